@@ -1,0 +1,40 @@
+# Two entry points for a fresh machine with Python 3.11+ and make:
+#   make demo   - install gadgetctl into .venv and run it on the bundled simulated devices
+#   make test   - install with the test extras and run the whole test suite
+PYTHON ?= python3
+VENV ?= .venv
+BIN := $(VENV)/bin
+
+.PHONY: demo test lint bench completions clean
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+
+$(VENV)/.installed: $(BIN)/python pyproject.toml
+	$(BIN)/python -m pip install --quiet -e .
+	touch $@
+
+$(VENV)/.installed-test: $(BIN)/python pyproject.toml
+	$(BIN)/python -m pip install --quiet -e '.[test]'
+	touch $@ $(VENV)/.installed
+
+demo: $(VENV)/.installed
+	$(BIN)/gadgetctl demo
+
+test: $(VENV)/.installed-test
+	$(BIN)/python -m ruff check .
+	$(BIN)/python -m pytest -q
+
+lint: $(VENV)/.installed-test
+	$(BIN)/python -m ruff check .
+	$(BIN)/python -m ruff format --check .
+
+bench: $(VENV)/.installed-test
+	$(BIN)/python bench/run.py
+
+completions: $(VENV)/.installed
+	$(BIN)/python -m gadgetctl.cli.completions completions
+
+clean:
+	rm -rf $(VENV) build dist

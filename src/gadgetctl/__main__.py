@@ -1,0 +1,3 @@
+from gadgetctl.cli.main import main
+
+main()

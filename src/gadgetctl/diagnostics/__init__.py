@@ -1,0 +1,15 @@
+"""The diagnostics model shared by every check in gadgetctl."""
+
+from gadgetctl.diagnostics.model import Category, Diagnostic, Severity, exit_code_for, sort_key
+from gadgetctl.diagnostics.codes import Code, catalog, lookup
+
+__all__ = [
+    "Category",
+    "Code",
+    "Diagnostic",
+    "Severity",
+    "catalog",
+    "exit_code_for",
+    "lookup",
+    "sort_key",
+]
