@@ -1,0 +1,27 @@
+"""Entry point of the `gadgetctl` command."""
+
+from __future__ import annotations
+
+import os
+import sys
+
+
+def main(argv: list[str] | None = None) -> None:
+    from gadgetctl.cli.app import build_app
+    from gadgetctl.errors import GadgetctlError
+
+    app = build_app()
+    try:
+        app(args=argv, prog_name="gadgetctl", standalone_mode=True)
+    except GadgetctlError as err:
+        print(f"gadgetctl: error: {err}", file=sys.stderr)
+        sys.exit(err.exit_code)
+    except KeyboardInterrupt:
+        print("gadgetctl: interrupted", file=sys.stderr)
+        sys.exit(130)
+    except Exception as err:  # a bug of ours: one line unless debugging
+        if os.environ.get("GADGETCTL_DEBUG"):
+            raise
+        print(f"gadgetctl: internal error: {type(err).__name__}: {err} "
+              "(set GADGETCTL_DEBUG=1 for a traceback)", file=sys.stderr)
+        sys.exit(2)

@@ -1,0 +1,1 @@
+"""The JCCL configuration system: definitions (.jdef) and configurations (.jconf)."""

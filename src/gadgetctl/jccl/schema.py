@@ -1,0 +1,91 @@
+"""XML Schema validation of JCCL files against gadgetctl's bundled XSDs."""
+
+from __future__ import annotations
+
+import re
+from functools import cache
+
+from lxml import etree
+
+from gadgetctl.diagnostics import Diagnostic
+from gadgetctl.jccl.formats import normalised_copy
+from gadgetctl.jccl.xmlload import FileKind, XmlDocument
+from gadgetctl.resources import schemas_dir
+
+SCHEMA_FILES = {
+    FileKind.CONFIGURATION: "configuration-3.0.xsd",
+    FileKind.DEFINITION: "definition-3.1.xsd",
+}
+_CLARK = re.compile(r"\{[^}]*\}")
+
+
+@cache
+def schema_for(kind: FileKind) -> etree.XMLSchema:
+    parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False)
+    return etree.XMLSchema(etree.parse(str(schemas_dir() / SCHEMA_FILES[kind]), parser))
+
+
+def readable_path(element: etree._Element) -> str:
+    """``/definition/definition_version[2]/property[3]`` style path with local names."""
+    parts: list[str] = []
+    node = element
+    while node is not None:
+        local = etree.QName(node).localname
+        parent = node.getparent()
+        if parent is not None:
+            same = [c for c in parent if isinstance(c.tag, str) and etree.QName(c).localname == local]
+            if len(same) > 1:
+                local = f"{local}[{same.index(node) + 1}]"
+        parts.append(local)
+        node = parent
+    return "/" + "/".join(reversed(parts))
+
+
+_STEP = re.compile(r"^(?:[\w.-]+:)?([\w.*-]+)(?:\[(\d+)\])?$")
+
+
+def element_at(root: etree._Element, path: str) -> etree._Element | None:
+    """Follow a libxml2 error path such as ``/*/*/*[3]`` or ``/ns0:a/ns0:b[2]``."""
+    steps = [s for s in path.split("/") if s]
+    if not steps:
+        return None
+    node: etree._Element | None = None
+    for depth, step in enumerate(steps):
+        match = _STEP.match(step)
+        if match is None:
+            return None
+        name, index = match.group(1), int(match.group(2) or 1)
+        pool = [root] if depth == 0 else [c for c in node if isinstance(c.tag, str)]
+        if name != "*":
+            pool = [c for c in pool if etree.QName(c).localname == name]
+        if len(pool) < index:
+            return None
+        node = pool[index - 1]
+    return node
+
+
+def _clean(message: str) -> str:
+    message = _CLARK.sub("", message).strip()
+    return re.sub(r"^Element '[^']*'(, attribute '([^']*)')?: ", lambda m: f"attribute {m.group(2)!r}: " if m.group(2) else "", message)
+
+
+def check_schema(doc: XmlDocument) -> None:
+    """Append one SCH001 diagnostic per schema violation, with element path and column."""
+    if doc.root is None or doc.kind not in SCHEMA_FILES:
+        return
+    schema = schema_for(doc.kind)
+    root = normalised_copy(doc)
+    tree = root.getroottree()
+    if schema.validate(tree):
+        return
+    for entry in schema.error_log:
+        element = None
+        if entry.path:
+            element = element_at(root, entry.path)
+        line, column, where = entry.line or None, None, ""
+        if element is not None:
+            where = readable_path(element)
+            line, column = doc.locate(element)  # the copy keeps the original source lines
+        message = _clean(entry.message)
+        doc.diagnostics.append(Diagnostic.make(
+            "SCH001", f"{where}: {message}" if where else message, doc.path, line, column))
