@@ -1,4 +1,10 @@
-"""`gadgetctl validate`: run every check on a set of files and collect diagnostics."""
+"""`gadgetctl validate`: run every check on a set of files and collect diagnostics.
+
+Stages: each file is read safely and checked at the XML, format and schema level; the
+definitions among the files join the definition repository (taking precedence over the
+search path, so a file is judged by its own content) and get definition-level checks;
+configurations are then checked against the definitions.
+"""
 
 from __future__ import annotations
 
@@ -7,14 +13,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gadgetctl.diagnostics import Diagnostic, sort_key
+from gadgetctl.errors import GadgetctlError
 from gadgetctl.files import expand_paths
-from gadgetctl.jccl.xmlload import DEFAULT_MAX_SIZE, XmlDocument, load_file
+from gadgetctl.jccl.xmlload import DEFAULT_MAX_SIZE, FileKind, XmlDocument, load_file
 
 
 @dataclass
 class ValidateOptions:
     max_size: int = DEFAULT_MAX_SIZE
     schema: bool = True
+    bundled: bool = True
+    definition_dirs: list[Path] = field(default_factory=list)
+    together: bool = False
 
 
 @dataclass
@@ -40,23 +50,68 @@ def load_and_check(path: Path, options: ValidateOptions) -> XmlDocument:
     try:
         doc = load_file(path, max_size=options.max_size)
     except OSError as err:
-        from gadgetctl.errors import GadgetctlError
-
         raise GadgetctlError(f"{path}: {err.strerror or err}") from None
     check_document(doc, options)
     return doc
 
 
+def search_path_diagnostics(repo) -> list[Diagnostic]:
+    """Problems of user-given search-path entries (the bundled one is trusted)."""
+    found = list(repo.diagnostics)
+    for entry in repo.entries:
+        if entry.origin == "bundled":
+            continue
+        for name in entry.undefined:
+            found.append(Diagnostic.make("DEF022", f"{entry.origin} entry {entry.raw!r} uses ${{{name}}}, which is not set",
+                                         *(_where(entry.location))))
+        if not entry.exists:
+            found.append(Diagnostic.make("DEF023", f"{entry.origin} directory {entry.path} does not exist",
+                                         *(_where(entry.location))))
+    for shadow in repo.shadowed:
+        if shadow.loser is not None:
+            found.append(Diagnostic.make(
+                "DEF021", f"{shadow.name} version {shadow.version} is ignored here: "
+                f"{shadow.winner} comes first on the search path",
+                shadow.loser.path, shadow.loser.line, shadow.loser.column))
+    return found
+
+
+def _where(location) -> tuple:
+    return (location.path, location.line, location.column) if location else ()
+
+
 def validate_paths(paths: Sequence[Path], options: ValidateOptions | None = None) -> ValidationResult:
+    from gadgetctl.jccl.defchecks import check_cycles, check_definition
+    from gadgetctl.jccl.defparser import read_definition
+    from gadgetctl.jccl.repository import default_repository
+
     options = options or ValidateOptions()
+    for directory in options.definition_dirs:
+        if not directory.is_dir():
+            raise GadgetctlError(f"--definitions {directory}: no such directory")
     result = ValidationResult()
     for path in expand_paths(paths):
         doc = load_and_check(path, options)
         result.files.append(doc.path)
         result.documents.append(doc)
         result.diagnostics.extend(doc.diagnostics)
+
+    definitions = [d for d in (read_definition(doc) for doc in result.documents
+                               if doc.root is not None and doc.kind is FileKind.DEFINITION) if d and d.name]
+    base = default_repository(options.definition_dirs, bundled=options.bundled)
+    repo = base.overlay(definitions)
+    result.diagnostics.extend(search_path_diagnostics(base))
+    for definition in definitions:
+        result.diagnostics.extend(check_definition(definition, definition.order, repo))
+    result.diagnostics.extend(check_cycles(definitions, repo))
+    result.diagnostics.extend(check_configurations(result, repo, options))
     result.diagnostics.sort(key=sort_key)
     return result
+
+
+def check_configurations(result: ValidationResult, repo, options: ValidateOptions) -> list[Diagnostic]:
+    """Configuration-level checks; filled in by the configuration checker."""
+    return []
 
 
 def summarize(diagnostics: Iterable[Diagnostic]) -> dict[str, int]:

@@ -1,0 +1,276 @@
+"""The definition repository: every version of every definition on the search path,
+with inheritance resolved correctly.
+
+Differences from VR Juggler's C++ repository, on purpose:
+
+* every version is kept (the C++ keeps only the newest), so old elements can be checked
+  against the rules they were written for and upgraded step by step;
+* :meth:`DefinitionRepository.is_a` is reflexive and follows every parent (the C++
+  ``isParent`` stops at the first resolvable parent);
+* missing parents and inheritance cycles are recorded and reported, never a crash, and no
+  recursion is used, so a thousand-level chain is fine.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from gadgetctl.diagnostics import Diagnostic
+from gadgetctl.jccl.definitions import Definition, DefinitionVersion, Location, PropertyDefinition
+from gadgetctl.jccl.searchpath import SearchPathEntry
+
+
+@dataclass(frozen=True, slots=True)
+class EffectiveProperty:
+    """A property of a type, own or inherited, and the definition it comes from."""
+
+    definition: PropertyDefinition
+    defined_by: str
+    defined_in: DefinitionVersion
+
+    @property
+    def name(self) -> str:
+        return self.definition.name
+
+    @property
+    def inherited(self) -> bool:
+        return self.defined_by != self.defined_in.name or False
+
+
+@dataclass(frozen=True, slots=True)
+class Shadowing:
+    name: str
+    version: int
+    winner: Location | None
+    loser: Location | None
+
+
+@dataclass
+class _Source:
+    definition: Definition
+    entry: SearchPathEntry | None
+
+
+@dataclass
+class DefinitionRepository:
+    entries: list[SearchPathEntry] = field(default_factory=list)
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+    shadowed: list[Shadowing] = field(default_factory=list)
+    _versions: dict[str, dict[int, DefinitionVersion]] = field(default_factory=dict)
+    _origins: dict[tuple[str, int], SearchPathEntry | None] = field(default_factory=dict)
+    _ancestor_cache: dict[str, tuple[str, ...]] = field(default_factory=dict)
+
+    # -- building ---------------------------------------------------------------------
+
+    @classmethod
+    def from_search_path(cls, entries: Iterable[SearchPathEntry]) -> DefinitionRepository:
+        repo = cls()
+        for entry in entries:
+            repo.load_entry(entry)
+        return repo
+
+    def load_entry(self, entry: SearchPathEntry) -> None:
+        """Load every ``*.jdef`` file of a directory (not recursive), in name order."""
+        from gadgetctl.jccl.defparser import read_definition
+        from gadgetctl.jccl.xmlload import load_file
+
+        self.entries.append(entry)
+        if not entry.exists:
+            return
+        for path in sorted(entry.path.glob("*.jdef")):
+            if not path.is_file():
+                continue
+            entry.files += 1
+            try:
+                doc = load_file(path)
+            except OSError as err:
+                self.diagnostics.append(Diagnostic.make(
+                    "DEF020", f"definition file on the search path cannot be read: {err.strerror}", str(path)))
+                continue
+            definition = read_definition(doc, columns=False) if doc.root is not None else None
+            if definition is None or not definition.name:
+                first = doc.diagnostics[0].message if doc.diagnostics else "not a definition file"
+                self.diagnostics.append(Diagnostic.make(
+                    "DEF020", f"definition file on the search path was skipped: {first}", str(path)))
+                continue
+            entry.contributed += self.add(definition, entry)
+
+    def add(self, definition: Definition, entry: SearchPathEntry | None = None) -> int:
+        """Add every version of ``definition``; an existing name and version wins. Returns how many were added."""
+        self._ancestor_cache.clear()
+        versions = self._versions.setdefault(definition.name, {})
+        added = 0
+        for number, version in sorted(definition.versions.items()):
+            existing = versions.get(number)
+            if existing is not None:
+                self.shadowed.append(Shadowing(definition.name, number, existing.location, version.location))
+                continue
+            versions[number] = version
+            self._origins[(definition.name, number)] = entry
+            added += 1
+        return added
+
+    def overlay(self, definitions: Iterable[Definition]) -> DefinitionRepository:
+        """A repository where ``definitions`` come first and this one's fill the rest."""
+        repo = DefinitionRepository(entries=list(self.entries))
+        for definition in definitions:
+            if definition.name:
+                repo.add(definition)
+        for name, versions in self._versions.items():
+            mine = repo._versions.setdefault(name, {})
+            for number, version in versions.items():
+                if number not in mine:
+                    mine[number] = version
+                    repo._origins[(name, number)] = self._origins.get((name, number))
+        return repo
+
+    # -- queries ----------------------------------------------------------------------
+
+    def names(self) -> list[str]:
+        return sorted(self._versions)
+
+    def __contains__(self, name: object) -> bool:
+        return isinstance(name, str) and bool(self._versions.get(name))
+
+    def versions(self, name: str) -> list[int]:
+        return sorted(self._versions.get(name, {}))
+
+    def get(self, name: str, version: int | None = None) -> DefinitionVersion | None:
+        versions = self._versions.get(name)
+        if not versions:
+            return None
+        if version is None:
+            return versions[max(versions)]
+        return versions.get(version)
+
+    def newest(self, name: str) -> DefinitionVersion | None:
+        return self.get(name)
+
+    def origin(self, name: str, version: int | None = None) -> SearchPathEntry | None:
+        found = self.get(name, version)
+        return None if found is None else self._origins.get((name, found.version))
+
+    def all_newest(self) -> Iterator[DefinitionVersion]:
+        for name in self.names():
+            newest = self.get(name)
+            if newest is not None:
+                yield newest
+
+    # -- inheritance ------------------------------------------------------------------
+
+    def parents_of(self, name: str, version: int | None = None) -> tuple[str, ...]:
+        found = self.get(name, version)
+        return found.parents if found else ()
+
+    def ancestors(self, name: str, version: int | None = None) -> tuple[str, ...]:
+        """Every ancestor, depth-first in parent order, each once, ``name`` excluded.
+
+        Parents resolve to their newest version, as in VR Juggler. Unknown parents are
+        listed (they are ancestors by declaration) but not followed.
+        """
+        if version is None and name in self._ancestor_cache:
+            return self._ancestor_cache[name]
+        order: list[str] = []
+        seen = {name}
+        stack = list(reversed(self.parents_of(name, version)))
+        while stack:
+            current = stack.pop()
+            if current in seen:
+                continue
+            seen.add(current)
+            order.append(current)
+            stack.extend(reversed(self.parents_of(current)))
+        result = tuple(order)
+        if version is None:
+            self._ancestor_cache[name] = result
+        return result
+
+    def is_a(self, name: str, base: str) -> bool:
+        """True when ``name`` is ``base`` or inherits from it through any parent."""
+        return name == base or base in self.ancestors(name)
+
+    def missing_parents(self, name: str, version: int | None = None) -> list[str]:
+        return [p for p in self.parents_of(name, version) if p not in self]
+
+    def effective_properties(self, name: str, version: int | None = None) -> list[EffectiveProperty]:
+        """Own properties first, then inherited ones depth-first; the first of a name wins."""
+        found = self.get(name, version)
+        if found is None:
+            return []
+        result: list[EffectiveProperty] = []
+        seen: set[str] = set()
+        chain = [found] + [d for d in (self.get(a) for a in self.ancestors(name, version)) if d is not None]
+        for owner in chain:
+            for prop in owner.properties:
+                if prop.name not in seen:
+                    seen.add(prop.name)
+                    result.append(EffectiveProperty(prop, owner.name, found))
+        return result
+
+    def find_property(self, name: str, prop: str, version: int | None = None) -> EffectiveProperty | None:
+        for candidate in self.effective_properties(name, version):
+            if candidate.name == prop:
+                return candidate
+        return None
+
+    def cycles(self) -> list[tuple[str, ...]]:
+        """Inheritance cycles among the newest versions (strongly connected components)."""
+        index: dict[str, int] = {}
+        low: dict[str, int] = {}
+        on_stack: set[str] = set()
+        stack: list[str] = []
+        result: list[tuple[str, ...]] = []
+        counter = 0
+        for start in self.names():
+            if start in index:
+                continue
+            work = [(start, iter(self.parents_of(start)))]
+            index[start] = low[start] = counter
+            counter += 1
+            stack.append(start)
+            on_stack.add(start)
+            while work:
+                node, children = work[-1]
+                advanced = False
+                for child in children:
+                    if child not in self:
+                        continue
+                    if child not in index:
+                        index[child] = low[child] = counter
+                        counter += 1
+                        stack.append(child)
+                        on_stack.add(child)
+                        work.append((child, iter(self.parents_of(child))))
+                        advanced = True
+                        break
+                    if child in on_stack:
+                        low[node] = min(low[node], index[child])
+                if advanced:
+                    continue
+                work.pop()
+                if work:
+                    parent = work[-1][0]
+                    low[parent] = min(low[parent], low[node])
+                if low[node] == index[node]:
+                    component = []
+                    while True:
+                        member = stack.pop()
+                        on_stack.discard(member)
+                        component.append(member)
+                        if member == node:
+                            break
+                    if len(component) > 1 or node in self.parents_of(node):
+                        result.append(tuple(sorted(component)))
+        return result
+
+
+def load_repository(entries: Iterable[SearchPathEntry]) -> DefinitionRepository:
+    return DefinitionRepository.from_search_path(entries)
+
+
+def default_repository(extra_dirs: Iterable[Path] = (), *, bundled: bool = True) -> DefinitionRepository:
+    from gadgetctl.jccl.searchpath import SearchPathOptions, build_search_path
+
+    return load_repository(build_search_path(SearchPathOptions(bundled=bundled, extra_dirs=list(extra_dirs))))
