@@ -42,3 +42,9 @@ COLOR_OPTION = typer.Option(ColorMode.auto, "--color", help="Colour the output: 
 def emit(text: str) -> None:
     if text:
         sys.stdout.write(text if text.endswith("\n") else text + "\n")
+
+DEFINITIONS_OPTION = typer.Option(
+    [], "--definitions", "-d", metavar="DIR",
+    help="Add a directory to the definition search path (after the bundled set, VJ_BASE_DIR and JCCL_DEFINITION_PATH). Repeatable.")
+BUNDLED_OPTION = typer.Option(
+    True, "--bundled/--no-bundled", help="Use gadgetctl's bundled standard definitions.")

@@ -6,7 +6,15 @@ from pathlib import Path
 
 import typer
 
-from gadgetctl.cli.options import COLOR_OPTION, ColorMode, DiagnosticFormat, emit, use_color
+from gadgetctl.cli.options import (
+    BUNDLED_OPTION,
+    COLOR_OPTION,
+    DEFINITIONS_OPTION,
+    ColorMode,
+    DiagnosticFormat,
+    emit,
+    use_color,
+)
 
 
 def register(app: typer.Typer) -> None:
@@ -17,6 +25,9 @@ def validate(
     paths: list[Path] = typer.Argument(..., help="Files or directories (searched for *.jdef and *.jconf).", show_default=False),
     fmt: DiagnosticFormat = typer.Option(DiagnosticFormat.text, "--format", "-f", help="Output format."),
     strict: bool = typer.Option(False, "--strict", help="Exit 1 on warnings too."),
+    definitions: list[Path] = DEFINITIONS_OPTION,
+    bundled: bool = BUNDLED_OPTION,
+    together: bool = typer.Option(False, "--together", help="Treat all configuration files as one configuration, as VR Juggler does with several files on its command line (pointer checks span them all)."),
     max_size: int = typer.Option(16 * 1024 * 1024, "--max-size", help="Largest file read, in bytes.", min=1),
     hints: bool = typer.Option(True, "--hints/--no-hints", help="Show a hint under findings that have one (text format)."),
     color: ColorMode = COLOR_OPTION,
@@ -29,7 +40,9 @@ def validate(
     from gadgetctl.report import render
     from gadgetctl.validate import ValidateOptions, validate_paths
 
-    result = validate_paths(paths, ValidateOptions(max_size=max_size))
+    options = ValidateOptions(max_size=max_size, bundled=bundled, definition_dirs=list(definitions),
+                              together=together)
+    result = validate_paths(paths, options)
     emit(render(fmt.value, result.diagnostics, files_checked=len(result.files),
                 color=use_color(color), hints=hints))
     raise typer.Exit(exit_code_for(result.diagnostics, strict=strict))

@@ -1,0 +1,109 @@
+"""Reading an element's property values the way VR Juggler's run time does.
+
+* a value written in the file is used even when empty (``<port/>`` reads as ""); a slot not
+  written falls back to the definition's default for that slot;
+* text is trimmed, then enumeration labels are replaced by their values;
+* numbers are read like a C++ stream extraction (a leading number, junk after it ignored,
+  nothing parsable gives 0); booleans are false only for exactly ``false`` or ``0``.
+
+``gadgetctl validate`` reports every value where these rules give a surprising result.
+"""
+
+from __future__ import annotations
+
+import re
+
+from gadgetctl.jccl.configuration import ConfigElement
+from gadgetctl.jccl.definitions import PropertyDefinition
+from gadgetctl.jccl.repository import DefinitionRepository
+
+_LEADING_INT = re.compile(r"^[+-]?\d+")
+_LEADING_FLOAT = re.compile(r"^[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+class UnknownProperty(KeyError):
+    """A property the element's definition does not have was asked for."""
+
+
+def read_int(text: str) -> int:
+    match = _LEADING_INT.match(text.strip())
+    return int(match.group(0)) if match else 0
+
+
+def read_float(text: str) -> float:
+    match = _LEADING_FLOAT.match(text.strip())
+    return float(match.group(0)) if match else 0.0
+
+
+def read_bool(text: str) -> bool:
+    return text.strip() not in ("false", "0")
+
+
+class ElementAccess:
+    """Typed, definition-aware reads of one element's properties."""
+
+    def __init__(self, element: ConfigElement, repo: DefinitionRepository) -> None:
+        self.element = element
+        self.repo = repo
+        self._props = {p.name: p.definition for p in repo.effective_properties(element.type)}
+
+    @property
+    def name(self) -> str:
+        return self.element.full_name
+
+    def definition(self, prop: str) -> PropertyDefinition:
+        try:
+            return self._props[prop]
+        except KeyError:
+            raise UnknownProperty(f"{self.element.type} has no property {prop!r}") from None
+
+    def has(self, prop: str) -> bool:
+        return prop in self._props
+
+    def count(self, prop: str) -> int:
+        """Number of values written (defaults are not counted)."""
+        return len(self.element.values(prop))
+
+    def string(self, prop: str, index: int = 0) -> str:
+        definition = self.definition(prop)
+        values = self.element.values(prop)
+        if index < len(values):
+            text = values[index].text
+        else:
+            text = definition.default(index) or ""
+        text = text.strip()
+        if definition.enumeration is not None:
+            text = definition.enumeration.substitute(text)
+        return text
+
+    def integer(self, prop: str, index: int = 0) -> int:
+        return read_int(self.string(prop, index))
+
+    def float(self, prop: str, index: int = 0) -> float:
+        return read_float(self.string(prop, index))
+
+    def boolean(self, prop: str, index: int = 0) -> bool:
+        return read_bool(self.string(prop, index))
+
+    def slots(self, prop: str) -> int:
+        """Values to read: the written count for a variable property, the slot count otherwise."""
+        definition = self.definition(prop)
+        return self.count(prop) if definition.variable else max(len(definition.values), self.count(prop))
+
+    def strings(self, prop: str) -> list[str]:
+        return [self.string(prop, i) for i in range(self.slots(prop))]
+
+    def floats(self, prop: str) -> list[float]:
+        return [read_float(s) for s in self.strings(prop)]
+
+    def integers(self, prop: str) -> list[int]:
+        return [read_int(s) for s in self.strings(prop)]
+
+    def child(self, prop: str, index: int = 0) -> ConfigElement | None:
+        self.definition(prop)
+        values = self.element.values(prop)
+        return values[index].element if index < len(values) else None
+
+    def children(self, prop: str) -> list[ConfigElement]:
+        self.definition(prop)
+        return [v.element for v in self.element.values(prop) if v.element is not None]

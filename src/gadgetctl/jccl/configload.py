@@ -1,0 +1,165 @@
+"""Loading configurations: files, includes (to any depth) and definition paths.
+
+Includes are resolved against the including file's directory first and then the working
+directory (VR Juggler tries the working directory first, which makes a configuration's
+meaning depend on where it is started). Missing includes and include cycles are reported
+and the rest still loads. Elements keep their file, line and column.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+
+from lxml import etree
+
+from gadgetctl.diagnostics import Diagnostic
+from gadgetctl.envvars import expand
+from gadgetctl.jccl.configuration import ConfigElement, ConfigFile, Configuration, PropertyValue
+from gadgetctl.jccl.definitions import Location
+from gadgetctl.jccl.xmlload import DEFAULT_MAX_SIZE, XmlDocument, load_file
+
+
+def _local(node) -> str | None:
+    tag = node.tag
+    return tag.rpartition("}")[2] if isinstance(tag, str) else None
+
+
+class ElementReader:
+    """Builds :class:`ConfigElement` objects from the ``<elements>`` of one document."""
+
+    def __init__(self, doc: XmlDocument) -> None:
+        self.doc = doc
+
+    def location(self, node: etree._Element) -> Location:
+        line, column = self.doc.locate(node)
+        return Location(self.doc.path, line, column)
+
+    def read(self, node: etree._Element, parent: ConfigElement | None = None,
+             parent_property: str | None = None) -> ConfigElement:
+        element = ConfigElement(
+            type=_local(node) or "",
+            name=node.get("name") if node.get("name") is not None else "",
+            version_text=node.get("version"),
+            location=self.location(node),
+            parent=parent,
+            parent_property=parent_property,
+            node=node,
+        )
+        for child in node:
+            prop = _local(child)
+            if prop is None:
+                continue
+            embedded = next((c for c in child if isinstance(c.tag, str)), None)
+            value = PropertyValue(text="".join(child.itertext()) if embedded is None else "",
+                                  location=self.location(child))
+            if embedded is not None:
+                value.element = self.read(embedded, element, prop)
+            element.properties.setdefault(prop, []).append(value)
+        return element
+
+
+def read_config_file(doc: XmlDocument, path: Path) -> ConfigFile:
+    """The includes, definition directories and elements of one parsed configuration."""
+    config = ConfigFile(path=path, display=doc.path)
+    root = doc.root
+    if root is None:
+        return config
+    config.name = root.get("name")
+    reader = ElementReader(doc)
+    for child in root:
+        tag = _local(child)
+        if tag == "include":
+            config.includes.append((child.text or "", reader.location(child)))
+        elif tag == "definition_path":
+            for entry in child:
+                if _local(entry) == "dir":
+                    config.definition_dirs.append(((entry.text or "").strip(), reader.location(entry)))
+        elif tag == "elements":
+            config.elements.extend(reader.read(e) for e in child if isinstance(e.tag, str))
+    return config
+
+
+class ConfigurationLoader:
+    def __init__(self, *, environ: Mapping[str, str] | None = None, max_size: int = DEFAULT_MAX_SIZE,
+                 documents: Mapping[Path, XmlDocument] | None = None) -> None:
+        self.environ = os.environ if environ is None else environ
+        self.max_size = max_size
+        self.documents = dict(documents or {})  # already loaded files, by resolved path
+        self.configuration = Configuration()
+        self._loaded: set[Path] = set()
+
+    def load(self, paths: Iterable[Path]) -> Configuration:
+        for path in paths:
+            self._load(path, path.resolve(), stack=[], display=None)
+        return self.configuration
+
+    def _document(self, resolved: Path, display: str) -> XmlDocument:
+        doc = self.documents.get(resolved)
+        if doc is None:
+            doc = load_file(resolved, max_size=self.max_size, display=display)
+            self.documents[resolved] = doc
+            self.configuration.diagnostics.extend(d for d in doc.diagnostics if d.code.startswith("XML0"))
+        return doc
+
+    def _load(self, path: Path, resolved: Path, stack: list[Path], display: str | None) -> None:
+        if resolved in self._loaded:
+            return
+        self._loaded.add(resolved)
+        doc = self._document(resolved, display or str(path))
+        config = read_config_file(doc, resolved)
+        self.configuration.files.append(config)
+        for raw, location in config.includes:
+            self._include(raw, location, resolved, [*stack, resolved])
+        self.configuration.loaded.extend(config.elements)
+
+    def _include(self, raw: str, location: Location, parent: Path, stack: list[Path]) -> None:
+        expansion = expand(raw.strip(), self.environ)
+        for name in expansion.undefined:
+            self.configuration.diagnostics.append(Diagnostic.make(
+                "CFG003", f"include {raw.strip()!r} uses ${{{name}}}, which is not set",
+                location.path, location.line, location.column))
+        target = self.resolve_include(expansion.text, parent.parent)
+        if target is None:
+            self.configuration.diagnostics.append(Diagnostic.make(
+                "CFG001", f"included file {raw.strip()!r} not found (looked in {parent.parent} and "
+                f"the working directory)", location.path, location.line, location.column))
+            return
+        resolved = target.resolve()
+        if resolved in stack:
+            chain = " -> ".join(p.name for p in [*stack[stack.index(resolved):], resolved])
+            self.configuration.diagnostics.append(Diagnostic.make(
+                "CFG002", f"include cycle: {chain}", location.path, location.line, location.column,
+                hint="VR Juggler would recurse until it crashes; remove one of these includes."))
+            return
+        try:
+            self._load(target, resolved, stack, display=_display(target))
+        except OSError as err:
+            self.configuration.diagnostics.append(Diagnostic.make(
+                "CFG001", f"included file {raw.strip()!r} cannot be read: {err.strerror}",
+                location.path, location.line, location.column))
+
+    @staticmethod
+    def resolve_include(name: str, directory: Path) -> Path | None:
+        if not name:
+            return None
+        candidate = Path(name).expanduser()
+        if candidate.is_absolute():
+            return candidate if candidate.is_file() else None
+        for base in (directory, Path.cwd()):
+            if (base / candidate).is_file():
+                return base / candidate
+        return None
+
+
+def _display(path: Path) -> str:
+    try:
+        return os.path.relpath(path)
+    except ValueError:
+        return str(path)
+
+
+def load_configuration(paths: Iterable[Path], *, environ: Mapping[str, str] | None = None,
+                       documents: Mapping[Path, XmlDocument] | None = None) -> Configuration:
+    return ConfigurationLoader(environ=environ, documents=documents).load(paths)
