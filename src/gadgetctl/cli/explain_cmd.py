@@ -20,10 +20,10 @@ def explain(
     """Describe a diagnostic code, with an example and how to fix it."""
     from difflib import get_close_matches
 
-    from gadgetctl.diagnostics import catalog
+    from gadgetctl.diagnostics import all_codes
     from gadgetctl.errors import GadgetctlError
 
-    codes = catalog()
+    codes = all_codes()
     if code is None:
         entries = sorted(codes.values(), key=lambda c: c.code)
         if fmt is DataFormat.json:
@@ -33,7 +33,7 @@ def explain(
         return
     entry = codes.get(code.upper())
     if entry is None:
-        close = get_close_matches(code.upper(), list(codes), n=3)
+        close = get_close_matches(code.upper(), list(codes), n=3, cutoff=0.5)
         suggestion = f" (did you mean {', '.join(close)}?)" if close else ""
         raise GadgetctlError(f"unknown diagnostic code {code!r}{suggestion}")
     if fmt is DataFormat.json:

@@ -1,6 +1,7 @@
 """The diagnostics model shared by every check in gadgetctl."""
 
-from gadgetctl.diagnostics.codes import Code, catalog, lookup
+from gadgetctl.diagnostics.codes import Code, lookup
+from gadgetctl.diagnostics.codes import catalog as all_codes
 from gadgetctl.diagnostics.model import Category, Diagnostic, Severity, exit_code_for, sort_key
 
 __all__ = [
@@ -8,7 +9,7 @@ __all__ = [
     "Code",
     "Diagnostic",
     "Severity",
-    "catalog",
+    "all_codes",
     "exit_code_for",
     "lookup",
     "sort_key",

@@ -1,0 +1,772 @@
+"""Ascension MotionStar BIRDNET protocol over TCP, independent of gadgetctl.
+
+Every message starts with a 16-byte big-endian header (sequence, milliseconds,
+time, type, xtype, protocol 3, error code, error extension, payload length).
+Start-up: wake-up, general system status (with one FBB status byte per
+device), optionally a new measurement rate, then per bird a status read and a
+setup write, then run-continuous. Data packets carry one record per sensor:
+address (bit 7 = two button bytes follow), data info (format code << 4 | word
+count), big-endian int16 words, the optional buttons.
+
+Positions are ``full_scale * word / 32767`` inches, angles ``180 * word / 32767``
+degrees in the order Z, Y, X; matrix and quaternion words are fractions in
+[-1, 1). Each sample gives a 4x4 float64 matrix per sensor, translation in
+inches, rotation ``Rz @ Ry @ Rx``.
+
+Differences from the C++ driver, on purpose:
+
+* matrix and quaternion words are signed fractions ``word / 32768``; the C++
+  read them unsigned, so negative values came out in (-2, -1];
+* button bytes are read right after each record's data words; the C++ read them
+  at a fixed offset in a union sized for the largest format;
+* the rotation of the matrix formats is taken from the matrix itself; the C++
+  went through arcsines (losing the quadrant) and, for the plain matrix format,
+  passed the X and Z angles in swapped order;
+* records are decoded by their own format code and mapped to units by their
+  FBB address; records that do not parse make the packet count as garbage and
+  the stream is re-synchronised on the next plausible header;
+* a data packet whose header carries an error code (missed or repeated packets
+  on the server side) is still decoded; the code is kept in the sample;
+* after a failed wake-up the server is shut down and woken again, as the
+  manual recommends (the C++ only shut it down).
+"""
+
+from __future__ import annotations
+
+import socket
+import struct
+import time
+from dataclasses import dataclass
+from enum import IntEnum
+from types import TracebackType
+
+import numpy as np
+
+MSG_WAKE_UP = 10
+RSP_WAKE_UP = 20
+MSG_SHUT_DOWN = 11
+RSP_SHUT_DOWN = 21
+MSG_SYNC_SEQUENCE = 30
+RSP_SYNC_SEQUENCE = 31
+RSP_ILLEGAL = 40
+RSP_UNKNOWN = 50
+MSG_GET_STATUS = 101
+MSG_SEND_SETUP = 102
+MSG_SINGLE_SHOT = 103
+MSG_RUN_CONTINUOUS = 104
+MSG_STOP_DATA = 105
+RSP_GET_STATUS = 201
+RSP_SEND_SETUP = 202
+RSP_RUN_CONTINUOUS = 204
+RSP_STOP_DATA = 205
+DATA_PACKET_MULTI = 210
+RESPONSE_TYPES = frozenset(
+    {
+        RSP_WAKE_UP,
+        RSP_SHUT_DOWN,
+        RSP_SYNC_SEQUENCE,
+        RSP_ILLEGAL,
+        RSP_UNKNOWN,
+        RSP_GET_STATUS,
+        RSP_SEND_SETUP,
+        RSP_RUN_CONTINUOUS,
+        RSP_STOP_DATA,
+        DATA_PACKET_MULTI,
+    }
+)
+BN_PROTOCOL = 3
+HEADER = struct.Struct(">HH4sBBBBHH")
+MAX_PAYLOAD = 2048
+SYSTEM_STATUS_SIZE = 16
+BIRD_STATUS_SIZE = 70
+SEQUENCE_MODULO = 1 << 16
+
+# FBB device status bits (one byte per device after the system status)
+FBB_ACCESSIBLE = 0x80
+FBB_RUNNING = 0x40
+FBB_SENSOR = 0x20
+FBB_ERC = 0x10
+
+APPEND_BUTTON_DATA = 0x08  # bird setup bit
+ERROR_FORMAT = 15  # record format code meaning "sampling failed"
+WORD_DIVISOR = 32767.0  # positions and angles
+FRACTION_DIVISOR = 32768.0  # matrix and quaternion words: -1 .. 0.99997
+ANGLE_SCALE = 180.0
+MIN_RATE, MAX_RATE = 20.0, 144.0
+UNITS = {0: "inches"}
+
+
+class DataFormat(IntEnum):
+    """The ``data_format`` values of the motion_star definition."""
+
+    NO_DATA = 0
+    POSITION = 1
+    ANGLES = 2
+    MATRIX = 3
+    POSITION_ANGLES = 4
+    POSITION_MATRIX = 5
+    QUATERNION = 7
+    POSITION_QUATERNION = 8
+
+
+#: Data words per format; the setup byte is ``words << 4 | code`` (e.g. 0x64).
+FORMAT_WORDS = {
+    DataFormat.NO_DATA: 0,
+    DataFormat.POSITION: 3,
+    DataFormat.ANGLES: 3,
+    DataFormat.MATRIX: 9,
+    DataFormat.POSITION_ANGLES: 6,
+    DataFormat.POSITION_MATRIX: 12,
+    DataFormat.QUATERNION: 4,
+    DataFormat.POSITION_QUATERNION: 7,
+}
+
+
+class Hemisphere(IntEnum):
+    FRONT = 0
+    AFT = 1
+    UPPER = 2
+    LOWER = 3
+    LEFT = 4
+    RIGHT = 5
+
+
+class RunMode(IntEnum):
+    """The ``mode`` values of the motion_star definition."""
+
+    RUN_CONTINUOUS = 0
+    SAMPLE_INDIVIDUALLY = 1
+
+
+class MotionStarError(Exception):
+    """Base class of the driver's errors."""
+
+
+class MotionStarTimeout(MotionStarError, TimeoutError):
+    """The server did not answer a command in time."""
+
+
+class MotionStarCommandError(MotionStarError):
+    """The server refused a command (illegal, unknown, or an error code)."""
+
+
+class MotionStarDisconnected(MotionStarError):
+    """The connection is gone (EOF, reset); reconnect with a new ``open()``."""
+
+
+@dataclass(frozen=True)
+class Header:
+    """A BIRDNET header; ``time`` is seconds since 1970, ``length`` the payload size."""
+
+    sequence: int
+    type: int
+    xtype: int = 0
+    length: int = 0
+    milliseconds: int = 0
+    time: int = 0
+    protocol: int = BN_PROTOCOL
+    error_code: int = 0
+    error_extension: int = 0
+
+    def pack(self) -> bytes:
+        return HEADER.pack(
+            self.sequence % SEQUENCE_MODULO,
+            self.milliseconds,
+            self.time.to_bytes(4, "big"),
+            self.type,
+            self.xtype,
+            self.protocol,
+            self.error_code,
+            self.error_extension,
+            self.length,
+        )
+
+    @classmethod
+    def unpack(cls, data: bytes) -> Header:
+        seq, ms, stamp, kind, xtype, proto, err, ext, length = HEADER.unpack(data[: HEADER.size])
+        return cls(seq, kind, xtype, length, ms, int.from_bytes(stamp, "big"), proto, err, ext)
+
+    def plausible(self) -> bool:
+        """Whether this can start a server message (used to re-synchronise)."""
+        return (
+            self.protocol == BN_PROTOCOL
+            and self.type in RESPONSE_TYPES
+            and self.length <= MAX_PAYLOAD
+        )
+
+
+@dataclass(frozen=True)
+class SystemStatus:
+    """General system status (device 0) and the FBB status byte of each device."""
+
+    raw: bytes
+    devices: tuple[int, ...]
+
+    @property
+    def flock_number(self) -> int:
+        return self.raw[2]
+
+    @property
+    def server_number(self) -> int:
+        return self.raw[3]
+
+    @property
+    def transmitter_number(self) -> int:
+        return self.raw[4]
+
+    @property
+    def measurement_rate(self) -> float:
+        """Chassis rate in Hz, from six ASCII digits of rate x 1000."""
+        try:
+            return int(self.raw[5:11].decode("ascii")) / 1000.0
+        except ValueError:
+            return 0.0
+
+    @property
+    def chassis_number(self) -> int:
+        return self.raw[11]
+
+    @property
+    def chassis_devices(self) -> int:
+        return self.raw[12]
+
+    @property
+    def first_address(self) -> int:
+        return self.raw[13]
+
+    @property
+    def software_revision(self) -> tuple[int, int]:
+        return self.raw[14], self.raw[15]
+
+    def with_rate(self, rate: float) -> bytes:
+        """The 16-byte block with a new measurement rate (clamped to 20..144 Hz)."""
+        rate = min(max(rate, MIN_RATE), MAX_RATE)
+        text = f"{rate * 1000.0:06.0f}".encode("ascii")
+        return self.raw[:5] + text + self.raw[11:SYSTEM_STATUS_SIZE]
+
+    @classmethod
+    def parse(cls, payload: bytes) -> SystemStatus:
+        if len(payload) < SYSTEM_STATUS_SIZE:
+            raise MotionStarCommandError(f"system status of {len(payload)} bytes")
+        count = payload[2]
+        devices = payload[SYSTEM_STATUS_SIZE : SYSTEM_STATUS_SIZE + count]
+        if len(devices) < count:
+            raise MotionStarCommandError("system status lacks FBB device bytes")
+        return cls(bytes(payload[:SYSTEM_STATUS_SIZE]), tuple(devices))
+
+
+@dataclass(frozen=True)
+class BirdStatus:
+    """The 70-byte status block of one bird (single bird status + filter tables)."""
+
+    address: int
+    raw: bytes
+
+    @property
+    def setup(self) -> int:
+        return self.raw[5]
+
+    @property
+    def data_format(self) -> int:
+        """Format code (low nibble of the data format byte)."""
+        return self.raw[6] & 0x0F
+
+    @property
+    def report_rate(self) -> int:
+        return self.raw[7]
+
+    @property
+    def units(self) -> int:
+        """Units code from the high nibble of scaling[0]; 0 is inches."""
+        return self.raw[8] >> 4
+
+    @property
+    def full_scale(self) -> int:
+        return (self.raw[8] & 0x0F) << 8 | self.raw[9]
+
+    @property
+    def hemisphere(self) -> int:
+        return self.raw[10]
+
+    @property
+    def fbb_address(self) -> int:
+        return self.raw[11] or self.address
+
+    def configured(self, data_format: int, report_rate: int, hemisphere: int) -> bytes:
+        """The block to send back: buttons appended, our format, rate and hemisphere."""
+        block = bytearray(self.raw)
+        block[5] |= APPEND_BUTTON_DATA
+        block[6] = FORMAT_WORDS[DataFormat(data_format)] << 4 | data_format
+        block[7] = report_rate & 0xFF
+        block[10] = hemisphere
+        return bytes(block)
+
+
+@dataclass(frozen=True)
+class Record:
+    """One undecoded sensor record of a data packet."""
+
+    address: int
+    format_code: int
+    words: tuple[int, ...]
+    buttons: tuple[int, int] | None
+
+
+@dataclass(frozen=True, eq=False)
+class BirdSample:
+    """One sensor of one data packet.
+
+    ``matrix`` is 4x4 float64 with the translation in inches (``position`` as
+    sent), ``angles`` are degrees in wire order (z, y, x), ``quaternion`` is
+    (w, x, y, z). Fields a format does not carry are None.
+    """
+
+    unit: int
+    address: int
+    data_format: int
+    matrix: np.ndarray
+    position: tuple[float, float, float] | None = None
+    angles: tuple[float, float, float] | None = None
+    quaternion: tuple[float, float, float, float] | None = None
+    buttons: tuple[int, int] | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class MotionStarSample:
+    """One data packet: its header fields and the decoded sensors in unit order."""
+
+    sequence: int
+    milliseconds: int
+    time: int
+    error_code: int
+    birds: tuple[BirdSample, ...]
+
+    def matrices(self) -> dict[int, np.ndarray]:
+        """Unit number -> 4x4 matrix."""
+        return {bird.unit: bird.matrix for bird in self.birds}
+
+
+def parse_records(payload: bytes) -> list[Record] | None:
+    """Split a data packet payload into records; None if it does not parse exactly."""
+    records: list[Record] = []
+    offset = 0
+    last_address = 0
+    while offset < len(payload):
+        if offset + 2 > len(payload):
+            return None
+        address, info = payload[offset] & 0x7F, payload[offset + 1]
+        has_buttons = bool(payload[offset] & 0x80)
+        code, count = info >> 4, info & 0x0F
+        if address <= last_address:
+            return None  # FBB addresses are 1.. and the server sends them in order
+        if code != ERROR_FORMAT and (
+            code not in FORMAT_WORDS or FORMAT_WORDS[DataFormat(code)] != count
+        ):
+            return None
+        end = offset + 2 + 2 * count
+        buttons = None
+        if has_buttons:
+            if end + 2 > len(payload):
+                return None
+            # The buttons follow this record's own words (the C++ used a fixed offset).
+            buttons = (payload[end], payload[end + 1])
+            end += 2
+        if end > len(payload):
+            return None
+        words = struct.unpack_from(f">{count}h", payload, offset + 2)
+        records.append(Record(address, code, words, buttons))
+        offset = end
+        last_address = address
+    return records
+
+
+def rotation_zyx(z_deg: float, y_deg: float, x_deg: float) -> np.ndarray:
+    """``Rz @ Ry @ Rx`` for angles in degrees (the Z, Y, X order of the wire)."""
+    z, y, x = np.radians([z_deg, y_deg, x_deg])
+    cz, sz, cy, sy, cx, sx = np.cos(z), np.sin(z), np.cos(y), np.sin(y), np.cos(x), np.sin(x)
+    rz = np.array([[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]])
+    ry = np.array([[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]])
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]])
+    return rz @ ry @ rx
+
+
+def rotation_from_matrix_words(words: tuple[int, ...]) -> np.ndarray:
+    """Rotation from the 9 matrix words.
+
+    The words are the Ascension matrix M in column order (M11, M21, M31, M12,
+    ...), whose rows are the sensor axes in transmitter coordinates, so the
+    sensor orientation M transposed is the words read row by row.
+    """
+    return np.array(words, dtype=np.float64).reshape(3, 3) / FRACTION_DIVISOR
+
+
+def rotation_from_quaternion(w: float, x: float, y: float, z: float) -> np.ndarray:
+    """Rotation of the normalised quaternion (w, x, y, z); identity if it is zero."""
+    norm = float(np.sqrt(w * w + x * x + y * y + z * z))
+    if norm == 0.0:
+        return np.eye(3)
+    w, x, y, z = w / norm, x / norm, y / norm, z / norm
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def decode_record(record: Record, unit: int, full_scale: float) -> BirdSample:
+    """Turn a record into a sample with a 4x4 matrix (translation in inches)."""
+    code = DataFormat(record.format_code)
+    words = record.words
+    matrix = np.eye(4)
+    position = angles = quaternion = None
+    rest = words
+    if code in (
+        DataFormat.POSITION,
+        DataFormat.POSITION_ANGLES,
+        DataFormat.POSITION_MATRIX,
+        DataFormat.POSITION_QUATERNION,
+    ):
+        position = tuple(full_scale * w / WORD_DIVISOR for w in words[:3])
+        matrix[:3, 3] = position
+        rest = words[3:]
+    if code in (DataFormat.ANGLES, DataFormat.POSITION_ANGLES):
+        angles = tuple(ANGLE_SCALE * w / WORD_DIVISOR for w in rest[:3])
+        matrix[:3, :3] = rotation_zyx(*angles)
+    elif code in (DataFormat.MATRIX, DataFormat.POSITION_MATRIX):
+        matrix[:3, :3] = rotation_from_matrix_words(rest[:9])
+    elif code in (DataFormat.QUATERNION, DataFormat.POSITION_QUATERNION):
+        # q0 is the scalar part; used as sent (no conjugation, unlike the Flock driver).
+        quaternion = tuple(w / FRACTION_DIVISOR for w in rest[:4])
+        matrix[:3, :3] = rotation_from_quaternion(*quaternion)
+    return BirdSample(
+        unit=unit,
+        address=record.address,
+        data_format=int(code),
+        matrix=matrix,
+        position=position,  # type: ignore[arg-type]
+        angles=angles,  # type: ignore[arg-type]
+        quaternion=quaternion,  # type: ignore[arg-type]
+        buttons=record.buttons,
+    )
+
+
+class _Stream:
+    """Buffered reads from a TCP socket against deadlines."""
+
+    def __init__(self, sock: socket.socket) -> None:
+        self.sock = sock
+        self.buffer = bytearray()
+
+    def fill(self, size: int, deadline: float) -> bool:
+        """Read until ``size`` bytes are buffered; False at the deadline."""
+        while len(self.buffer) < size:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                return False
+            self.sock.settimeout(remaining)
+            try:
+                chunk = self.sock.recv(65536)
+            except TimeoutError:
+                return False
+            except OSError as exc:
+                raise MotionStarDisconnected(f"connection lost: {exc}") from exc
+            if not chunk:
+                raise MotionStarDisconnected("the server closed the connection")
+            self.buffer += chunk
+        return True
+
+    def send(self, data: bytes) -> None:
+        try:
+            self.sock.settimeout(None)
+            self.sock.sendall(data)
+        except OSError as exc:
+            raise MotionStarDisconnected(f"connection lost: {exc}") from exc
+
+
+class MotionStar:
+    """Client of one MotionStar chassis.
+
+    Give ``host``/``port`` or an already-connected TCP ``sock`` (used, never
+    closed). ``hemisphere``, ``data_format``, ``mode``, ``report_rate`` and
+    ``measurement_rate`` take the numeric values of the motion_star definition.
+    Timeouts: ``connect_timeout``, ``read_timeout`` (per command reply),
+    ``sample_timeout`` (for :meth:`sample`), ``close_timeout`` (stop/shut-down).
+    """
+
+    def __init__(
+        self,
+        host: str = "",
+        port: int = 6000,
+        *,
+        sock: socket.socket | None = None,
+        hemisphere: int = Hemisphere.FRONT,
+        data_format: int = DataFormat.POSITION_ANGLES,
+        mode: int = RunMode.RUN_CONTINUOUS,
+        report_rate: int = 1,
+        measurement_rate: float = 0.0,
+        connect_timeout: float = 5.0,
+        read_timeout: float = 5.0,
+        sample_timeout: float = 1.0,
+        close_timeout: float = 1.0,
+    ) -> None:
+        if sock is None and not host:
+            raise ValueError("give a host or a connected socket")
+        self.host = host
+        self.port = port
+        self.hemisphere = int(Hemisphere(hemisphere))
+        self.data_format = int(DataFormat(data_format))
+        self.mode = int(RunMode(mode))
+        self.report_rate = report_rate
+        self.measurement_rate = measurement_rate
+        self.connect_timeout = connect_timeout
+        self.read_timeout = read_timeout
+        self.sample_timeout = sample_timeout
+        self.close_timeout = close_timeout
+        self.sequence = 0
+        self.system_status: SystemStatus | None = None
+        self.birds: dict[int, BirdStatus] = {}
+        self.sensors: tuple[int, ...] = ()
+        self.full_scale: int | None = None
+        self.units = ""
+        self.warnings: list[str] = []
+        self.packets = 0
+        self.bad_packets = 0
+        self.skipped_bytes = 0
+        self.sequence_resyncs = 0
+        self.unknown_records = 0
+        self.sensor_errors = 0
+        self.last_error_code = 0
+        self._given_sock = sock
+        self._stream: _Stream | None = None
+        self._running = False
+        self._in_junk = False
+        self._units_of: dict[int, int] = {}
+
+    # -- life cycle -------------------------------------------------------------------
+
+    def open(self) -> None:
+        """Connect, wake the server, read status, configure the birds, start data."""
+        if self._stream is not None:
+            return
+        sock = self._given_sock or socket.create_connection(
+            (self.host, self.port), timeout=self.connect_timeout
+        )
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self._stream = _Stream(sock)
+        self.sequence = 0
+        try:
+            self._wake_up()
+            status = SystemStatus.parse(self._transact(MSG_GET_STATUS, RSP_GET_STATUS)[1])
+            if self.measurement_rate > 0:
+                self._send_rate(status)
+                status = SystemStatus.parse(self._transact(MSG_GET_STATUS, RSP_GET_STATUS)[1])
+            self.system_status = status
+            self._configure_birds(status)
+            if self.full_scale is None:
+                raise MotionStarError("no bird reported a position scale")
+            if self.mode == RunMode.RUN_CONTINUOUS:
+                self._transact(MSG_RUN_CONTINUOUS, RSP_RUN_CONTINUOUS)
+                self._running = True
+        except BaseException:
+            self._drop_connection()
+            raise
+
+    def close(self) -> None:
+        """Stop the data, shut the server down, and close our own socket."""
+        if self._stream is None:
+            return
+        try:
+            if self._running:
+                self._transact(MSG_STOP_DATA, RSP_STOP_DATA, timeout=self.close_timeout)
+            self._transact(MSG_SHUT_DOWN, RSP_SHUT_DOWN, timeout=self.close_timeout)
+        except MotionStarError:
+            pass  # the server may be gone already
+        finally:
+            self._drop_connection()
+
+    @property
+    def is_open(self) -> bool:
+        return self._stream is not None
+
+    def __enter__(self) -> MotionStar:
+        self.open()
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    # -- data ---------------------------------------------------------------------------
+
+    def sample(self) -> MotionStarSample | None:
+        """Read one data packet (asking for it in single-shot mode).
+
+        Returns None if none completes within ``sample_timeout``. Garbage and
+        truncated packets are counted in ``bad_packets`` (bytes in
+        ``skipped_bytes``) and skipped. Raises :class:`MotionStarDisconnected`
+        when the connection is lost.
+        """
+        if self._stream is None:
+            raise MotionStarError("the MotionStar is not open")
+        if self.mode == RunMode.SAMPLE_INDIVIDUALLY:
+            self._send(MSG_SINGLE_SHOT)
+        deadline = time.monotonic() + self.sample_timeout
+        while True:
+            packet = self._read_packet(deadline)
+            if packet is None:
+                return None
+            header, _payload, records = packet
+            if header.type == DATA_PACKET_MULTI and records is not None:
+                return self._decode(header, records)
+
+    # -- internals ------------------------------------------------------------------------
+
+    def _drop_connection(self) -> None:
+        stream, self._stream = self._stream, None
+        self._running = False
+        self.sequence = 0  # a new connection starts from 0, as the C++ does
+        if stream is not None and self._given_sock is None:
+            try:
+                stream.sock.close()
+            except OSError:
+                pass
+
+    def _send(self, kind: int, xtype: int = 0, payload: bytes = b"") -> None:
+        assert self._stream is not None
+        header = Header(self.sequence, kind, xtype, len(payload))
+        self._stream.send(header.pack() + payload)
+
+    def _transact(
+        self,
+        kind: int,
+        reply: int,
+        xtype: int = 0,
+        payload: bytes = b"",
+        timeout: float | None = None,
+    ) -> tuple[Header, bytes]:
+        """Send a command and wait for its reply, passing over data packets."""
+        self._send(kind, xtype, payload)
+        deadline = time.monotonic() + (self.read_timeout if timeout is None else timeout)
+        while True:
+            packet = self._read_packet(deadline)
+            if packet is None:
+                raise MotionStarTimeout(f"no reply to message {kind} (xtype {xtype})")
+            header, body, _records = packet
+            if header.type == reply:
+                if header.error_code:
+                    raise MotionStarCommandError(
+                        f"message {kind} (xtype {xtype}): server error {header.error_code}"
+                    )
+                return header, body
+            if header.type in (RSP_ILLEGAL, RSP_UNKNOWN):
+                raise MotionStarCommandError(f"message {kind} refused with type {header.type}")
+
+    def _read_packet(self, deadline: float) -> tuple[Header, bytes, list[Record] | None] | None:
+        """Next well-formed server message, re-synchronising over junk."""
+        stream = self._stream
+        assert stream is not None
+        while True:
+            if not stream.fill(HEADER.size, deadline):
+                return None
+            header = Header.unpack(bytes(stream.buffer[: HEADER.size]))
+            if not header.plausible():
+                self._skip_byte(stream)
+                continue
+            size = HEADER.size + header.length
+            if not stream.fill(size, deadline):
+                return None  # keep the partial packet for the next call
+            payload = bytes(stream.buffer[HEADER.size : size])
+            records = None
+            if header.type == DATA_PACKET_MULTI:
+                records = parse_records(payload)
+                if records is None:
+                    # A false header or a packet cut short by the next one:
+                    # rescan from the following byte.
+                    self._skip_byte(stream)
+                    continue
+            del stream.buffer[:size]
+            self._in_junk = False
+            self._track_sequence(header)
+            return header, payload, records
+
+    def _skip_byte(self, stream: _Stream) -> None:
+        if not self._in_junk:
+            self.bad_packets += 1
+            self._in_junk = True
+        self.skipped_bytes += 1
+        del stream.buffer[0]
+
+    def _track_sequence(self, header: Header) -> None:
+        """Adopt the server's sequence number if it differs, then count on."""
+        if header.sequence != self.sequence:
+            self.sequence_resyncs += 1
+            self.sequence = header.sequence
+        self.sequence = (self.sequence + 1) % SEQUENCE_MODULO
+
+    def _wake_up(self) -> None:
+        try:
+            self._transact(MSG_WAKE_UP, RSP_WAKE_UP)
+        except MotionStarCommandError:
+            # The manual's recovery: shut the server down and wake it again.
+            self._transact(MSG_SHUT_DOWN, RSP_SHUT_DOWN)
+            self._transact(MSG_WAKE_UP, RSP_WAKE_UP)
+
+    def _send_rate(self, status: SystemStatus) -> None:
+        try:
+            self._transact(MSG_SEND_SETUP, RSP_SEND_SETUP, 0, status.with_rate(self.measurement_rate))
+        except MotionStarCommandError as exc:
+            self.warnings.append(f"measurement rate not set: {exc}")
+
+    def _configure_birds(self, status: SystemStatus) -> None:
+        """Read each non-ERC bird's status, write back our setup for sensors."""
+        self.birds.clear()
+        sensors: list[int] = []
+        for index, flags in enumerate(status.devices):
+            address = index + 1
+            if flags & FBB_ERC:
+                continue
+            _header, body = self._transact(MSG_GET_STATUS, RSP_GET_STATUS, address)
+            if len(body) < BIRD_STATUS_SIZE:
+                raise MotionStarCommandError(f"bird {address}: status of {len(body)} bytes")
+            bird = BirdStatus(address, bytes(body[:BIRD_STATUS_SIZE]))
+            if self.full_scale is None:
+                self.full_scale = bird.full_scale
+                self.units = UNITS.get(bird.units, f"unknown units {bird.units}")
+                if bird.units not in UNITS:
+                    self.warnings.append(f"bird {address} reports units code {bird.units}")
+            block = bird.raw
+            if flags & FBB_SENSOR:
+                block = bird.configured(self.data_format, self.report_rate, self.hemisphere)
+                sensors.append(bird.fbb_address)
+            self._transact(MSG_SEND_SETUP, RSP_SEND_SETUP, address, block)
+            self.birds[address] = BirdStatus(address, block)
+        self.sensors = tuple(sensors)
+        self._units_of = {address: unit for unit, address in enumerate(self.sensors)}
+
+    def _decode(self, header: Header, records: list[Record]) -> MotionStarSample:
+        self.packets += 1
+        if header.error_code:
+            self.last_error_code = header.error_code
+        birds = []
+        for record in records:
+            unit = self._units_of.get(record.address)
+            if unit is None:
+                self.unknown_records += 1
+                continue
+            if record.format_code == ERROR_FORMAT:
+                self.sensor_errors += 1
+                continue
+            birds.append(decode_record(record, unit, float(self.full_scale or 0)))
+        return MotionStarSample(
+            sequence=header.sequence,
+            milliseconds=header.milliseconds,
+            time=header.time,
+            error_code=header.error_code,
+            birds=tuple(birds),
+        )

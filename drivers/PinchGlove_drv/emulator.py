@@ -1,0 +1,316 @@
+"""A Fakespace PinchGlove box on a pseudo-terminal, independent of gadgetctl.
+
+The emulator owns the master side of an ``os.openpty()`` pair; a driver opens
+the slave's path (``address``) as a serial port. It answers the two-byte
+commands (``C L/R/P/T`` queries, ``T 1/0`` timestamps, ``V`` format version),
+replies ``?`` to a pair it does not know, and once timestamps have been set
+it plays a scripted scenario of touch frames:
+
+``idle``        no contact ever changes, so nothing is sent
+``touches``     a fixed press/release sequence (``buttons`` is an alias)
+``motion``      the thumb taps each finger in turn, left hand then right
+``garbage``     the touch sequence with junk bytes and broken frames in between
+``disconnect``  ``disconnect_after`` frames of the touch sequence, then hang-up
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import random
+import select
+import sys
+import threading
+import time
+import tty
+from collections.abc import Iterator
+from pathlib import Path
+from types import TracebackType
+
+# The emulator keeps its own copy of the wire constants so that a mistake in the
+# driver cannot be mirrored here and go unnoticed by the tests.
+START_DATA = 0x80
+START_DATA_TS = 0x81
+START_INFO = 0x82
+END = 0x8F
+CMD_QUERY = ord("C")
+CMD_TIMESTAMPS = ord("T")
+CMD_FORMAT_VERSION = ord("V")
+QUERIES = {
+    ord("L"): "left_version",
+    ord("R"): "right_version",
+    ord("P"): "processor",
+    ord("T"): "tick_length",
+}
+CONFUSED = b"?"
+
+Groups = tuple[tuple[int, int], ...]
+
+SCENARIOS = ("idle", "touches", "buttons", "motion", "garbage", "disconnect")
+
+L_THUMB, L_INDEX, L_MIDDLE, L_RING, L_PINKY = (1 << k for k in range(5))
+R_THUMB, R_INDEX, R_MIDDLE, R_RING, R_PINKY = L_THUMB, L_INDEX, L_MIDDLE, L_RING, L_PINKY
+
+#: The press/release sequence of the ``touches`` scenario (one frame per step).
+TOUCH_SEQUENCE: tuple[Groups, ...] = (
+    ((L_THUMB | L_INDEX, 0),),
+    (),
+    ((0, R_THUMB | R_MIDDLE),),
+    (),
+    ((L_THUMB, R_THUMB),),
+    ((L_THUMB | L_PINKY, 0), (0, R_RING | R_PINKY)),
+    (),
+)
+
+#: Junk inserted before each valid frame by the ``garbage`` scenario.
+GARBAGE_CHUNKS: tuple[bytes, ...] = (
+    bytes([0x13, 0x37, 0x00, 0x7E]),  # bytes outside any frame
+    bytes([START_DATA_TS, 0x03, 0x00]),  # truncated: the next frame starts at once
+    bytes([START_DATA, 0x01, END]),  # odd number of pair bytes
+    bytes([START_DATA, 0x60, 0x00, END]),  # bits no finger has
+    bytes([END, END]),  # stray end bytes
+    bytes([START_INFO]) + b"noise" + bytes([END]),  # an unsolicited info frame
+    bytes([START_DATA_TS, END]),  # too short to hold a timestamp
+)
+
+#: Timestamp tick: 16382 ticks saturate after 13.6511206 s (PinchGlove manual).
+TICK_SECONDS = 13.6511206 / 16382
+MAX_TICKS = 16382
+
+DEFAULT_INFO = {
+    "left_version": "PG-L 1.1",
+    "right_version": "PG-R 1.1",
+    "processor": "PGP 2.0",
+    "tick_length": "833",
+}
+
+
+def encode_frame(groups: Groups, timestamp: int | None) -> bytes:
+    """A touch frame: start byte, ``(left, right)`` pairs, 2 timestamp bytes, end."""
+    out = bytearray([START_DATA if timestamp is None else START_DATA_TS])
+    for left, right in groups:
+        out += bytes([left & 0x1F, right & 0x1F])
+    if timestamp is not None:
+        out += bytes([timestamp >> 7 & 0x7F, timestamp & 0x7F])
+    out.append(END)
+    return bytes(out)
+
+
+def touch_steps(scenario: str) -> Iterator[Groups]:
+    """Endless contact-group steps of a scenario (none for ``idle``)."""
+    if scenario == "idle":
+        return
+    if scenario == "motion":
+        step = 0
+        while True:
+            finger = 1 << (1 + step % 4)
+            yield ((L_THUMB | finger, 0),) if step // 4 % 2 == 0 else ((0, R_THUMB | finger),)
+            yield ()
+            step += 1
+    while True:
+        yield from TOUCH_SEQUENCE
+
+
+class PinchGloveEmulator:
+    """The glove box side of the protocol on a pty pair.
+
+    ``address`` is the slave's path once started. ``rate`` is frames per second.
+    ``link`` optionally names a symlink to create pointing at the pty.
+    ``sent`` records every valid frame sent as ``(groups, timestamp)``.
+    """
+
+    def __init__(
+        self,
+        scenario: str = "touches",
+        rate: float = 2.0,
+        *,
+        disconnect_after: int = 5,
+        link: str | os.PathLike[str] | None = None,
+        info: dict[str, str] | None = None,
+        seed: int = 7,
+    ) -> None:
+        if scenario not in SCENARIOS:
+            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
+        if rate <= 0:
+            raise ValueError("rate must be positive")
+        self.scenario = "touches" if scenario == "buttons" else scenario
+        self.rate = rate
+        self.disconnect_after = disconnect_after
+        self.link = Path(link) if link is not None else None
+        self.info = dict(DEFAULT_INFO if info is None else info)
+        self.address = ""
+        self.commands: list[bytes] = []
+        self.sent: list[tuple[Groups, int | None]] = []
+        self.bytes_received = 0
+        self.timestamps = True
+        self.streaming = threading.Event()
+        self.disconnected = threading.Event()
+        self._rng = random.Random(seed)
+        self._master = -1
+        self._slave = -1
+        self._pending: int | None = None
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._steps = touch_steps(self.scenario)
+        self._next_due = 0.0
+        self._frame_index = 0
+        self._lock = threading.Lock()
+
+    # -- life cycle -------------------------------------------------------------------
+
+    def start(self) -> PinchGloveEmulator:
+        """Create the pty pair and start answering in a background thread."""
+        if self._thread is not None:
+            return self
+        self._master, self._slave = os.openpty()
+        tty.setraw(self._slave)  # no echo, no line editing, bytes pass untouched
+        self.address = os.ttyname(self._slave)
+        if self.link is not None:
+            with contextlib.suppress(FileNotFoundError):
+                self.link.unlink()
+            self.link.symlink_to(self.address)
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._run, name="pinchglove-emulator", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        """Stop the thread and close the pty."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5)
+            self._thread = None
+        self._close_fds()
+        if self.link is not None and self.link.is_symlink():
+            self.link.unlink()
+
+    def __enter__(self) -> PinchGloveEmulator:
+        return self.start()
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.stop()
+
+    # -- device behaviour ---------------------------------------------------------------
+
+    def _run(self) -> None:
+        while not self._stop.is_set() and self._master >= 0:
+            wait = 0.05
+            if self.streaming.is_set():
+                wait = min(wait, max(0.0, self._next_due - time.monotonic()))
+            try:
+                ready, _, _ = select.select([self._master], [], [], wait)
+                if ready:
+                    data = os.read(self._master, 1024)
+                    self.bytes_received += len(data)
+                    for value in data:
+                        self._on_byte(value)
+                if self.streaming.is_set() and time.monotonic() >= self._next_due:
+                    self._next_due += 1.0 / self.rate
+                    self._emit_step()
+            except OSError:
+                break
+
+    def _on_byte(self, value: int) -> None:
+        if self._pending is None:
+            self._pending = value
+            return
+        pair = bytes([self._pending, value])
+        self._pending = None
+        self.commands.append(pair)
+        self._answer(pair)
+
+    def _answer(self, pair: bytes) -> None:
+        first, second = pair
+        if first == CMD_QUERY and second in QUERIES:
+            self._reply(self.info[QUERIES[second]].encode("ascii"))
+        elif first == CMD_TIMESTAMPS and second in b"01":
+            self.timestamps = second == ord("1")
+            self._reply(bytes([second]))
+            if not self.streaming.is_set():
+                self._next_due = time.monotonic()
+                self.streaming.set()
+        elif first == CMD_FORMAT_VERSION and second in b"01":
+            self._reply(bytes([second]))
+        else:
+            self._reply(CONFUSED)
+
+    def _reply(self, text: bytes) -> None:
+        self._write(bytes([START_INFO]) + text + bytes([END]))
+
+    def _emit_step(self) -> None:
+        if self.scenario == "disconnect" and self._frame_index >= self.disconnect_after:
+            self.disconnected.set()
+            self._close_fds()
+            return
+        groups = next(self._steps, None)
+        if groups is None:
+            return
+        stamp = min(round(self._frame_index / self.rate / TICK_SECONDS), MAX_TICKS)
+        timestamp = stamp if self.timestamps else None
+        frame = encode_frame(groups, timestamp)
+        junk = b""
+        if self.scenario == "garbage":
+            junk = GARBAGE_CHUNKS[self._frame_index % len(GARBAGE_CHUNKS)]
+            junk += bytes(self._rng.randrange(0x00, 0x7F) for _ in range(self._frame_index % 3))
+        self._frame_index += 1
+        self.sent.append((groups, timestamp))
+        self._write(junk + frame)
+
+    def send_raw(self, data: bytes) -> None:
+        """Write bytes to the driver as they are (for tests and experiments)."""
+        self._write(data)
+
+    def _write(self, data: bytes) -> None:
+        with self._lock:
+            if self._master >= 0:
+                os.write(self._master, data)
+
+    def _close_fds(self) -> None:
+        with self._lock:
+            for fd in (self._master, self._slave):
+                if fd >= 0:
+                    with contextlib.suppress(OSError):
+                        os.close(fd)
+            self._master = self._slave = -1
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the emulator until Ctrl-C or ``--duration`` seconds."""
+    parser = argparse.ArgumentParser(
+        prog="PinchGlove_drv.emulator",
+        description="Emulate a Fakespace PinchGlove box on a pseudo-terminal.",
+    )
+    parser.add_argument("--scenario", choices=SCENARIOS, default="touches")
+    parser.add_argument("--rate", type=float, default=2.0, help="touch frames per second")
+    parser.add_argument(
+        "--port", default=None, help="also create this symlink to the pty (e.g. /tmp/pinchglove)"
+    )
+    parser.add_argument("--duration", type=float, default=None, help="seconds to run")
+    parser.add_argument("--disconnect-after", type=int, default=5, help="frames before hang-up")
+    args = parser.parse_args(argv)
+    emulator = PinchGloveEmulator(
+        args.scenario, args.rate, disconnect_after=args.disconnect_after, link=args.port
+    )
+    with emulator:
+        where = str(emulator.link) if emulator.link is not None else emulator.address
+        print(f"PinchGlove emulator ({args.scenario}) on {emulator.address}", flush=True)
+        print(f"point the pinch_glove element at it: <port>{where}</port>", flush=True)
+        deadline = None if args.duration is None else time.monotonic() + args.duration
+        try:
+            while deadline is None or time.monotonic() < deadline:
+                if emulator.disconnected.wait(0.1):
+                    print("scenario finished: the line was hung up", flush=True)
+                    break
+        except KeyboardInterrupt:
+            pass
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
