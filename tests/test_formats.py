@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
+from gadgetctl.validate import validate_paths
+
 from conftest import write
 from jccl_samples import CONFIG_NS, jconf, jdef, prop
-
-from gadgetctl.validate import validate_paths
 
 
 def found(path):
