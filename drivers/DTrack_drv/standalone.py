@@ -262,9 +262,13 @@ class _FrameBuilder:
 
     def build(self, bad_lines: int) -> DTrackFrame:
         return DTrackFrame(
-            bodies=tuple(self.bodies), flysticks=tuple(self.flysticks),
-            meatools=tuple(self.meatools), markers=tuple(self.markers),
-            gloves=tuple(self.gloves), bad_lines=bad_lines, **self.values,  # type: ignore[arg-type]
+            bodies=tuple(self.bodies),
+            flysticks=tuple(self.flysticks),
+            meatools=tuple(self.meatools),
+            markers=tuple(self.markers),
+            gloves=tuple(self.gloves),
+            bad_lines=bad_lines,
+            **self.values,  # type: ignore[arg-type]
         )
 
     # Each method parses one tag into local lists first, so a bad line adds nothing.
@@ -286,7 +290,9 @@ class _FrameBuilder:
         for _ in range(_count(line.head(0), "body count")):
             ident, quality = line.block(2)
             loc = line.location()
-            found.append(Body(_count(ident, "id"), _float(quality), loc, pose_matrix(loc, line.floats(9))))
+            found.append(
+                Body(_count(ident, "id"), _float(quality), loc, pose_matrix(loc, line.floats(9)))
+            )
         self.bodies.extend(found)
 
     def body6di(self, line: _Line) -> None:
@@ -294,10 +300,16 @@ class _FrameBuilder:
         for _ in range(_count(line.head(0), "body count")):
             ident, state, error = line.block(3)
             loc = line.location()
-            found.append(Body(
-                _count(ident, "id"), float(_int(state) - 1), loc, pose_matrix(loc, line.floats(9)),
-                inertial=True, drift_error=_float(error),
-            ))
+            found.append(
+                Body(
+                    _count(ident, "id"),
+                    float(_int(state) - 1),
+                    loc,
+                    pose_matrix(loc, line.floats(9)),
+                    inertial=True,
+                    drift_error=_float(error),
+                )
+            )
         self.bodies.extend(found)
 
     def flystick6df(self, line: _Line) -> None:
@@ -311,9 +323,16 @@ class _FrameBuilder:
             # The four hat bits also give a joystick: 0x20 left, 0x80 right, 0x10 down, 0x40 up.
             x = -1.0 if mask & 0x20 else 1.0 if mask & 0x80 else 0.0
             y = -1.0 if mask & 0x10 else 1.0 if mask & 0x40 else 0.0
-            found.append(Flystick(
-                k, _float(quality), loc, pose_matrix(loc, line.floats(9)), _bits([mask], 8), (x, y)
-            ))
+            found.append(
+                Flystick(
+                    k,
+                    _float(quality),
+                    loc,
+                    pose_matrix(loc, line.floats(9)),
+                    _bits([mask], 8),
+                    (x, y),
+                )
+            )
         self.flysticks.extend(found)
         self.values["old_flysticks"] = len(found)
 
@@ -332,7 +351,9 @@ class _FrameBuilder:
             values = line.block(n_fields + n_valuators)
             fields = [_int(v) & 0xFFFFFFFF for v in values[:n_fields]]
             joystick = tuple(_float(v) for v in values[n_fields:])
-            found.append(Flystick(k, _float(quality), loc, matrix, _bits(fields, n_buttons), joystick))
+            found.append(
+                Flystick(k, _float(quality), loc, matrix, _bits(fields, n_buttons), joystick)
+            )
         self.flysticks.extend(found)
         self.values["calibrated_flysticks"] = calibrated
 
@@ -341,10 +362,15 @@ class _FrameBuilder:
         for _ in range(_count(line.head(0), "tool count")):
             ident, quality, bt = line.block(3)
             loc = line.location()
-            found.append(MeasurementTool(
-                _count(ident, "id"), _float(quality), loc, pose_matrix(loc, line.floats(9)),
-                _bits([_count(bt, "button mask")], 4),
-            ))
+            found.append(
+                MeasurementTool(
+                    _count(ident, "id"),
+                    _float(quality),
+                    loc,
+                    pose_matrix(loc, line.floats(9)),
+                    _bits([_count(bt, "button mask")], 4),
+                )
+            )
         self.meatools.extend(found)
         self.values["old_meatools"] = len(found)
 
@@ -357,10 +383,17 @@ class _FrameBuilder:
             matrix = pose_matrix(loc, line.floats(9))
             fields = [_int(v) & 0xFFFFFFFF for v in line.block(-(-n_buttons // 32))]
             covariance = tuple(line.floats(6))
-            found.append(MeasurementTool(
-                _count(ident, "id"), _float(quality), loc, matrix, _bits(fields, n_buttons),
-                tip_radius_mm=_float(radius), covariance=covariance,
-            ))
+            found.append(
+                MeasurementTool(
+                    _count(ident, "id"),
+                    _float(quality),
+                    loc,
+                    matrix,
+                    _bits(fields, n_buttons),
+                    tip_radius_mm=_float(radius),
+                    covariance=covariance,
+                )
+            )
         self.meatools.extend(found)
 
     def marker3d(self, line: _Line) -> None:
@@ -387,7 +420,9 @@ class _FrameBuilder:
                 fmatrix = pose_matrix(floc, line.floats(9))
                 tip, l_out, a_om, l_mid, a_mi, l_in = line.floats(6)
                 fingers.append(Finger(floc, fmatrix, tip, (l_out, l_mid, l_in), (a_om, a_mi)))
-            found.append(Glove(_count(ident, "id"), _float(quality), lr == "1", loc, matrix, tuple(fingers)))
+            found.append(
+                Glove(_count(ident, "id"), _float(quality), lr == "1", loc, matrix, tuple(fingers))
+            )
         self.gloves.extend(found)
 
 
@@ -626,7 +661,9 @@ class DTrackUnits:
     """
 
     def __init__(
-        self, buttons_per_flystick: int = 8, valuators_per_flystick: int = 2,
+        self,
+        buttons_per_flystick: int = 8,
+        valuators_per_flystick: int = 2,
         buttons_per_meatool: int = 4,
     ) -> None:
         self.buttons_per_flystick = buttons_per_flystick
@@ -641,8 +678,12 @@ class DTrackUnits:
         if frame.calibrated_flysticks is not None:
             self._grow(self.flysticks, frame.calibrated_flysticks)
         if frame.calibrated_bodies is not None:
-            self._grow(self.bodies, frame.calibrated_bodies - frame.old_flysticks - frame.old_meatools)
-        self._merge(self.flysticks, frame.flysticks, self.buttons_per_flystick, self.valuators_per_flystick)
+            self._grow(
+                self.bodies, frame.calibrated_bodies - frame.old_flysticks - frame.old_meatools
+            )
+        self._merge(
+            self.flysticks, frame.flysticks, self.buttons_per_flystick, self.valuators_per_flystick
+        )
         self._merge(self.meatools, frame.meatools, self.buttons_per_meatool, 0)
         self._merge(self.bodies, frame.bodies, 0, 0)
 
@@ -668,8 +709,11 @@ class DTrackUnits:
             slots.append(_Slot())
 
     def _merge(
-        self, slots: list[_Slot], objects: Sequence[Body | Flystick | MeasurementTool],
-        n_buttons: int, n_valuators: int,
+        self,
+        slots: list[_Slot],
+        objects: Sequence[Body | Flystick | MeasurementTool],
+        n_buttons: int,
+        n_valuators: int,
     ) -> None:
         for slot in slots:
             slot.quality = -1.0

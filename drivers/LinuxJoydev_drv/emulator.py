@@ -211,6 +211,8 @@ class JoydevEmulator:
                 return
             self._tick += 1
             items = next(ticks)
+            if self.scenario == "disconnect":
+                items = items[: self.disconnect_after - live]  # stop after exactly N records
             live += self._write(fd, items, self._time_ms())
             if self.scenario == "disconnect" and live >= self.disconnect_after:
                 self._unplug()
@@ -301,21 +303,35 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--duration", type=float, help="stop after this many seconds")
     parser.add_argument("--buttons", type=int, default=12)
     parser.add_argument("--axes", type=int, default=6)
-    parser.add_argument("--disconnect-after", type=int, default=20, metavar="N",
-                        help="live records per connection in the disconnect scenario")
+    parser.add_argument(
+        "--disconnect-after",
+        type=int,
+        default=20,
+        metavar="N",
+        help="live records per connection in the disconnect scenario",
+    )
     parser.add_argument("--seed", type=int, default=0, help="seed of the garbage scenario")
     args = parser.parse_args(argv)
     if args.rate <= 0 or args.buttons < 0 or args.axes < 0 or args.buttons + args.axes > 255:
         parser.error("--rate must be positive; --buttons and --axes between 0 and 255")
     emulator = JoydevEmulator(
-        args.path, scenario=args.scenario, rate=args.rate, buttons=args.buttons, axes=args.axes,
-        disconnect_after=args.disconnect_after, seed=args.seed,
+        args.path,
+        scenario=args.scenario,
+        rate=args.rate,
+        buttons=args.buttons,
+        axes=args.axes,
+        disconnect_after=args.disconnect_after,
+        seed=args.seed,
     )
     try:
         with emulator:
-            print(f"Linux joystick emulator ({args.scenario}, {args.rate:g} Hz, "
-                  f"{args.buttons} buttons, {args.axes} axes)")
-            print(f"Point the linux_joydev element at it: <port_name>{emulator.address}</port_name>")
+            print(
+                f"Linux joystick emulator ({args.scenario}, {args.rate:g} Hz, "
+                f"{args.buttons} buttons, {args.axes} axes)"
+            )
+            print(
+                f"Point the linux_joydev element at it: <port_name>{emulator.address}</port_name>"
+            )
             print("Press Ctrl-C to stop.", flush=True)
             end = None if args.duration is None else time.monotonic() + args.duration
             while end is None or time.monotonic() < end:

@@ -93,7 +93,9 @@ class JoystickEvent:
 
     def pack(self) -> bytes:
         """The 8 bytes of this record."""
-        return struct.pack(EVENT_FORMAT, self.time_ms & 0xFFFFFFFF, self.value, self.type, self.number)
+        return struct.pack(
+            EVENT_FORMAT, self.time_ms & 0xFFFFFFFF, self.value, self.type, self.number
+        )
 
 
 @dataclass(frozen=True)
@@ -200,7 +202,8 @@ class EventDecoder:
         self._clock = clock
         self._buffer = bytearray()
         self._last_time: int | None = None
-        self._last_init: JoystickEvent | None = None  # the previous record, if it was an initial one
+        # the previous record, if it was an initial one
+        self._last_init: JoystickEvent | None = None
         self._last_read = 0.0
         self._skipped_in_resync = 0  # bytes skipped since the stream went out of sync
         self._in_sync = True
@@ -251,7 +254,9 @@ class EventDecoder:
         if event.is_button and event.value not in (0, 1):
             return False
         count = self.num_buttons if event.is_button else self.num_axes
-        if event.number > count or (event.number == count and (self.fixed_counts or not event.is_init)):
+        if event.number > count or (
+            event.number == count and (self.fixed_counts or not event.is_init)
+        ):
             return False
         if event.is_init and not self._init_in_order(event):
             return False
@@ -423,7 +428,9 @@ class LinuxJoydevStandalone:
     # -- internals ----------------------------------------------------------------------------
 
     def _port_label(self) -> str:
-        return os.fspath(self.port) if isinstance(self.port, (str, os.PathLike)) else repr(self.port)
+        return (
+            os.fspath(self.port) if isinstance(self.port, (str, os.PathLike)) else repr(self.port)
+        )
 
     def _query_device(self) -> None:
         """Ask the kernel for version, counts and name; a FIFO answers ENOTTY to all of them."""

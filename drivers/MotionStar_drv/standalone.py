@@ -719,7 +719,9 @@ class MotionStar:
 
     def _send_rate(self, status: SystemStatus) -> None:
         try:
-            self._transact(MSG_SEND_SETUP, RSP_SEND_SETUP, 0, status.with_rate(self.measurement_rate))
+            self._transact(
+                MSG_SEND_SETUP, RSP_SEND_SETUP, 0, status.with_rate(self.measurement_rate)
+            )
         except MotionStarCommandError as exc:
             self.warnings.append(f"measurement rate not set: {exc}")
 

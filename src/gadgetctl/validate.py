@@ -18,10 +18,13 @@ from gadgetctl.files import expand_paths
 from gadgetctl.jccl.xmlload import DEFAULT_MAX_SIZE, FileKind, XmlDocument, load_file
 
 
+LEVELS = ("xml", "schema", "definitions", "full")
+
+
 @dataclass
 class ValidateOptions:
     max_size: int = DEFAULT_MAX_SIZE
-    schema: bool = True
+    level: str = "full"  # how far to go: xml, schema, definitions or full
     bundled: bool = True
     definition_dirs: list[Path] = field(default_factory=list)
     together: bool = False
@@ -42,7 +45,7 @@ def check_document(doc: XmlDocument, options: ValidateOptions) -> None:
     if doc.root is None:
         return
     check_format(doc)
-    if options.schema:
+    if LEVELS.index(options.level) >= LEVELS.index("schema"):
         check_schema(doc)
 
 
@@ -95,6 +98,9 @@ def validate_paths(paths: Sequence[Path], options: ValidateOptions | None = None
         result.files.append(doc.path)
         result.documents.append(doc)
         result.diagnostics.extend(doc.diagnostics)
+    if LEVELS.index(options.level) < LEVELS.index("definitions"):
+        result.diagnostics.sort(key=sort_key)
+        return result
 
     definitions = [d for d in (read_definition(doc) for doc in result.documents
                                if doc.root is not None and doc.kind is FileKind.DEFINITION) if d and d.name]
@@ -104,7 +110,8 @@ def validate_paths(paths: Sequence[Path], options: ValidateOptions | None = None
     for definition in definitions:
         result.diagnostics.extend(check_definition(definition, definition.order, repo))
     result.diagnostics.extend(check_cycles(definitions, repo))
-    result.diagnostics.extend(check_configurations(result, repo, options))
+    if options.level == "full":
+        result.diagnostics.extend(check_configurations(result, repo, options))
     result.diagnostics.sort(key=sort_key)
     return result
 

@@ -19,6 +19,7 @@ COMMAND_MODULES = (
     "gadgetctl.cli.emulate_cmd",
     "gadgetctl.cli.doctor_cmd",
     "gadgetctl.cli.scaffold_cmd",
+    "gadgetctl.cli.completion_cmd",
     "gadgetctl.cli.demo_cmd",
 )
 

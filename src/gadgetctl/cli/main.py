@@ -7,6 +7,12 @@ import sys
 
 
 def main(argv: list[str] | None = None) -> None:
+    args = sys.argv[1:] if argv is None else argv
+    if args in (["--version"], ["-V"]):  # answered without loading the CLI framework
+        from gadgetctl import __version__
+
+        print(f"gadgetctl {__version__}")
+        return
     from gadgetctl.cli.app import build_app
     from gadgetctl.errors import GadgetctlError
 

@@ -16,6 +16,13 @@ class DiagnosticFormat(StrEnum):
     sarif = "sarif"
 
 
+class CheckLevel(StrEnum):
+    xml = "xml"
+    schema = "schema"
+    definitions = "definitions"
+    full = "full"
+
+
 class DataFormat(StrEnum):
     text = "text"
     json = "json"

@@ -8,6 +8,7 @@ import typer
 
 from gadgetctl.cli.options import (
     BUNDLED_OPTION,
+    CheckLevel,
     COLOR_OPTION,
     DEFINITIONS_OPTION,
     ColorMode,
@@ -28,6 +29,7 @@ def validate(
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
     together: bool = typer.Option(False, "--together", help="Treat all configuration files as one configuration, as VR Juggler does with several files on its command line (pointer checks span them all)."),
+    level: CheckLevel = typer.Option(CheckLevel.full, "--level", help="How far to check: xml (well-formedness, encoding, format markers), schema, definitions, or full (configuration semantics too)."),
     max_size: int = typer.Option(16 * 1024 * 1024, "--max-size", help="Largest file read, in bytes.", min=1),
     hints: bool = typer.Option(True, "--hints/--no-hints", help="Show a hint under findings that have one (text format)."),
     color: ColorMode = COLOR_OPTION,
@@ -40,7 +42,7 @@ def validate(
     from gadgetctl.report import render
     from gadgetctl.validate import ValidateOptions, validate_paths
 
-    options = ValidateOptions(max_size=max_size, bundled=bundled, definition_dirs=list(definitions),
+    options = ValidateOptions(max_size=max_size, level=level.value, bundled=bundled, definition_dirs=list(definitions),
                               together=together)
     result = validate_paths(paths, options)
     emit(render(fmt.value, result.diagnostics, files_checked=len(result.files),

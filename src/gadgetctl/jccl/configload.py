@@ -83,10 +83,14 @@ def read_config_file(doc: XmlDocument, path: Path) -> ConfigFile:
 
 class ConfigurationLoader:
     def __init__(self, *, environ: Mapping[str, str] | None = None, max_size: int = DEFAULT_MAX_SIZE,
-                 documents: Mapping[Path, XmlDocument] | None = None) -> None:
+                 documents: dict[Path, XmlDocument] | None = None,
+                 files: dict[Path, ConfigFile] | None = None) -> None:
         self.environ = os.environ if environ is None else environ
         self.max_size = max_size
-        self.documents = dict(documents or {})  # already loaded files, by resolved path
+        # Already loaded documents and read files, by resolved path; shared (not copied) so
+        # that several configurations of one run read each file once.
+        self.documents = {} if documents is None else documents
+        self.files = {} if files is None else files
         self.configuration = Configuration()
         self._loaded: set[Path] = set()
 
@@ -107,8 +111,10 @@ class ConfigurationLoader:
         if resolved in self._loaded:
             return
         self._loaded.add(resolved)
-        doc = self._document(resolved, display or str(path))
-        config = read_config_file(doc, resolved)
+        config = self.files.get(resolved)
+        if config is None:
+            doc = self._document(resolved, display or str(path))
+            config = self.files[resolved] = read_config_file(doc, resolved)
         self.configuration.files.append(config)
         for raw, location in config.includes:
             self._include(raw, location, resolved, [*stack, resolved])
@@ -161,5 +167,6 @@ def _display(path: Path) -> str:
 
 
 def load_configuration(paths: Iterable[Path], *, environ: Mapping[str, str] | None = None,
-                       documents: Mapping[Path, XmlDocument] | None = None) -> Configuration:
-    return ConfigurationLoader(environ=environ, documents=documents).load(paths)
+                       documents: dict[Path, XmlDocument] | None = None,
+                       files: dict[Path, ConfigFile] | None = None) -> Configuration:
+    return ConfigurationLoader(environ=environ, documents=documents, files=files).load(paths)

@@ -1,0 +1,69 @@
+"""What VR Juggler's run time does with particular element types (reference sections 4-9).
+
+The generic definition model cannot say these things: which proxies skip dependency checks,
+which handlers refuse old element versions, which pointers an element cannot work without,
+and which string properties are paths that get environment variables expanded.
+"""
+
+from __future__ import annotations
+
+# gadget::ProxyDepChecker: these proxies count as configured even when their device is
+# missing (they return default data); command_proxy and string_proxy are not among them.
+STUPEFIED_PROXIES = frozenset({
+    "analog_proxy", "digital_proxy", "gesture_proxy", "glove_proxy", "keyboard_mouse_proxy",
+    "position_proxy", "rumble_proxy", "hat_proxy",
+})
+
+# cluster::ClusterDepChecker lets cluster_node elements through unconditionally.
+NO_DEPENDENCY_CHECK = STUPEFIED_PROXIES | {"cluster_node"}
+
+# Handlers that refuse elements older than a version: the element stays pending.
+MINIMUM_VERSIONS = {
+    "input_manager": 2,
+    "cluster_manager": 3,
+    "keyboard_mouse_device": 2,
+    "input_window": 2,
+    "flock": 2,
+    "motion_star": 2,
+    "fastrak": 2,
+}
+
+# Types that have a definition but that no handler accepts.
+NEVER_HANDLED = {
+    "gesture_proxy": "Gadgeteer has no constructor for gesture proxies (it is commented out)",
+}
+
+# Pointers an element cannot work without, as (base type, property): the rule applies to
+# the base type and every type derived from it.
+REQUIRED_POINTERS: tuple[tuple[str, str, str], ...] = (
+    ("alias", "proxy", "the alias stays pending and resolves to nothing"),
+    ("proxy", "device", "the proxy is never bound and returns default data"),
+    ("simulated_analog_device", "keyboard_mouse_proxy", "the simulated device never sees a key"),
+    ("simulated_digital_device", "keyboard_mouse_proxy", "the simulated device never sees a key"),
+    ("simulated_positional_device", "keyboard_mouse_proxy", "the simulated device never sees a key"),
+    ("simulated_digital_glove", "keyboard_mouse_proxy", "the simulated device never sees a key"),
+    ("simulated_glove_gesture", "keyboard_mouse_proxy", "the simulated device never sees a key"),
+    ("simulated_glove_gesture", "glove_position", "the device fails to configure"),
+    ("simulated_relative_position", "base_frame_proxy", "the device has no base frame"),
+    ("simulated_relative_position", "relative_proxy", "the device has nothing to follow"),
+)
+
+# String properties whose values VR Juggler passes through environment-variable expansion
+# as paths, by (type, property).
+PATH_PROPERTIES = frozenset({
+    ("input_manager", "driver_path"),
+    ("input_manager", "driver_scan_path"),
+    ("cluster_manager", "plugin_path"),
+})
+
+
+def missing_target_effect(type_name: str) -> str:
+    """What the run time does with an element of this type whose pointer finds nothing."""
+    if type_name in STUPEFIED_PROXIES:
+        return "the proxy stays unbound and returns default data"
+    if type_name == "cluster_node":
+        return "the cluster node is configured without it"
+    if type_name in ("command_proxy", "string_proxy"):
+        return (f"unlike most proxies, a {type_name} waits for its device, so VR Juggler keeps it "
+                "pending forever")
+    return "VR Juggler keeps the element pending until an element of that name appears"
