@@ -11,7 +11,6 @@ independently of the library that reads them.
 from __future__ import annotations
 
 import copy
-import re
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -78,24 +77,29 @@ def parse_definition(root: etree._Element) -> Definition:
         props = []
         for p in v.iterfind(D + "property"):
             enum = p.find(D + "enumeration")
-            props.append(Prop(
-                name=p.get("name"),
-                valuetype=p.get("valuetype"),
-                variable=p.get("variable"),
-                defaults=tuple(s.get("defaultvalue") for s in p.iterfind(D + "value")),
-                allowed=tuple(a.text.strip() for a in p.iterfind(D + "allowed_type")),
-                editable=None if enum is None else (enum.get("editable") or "false").strip(),
-                enums=() if enum is None else tuple(
-                    (e.get("label"), e.get("value")) for e in enum.iterfind(D + "enum")),
-                help=norm(p.findtext(D + "help")),
-            ))
+            props.append(
+                Prop(
+                    name=p.get("name"),
+                    valuetype=p.get("valuetype"),
+                    variable=p.get("variable"),
+                    defaults=tuple(s.get("defaultvalue") for s in p.iterfind(D + "value")),
+                    allowed=tuple(a.text.strip() for a in p.iterfind(D + "allowed_type")),
+                    editable=None if enum is None else (enum.get("editable") or "false").strip(),
+                    enums=()
+                    if enum is None
+                    else tuple((e.get("label"), e.get("value")) for e in enum.iterfind(D + "enum")),
+                    help=norm(p.findtext(D + "help")),
+                )
+            )
         transform = v.find(f"{D}upgrade_transform/{{{XSL_NS}}}stylesheet")
         number = int(v.get("version"))
         versions[number] = Version(
             number=number,
             abstract=(v.findtext(D + "abstract") or "false").strip(),
             help=norm(v.findtext(D + "help")),
-            parents=tuple(p.text.strip() for p in v.iterfind(D + "parent") if (p.text or "").strip()),
+            parents=tuple(
+                p.text.strip() for p in v.iterfind(D + "parent") if (p.text or "").strip()
+            ),
             categories=tuple(c.text or "" for c in v.iterfind(D + "category")),
             props=tuple(props),
             transform=transform,
@@ -168,15 +172,21 @@ def deviations() -> tuple[Deviation, ...]:
 
 
 def allowed_type_deviations() -> dict[tuple[str, int, str], Deviation]:
-    return {(d.definition, int(d.version), d.prop): d
-            for d in deviations() if d.field == "allowed_type"}
+    return {
+        (d.definition, int(d.version), d.prop): d for d in deviations() if d.field == "allowed_type"
+    }
 
 
 def kept_by_us(definition: str, version: int) -> set[str]:
     """Properties our upgrade keeps where the upstream one drops them (rows with ours = kept)."""
-    return {d.prop for d in deviations()
-            if d.field == "upgrade_transform" and d.ours == "kept"
-            and d.definition == definition and d.version == str(version)}
+    return {
+        d.prop
+        for d in deviations()
+        if d.field == "upgrade_transform"
+        and d.ours == "kept"
+        and d.definition == definition
+        and d.version == str(version)
+    }
 
 
 def type_list(types: tuple[str, ...]) -> str:
@@ -218,17 +228,25 @@ def test_file_is_utf8_valid_and_well_shaped(name):
 
 # --------------------------------------------------------------------------- interface
 def version_fields(version: Version) -> dict[str, object]:
-    return {"abstract": version.abstract, "parents": version.parents,
-            "categories": version.categories,
-            "properties": tuple(p.name for p in version.props),
-            "has_transform": version.transform is not None}
+    return {
+        "abstract": version.abstract,
+        "parents": version.parents,
+        "categories": version.categories,
+        "properties": tuple(p.name for p in version.props),
+        "has_transform": version.transform is not None,
+    }
 
 
 def prop_fields(prop: Prop) -> dict[str, object]:
-    return {"valuetype": prop.valuetype, "variable": prop.variable,
-            "slots": len(prop.defaults), "defaults": prop.defaults,
-            "allowed_type": prop.allowed, "enumeration editable": prop.editable,
-            "enumeration": prop.enums}
+    return {
+        "valuetype": prop.valuetype,
+        "variable": prop.variable,
+        "slots": len(prop.defaults),
+        "defaults": prop.defaults,
+        "allowed_type": prop.allowed,
+        "enumeration editable": prop.editable,
+        "enumeration": prop.enums,
+    }
 
 
 @pytest.mark.parametrize("name", sorted(bundled_paths()))
@@ -265,8 +283,11 @@ def test_no_stale_allowed_types_remain():
 
 
 def test_position_filters_allow_every_filter_type():
-    filters = {"position_transform_filter", "full_position_transform_filter",
-               "position_calibration_filter"}
+    filters = {
+        "position_transform_filter",
+        "full_position_transform_filter",
+        "position_calibration_filter",
+    }
     for name in ("positional_device", "position_proxy"):
         (prop,) = [p for p in bundled(name).versions[1].props if p.name == "position_filters"]
         assert set(prop.allowed) == filters
@@ -299,8 +320,12 @@ def test_help_texts_are_our_own(name):
 
 # --------------------------------------------------------------------------- upgrades
 def steps(definitions: dict[str, Definition]) -> set[tuple[str, int]]:
-    return {(d.name, v.number) for d in definitions.values() for v in d.versions.values()
-            if v.transform is not None}
+    return {
+        (d.name, v.number)
+        for d in definitions.values()
+        for v in d.versions.values()
+        if v.transform is not None
+    }
 
 
 def bundled_steps() -> list[tuple[str, int]]:
@@ -343,19 +368,28 @@ def apply(transform: etree.XSLT, element: etree._Element) -> list[etree._Element
 def canonical(element: etree._Element, ignore: frozenset[str] = frozenset()) -> tuple:
     """Tag, attributes, child elements in order and leaf text, ignoring whitespace, comments
     and text that sits directly inside an element next to child elements."""
-    children = [c for c in element if isinstance(c.tag, str)
-                and etree.QName(c).localname not in ignore]
+    children = [
+        c for c in element if isinstance(c.tag, str) and etree.QName(c).localname not in ignore
+    ]
     text = None if children else norm(element.text)
-    return (element.tag, tuple(sorted(element.attrib.items())), text,
-            tuple(canonical(c) for c in children))
+    return (
+        element.tag,
+        tuple(sorted(element.attrib.items())),
+        text,
+        tuple(canonical(c) for c in children),
+    )
 
 
 def synthetic(definition: Definition, version: int, depth: int = 0) -> etree._Element:
     """An element of the given version holding every own property of that version with its
     default values; configelement slots embed a synthetic element of the first allowed type
     when that type is defined (one level deep)."""
-    element = etree.Element(f"{{{CFG_NS}}}{definition.name}", nsmap={None: CFG_NS},
-                            name=f"synthetic {definition.name}", version=str(version))
+    element = etree.Element(
+        f"{{{CFG_NS}}}{definition.name}",
+        nsmap={None: CFG_NS},
+        name=f"synthetic {definition.name}",
+        version=str(version),
+    )
     for prop in definition.versions[version].props:
         for default in prop.defaults:
             if prop.valuetype == "configelement":
@@ -398,15 +432,15 @@ def element_from(text: str) -> etree._Element:
 BRANCH_CASES: dict[tuple[str, int], list[str]] = {
     ("fastrak", 2): [
         '<fastrak name="f" version="1"><port>/dev/ttyS1</port><baud>38400</baud>'
-        '<hem1>0.0</hem1><hem1>0.0</hem1><hem1>-1.0</hem1><device_host/></fastrak>',
+        "<hem1>0.0</hem1><hem1>0.0</hem1><hem1>-1.0</hem1><device_host/></fastrak>",
         '<fastrak name="f" version="1"><hem1>1.0</hem1><hem1>0.0</hem1><hem1>0.0</hem1>'
         '<position_filters><position_transform_filter name="x" version="1">'
-        '<custom_scale>2.0</custom_scale></position_transform_filter></position_filters>'
-        '</fastrak>',
+        "<custom_scale>2.0</custom_scale></position_transform_filter></position_filters>"
+        "</fastrak>",
     ],
     ("flock", 2): [
         '<flock name="f" version="1"><port>COM1</port><hemisphere>FRONT_HEM</hemisphere>'
-        '<filter>AC_WIDE</filter><report>Q</report></flock>',
+        "<filter>AC_WIDE</filter><report>Q</report></flock>",
         '<flock name="f" version="1"><hemisphere>AFT_HEM</hemisphere></flock>',
         '<flock name="f" version="1"><hemisphere>2</hemisphere></flock>',
     ],
@@ -416,61 +450,64 @@ BRANCH_CASES: dict[tuple[str, int], list[str]] = {
     ],
     ("opengl_frame_buffer_config", 3): [
         f'<opengl_frame_buffer_config name="o" version="2"><red_size>8</red_size>'
-        f'<fsaa_enable>{v}</fsaa_enable></opengl_frame_buffer_config>'
+        f"<fsaa_enable>{v}</fsaa_enable></opengl_frame_buffer_config>"
         for v in ("true", "1", "false")
     ],
     ("input_manager", 2): [
         '<input_manager name="im" version="1">'
-        '<driver>${VJ_BASE_DIR}/lib/gadgeteer/drivers/libFlock.so</driver>'
-        '<driver>${VJ_BASE_DIR}/lib/gadgeteer/drivers/Wanda.dll</driver>'
-        '<driver_directory>/opt/drivers</driver_directory>'
-        '<dso_file_extension>so</dso_file_extension></input_manager>',
+        "<driver>${VJ_BASE_DIR}/lib/gadgeteer/drivers/libFlock.so</driver>"
+        "<driver>${VJ_BASE_DIR}/lib/gadgeteer/drivers/Wanda.dll</driver>"
+        "<driver_directory>/opt/drivers</driver_directory>"
+        "<dso_file_extension>so</dso_file_extension></input_manager>",
         '<input_manager name="im" version="1"><driver>/usr/lib/x/libPinch.dylib</driver>'
-        '</input_manager>',
+        "</input_manager>",
     ],
     ("cluster_manager", 2): [
         '<cluster_manager name="c" version="1">'
-        '<plugin>/opt/vj/lib/gadgeteer/plugins/libRIMPlugin.so</plugin>'
-        '<plugin>/opt/vj/lib/gadgeteer/plugins/ApplicationDataManager.dll</plugin>'
-        '<cluster_nodes>node1</cluster_nodes><cluster_nodes>node2</cluster_nodes>'
-        '<barrier_master>node1</barrier_master></cluster_manager>',
+        "<plugin>/opt/vj/lib/gadgeteer/plugins/libRIMPlugin.so</plugin>"
+        "<plugin>/opt/vj/lib/gadgeteer/plugins/ApplicationDataManager.dll</plugin>"
+        "<cluster_nodes>node1</cluster_nodes><cluster_nodes>node2</cluster_nodes>"
+        "<barrier_master>node1</barrier_master></cluster_manager>",
     ],
     ("cluster_manager", 3): [
         '<cluster_manager name="c" version="2"><plugin_path>/p</plugin_path>'
-        '<plugin>RIMPlugin</plugin><plugin>StartBarrierPlugin</plugin>'
-        '<plugin>SwapLockTCPPlugin</plugin><plugin>SwapLockWiredPlugin</plugin>'
-        '<plugin>EventManager</plugin><cluster_node>a</cluster_node></cluster_manager>',
+        "<plugin>RIMPlugin</plugin><plugin>StartBarrierPlugin</plugin>"
+        "<plugin>SwapLockTCPPlugin</plugin><plugin>SwapLockWiredPlugin</plugin>"
+        "<plugin>EventManager</plugin><cluster_node>a</cluster_node></cluster_manager>",
     ],
     ("display_window", 4): [
         '<display_window name="w" version="3"><origin>1</origin><origin>2</origin>'
-        '<size>3</size><size>4</size><act_as_event_source>true</act_as_event_source>'
+        "<size>3</size><size>4</size><act_as_event_source>true</act_as_event_source>"
         '<event_window_device><event_window name="ev" version="1"><lock_key>KEY_L</lock_key>'
-        '<start_locked>true</start_locked><sleep_time>10</sleep_time></event_window>'
-        '</event_window_device><active>true</active></display_window>',
+        "<start_locked>true</start_locked><sleep_time>10</sleep_time></event_window>"
+        "</event_window_device><active>true</active></display_window>",
         '<display_window name="w" version="3"><act_as_event_source>1</act_as_event_source>'
         '<event_window_device><event_window name="ev2" version="1"/></event_window_device>'
-        '</display_window>',
+        "</display_window>",
     ],
     ("surface_viewport", 2): [
         '<surface_viewport name="s" version="1"><origin>0</origin><origin>0</origin>'
-        + "".join(f'<corners><vec3 name="c{i}" version="1"><x>{i}.1</x><y>{i}.2</y>'
-                  f'<z>{i}.3</z></vec3></corners>' for i in range(4))
-        + '<user>u</user></surface_viewport>',
+        + "".join(
+            f'<corners><vec3 name="c{i}" version="1"><x>{i}.1</x><y>{i}.2</y>'
+            f"<z>{i}.3</z></vec3></corners>"
+            for i in range(4)
+        )
+        + "<user>u</user></surface_viewport>",
     ],
     ("simulated_positional_device", 3): [
         '<simulated_positional_device name="s" version="2">'
-        '<event_window_proxy>Keyboard Proxy</event_window_proxy>'
-        '<translation_delta>0.5</translation_delta><position_filters/>'
-        '</simulated_positional_device>',
+        "<event_window_proxy>Keyboard Proxy</event_window_proxy>"
+        "<translation_delta>0.5</translation_delta><position_filters/>"
+        "</simulated_positional_device>",
     ],
     ("data_glove_ultra_wireless", 2): [
         '<data_glove_ultra_wireless name="g" version="1"><port>COM3</port>'
-        '<device_host>node1</device_host></data_glove_ultra_wireless>',
+        "<device_host>node1</device_host></data_glove_ultra_wireless>",
     ],
     ("optitrack", 2): [
         '<optitrack name="o" version="1"><server>10.0.0.1</server>'
         '<rigid_body><optitrack_rigid_body name="rb" version="1"><body_index>3</body_index>'
-        '</optitrack_rigid_body></rigid_body><position_filters>'
+        "</optitrack_rigid_body></rigid_body><position_filters>"
         '<position_transform_filter name="p" version="1"/></position_filters></optitrack>',
     ],
 }
@@ -490,17 +527,27 @@ def upgrade_inputs(name: str, version: int) -> list[etree._Element]:
 def test_upgrade_matches_upstream(name, version):
     theirs = compiled("upstream", name, version)
     ours = compiled("bundled", name, version)
-    extra = frozenset(kept_by_us(name, version))
+    definition = upstream()[name]
+    added = {p.name for p in definition.versions[version].props} - {
+        p.name for p in definition.versions[version - 1].props
+    }
+    exercised = set()
     for element in upgrade_inputs(name, version):
         source = etree.tostring(element, encoding="unicode")
+        exercised.update(prop for prop in kept_by_us(name, version) if children(element, prop))
+        # Documented differences: properties upstream drops but ours keeps, and new
+        # properties the old element already has (upstream adds a second value, ours not).
+        present = {prop for prop in added if children(element, prop)}
+        extra = frozenset(kept_by_us(name, version) | present)
         want = apply(theirs, element)
         got = apply(ours, element)
         assert got[0].get("version") == str(version), source
         assert [canonical(e, extra) for e in got] == [canonical(e, extra) for e in want], source
-        for prop in extra:  # what upstream drops, ours keeps unchanged
+        for prop in extra:  # ours keeps these unchanged
             before = [canonical(c) for c in children(element, prop)]
             after = [canonical(c) for c in children(got[0], prop)]
             assert after == before, f"{prop} not kept: {source}"
+    assert exercised == kept_by_us(name, version), "a documented kept property is never tested"
 
 
 def test_branch_cases_belong_to_real_steps():
@@ -558,11 +605,16 @@ def values(element: etree._Element, prop: str) -> list[str]:
 
 
 def test_input_manager_upgrade_keeps_bare_names_and_all_directories():
-    got = upgrade_ours("input_manager", 2, (
-        '<input_manager name="im" version="1"><driver>/a/libFlock.so</driver>'
-        '<driver>/b/Wanda_drv.dll</driver><driver>/a/IS900_drv.so</driver>'
-        '<driver>PinchGlove_drv</driver><dso_file_extension>so</dso_file_extension>'
-        '</input_manager>'))
+    got = upgrade_ours(
+        "input_manager",
+        2,
+        (
+            '<input_manager name="im" version="1"><driver>/a/libFlock.so</driver>'
+            "<driver>/b/Wanda_drv.dll</driver><driver>/a/IS900_drv.so</driver>"
+            "<driver>PinchGlove_drv</driver><dso_file_extension>so</dso_file_extension>"
+            "</input_manager>"
+        ),
+    )
     assert values(got, "driver_path") == ["/a/", "/b/"]
     assert values(got, "driver") == ["libFlock", "Wanda_drv", "IS900_drv", "PinchGlove_drv"]
     assert values(got, "dso_file_extension") == []
@@ -570,18 +622,25 @@ def test_input_manager_upgrade_keeps_bare_names_and_all_directories():
 
 
 def test_cluster_manager_upgrade_keeps_bare_names_and_all_directories():
-    got = upgrade_ours("cluster_manager", 2, (
-        '<cluster_manager name="c" version="1"><plugin>/a/libRIMPlugin.so</plugin>'
-        '<plugin>EventManager</plugin><plugin>/b/libApplicationDataManager.so</plugin>'
-        '</cluster_manager>'))
+    got = upgrade_ours(
+        "cluster_manager",
+        2,
+        (
+            '<cluster_manager name="c" version="1"><plugin>/a/libRIMPlugin.so</plugin>'
+            "<plugin>EventManager</plugin><plugin>/b/libApplicationDataManager.so</plugin>"
+            "</cluster_manager>"
+        ),
+    )
     assert values(got, "plugin_path") == ["/a/", "/b/"]
     assert values(got, "plugin") == ["RIMPlugin", "EventManager", "ApplicationDataManager"]
 
 
 def test_fastrak_upgrade_compares_the_hemisphere_vector_as_numbers():
-    got = upgrade_ours("fastrak", 2, (
-        '<fastrak name="f" version="1"><hem1>0</hem1><hem1> 1 </hem1><hem1>0.00</hem1>'
-        '</fastrak>'))
+    got = upgrade_ours(
+        "fastrak",
+        2,
+        ('<fastrak name="f" version="1"><hem1>0</hem1><hem1> 1 </hem1><hem1>0.00</hem1></fastrak>'),
+    )
     assert values(got, "hemisphere") == ["Right"]
 
 
@@ -593,7 +652,12 @@ def test_upgrades_leave_missing_old_values_to_the_defaults():
 
 
 def test_added_properties_are_not_duplicated():
-    got = upgrade_ours("display_window", 6, (
-        '<display_window name="w" version="5">'
-        '<allow_mouse_locking>false</allow_mouse_locking></display_window>'))
+    got = upgrade_ours(
+        "display_window",
+        6,
+        (
+            '<display_window name="w" version="5">'
+            "<allow_mouse_locking>false</allow_mouse_locking></display_window>"
+        ),
+    )
     assert values(got, "allow_mouse_locking") == ["false"]

@@ -6,9 +6,10 @@ import shutil
 import subprocess
 
 import pytest
-from conftest import REPO
 
 from gadgetctl.cli.completions import FILES, scripts
+
+from conftest import REPO
 
 
 def test_completion_files_are_up_to_date():

@@ -8,7 +8,7 @@ configurations are then checked against the definitions.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -16,7 +16,6 @@ from gadgetctl.diagnostics import Diagnostic, sort_key
 from gadgetctl.errors import GadgetctlError
 from gadgetctl.files import expand_paths
 from gadgetctl.jccl.xmlload import DEFAULT_MAX_SIZE, FileKind, XmlDocument, load_file
-
 
 LEVELS = ("xml", "schema", "definitions", "full")
 
@@ -28,6 +27,7 @@ class ValidateOptions:
     bundled: bool = True
     definition_dirs: list[Path] = field(default_factory=list)
     together: bool = False
+    environ: Mapping[str, str] | None = None  # for ${VAR} in paths; os.environ when None
 
 
 @dataclass
@@ -117,8 +117,12 @@ def validate_paths(paths: Sequence[Path], options: ValidateOptions | None = None
 
 
 def check_configurations(result: ValidationResult, repo, options: ValidateOptions) -> list[Diagnostic]:
-    """Configuration-level checks; filled in by the configuration checker."""
-    return []
+    """Configuration-level checks of the configurations among the files (see
+    :mod:`gadgetctl.jccl.configcheck`): each file with its includes, or all of them as one
+    configuration with ``options.together``."""
+    from gadgetctl.jccl.configcheck import check_documents
+
+    return check_documents(result.documents, repo, together=options.together, environ=options.environ)
 
 
 def summarize(diagnostics: Iterable[Diagnostic]) -> dict[str, int]:

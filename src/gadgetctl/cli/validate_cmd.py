@@ -8,9 +8,9 @@ import typer
 
 from gadgetctl.cli.options import (
     BUNDLED_OPTION,
-    CheckLevel,
     COLOR_OPTION,
     DEFINITIONS_OPTION,
+    CheckLevel,
     ColorMode,
     DiagnosticFormat,
     emit,

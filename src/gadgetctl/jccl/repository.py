@@ -126,6 +126,13 @@ class DefinitionRepository:
                     repo._origins[(name, number)] = self._origins.get((name, number))
         return repo
 
+    def extended(self, entries: Iterable[SearchPathEntry]) -> DefinitionRepository:
+        """A copy of this repository with ``entries`` appended to its search path."""
+        repo = self.overlay(())
+        for entry in entries:
+            repo.load_entry(entry)
+        return repo
+
     # -- queries ----------------------------------------------------------------------
 
     def names(self) -> list[str]:

@@ -1,0 +1,166 @@
+"""Semantic checks of configurations against their definitions.
+
+A *configuration* is what VR Juggler would load at once: one file with its includes, or,
+with ``together``, every file given. Without ``together`` a file that another given file
+includes is checked as part of the configuration that includes it (where its pointers
+can be resolved) rather than on its own.
+
+Each configuration's ``<definition_path>`` directories join the search path after every
+other entry, resolved against the directory of the file that names them.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from gadgetctl.diagnostics import Diagnostic
+from gadgetctl.envvars import expand
+from gadgetctl.jccl.configuration import ConfigElement, ConfigFile, Configuration
+from gadgetctl.jccl.elementcheck import ElementChecker, ElementReport, at, describe
+from gadgetctl.jccl.repository import DefinitionRepository
+from gadgetctl.jccl.runtime import PATH_PROPERTIES
+from gadgetctl.jccl.searchpath import SearchPathEntry, configuration_entries
+from gadgetctl.jccl.typeindex import TypeIndex
+from gadgetctl.jccl.wiring import Scope, check_wiring
+from gadgetctl.jccl.xmlload import FileKind, XmlDocument
+
+
+@dataclass
+class Session:
+    """Shared state of one run: parsed documents, read files, per-repository checkers."""
+
+    base: DefinitionRepository
+    environ: Mapping[str, str] = field(default_factory=lambda: os.environ)
+    documents: dict[Path, XmlDocument] = field(default_factory=dict)
+    files: dict[Path, ConfigFile] = field(default_factory=dict)
+    _repos: dict[tuple[Path, ...], DefinitionRepository] = field(default_factory=dict)
+    _checkers: dict[int, ElementChecker] = field(default_factory=dict)
+
+    def load(self, paths: Iterable[Path]) -> Configuration:
+        from gadgetctl.jccl.configload import load_configuration
+
+        return load_configuration(paths, environ=self.environ, documents=self.documents, files=self.files)
+
+    def definition_entries(self, config: Configuration) -> list[SearchPathEntry]:
+        entries: list[SearchPathEntry] = []
+        for config_file in config.files:
+            entries += configuration_entries(config_file.definition_dirs, config_file.path.parent, self.environ)
+        return entries
+
+    def repository(self, config: Configuration) -> tuple[DefinitionRepository, list[SearchPathEntry]]:
+        """The base repository extended by the configuration's definition_path entries."""
+        entries = self.definition_entries(config)
+        if not entries:
+            return self.base, entries
+        key = tuple(e.path for e in entries)
+        repo = self._repos.get(key)
+        if repo is None:
+            repo = self._repos[key] = self.base.extended(entries)
+        return repo, entries
+
+    def checker(self, repo: DefinitionRepository) -> ElementChecker:
+        checker = self._checkers.get(id(repo))
+        if checker is None:
+            shown = "; ".join("bundled definitions" if e.origin == "bundled" else str(e.path)
+                              for e in repo.entries) or "empty"
+            checker = self._checkers[id(repo)] = ElementChecker(TypeIndex(repo), shown)
+        return checker
+
+
+def check_configuration(config: Configuration, session: Session, scope: Scope) -> list[Diagnostic]:
+    """Every configuration-level finding of one loaded configuration."""
+    found = list(config.diagnostics)
+    repo, entries = session.repository(config)
+    found += _definition_path_findings(entries)
+    checker = session.checker(repo)
+    reports: dict[int, ElementReport] = {}
+    for element in config.loaded:
+        report = checker.check(element)
+        reports[id(element)] = report
+        found += report.diagnostics
+        found += _path_variables(element, session.environ)
+    found += check_wiring(config, reports, checker.index, scope)
+    return found
+
+
+def _definition_path_findings(entries: list[SearchPathEntry]) -> list[Diagnostic]:
+    found = []
+    for entry in entries:
+        location = entry.location
+        if location is None:
+            continue
+        for name in entry.undefined:
+            found.append(at("CFG003", f"definition directory {entry.raw!r} uses ${{{name}}}, which is "
+                            "not set", location))
+        if not entry.exists:
+            found.append(at("DEF023", f"definition directory {entry.path} does not exist", location,
+                            hint="Relative directories are resolved against the configuration "
+                            "file's directory (VR Juggler uses the working directory)."))
+    return found
+
+
+def _path_variables(element: ConfigElement, environ: Mapping[str, str]) -> list[Diagnostic]:
+    found = []
+    for prop, values in element.properties.items():
+        if (element.type, prop) not in PATH_PROPERTIES:
+            continue
+        for value in values:
+            for name in expand(value.stripped, environ).undefined:
+                found.append(at("CFG003", f"{describe(element)}: {prop} {value.stripped!r} uses "
+                                f"${{{name}}}, which is not set", value.location))
+    return found
+
+
+def _is_configuration(doc: XmlDocument) -> bool:
+    if doc.root is None or doc.kind is not FileKind.CONFIGURATION:
+        return False
+    tag = doc.root.tag
+    return isinstance(tag, str) and tag.rpartition("}")[2] == "configuration"
+
+
+def check_documents(documents: Iterable[XmlDocument], base: DefinitionRepository, *,
+                    together: bool = False, environ: Mapping[str, str] | None = None) -> list[Diagnostic]:
+    """Configuration-level findings for the configuration documents among ``documents``."""
+    session = Session(base, os.environ if environ is None else environ)
+    given: list[Path] = []
+    for doc in documents:
+        if _is_configuration(doc):
+            resolved = Path(doc.path).resolve()
+            session.documents[resolved] = doc
+            given.append(resolved)
+    if not given:
+        return []
+    if together:
+        config = session.load(given)
+        names = ", ".join(Path(p).name for p in given)
+        return _unique(check_configuration(config, session, Scope(True, names)))
+    configs = {path: session.load([path]) for path in given}
+    found: list[Diagnostic] = []
+    for path in _roots(configs):
+        found += check_configuration(configs[path], session, Scope(False, path.name))
+    return _unique(found)
+
+
+def _roots(configs: dict[Path, Configuration]) -> list[Path]:
+    """Given files not included (directly or not) by another given file that they do not include."""
+    reach = {path: {f.path for f in config.files} for path, config in configs.items()}
+    included_by: dict[Path, list[Path]] = {}
+    for path, files in reach.items():
+        for included in files:
+            if included != path and included in configs:
+                included_by.setdefault(included, []).append(path)
+    return [path for path in configs
+            if not any(other not in reach[path] for other in included_by.get(path, ()))]
+
+
+def _unique(diagnostics: list[Diagnostic]) -> list[Diagnostic]:
+    seen: set[Diagnostic] = set()
+    result = []
+    for d in diagnostics:
+        if d not in seen:
+            seen.add(d)
+            result.append(d)
+    return result
