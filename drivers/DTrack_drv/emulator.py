@@ -231,7 +231,8 @@ class DTrackEmulator:
     ``address`` is where the frames go (the receiver's ``receive_port``). With ``command_port``
     (0 = chosen by the OS, see ``command_address``) remote commands are received and kept in
     ``commands`` (and, as received, in ``raw_commands``). ``frames_sent`` lists the numbers of the valid frames sent; ``garbage_sent``
-    and ``bad_lines_sent`` count what the garbage scenario added.
+    and ``bad_lines_sent`` count what the garbage scenario added. With ``max_frames`` the
+    emulator stops sending after that many frames (and sets ``finished``) but keeps its socket.
     """
 
     def __init__(
@@ -247,6 +248,7 @@ class DTrackEmulator:
         markers: int = 2,
         gloves: int = 1,
         disconnect_after: int = 10,
+        max_frames: int | None = None,
         command_port: int | None = None,
         wait_for_start: bool = False,
         first_frame: int = 1,
@@ -265,6 +267,7 @@ class DTrackEmulator:
             scenario, rate, bodies, flysticks, flystick_buttons, flystick_format, markers, gloves
         )
         self.disconnect_after = disconnect_after
+        self.max_frames = max_frames
         self.command_port = command_port
         self.wait_for_start = wait_for_start and command_port is not None
         self.commands: list[str] = []
@@ -374,6 +377,8 @@ class DTrackEmulator:
                             self._sender.close()
                         self._sender = None
                     return
+                if self.max_frames is not None and sent >= self.max_frames:
+                    return
         except BaseException as exc:  # reported through .error
             self.error = exc
         finally:
@@ -397,11 +402,11 @@ class DTrackEmulator:
         if self.scenario == "garbage" and n % 4 == 3:
             text += "3d 2 [1 1.000][10.000 20\r\n"  # a malformed line inside a valid frame
             self.bad_lines_sent += 1
+        self.frames_sent.append(n)  # logged first, so a fast reader never gets ahead of the log
         self.send_raw(text)
-        self.frames_sent.append(n)
         if self.scenario == "garbage":
-            self.send_raw(self._garbage(n))
             self.garbage_sent += 1
+            self.send_raw(self._garbage(n))
 
     def _garbage(self, n: int) -> bytes:
         """A datagram that holds no valid DTrack line."""

@@ -15,7 +15,7 @@ Differences from Gadgeteer's C++ driver, on purpose:
   datagram that is not a frame at all (binary garbage, no known line) is counted and skipped.
 * Integers are read as decimal. ``strtol(..., 0)`` would take a leading 0 as octal; DTrack never
   sends one, so this only matters for damaged input, which is now rejected.
-* Silence longer than ``peer_timeout`` is reported with :class:`DTrackPeerLost`, so a caller can
+* Silence longer than ``peer_timeout`` is reported with :class:`DTrackDisconnected`, so a caller can
   reconnect (and re-send the start commands) instead of waiting for ever.
 """
 
@@ -51,7 +51,7 @@ class DTrackFormatError(ValueError):
     """A line does not follow the DTrack output format."""
 
 
-class DTrackPeerLost(ConnectionError):
+class DTrackDisconnected(ConnectionError):
     """No datagram arrived for longer than ``peer_timeout``: the tracker is gone or stopped."""
 
 
@@ -494,7 +494,7 @@ class DTrackStandalone:
     sends "start sending"; :meth:`close` sends "stop sending" and "cameras off".
 
     :meth:`sample` waits at most ``receive_timeout`` for data; after ``peer_timeout`` seconds
-    without any datagram it raises :class:`DTrackPeerLost` (``None`` never does).
+    without any datagram it raises :class:`DTrackDisconnected` (``None`` never does).
     """
 
     def __init__(
@@ -633,7 +633,7 @@ class DTrackStandalone:
         if got_any:
             self._last_rx = now
         elif self.peer_timeout is not None and now - self._last_rx > self.peer_timeout:
-            raise DTrackPeerLost(f"no DTrack data for {now - self._last_rx:.3f} s")
+            raise DTrackDisconnected(f"no DTrack data for {now - self._last_rx:.3f} s")
         if frames:
             self.last_frame = frames[-1]
         return frames

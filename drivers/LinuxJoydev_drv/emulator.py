@@ -32,7 +32,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-EVENT_FORMAT = "<IhBB"
+EVENT_FORMAT = "=IhBB"  # native byte order, standard sizes, no padding
 JS_EVENT_BUTTON = 0x01
 JS_EVENT_AXIS = 0x02
 JS_EVENT_INIT = 0x80
@@ -224,23 +224,29 @@ class JoydevEmulator:
             return 0
         chunks: list[bytes] = []
         records: list[tuple[int, int, int, int]] = []
+        stamp = time_ms & 0xFFFFFFFF
         for item in items:
             if isinstance(item, bytes):
                 chunks.append(item)
                 continue
             kind, number, value = item
-            chunks.append(struct.pack(EVENT_FORMAT, time_ms & 0xFFFFFFFF, value, kind, number))
-            records.append((time_ms, value, kind, number))
+            chunks.append(struct.pack(EVENT_FORMAT, stamp, value, kind, number))
+            records.append((stamp, value, kind, number))
+        with self._lock:  # logged before the write, so a fast reader never gets ahead of the log
+            first = len(self.sent)
+            self.sent.extend(records)
         try:
             os.write(fd, b"".join(chunks))
-        except BlockingIOError:
-            self.dropped_ticks += 1  # the reader is not keeping up; a kernel drops too
-            return 0
+        except BaseException as exc:
+            with self._lock:
+                del self.sent[first:]
+            if isinstance(exc, BlockingIOError):
+                self.dropped_ticks += 1  # the reader is not keeping up; a kernel drops too
+                return 0
+            raise
         for _t, value, kind, number in records:
             state = self.buttons if kind & JS_EVENT_BUTTON else self.axes
             state[number] = value
-        with self._lock:
-            self.sent.extend(records)
         return sum(1 for r in records if not r[2] & JS_EVENT_INIT)
 
     def _unplug(self) -> None:

@@ -3,7 +3,7 @@
 Knows nothing of gadgetctl. The device file may be a real ``/dev/input/jsN`` node or any
 byte stream with the same records (a FIFO, a pipe): the joystick ioctls are optional.
 
-Record layout (``linux/joystick.h``), native byte order, little-endian here::
+Record layout (``linux/joystick.h``), in the host's byte order (little-endian on x86)::
 
     u32 time (ms)   s16 value   u8 type   u8 number
 
@@ -38,7 +38,7 @@ JS_EVENT_BUTTON = 0x01
 JS_EVENT_AXIS = 0x02
 JS_EVENT_INIT = 0x80
 
-EVENT_FORMAT = "<IhBB"
+EVENT_FORMAT = "=IhBB"  # native byte order, standard sizes, no padding
 EVENT_SIZE = struct.calcsize(EVENT_FORMAT)  # 8
 
 JSIOCGVERSION = 0x80046A01
@@ -166,6 +166,13 @@ def axis_buttons_state(
     return tuple(states)
 
 
+_DecoderState = tuple[int, int, "int | None", float, "JoystickEvent | None", bool, int]
+
+
+def _unpack(buf: bytes | bytearray, pos: int) -> JoystickEvent:
+    return JoystickEvent(*struct.unpack_from(EVENT_FORMAT, buf, pos))
+
+
 class EventDecoder:
     """Splits a byte stream into plausible ``js_event`` records and resynchronises on garbage.
 
@@ -178,8 +185,10 @@ class EventDecoder:
     is monotonic milliseconds, so it may not lie more than ``time_slack_ms`` before the last good
     record, nor further after it than the wall-clock time since that record was read plus the
     slack. After ``max_timed_resync`` skipped bytes the time test is dropped, so a stream whose
-    clock cannot be trusted (a replayed recording) still recovers. ``skipped_bytes`` and
-    ``resyncs`` count the damage.
+    clock cannot be trusted (a replayed recording) still recovers. When the bytes right after an
+    accepted record make no sense and two good records start inside it, that record was a fake
+    built from a cut-off record and is taken back. ``skipped_bytes`` and ``resyncs`` count the
+    damage.
     """
 
     def __init__(
@@ -220,21 +229,70 @@ class EventDecoder:
         events: list[JoystickEvent] = []
         buf = self._buffer
         pos = 0
+        last: tuple[int, _DecoderState] | None = None  # start of, and state before, the last record
         while len(buf) - pos >= EVENT_SIZE:
-            event = JoystickEvent(*struct.unpack_from(EVENT_FORMAT, buf, pos))
+            event = _unpack(buf, pos)
             if self._plausible(event, now):
+                last = (pos, self._save())
                 self._accept(event, now)
                 events.append(event)
                 pos += EVENT_SIZE
-            else:
-                if self._in_sync:
+                continue
+            if last is not None and last[0] == pos - EVENT_SIZE:
+                start = self._overlapping_record(buf, *last, now)
+                if start is not None:
+                    # The record just accepted was a fake: a cut-off record followed by the
+                    # first bytes of a real one, which starts inside it. Take it back.
+                    events.pop()
+                    self._restore(last[1])
                     self.resyncs += 1
-                    self._in_sync = False
-                self.skipped_bytes += 1
-                self._skipped_in_resync += 1
-                pos += 1
+                    self.skipped_bytes += start - last[0]
+                    pos, last = start, None
+                    continue
+            last = None
+            if self._in_sync:
+                self.resyncs += 1
+                self._in_sync = False
+            self.skipped_bytes += 1
+            self._skipped_in_resync += 1
+            pos += 1
         del buf[:pos]
         return events
+
+    def _overlapping_record(
+        self, buf: bytearray, start: int, before: _DecoderState, now: float
+    ) -> int | None:
+        """Where a believable pair of records starts inside the record at ``start``, if anywhere.
+
+        Called when the bytes right after an accepted record make no sense. Two plausible records
+        in a row, with a believable time, starting inside it mean the accepted one was not real.
+        """
+        after = self._save()
+        for candidate in range(start + 1, start + EVENT_SIZE):
+            if len(buf) - candidate < 2 * EVENT_SIZE:
+                break
+            self._restore(before)
+            first = _unpack(buf, candidate)
+            if not (self._plausible(first, now) and self._believable_time(first.time_ms, now)):
+                continue
+            self._accept(first, now)
+            if self._plausible(_unpack(buf, candidate + EVENT_SIZE), now):
+                self._restore(after)
+                return candidate
+        self._restore(after)
+        return None
+
+    def _save(self) -> _DecoderState:
+        return (
+            self.num_buttons, self.num_axes, self._last_time, self._last_read, self._last_init,
+            self._in_sync, self._skipped_in_resync,
+        )  # fmt: skip
+
+    def _restore(self, state: _DecoderState) -> None:
+        (
+            self.num_buttons, self.num_axes, self._last_time, self._last_read, self._last_init,
+            self._in_sync, self._skipped_in_resync,
+        ) = state  # fmt: skip
 
     def finish(self) -> int:
         """Drop an incomplete trailing record (at end of stream); returns its length."""
@@ -385,12 +443,12 @@ class LinuxJoydevStandalone:
 
     @property
     def skipped_bytes(self) -> int:
-        """Bytes dropped as garbage or as truncated records since the driver was created."""
+        """Bytes dropped as garbage or as truncated records, over all connections."""
         return self.decoder.skipped_bytes
 
     @property
     def resyncs(self) -> int:
-        """How many times the stream lost its record boundaries."""
+        """How many times the stream lost its record boundaries, over all connections."""
         return self.decoder.resyncs
 
     def sample(self) -> JoystickSample:
@@ -444,14 +502,15 @@ class LinuxJoydevStandalone:
         buttons = _ioctl_u8(self._fd, JSIOCGBUTTONS)
         self.name = _ioctl_name(self._fd)
         fixed = axes is not None and buttons is not None
+        previous = self.decoder
         self.decoder = EventDecoder(
             num_buttons=buttons if buttons is not None else (self.configured_buttons or 0),
             num_axes=axes if axes is not None else (self.configured_axes or 0),
             fixed_counts=fixed,
             time_slack_ms=self.time_slack_ms,
         )
-        if self.name is None and not isinstance(self.port, (str, os.PathLike)):
-            self.name = getattr(self.port, "name", None)
+        # the counters survive a reconnection
+        self.decoder.skipped_bytes, self.decoder.resyncs = previous.skipped_bytes, previous.resyncs
 
     def _wait_readable(self) -> None:
         if self.poll_timeout > 0:

@@ -98,7 +98,11 @@ def ascension_matrix(angles: tuple[float, float, float]) -> list[list[float]]:
 
 
 def ascension_quaternion(m: list[list[float]]) -> tuple[float, float, float, float]:
-    """q0..q3 from M as the manual defines them (q0 = scalar part, kept >= 0)."""
+    """q0..q3 for M (q0 = scalar part, kept >= 0).
+
+    They are built to describe the sensor orientation (M transposed), which is
+    how the C++ driver reads them: as (w, x, y, z) with no conjugation.
+    """
     trace = m[0][0] + m[1][1] + m[2][2]
     if trace > 0:
         s = math.sqrt(1.0 + trace) * 2
@@ -152,26 +156,13 @@ class Device:
 def bird_status(address: int, full_scale: int) -> bytearray:
     """A 70-byte bird status: position/angles, inches, the given full scale."""
     block = bytearray(70)
-    block[0:16] = bytes(
-        [
-            0x40,
-            0x03,
-            3,
-            67,
-            0,
-            0x00,
-            0x64,
-            1,
-            full_scale >> 8 & 0x0F,
-            full_scale & 0xFF,
-            0,
-            address,
-            0,
-            0,
-            0,
-            0,
-        ]
-    )
+    block[0] = 0x40  # running
+    block[1] = 0x03  # device id
+    block[2:4] = bytes([3, 67])  # software revision
+    block[6] = 0x64  # 6 words, position/angles
+    block[7] = 1  # report rate
+    block[8:10] = bytes([full_scale >> 8 & 0x0F, full_scale & 0xFF])  # units 0 (inches)
+    block[11] = address  # FBB address
     tables = [0x0000] * 7 + [0x0800] * 7 + [0x0032] * 7 + [0] * 6
     struct.pack_into(">27H", block, 16, *tables)
     return block
@@ -289,6 +280,7 @@ class MotionStarEmulator:
             self.client_left.clear()
             with conn:
                 conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+                conn.settimeout(1.0)  # a client that stops reading ends the session
                 with contextlib.suppress(OSError):
                     _Session(self, conn).run()
             self.client_left.set()
@@ -382,6 +374,8 @@ class _Session:
         emu = self.emu
         if xtype == 0:
             rate = f"{round(emu.measurement_rate * 1000):06d}".encode("ascii")[:6]
+            # all, error, FBB devices, servers, transmitter | rate x 1000 as text |
+            # chassis number, devices in chassis, first address, software revision
             block = (
                 bytes([0x40, 0, len(emu.devices), 1, 0])
                 + rate

@@ -33,6 +33,7 @@ Differences from the C++ driver, on purpose:
 
 from __future__ import annotations
 
+import contextlib
 import socket
 import struct
 import time
@@ -477,10 +478,12 @@ class _Stream:
             self.buffer += chunk
         return True
 
-    def send(self, data: bytes) -> None:
+    def send(self, data: bytes, timeout: float) -> None:
         try:
-            self.sock.settimeout(None)
+            self.sock.settimeout(timeout)
             self.sock.sendall(data)
+        except TimeoutError as exc:
+            raise MotionStarTimeout("the server does not take our messages") from exc
         except OSError as exc:
             raise MotionStarDisconnected(f"connection lost: {exc}") from exc
 
@@ -518,6 +521,8 @@ class MotionStar:
         self.hemisphere = int(Hemisphere(hemisphere))
         self.data_format = int(DataFormat(data_format))
         self.mode = int(RunMode(mode))
+        if not 0 <= report_rate <= 255:
+            raise ValueError("report_rate is one byte (0..255)")
         self.report_rate = report_rate
         self.measurement_rate = measurement_rate
         self.connect_timeout = connect_timeout
@@ -550,12 +555,22 @@ class MotionStar:
         """Connect, wake the server, read status, configure the birds, start data."""
         if self._stream is not None:
             return
-        sock = self._given_sock or socket.create_connection(
-            (self.host, self.port), timeout=self.connect_timeout
-        )
-        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        sock = self._given_sock
+        if sock is None:
+            try:
+                sock = socket.create_connection(
+                    (self.host, self.port), timeout=self.connect_timeout
+                )
+            except OSError as exc:
+                raise MotionStarDisconnected(
+                    f"cannot connect to {self.host}:{self.port}: {exc}"
+                ) from exc
+        with contextlib.suppress(OSError):
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self._stream = _Stream(sock)
         self.sequence = 0
+        self.full_scale = None
+        self.units = ""
         try:
             self._wake_up()
             status = SystemStatus.parse(self._transact(MSG_GET_STATUS, RSP_GET_STATUS)[1])
@@ -640,7 +655,7 @@ class MotionStar:
     def _send(self, kind: int, xtype: int = 0, payload: bytes = b"") -> None:
         assert self._stream is not None
         header = Header(self.sequence, kind, xtype, len(payload))
-        self._stream.send(header.pack() + payload)
+        self._stream.send(header.pack() + payload, self.read_timeout)
 
     def _transact(
         self,

@@ -17,10 +17,13 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import fcntl
 import os
 import random
 import select
+import struct
 import sys
+import termios
 import threading
 import time
 import tty
@@ -117,6 +120,8 @@ class PinchGloveEmulator:
 
     ``address`` is the slave's path once started. ``rate`` is frames per second.
     ``link`` optionally names a symlink to create pointing at the pty.
+    ``disconnect_after`` frames into the ``disconnect`` scenario the line is hung
+    up, once the driver has read them (or ``linger`` seconds later).
     ``sent`` records every valid frame sent as ``(groups, timestamp)``.
     """
 
@@ -126,6 +131,7 @@ class PinchGloveEmulator:
         rate: float = 2.0,
         *,
         disconnect_after: int = 5,
+        linger: float = 1.0,
         link: str | os.PathLike[str] | None = None,
         info: dict[str, str] | None = None,
         seed: int = 7,
@@ -137,12 +143,15 @@ class PinchGloveEmulator:
         self.scenario = "touches" if scenario == "buttons" else scenario
         self.rate = rate
         self.disconnect_after = disconnect_after
+        self.linger = linger
+        self._hangup_due: float | None = None
         self.link = Path(link) if link is not None else None
         self.info = dict(DEFAULT_INFO if info is None else info)
         self.address = ""
         self.commands: list[bytes] = []
         self.sent: list[tuple[Groups, int | None]] = []
         self.bytes_received = 0
+        self.dropped_bytes = 0
         self.timestamps = True
         self.streaming = threading.Event()
         self.disconnected = threading.Event()
@@ -165,6 +174,7 @@ class PinchGloveEmulator:
             return self
         self._master, self._slave = os.openpty()
         tty.setraw(self._slave)  # no echo, no line editing, bytes pass untouched
+        os.set_blocking(self._master, False)
         self.address = os.ttyname(self._slave)
         if self.link is not None:
             with contextlib.suppress(FileNotFoundError):
@@ -245,6 +255,12 @@ class PinchGloveEmulator:
 
     def _emit_step(self) -> None:
         if self.scenario == "disconnect" and self._frame_index >= self.disconnect_after:
+            # Hang up once the driver has read what was sent (a pty drops unread
+            # input on hang-up), or after ``linger`` seconds at the latest.
+            if self._hangup_due is None:
+                self._hangup_due = time.monotonic() + self.linger
+            if self._unread() and time.monotonic() < self._hangup_due:
+                return
             self.disconnected.set()
             self._close_fds()
             return
@@ -262,14 +278,30 @@ class PinchGloveEmulator:
         self.sent.append((groups, timestamp))
         self._write(junk + frame)
 
+    def _unread(self) -> int:
+        """Bytes waiting in the slave's input queue (not yet read by the driver)."""
+        with self._lock:
+            if self._slave < 0:
+                return 0
+            try:
+                raw = fcntl.ioctl(self._slave, termios.FIONREAD, b"\0\0\0\0")
+            except OSError:
+                return 0
+        return struct.unpack("i", raw)[0]
+
     def send_raw(self, data: bytes) -> None:
         """Write bytes to the driver as they are (for tests and experiments)."""
         self._write(data)
 
     def _write(self, data: bytes) -> None:
+        """Write to the driver; what does not fit (nobody reading) is dropped."""
         with self._lock:
             if self._master >= 0:
-                os.write(self._master, data)
+                try:
+                    written = os.write(self._master, data)
+                except BlockingIOError:
+                    written = 0
+                self.dropped_bytes += len(data) - written
 
     def _close_fds(self) -> None:
         with self._lock:

@@ -19,6 +19,11 @@ from types import TracebackType
 
 import serial
 
+try:
+    import termios
+except ImportError:  # not a POSIX system: no IGNBRK to set
+    termios = None  # type: ignore[assignment]
+
 START_DATA = 0x80
 START_DATA_TS = 0x81
 START_INFO = 0x82
@@ -72,9 +77,7 @@ class HandSample:
     def from_bits(cls, hand: str, bits: int) -> HandSample:
         """Build a hand from a 5-bit mask (bit k = finger k)."""
         contacts = tuple(bool(bits >> k & 1) for k in range(len(FINGERS)))
-        angles = tuple(
-            (TOUCHING_ANGLE if c else 0.0,) * JOINTS_PER_FINGER for c in contacts
-        )
+        angles = tuple((TOUCHING_ANGLE if c else 0.0,) * JOINTS_PER_FINGER for c in contacts)
         return cls(hand, contacts, angles)
 
     def finger(self, name: str) -> bool:
@@ -142,6 +145,19 @@ def decode_frame(start: int, body: bytes) -> PinchSample | None:
         return None  # a hand has five contacts; higher bits mean corruption
     groups = tuple((body[i], body[i + 1]) for i in range(0, len(body), 2))
     return PinchSample.from_groups(groups, timestamp)
+
+
+def _ignore_break(port: serial.SerialBase) -> None:
+    """Set IGNBRK as the C++ driver does; only real POSIX ports have it."""
+    if termios is None:
+        return
+    try:
+        fd = port.fileno()
+        attrs = termios.tcgetattr(fd)
+        attrs[0] |= termios.IGNBRK
+        termios.tcsetattr(fd, termios.TCSANOW, attrs)
+    except (AttributeError, NotImplementedError, OSError, termios.error, serial.SerialException):
+        pass  # URL ports have no file descriptor
 
 
 class _SerialLink:
@@ -246,9 +262,13 @@ class PinchGlove:
         """Open the port, query the hardware, enable timestamps; return the open-hand state."""
         if self._link is not None:
             return self.last
-        port = self._open_port()
+        try:
+            port = self._open_port()
+        except (serial.SerialException, OSError, ValueError) as exc:
+            raise PinchGloveDisconnected(f"cannot open {self.port_spec}: {exc}") from exc
         self._link = _SerialLink(port, self.poll_interval)
         try:
+            _ignore_break(port)
             self._raise_control_lines(port)
             if self.query_info:
                 for key, param in QUERIES.items():
@@ -368,9 +388,7 @@ class PinchGlove:
     def _set_echoed(self, command: int, param: int) -> None:
         reply = self._command(command, param)
         if reply[:1] != bytes([param]):
-            raise PinchGloveProtocolError(
-                f"command {chr(command)}{chr(param)} answered {reply!r}"
-            )
+            raise PinchGloveProtocolError(f"command {chr(command)}{chr(param)} answered {reply!r}")
 
     def _command(self, first: int, second: int) -> bytes:
         """Send a two-byte command and return the text of its info reply."""

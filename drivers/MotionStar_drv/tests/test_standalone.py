@@ -9,7 +9,7 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from MotionStar_drv.emulator import BUTTON_STEPS, MotionStarEmulator, pose
+from MotionStar_drv.emulator import BUTTON_STEPS, MotionStarEmulator, encode_words, pose
 from MotionStar_drv.standalone import (
     MotionStar,
     MotionStarDisconnected,
@@ -152,6 +152,19 @@ def test_every_data_format_gives_the_same_pose(emulator, data_format: int) -> No
             assert bird.quaternion is not None and bird.quaternion[0] > 0
 
 
+@pytest.mark.parametrize("code", [3, 5, 7, 8])
+def test_rotation_words_round_trip_over_all_orientations(code: int) -> None:
+    for k in range(0, 3000, 7):  # the motion path sweeps all quadrants
+        position, (z, y, x) = pose("motion", 1, k)
+        words = encode_words(code, position, (z, y, x), FULL_SCALE)
+        record = parse_records(
+            bytes([0x01, code << 4 | len(words)]) + struct.pack(f">{len(words)}h", *words)
+        )
+        assert record is not None
+        matrix = decode_record(record[0], 0, float(FULL_SCALE)).matrix
+        np.testing.assert_allclose(matrix[:3, :3], rz(z) @ ry(y) @ rx(x), atol=3e-4)
+
+
 def test_matrix_words_are_signed_fractions() -> None:
     # one MATRIX record: identity with -1 and the smallest negative value mixed in
     words = (32767, 0, -1, 0, -32768, 0, 0, 0, 32767)
@@ -193,7 +206,7 @@ def test_garbage_and_truncated_packets_are_counted(emulator) -> None:
     emu = emulator("garbage", birds=2)
     with client(emu) as ms:
         samples = take(ms, 24)
-        assert ms.bad_packets >= 20  # junk precedes every packet
+        assert ms.bad_packets == 24  # one junk run before every packet
         assert ms.skipped_bytes > 0
         assert ms.sequence_resyncs == 0  # no valid packet was lost
     sequences = [s.sequence for s in samples]
@@ -260,6 +273,26 @@ def test_measurement_rate_is_clamped(emulator, asked: float, taken: float) -> No
     assert emu.measurement_rate == pytest.approx(taken)
 
 
-def test_invalid_format_is_rejected() -> None:
+def test_invalid_settings_are_rejected() -> None:
     with pytest.raises(ValueError):
         MotionStar("127.0.0.1", 1, data_format=6)
+    with pytest.raises(ValueError):
+        MotionStar("127.0.0.1", 1, report_rate=256)
+
+
+def test_refused_connection_is_reported_as_disconnected() -> None:
+    probe = socket.socket()
+    probe.bind(("127.0.0.1", 0))
+    port = probe.getsockname()[1]
+    probe.close()  # nothing listens there now
+    with pytest.raises(MotionStarDisconnected):
+        MotionStar("127.0.0.1", port, **FAST).open()
+
+
+def test_emulator_main_prints_where_to_point(capsys) -> None:
+    from MotionStar_drv.emulator import main
+
+    assert main(["--scenario", "idle", "--birds", "3", "--rate", "10", "--duration", "0.1"]) == 0
+    out = capsys.readouterr().out
+    assert "3 sensors" in out and "<address>127.0.0.1</address>" in out
+    assert "<server_port>" in out

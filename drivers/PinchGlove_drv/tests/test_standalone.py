@@ -139,9 +139,9 @@ def test_garbage_is_counted_and_skipped(emulator) -> None:
     with PinchGlove(emu.address, query_info=False, **FAST) as glove:
         samples = read_samples(glove, count)
         assert glove.frames == count
-        # every junk kind was sent once per sequence cycle; the broken frames
-        # (truncated, odd, bad bits, too short) are counted as bad frames
-        assert glove.bad_frames >= 4
+        # each junk kind went out twice; the broken frames among them (truncated,
+        # odd length, bits no finger has, too short) are counted as bad frames
+        assert glove.bad_frames == 8
         assert glove.skipped_bytes > 0
     # no valid frame lost, no junk decoded as a frame
     assert [s.digital for s in samples] == [expected_digital(g) for g, _ in emu.sent[:count]]
@@ -150,7 +150,9 @@ def test_garbage_is_counted_and_skipped(emulator) -> None:
 
 def test_truncated_frame_then_silence_is_counted(emulator) -> None:
     emu = emulator("idle")
-    with PinchGlove(emu.address, query_info=False, **{**FAST, "read_timeout": 0.05, "sample_timeout": 0.2}) as glove:
+    with PinchGlove(
+        emu.address, query_info=False, **{**FAST, "read_timeout": 0.05, "sample_timeout": 0.2}
+    ) as glove:
         emu.send_raw(bytes([0x81, 0x01]))  # a frame that never ends
         assert glove.sample() is None
         assert glove.bad_frames == 1
@@ -211,6 +213,11 @@ def test_loop_url_without_glove_times_out_quickly() -> None:
     assert time.monotonic() - start < 2
 
 
+def test_missing_port_is_reported_as_unavailable(tmp_path) -> None:
+    with pytest.raises(PinchGloveDisconnected):
+        PinchGlove(str(tmp_path / "no-such-tty"), **FAST).open()
+
+
 def test_decode_frame_rules() -> None:
     sample = decode_frame(0x81, bytes([0x01, 0x01, 0x12, 0x34]))
     assert sample is not None
@@ -221,3 +228,15 @@ def test_decode_frame_rules() -> None:
     assert decode_frame(0x80, bytes([0x01])) is None  # odd pair bytes
     assert decode_frame(0x81, bytes([0x01])) is None  # no room for the timestamp
     assert decode_frame(0x80, bytes([0x20, 0x00])) is None  # no sixth finger
+
+
+def test_emulator_main_prints_where_to_point(tmp_path, capsys) -> None:
+    from PinchGlove_drv.emulator import main
+
+    link = tmp_path / "pinchglove"
+    assert (
+        main(["--scenario", "idle", "--rate", "5", "--duration", "0.1", "--port", str(link)]) == 0
+    )
+    out = capsys.readouterr().out
+    assert "/dev/pts/" in out and f"<port>{link}</port>" in out
+    assert not link.exists()  # the symlink goes away with the emulator
