@@ -1,0 +1,359 @@
+"""Monitor records and their NDJSON encoding: one JSON object per line, each with ``"v": 1``.
+
+Sample records are the hot path and are formatted by hand (``repr`` of floats round-trips
+exactly); the rare records go through :func:`json.dumps`. Non-finite floats are written as
+``NaN``, ``Infinity`` and ``-Infinity``, as Python's :mod:`json` does. The format is
+described in ``docs/recording-format.md``.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import time
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from typing import Any
+
+FORMAT_NAME = "gadgetctl-recording"
+FORMAT_VERSION = 1
+KINDS = ("analog", "digital", "position", "glove", "gesture", "command", "string", "hat")
+
+
+class RecordFormatError(ValueError):
+    """A line or JSON object that is not a valid record."""
+
+
+class UnknownRecordType(RecordFormatError):
+    """A well-formed record of a type this version does not know (newer writers may add types)."""
+
+
+@dataclass(frozen=True, slots=True)
+class SampleRecord:
+    """One sample of one unit of one device (or proxy); ``timestamp`` in monotonic seconds."""
+
+    device: str
+    kind: str
+    unit: int
+    timestamp: float
+    value: object
+    raw: object
+
+
+@dataclass(frozen=True, slots=True)
+class MarkerRecord:
+    """A named point in time, e.g. set by the user while recording."""
+
+    name: str
+    timestamp: float
+
+
+@dataclass(frozen=True, slots=True)
+class FrameDevice:
+    """One device in a frame: samples received this frame and the newest value per kind/unit."""
+
+    count: int
+    values: Mapping[str, Mapping[int, object]] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, slots=True)
+class FrameRecord:
+    """The per-frame output: frame number, frame timestamp and each device's newest values."""
+
+    frame: int
+    timestamp: float
+    devices: Mapping[str, FrameDevice] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, slots=True)
+class StatsRecord:
+    """A snapshot of running statistics: device name -> statistic name -> value."""
+
+    timestamp: float
+    devices: Mapping[str, Mapping[str, object]] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, slots=True)
+class EndRecord:
+    """The last record of a recording closed cleanly or on SIGINT/SIGTERM."""
+
+    timestamp: float
+    reason: str
+    samples: int
+    markers: int
+    frames: int
+
+
+@dataclass(frozen=True, slots=True)
+class HeaderRecord:
+    """The first line of a recording; ``info`` is free-form data from the writer."""
+
+    created: str
+    wall_time: float
+    monotonic: float
+    generator: str
+    info: Mapping[str, object] = field(default_factory=dict)
+    version: int = FORMAT_VERSION
+
+    @classmethod
+    def now(cls, info: Mapping[str, object] | None = None, *,
+            clock: Any = time.monotonic) -> HeaderRecord:
+        """A header stamped with the current wall-clock and ``clock`` times."""
+        from gadgetctl import __version__
+
+        wall = time.time()
+        created = datetime.fromtimestamp(wall, UTC).strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+        return cls(created, wall, clock(), f"gadgetctl {__version__}", dict(info or {}))
+
+
+Record = SampleRecord | MarkerRecord | FrameRecord | StatsRecord | EndRecord | HeaderRecord
+
+
+# --------------------------------------------------------------------------- encoding
+
+_NUMERIC_LIST = re.compile(r"[\[\]0-9eE.,+\- ]*")
+_PREFIXES: dict[tuple[str, str], str] = {}
+_PREFIX_CACHE_LIMIT = 4096
+_SCALARS = (float, int, str, bool)
+_DECODER = json.JSONDecoder()
+
+
+def _json_default(value: object) -> object:
+    tolist = getattr(value, "tolist", None)
+    if tolist is not None:  # numpy arrays and scalars
+        return tolist()
+    if isinstance(value, (set, frozenset, tuple)):
+        return list(value)
+    return str(value)
+
+
+def _dumps(obj: object) -> str:
+    return json.dumps(obj, separators=(",", ":"), default=_json_default)
+
+
+def _nonfinite(value: float) -> str:
+    return "NaN" if value != value else ("Infinity" if value > 0 else "-Infinity")
+
+
+def encode_value(value: object) -> str:
+    """``value`` as JSON text; floats round-trip, tuples and numpy arrays become arrays."""
+    t = type(value)
+    if t is float:
+        return repr(value) if value - value == 0.0 else _nonfinite(value)
+    if t is int:
+        return repr(value)
+    if t is list:
+        text = repr(value)
+        if _NUMERIC_LIST.fullmatch(text):  # nested lists of finite floats and ints
+            return text.replace(" ", "")
+        return "[" + ",".join([encode_value(v) for v in value]) + "]"
+    if t is str:
+        return json.dumps(value)
+    if t is bool:
+        return "true" if value else "false"
+    if value is None:
+        return "null"
+    if t is tuple:
+        return encode_value(list(value))
+    tolist = getattr(value, "tolist", None)
+    if tolist is not None:
+        return encode_value(tolist())
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return int.__repr__(value)
+    if isinstance(value, float):
+        return encode_value(float(value))
+    if isinstance(value, str):
+        return json.dumps(str(value))
+    if isinstance(value, (list, tuple)):
+        return encode_value(list(value))
+    if isinstance(value, Mapping):
+        return _dumps(value)
+    raise TypeError(f"cannot encode a sample value of type {t.__name__}")
+
+
+def _prefix(device: str, kind: str) -> str:
+    key = (device, kind)
+    text = _PREFIXES.get(key)
+    if text is None:
+        if not isinstance(device, str) or not isinstance(kind, str):
+            raise TypeError("device and kind of a sample record must be strings")
+        text = ('{"v":1,"type":"sample","device":' + json.dumps(device)
+                + ',"kind":' + json.dumps(kind) + ',"unit":')
+        if len(_PREFIXES) < _PREFIX_CACHE_LIMIT:
+            _PREFIXES[key] = text
+    return text
+
+
+def _timestamp(value: object) -> str:
+    if type(value) is float and value - value == 0.0:
+        return repr(value)
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        number = float(value)
+        if number - number == 0.0:
+            return repr(number)
+    raise ValueError(f"timestamp must be a finite number, not {value!r}")
+
+
+def _unit(value: object) -> str:
+    if type(value) is int:
+        return repr(value)
+    if hasattr(value, "__index__") and not isinstance(value, bool):
+        return repr(value.__index__())  # type: ignore[attr-defined]
+    raise ValueError(f"unit must be an integer, not {value!r}")
+
+
+def encode_samples(records: Iterable[SampleRecord]) -> str:
+    """Sample records as NDJSON lines (each ending in a newline), formatted by hand."""
+    parts: list[str] = []
+    append = parts.append
+    prefixes = _PREFIXES
+    for r in records:
+        prefix = prefixes.get((r.device, r.kind)) or _prefix(r.device, r.kind)
+        unit = r.unit
+        ts = r.timestamp
+        value = r.value
+        raw = r.raw
+        t = type(value)
+        if (t is float and value - value == 0.0) or t is int:
+            vtext = repr(value)
+        else:
+            vtext = encode_value(value)
+        if raw is value or (type(raw) is t and t in _SCALARS and raw == value):
+            tail = "}\n"
+        else:
+            tail = ',"raw":' + encode_value(raw) + "}\n"
+        append(prefix
+               + (repr(unit) if type(unit) is int else _unit(unit))
+               + ',"timestamp":'
+               + (repr(ts) if type(ts) is float and ts - ts == 0.0 else _timestamp(ts))
+               + ',"value":' + vtext + tail)
+    return "".join(parts)
+
+
+def encode_record(record: Record) -> str:
+    """Any record as one NDJSON line ending in a newline."""
+    if isinstance(record, SampleRecord):
+        return encode_samples((record,))
+    if isinstance(record, MarkerRecord):
+        obj: dict[str, object] = {"v": FORMAT_VERSION, "type": "marker", "name": record.name,
+                                  "timestamp": record.timestamp}
+    elif isinstance(record, FrameRecord):
+        obj = {"v": FORMAT_VERSION, "type": "frame", "frame": record.frame,
+               "timestamp": record.timestamp,
+               "devices": {name: {"count": dev.count,
+                                  "values": {kind: {str(u): v for u, v in units.items()}
+                                             for kind, units in dev.values.items()}}
+                           for name, dev in record.devices.items()}}
+    elif isinstance(record, StatsRecord):
+        obj = {"v": FORMAT_VERSION, "type": "stats", "timestamp": record.timestamp,
+               "devices": {name: dict(values) for name, values in record.devices.items()}}
+    elif isinstance(record, EndRecord):
+        obj = {"v": FORMAT_VERSION, "type": "end", "timestamp": record.timestamp,
+               "reason": record.reason, "samples": record.samples, "markers": record.markers,
+               "frames": record.frames}
+    elif isinstance(record, HeaderRecord):
+        obj = {"v": record.version, "type": "header", "format": FORMAT_NAME,
+               "created": record.created, "wall_time": record.wall_time,
+               "monotonic": record.monotonic, "clock": "monotonic",
+               "generator": record.generator, "info": dict(record.info)}
+    else:
+        raise TypeError(f"not a record: {type(record).__name__}")
+    if isinstance(obj.get("timestamp"), (int, float)):
+        _timestamp(obj["timestamp"])
+    return _dumps(obj) + "\n"
+
+
+# --------------------------------------------------------------------------- decoding
+
+
+def _field(obj: Mapping[str, Any], name: str, kind: type | tuple[type, ...]) -> Any:
+    try:
+        value = obj[name]
+    except KeyError:
+        raise RecordFormatError(f"missing field {name!r}") from None
+    if not isinstance(value, kind) or (isinstance(value, bool) and kind is not bool):
+        raise RecordFormatError(f"field {name!r} has the wrong type ({type(value).__name__})")
+    return value
+
+
+def _time(obj: Mapping[str, Any], name: str = "timestamp") -> float:
+    try:
+        value = float(_field(obj, name, (int, float)))
+    except OverflowError:
+        value = float("inf")
+    if value - value != 0.0:
+        raise RecordFormatError(f"field {name!r} is not a finite number")
+    return value
+
+
+def _mapping(obj: Mapping[str, Any], name: str) -> Mapping[str, Any]:
+    return _field(obj, name, dict) if name in obj else {}
+
+
+def _frame_devices(obj: Mapping[str, Any]) -> dict[str, FrameDevice]:
+    devices = {}
+    for name, entry in _mapping(obj, "devices").items():
+        if not isinstance(entry, dict):
+            raise RecordFormatError(f"frame entry for {name!r} is not an object")
+        values: dict[str, dict[int, object]] = {}
+        for kind, units in _mapping(entry, "values").items():
+            if not isinstance(units, dict):
+                raise RecordFormatError(f"frame values of {name!r}/{kind} are not an object")
+            try:
+                values[kind] = {int(u): v for u, v in units.items()}
+            except ValueError:
+                raise RecordFormatError(f"frame values of {name!r}/{kind} have a non-integer unit") from None
+        devices[name] = FrameDevice(_field(entry, "count", int), values)
+    return devices
+
+
+def decode_record(obj: object) -> Record:
+    """The record a decoded JSON object describes; raises :class:`RecordFormatError`."""
+    if not isinstance(obj, dict):
+        raise RecordFormatError("not a JSON object")
+    version = _field(obj, "v", int)
+    if version < 1:
+        raise RecordFormatError(f"invalid version {version}")
+    if version > FORMAT_VERSION:
+        raise RecordFormatError(f"record version {version} is newer than this reader ({FORMAT_VERSION})")
+    kind = _field(obj, "type", str)
+    if kind == "sample":
+        if "value" not in obj:
+            raise RecordFormatError("missing field 'value'")
+        value = obj["value"]
+        return SampleRecord(_field(obj, "device", str), _field(obj, "kind", str),
+                            _field(obj, "unit", int), _time(obj), value, obj.get("raw", value))
+    if kind == "frame":
+        return FrameRecord(_field(obj, "frame", int), _time(obj), _frame_devices(obj))
+    if kind == "marker":
+        return MarkerRecord(_field(obj, "name", str), _time(obj))
+    if kind == "stats":
+        devices = _mapping(obj, "devices")
+        if not all(isinstance(v, dict) for v in devices.values()):
+            raise RecordFormatError("stats entries must be objects")
+        return StatsRecord(_time(obj), devices)
+    if kind == "end":
+        return EndRecord(_time(obj), _field(obj, "reason", str), _field(obj, "samples", int),
+                         int(obj.get("markers", 0)), int(obj.get("frames", 0)))
+    if kind == "header":
+        if obj.get("format") != FORMAT_NAME:
+            raise RecordFormatError(f"header format is not {FORMAT_NAME!r}")
+        info = obj.get("info", {})
+        if not isinstance(info, dict):
+            raise RecordFormatError("header field 'info' is not an object")
+        return HeaderRecord(str(obj.get("created", "")), float(obj.get("wall_time", 0.0)),
+                            _time(obj, "monotonic") if "monotonic" in obj else 0.0,
+                            str(obj.get("generator", "")), info, version)
+    raise UnknownRecordType(f"unknown record type {kind!r}")
+
+
+def decode_line(line: str | bytes) -> Record:
+    """The record on one NDJSON line; raises :class:`RecordFormatError`."""
+    try:
+        obj = _DECODER.decode(line if isinstance(line, str) else line.decode("utf-8"))
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise RecordFormatError(f"not valid JSON: {exc}") from None
+    return decode_record(obj)

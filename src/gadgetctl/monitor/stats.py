@@ -1,0 +1,280 @@
+"""Running per-device sample statistics for the live monitor.
+
+Feed each device the timestamps of its updates (one per sampling instant, whatever the
+number of units), in non-decreasing order, in batches. Adding is a list append; the numpy
+work happens once per snapshot (or when ``history`` timestamps are pending), so 100 devices
+at 1 kHz cost little. Counts, mean rate and the largest gap cover the whole run; interval
+percentiles and jitter cover the ``history`` most recent intervals; the window rate covers
+the last ``window`` seconds.
+
+:func:`summarize_recording` (in :mod:`gadgetctl.monitor.summary`) summarizes a finished
+recording.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Iterator, Sequence
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from gadgetctl.monitor.summary import summarize_recording
+
+__all__ = ["DeviceSnapshot", "DeviceStats", "MonitorStats", "summarize_recording"]
+
+DEFAULT_WINDOW = 1.0
+DEFAULT_HISTORY = 4096
+
+
+@dataclass(frozen=True, slots=True)
+class DeviceSnapshot:
+    """Statistics of one device at one moment; times in seconds, rates in Hz.
+
+    ``None`` means "not known yet" (e.g. percentiles before the second sample).
+    """
+
+    name: str
+    count: int
+    first_timestamp: float | None
+    newest_timestamp: float | None
+    mean_rate: float
+    window_rate: float
+    p50_interval: float | None
+    p99_interval: float | None
+    max_gap: float | None
+    jitter: float | None
+    dropped: int
+    faults: int
+    age: float | None
+    frames: int
+    samples_per_frame: int | None
+    mean_samples_per_frame: float | None
+
+    def to_dict(self) -> dict[str, object]:
+        return asdict(self)
+
+
+def _nearest_rank(sorted_or_partitioned: np.ndarray, n: int, percent: float) -> float:
+    return float(sorted_or_partitioned[max(0, math.ceil(percent / 100.0 * n) - 1)])
+
+
+class DeviceStats:
+    """Running statistics of one device's sample timestamps."""
+
+    def __init__(self, name: str, *, window: float = DEFAULT_WINDOW,
+                 history: int = DEFAULT_HISTORY) -> None:
+        if window <= 0:
+            raise ValueError("window must be positive")
+        if history < 2:
+            raise ValueError("history must hold at least 2 timestamps")
+        self.name = name
+        self.window = window
+        self.history = history
+        self._ring = np.empty(history, dtype=np.float64)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget everything, counters included."""
+        self.count = 0
+        self.first_timestamp: float | None = None
+        self.newest_timestamp: float | None = None
+        self.dropped = 0
+        self.faults = 0
+        self.frames = 0
+        self.samples_per_frame: int | None = None
+        self._frame_start_count = 0
+        self._frame_samples = 0
+        self._pending: list[float] = []
+        self._ring_len = 0
+        self._ring_pos = 0
+        self._last: float | None = None
+        self._max_gap: float | None = None
+
+    # ---------------------------------------------------------------- feeding
+
+    def add_timestamp(self, timestamp: float) -> None:
+        """One update at ``timestamp``."""
+        self._pending.append(float(timestamp))
+        self.count += 1
+        if self.first_timestamp is None:
+            self.first_timestamp = float(timestamp)
+        self.newest_timestamp = float(timestamp)
+        if len(self._pending) >= self.history:
+            self._consolidate()
+
+    def add_timestamps(self, timestamps: Sequence[float] | np.ndarray) -> None:
+        """A batch of updates (a list, tuple or numpy array of timestamps)."""
+        n = len(timestamps)
+        if n == 0:
+            return
+        if isinstance(timestamps, np.ndarray):
+            self._pending.extend(timestamps.astype(np.float64, copy=False).ravel().tolist())
+        else:
+            self._pending.extend(timestamps)
+        self.count += n
+        if self.first_timestamp is None:
+            self.first_timestamp = float(timestamps[0])
+        self.newest_timestamp = float(timestamps[-1])
+        if len(self._pending) >= self.history:
+            self._consolidate()
+
+    def add_dropped(self, count: int = 1) -> None:
+        """Samples the caller knows were lost (e.g. buffer overflow)."""
+        self.dropped += count
+
+    def add_fault(self, count: int = 1) -> None:
+        """Device faults (read errors, reconnects) reported by the caller."""
+        self.faults += count
+
+    def end_frame(self) -> None:
+        """A frame boundary: the samples added since the previous one belong to this frame."""
+        self.samples_per_frame = self.count - self._frame_start_count
+        self._frame_start_count = self.count
+        self._frame_samples += self.samples_per_frame
+        self.frames += 1
+
+    # ---------------------------------------------------------------- numpy side
+
+    def _consolidate(self) -> None:
+        if not self._pending:
+            return
+        batch = np.array(self._pending, dtype=np.float64)
+        self._pending.clear()
+        intervals = np.diff(batch, prepend=self._last) if self._last is not None else np.diff(batch)
+        if intervals.size:
+            largest = float(intervals.max())
+            if self._max_gap is None or largest > self._max_gap:
+                self._max_gap = largest
+        self._last = float(batch[-1])
+        cap = self.history
+        if len(batch) >= cap:
+            self._ring[:] = batch[-cap:]
+            self._ring_pos, self._ring_len = 0, cap
+            return
+        end = self._ring_pos + len(batch)
+        if end <= cap:
+            self._ring[self._ring_pos:end] = batch
+        else:
+            split = cap - self._ring_pos
+            self._ring[self._ring_pos:] = batch[:split]
+            self._ring[:end - cap] = batch[split:]
+        self._ring_pos = end % cap
+        self._ring_len = min(cap, self._ring_len + len(batch))
+
+    def recent_timestamps(self) -> np.ndarray:
+        """The ``history`` newest timestamps, oldest first (a copy)."""
+        self._consolidate()
+        if self._ring_len < self.history:
+            return self._ring[:self._ring_len].copy()
+        return np.concatenate((self._ring[self._ring_pos:], self._ring[:self._ring_pos]))
+
+    # ---------------------------------------------------------------- figures
+
+    @property
+    def mean_rate(self) -> float:
+        """Updates per second from the first to the newest timestamp."""
+        if self.count < 2 or self.newest_timestamp is None or self.first_timestamp is None:
+            return 0.0
+        span = self.newest_timestamp - self.first_timestamp
+        return (self.count - 1) / span if span > 0 else 0.0
+
+    @property
+    def max_gap(self) -> float | None:
+        """The longest interval between two consecutive updates over the run."""
+        self._consolidate()
+        return self._max_gap
+
+    def window_rate(self, now: float | None = None) -> float:
+        """Updates per second over the last ``window`` seconds before ``now``.
+
+        Without ``now`` the window ends at the newest timestamp; with it, a device that
+        went silent decays towards 0 Hz.
+        """
+        if self.newest_timestamp is None:
+            return 0.0
+        end = self.newest_timestamp if now is None else max(now, self.newest_timestamp)
+        recent = self.recent_timestamps()
+        inside = recent[recent > end - self.window]
+        if len(inside) < 2:
+            return 0.0
+        span = end - float(inside[0])
+        return (len(inside) - 1) / span if span > 0 else 0.0
+
+    def interval_stats(self) -> tuple[float | None, float | None, float | None]:
+        """(p50, p99, jitter) of the recent intervals: nearest-rank percentiles and the
+        population standard deviation, in seconds."""
+        intervals = np.diff(self.recent_timestamps())
+        n = len(intervals)
+        if n == 0:
+            return None, None, None
+        ranks = sorted({max(0, math.ceil(p / 100.0 * n) - 1) for p in (50, 99)})
+        part = np.partition(intervals, ranks)
+        deviations = intervals - intervals.mean()
+        jitter = math.sqrt(float(np.dot(deviations, deviations)) / n)
+        return _nearest_rank(part, n, 50), _nearest_rank(part, n, 99), jitter
+
+    def age(self, now: float) -> float | None:
+        """Seconds since the newest update (None before the first)."""
+        return None if self.newest_timestamp is None else now - self.newest_timestamp
+
+    def snapshot(self, now: float | None = None) -> DeviceSnapshot:
+        """All figures at once; ``now`` (same clock as the timestamps) enables age and decay."""
+        p50, p99, jitter = self.interval_stats()
+        return DeviceSnapshot(
+            name=self.name, count=self.count, first_timestamp=self.first_timestamp,
+            newest_timestamp=self.newest_timestamp, mean_rate=self.mean_rate,
+            window_rate=self.window_rate(now), p50_interval=p50, p99_interval=p99,
+            max_gap=self.max_gap, jitter=jitter, dropped=self.dropped, faults=self.faults,
+            age=None if now is None else self.age(now), frames=self.frames,
+            samples_per_frame=self.samples_per_frame,
+            mean_samples_per_frame=self._frame_samples / self.frames if self.frames else None)
+
+
+class MonitorStats:
+    """:class:`DeviceStats` for every device and proxy name, created on first use."""
+
+    def __init__(self, *, window: float = DEFAULT_WINDOW, history: int = DEFAULT_HISTORY) -> None:
+        self.window = window
+        self.history = history
+        self._devices: dict[str, DeviceStats] = {}
+
+    def device(self, name: str) -> DeviceStats:
+        stats = self._devices.get(name)
+        if stats is None:
+            stats = self._devices[name] = DeviceStats(name, window=self.window, history=self.history)
+        return stats
+
+    def add_timestamps(self, name: str, timestamps: Sequence[float] | np.ndarray) -> None:
+        self.device(name).add_timestamps(timestamps)
+
+    def add_timestamp(self, name: str, timestamp: float) -> None:
+        self.device(name).add_timestamp(timestamp)
+
+    def add_dropped(self, name: str, count: int = 1) -> None:
+        self.device(name).add_dropped(count)
+
+    def add_fault(self, name: str, count: int = 1) -> None:
+        self.device(name).add_fault(count)
+
+    def end_frame(self, names: Iterable[str] | None = None) -> None:
+        """A frame boundary for every device (or the ``names`` given)."""
+        for stats in (self._devices.values() if names is None else map(self.device, names)):
+            stats.end_frame()
+
+    def snapshot(self, now: float | None = None) -> dict[str, DeviceSnapshot]:
+        return {name: stats.snapshot(now) for name, stats in self._devices.items()}
+
+    def reset(self) -> None:
+        """Reset every device's statistics (devices stay known)."""
+        for stats in self._devices.values():
+            stats.reset()
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._devices
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._devices)
+
+    def __len__(self) -> int:
+        return len(self._devices)
