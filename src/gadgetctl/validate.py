@@ -84,6 +84,13 @@ def _where(location) -> tuple:
 
 
 def validate_paths(paths: Sequence[Path], options: ValidateOptions | None = None) -> ValidationResult:
+    from gadgetctl.perf import collector_paused
+
+    with collector_paused():
+        return _validate_paths(paths, options)
+
+
+def _validate_paths(paths: Sequence[Path], options: ValidateOptions | None = None) -> ValidationResult:
     from gadgetctl.jccl.defchecks import check_cycles, check_definition
     from gadgetctl.jccl.defparser import read_definition
     from gadgetctl.jccl.repository import default_repository

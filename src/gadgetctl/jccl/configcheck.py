@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 
 from gadgetctl.diagnostics import Diagnostic
@@ -114,6 +115,19 @@ def _path_variables(element: ConfigElement, environ: Mapping[str, str]) -> list[
     return found
 
 
+@lru_cache(maxsize=4096)
+def _real_directory(directory: str) -> str:
+    return os.path.realpath(directory)
+
+
+def _real_path(path: str) -> Path:
+    """``Path(path).resolve()``, with the directory part resolved once per directory."""
+    if os.path.islink(path):
+        return Path(path).resolve()
+    directory, name = os.path.split(os.path.abspath(path))
+    return Path(_real_directory(directory), name)
+
+
 def _is_configuration(doc: XmlDocument) -> bool:
     if doc.root is None or doc.kind is not FileKind.CONFIGURATION:
         return False
@@ -128,7 +142,7 @@ def check_documents(documents: Iterable[XmlDocument], base: DefinitionRepository
     given: list[Path] = []
     for doc in documents:
         if _is_configuration(doc):
-            resolved = Path(doc.path).resolve()
+            resolved = _real_path(doc.path)
             session.documents[resolved] = doc
             given.append(resolved)
     if not given:
@@ -139,8 +153,13 @@ def check_documents(documents: Iterable[XmlDocument], base: DefinitionRepository
         return _unique(check_configuration(config, session, Scope(True, names)))
     configs = {path: session.load([path]) for path in given}
     found: list[Diagnostic] = []
+    reported: set[tuple] = set()
     for path in _roots(configs):
-        found += check_configuration(configs[path], session, Scope(False, path.name))
+        mine = _unique(check_configuration(configs[path], session, Scope(False, path.name)))
+        # A file included by several configurations: one finding per place and code (the
+        # first configuration's wording), not one per configuration.
+        found += [d for d in mine if (d.code, d.path, d.line, d.column) not in reported]
+        reported.update((d.code, d.path, d.line, d.column) for d in mine)
     return _unique(found)
 
 
@@ -164,3 +183,34 @@ def _unique(diagnostics: list[Diagnostic]) -> list[Diagnostic]:
             seen.add(d)
             result.append(d)
     return result
+
+
+@dataclass
+class OpenedConfiguration:
+    configuration: Configuration
+    index: TypeIndex
+    session: Session
+
+
+def open_configuration(paths: Iterable[Path], *, definition_dirs: Iterable[Path] = (), bundled: bool = True,
+                       environ: Mapping[str, str] | None = None) -> OpenedConfiguration:
+    """Load files as one configuration (includes followed) with the repository they are
+    judged by. A file that is missing or not well-formed raises :class:`GadgetctlError`."""
+    from gadgetctl.errors import GadgetctlError
+    from gadgetctl.jccl.repository import default_repository
+
+    paths = list(paths)
+    for path in paths:
+        if not path.is_file():
+            raise GadgetctlError(f"{path}: no such file")
+    for directory in definition_dirs:
+        if not directory.is_dir():
+            raise GadgetctlError(f"--definitions {directory}: no such directory")
+    session = Session(default_repository(definition_dirs, bundled=bundled),
+                      os.environ if environ is None else environ)
+    config = session.load(paths)
+    broken = [d for d in config.diagnostics if d.code == "XML001"]
+    if broken:
+        raise GadgetctlError(f"{broken[0].location}: {broken[0].message}")
+    repo, _ = session.repository(config)
+    return OpenedConfiguration(config, session.checker(repo).index, session)

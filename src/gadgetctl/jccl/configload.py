@@ -16,7 +16,14 @@ from lxml import etree
 
 from gadgetctl.diagnostics import Diagnostic
 from gadgetctl.envvars import expand
-from gadgetctl.jccl.configuration import ConfigElement, ConfigFile, Configuration, PropertyValue
+from gadgetctl.jccl.configuration import (
+    ConfigElement,
+    ConfigFile,
+    Configuration,
+    PropertyValue,
+    SourceLocation,
+    TagLocation,
+)
 from gadgetctl.jccl.definitions import Location
 from gadgetctl.jccl.xmlload import DEFAULT_MAX_SIZE, XmlDocument, load_file
 
@@ -32,9 +39,8 @@ class ElementReader:
     def __init__(self, doc: XmlDocument) -> None:
         self.doc = doc
 
-    def location(self, node: etree._Element) -> Location:
-        line, column = self.doc.locate(node)
-        return Location(self.doc.path, line, column)
+    def location(self, node: etree._Element) -> SourceLocation:
+        return SourceLocation(self.doc, node)
 
     def read(self, node: etree._Element, parent: ConfigElement | None = None,
              parent_property: str | None = None) -> ConfigElement:
@@ -47,16 +53,31 @@ class ElementReader:
             parent_property=parent_property,
             node=node,
         )
+        doc = self.doc
+        properties = element.properties
+        on_line: dict[tuple[int, str], int] = {}  # tags of a name seen so far on a line
         for child in node:
-            prop = _local(child)
-            if prop is None:
+            tag = child.tag
+            if not isinstance(tag, str):
                 continue
-            embedded = next((c for c in child if isinstance(c.tag, str)), None)
-            value = PropertyValue(text="".join(child.itertext()) if embedded is None else "",
-                                  location=self.location(child))
+            prop = tag.rpartition("}")[2]
+            embedded = None
+            if len(child):  # rare: an embedded element, or text mixed with comments
+                embedded = next((c for c in child if isinstance(c.tag, str)), None)
+                text = "" if embedded is not None else "".join(child.itertext())
+            else:
+                text = child.text or ""
+            line = child.sourceline
+            index = on_line.get((line, prop), 0)
+            on_line[(line, prop)] = index + 1
+            value = PropertyValue(text=text, location=TagLocation(doc, line, prop, index))
             if embedded is not None:
                 value.element = self.read(embedded, element, prop)
-            element.properties.setdefault(prop, []).append(value)
+            values = properties.get(prop)
+            if values is None:
+                properties[prop] = [value]
+            else:
+                values.append(value)
         return element
 
 
@@ -71,11 +92,11 @@ def read_config_file(doc: XmlDocument, path: Path) -> ConfigFile:
     for child in root:
         tag = _local(child)
         if tag == "include":
-            config.includes.append((child.text or "", reader.location(child)))
+            config.includes.append((child.text or "", reader.location(child).resolved()))
         elif tag == "definition_path":
             for entry in child:
                 if _local(entry) == "dir":
-                    config.definition_dirs.append(((entry.text or "").strip(), reader.location(entry)))
+                    config.definition_dirs.append(((entry.text or "").strip(), reader.location(entry).resolved()))
         elif tag == "elements":
             config.elements.extend(reader.read(e) for e in child if isinstance(e.tag, str))
     return config
@@ -96,7 +117,8 @@ class ConfigurationLoader:
 
     def load(self, paths: Iterable[Path]) -> Configuration:
         for path in paths:
-            self._load(path, path.resolve(), stack=[], display=None)
+            resolved = path if path in self.documents else path.resolve()
+            self._load(path, resolved, stack=[], display=None)
         return self.configuration
 
     def _document(self, resolved: Path, display: str) -> XmlDocument:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -14,12 +15,87 @@ from gadgetctl.jccl.definitions import Location
 EMBEDDED_SEPARATOR = "/"
 
 
+class SourceLocation:
+    """Where a node of a parsed document starts. Looking up the column costs a search of the
+    source line, so line and column are found on first use only (most nodes never need them)."""
+
+    __slots__ = ("_doc", "_found", "_node")
+
+    def __init__(self, doc, node: etree._Element) -> None:
+        self._doc = doc
+        self._node = node
+        self._found: tuple[int | None, int | None] | None = None
+
+    def _locate(self) -> tuple[int | None, int | None]:
+        if self._found is None:
+            self._found = self._doc.locate(self._node)
+        return self._found
+
+    @property
+    def path(self) -> str:
+        return self._doc.path
+
+    @property
+    def line(self) -> int | None:
+        return self._locate()[0]
+
+    @property
+    def column(self) -> int | None:
+        return self._locate()[1]
+
+    def resolved(self) -> Location:
+        return Location(self.path, self.line, self.column)
+
+    def __str__(self) -> str:
+        return str(self.resolved())
+
+    def __repr__(self) -> str:
+        return f"SourceLocation({self})"
+
+
+class TagLocation(SourceLocation):
+    """Where a start tag without attributes (a property value) is, from its line, name and
+    how many tags of that name come before it on that line. Keeps no reference to the
+    parsed node, so that a large configuration does not pin one lxml proxy per value."""
+
+    __slots__ = ("_index", "_line", "_local")
+
+    def __init__(self, doc, line: int | None, local: str, index: int = 0) -> None:
+        self._doc = doc
+        self._node = None
+        self._found = None
+        self._line = line
+        self._local = local
+        self._index = index
+
+    def _locate(self) -> tuple[int | None, int | None]:
+        if self._found is None:
+            self._found = locate_tag(self._doc.lines, self._line, self._local, self._index)
+        return self._found
+
+
+def locate_tag(lines: list[str], line: int | None, local: str, index: int) -> tuple[int | None, int | None]:
+    """Line and column of the ``index``-th ``<local`` start tag on ``line`` (the line libxml2
+    gives, where the tag ends), searching backwards for a tag that spans lines."""
+    if not line or line > len(lines):
+        return line, None
+    pattern = re.compile(r"<(?:[\w.-]+:)?" + re.escape(local) + r"(?=[\s/>]|$)")
+    matches = [m.start() + 1 for m in pattern.finditer(lines[line - 1])]
+    if matches:
+        return line, matches[min(index, len(matches) - 1)]
+    for back in range(line - 1, max(0, line - 200), -1):
+        found = list(pattern.finditer(lines[back - 1]))
+        if found:
+            return back, found[-1].start() + 1
+    return line, None
+
+
 @dataclass(slots=True)
 class PropertyValue:
     """One value of a property: the text as written, or an embedded element."""
 
     text: str
-    location: Location
+    location: Location | SourceLocation
     element: ConfigElement | None = None
 
     @property
@@ -32,7 +108,7 @@ class ConfigElement:
     type: str
     name: str
     version_text: str | None
-    location: Location
+    location: Location | SourceLocation
     properties: dict[str, list[PropertyValue]] = field(default_factory=dict)
     parent: ConfigElement | None = None
     parent_property: str | None = None

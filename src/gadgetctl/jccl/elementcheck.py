@@ -11,11 +11,11 @@ from dataclasses import dataclass, field
 from difflib import get_close_matches
 
 from gadgetctl.diagnostics import Diagnostic
-from gadgetctl.jccl.configuration import ConfigElement, PropertyValue
+from gadgetctl.jccl.configuration import ConfigElement, PropertyValue, SourceLocation
 from gadgetctl.jccl.definitions import Location, PropertyDefinition, ValueType
 from gadgetctl.jccl.runtime import REQUIRED_POINTERS
 from gadgetctl.jccl.typeindex import TypeIndex, TypeView
-from gadgetctl.jccl.valuecheck import check_text
+from gadgetctl.jccl.valuecheck import ValueProblem, check_text
 
 
 @dataclass(frozen=True, slots=True)
@@ -38,7 +38,7 @@ class ElementReport:
     views: dict[int, TypeView | None] = field(default_factory=dict)  # id(element) -> judged view
 
 
-def at(code: str, message: str, location: Location, **kwargs) -> Diagnostic:
+def at(code: str, message: str, location: Location | SourceLocation, **kwargs) -> Diagnostic:
     return Diagnostic.make(code, message, location.path, location.line, location.column, **kwargs)
 
 
@@ -53,6 +53,8 @@ class ElementChecker:
         self.index = index
         self.search_path = search_path
         self._cache: dict[int, tuple[ConfigElement, ElementReport]] = {}
+        self._values: dict[tuple[int, str], ValueProblem | None] = {}
+        self._required_cache: dict[tuple[str, int], list[tuple[PropertyDefinition, str]]] = {}
 
     def check(self, element: ConfigElement) -> ElementReport:
         cached = self._cache.get(id(element))
@@ -89,10 +91,10 @@ class ElementChecker:
         if not versions:
             close = get_close_matches(element.type, self.index.repo.names(), n=3, cutoff=0.6)
             hint = f"Did you mean {', '.join(close)}? " if close else ""
-            where = f" (searched: {self.search_path})" if self.search_path else ""
-            found.append(at("CFG010", f"no definition of element type {element.type!r} on the "
-                            f"search path{where}; VR Juggler drops {element.full_name!r} when loading",
-                            element.location, hint=hint + "Add its .jdef with --definitions DIR or "
+            searched = f"Searched: {self.search_path}. " if self.search_path else ""
+            found.append(at("CFG010", f"no definition of element type {element.type!r} on the search "
+                            f"path; VR Juggler drops {element.full_name!r} when loading", element.location,
+                            hint=f"{hint}{searched}Add its .jdef with --definitions DIR or "
                             "JCCL_DEFINITION_PATH, or fix the tag."))
             return None
         newest = versions[-1]
@@ -166,9 +168,9 @@ class ElementChecker:
 
     def _check_count(self, element: ConfigElement, prop: PropertyDefinition,
                      values: list[PropertyValue], report: ElementReport) -> None:
-        if prop.variable:
-            return
         slots = len(prop.values)
+        if prop.variable or not slots:  # no slots at all: a broken definition, reported there
+            return
         if len(values) > slots:
             report.diagnostics.append(at(
                 "CFG023", f"{describe(element)}: {prop.name} has {len(values)} values; its definition "
@@ -201,7 +203,11 @@ class ElementChecker:
             if value.stripped:
                 report.pointers.append(PointerValue(element, prop, value))
             return
-        problem = check_text(prop, value.text)
+        key = (id(prop), value.text)
+        try:
+            problem = self._values[key]
+        except KeyError:
+            problem = self._values[key] = check_text(prop, value.text)
         if problem is not None:
             report.diagnostics.append(at(problem.code, f"{describe(element)}: {problem.message}",
                                          value.location, hint=problem.hint))
@@ -218,11 +224,21 @@ class ElementChecker:
                 f"{child.type} ({child.name!r})", child.location))
         self._check(child, report)
 
+    def _required(self, view: TypeView) -> list[tuple[PropertyDefinition, str]]:
+        key = (view.name, view.version)
+        found = self._required_cache.get(key)
+        if found is None:
+            found = []
+            for base, prop_name, effect in REQUIRED_POINTERS:
+                prop = view.get(prop_name)
+                if prop is not None and prop.valuetype is ValueType.POINTER and self.index.is_a(view.name, base):
+                    found.append((prop, effect))
+            self._required_cache[key] = found
+        return found
+
     def _check_required(self, element: ConfigElement, view: TypeView, report: ElementReport) -> None:
-        for base, prop_name, effect in REQUIRED_POINTERS:
-            prop = view.get(prop_name)
-            if prop is None or prop.valuetype is not ValueType.POINTER or not self.index.is_a(element.type, base):
-                continue
+        for prop, effect in self._required(view):
+            prop_name = prop.name
             values = element.values(prop_name)
             if values and any(v.stripped or v.element is not None for v in values):
                 continue

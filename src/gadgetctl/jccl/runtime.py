@@ -22,7 +22,6 @@ MINIMUM_VERSIONS = {
     "input_manager": 2,
     "cluster_manager": 3,
     "keyboard_mouse_device": 2,
-    "input_window": 2,
     "flock": 2,
     "motion_star": 2,
     "fastrak": 2,
@@ -30,13 +29,13 @@ MINIMUM_VERSIONS = {
 
 # Types that have a definition but that no handler accepts.
 NEVER_HANDLED = {
-    "gesture_proxy": "Gadgeteer has no constructor for gesture proxies (it is commented out)",
+    "gesture_proxy": "VR Juggler never handles gesture proxies (Gadgeteer's constructor for them is commented out)",
 }
 
 # Pointers an element cannot work without, as (base type, property): the rule applies to
 # the base type and every type derived from it.
 REQUIRED_POINTERS: tuple[tuple[str, str, str], ...] = (
-    ("alias", "proxy", "the alias stays pending and resolves to nothing"),
+    ("alias", "proxy", "the alias leads to no proxy"),
     ("proxy", "device", "the proxy is never bound and returns default data"),
     ("simulated_analog_device", "keyboard_mouse_proxy", "the simulated device never sees a key"),
     ("simulated_digital_device", "keyboard_mouse_proxy", "the simulated device never sees a key"),
@@ -57,13 +56,17 @@ PATH_PROPERTIES = frozenset({
 })
 
 
-def missing_target_effect(type_name: str) -> str:
-    """What the run time does with an element of this type whose pointer finds nothing."""
-    if type_name in STUPEFIED_PROXIES:
+def missing_target_effect(root_type: str, root_name: str, embedded: bool) -> str:
+    """What the run time does with a top-level element when a pointer of it (or, with
+    ``embedded``, of one of its embedded elements) finds nothing."""
+    if root_type in STUPEFIED_PROXIES:
         return "the proxy stays unbound and returns default data"
-    if type_name == "cluster_node":
-        return "the cluster node is configured without it"
-    if type_name in ("command_proxy", "string_proxy"):
-        return (f"unlike most proxies, a {type_name} waits for its device, so VR Juggler keeps it "
+    if root_type == "cluster_node":
+        return ("on the node that uses it, the embedded element waits until an element of that "
+                "name appears")
+    if root_type in ("command_proxy", "string_proxy"):
+        return (f"unlike most proxies, a {root_type} waits for its device, so VR Juggler keeps it "
                 "pending forever")
+    if embedded:
+        return f"VR Juggler keeps {root_type} {root_name!r} pending until an element of that name appears"
     return "VR Juggler keeps the element pending until an element of that name appears"

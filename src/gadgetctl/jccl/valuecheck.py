@@ -60,7 +60,7 @@ def _label_problem(prop: PropertyDefinition, raw: str) -> ValueProblem | None:
             "CFG027", f"{prop.name} {raw!r} is not a label of its enumeration: labels are "
             f"case-sensitive, so it is not replaced by {near.label}'s value {near.value!r}"
             + (f" and is read as {reads}" if reads else ""),
-            f"Write {near.label!r}.")
+            f"Write {near.label!r}. Choices: {describe_choices(enumeration)}.")
     if enumeration.editable:
         return None
     from difflib import get_close_matches
@@ -86,7 +86,7 @@ def check_text(prop: PropertyDefinition, text: str) -> ValueProblem | None:
     """The first problem of one written value of a text-valued property, if any."""
     raw = text.strip()
     value = raw
-    if prop.enumeration is not None and prop.enumeration.choices:
+    if prop.enumeration is not None and prop.enumeration.choices and raw:
         problem = _label_problem(prop, raw)
         if problem is not None and problem.code == "CFG027":
             return problem

@@ -24,6 +24,8 @@ from gadgetctl.jccl.runtime import (
 )
 from gadgetctl.jccl.typeindex import TypeIndex
 
+UNHANDLED = "unhandled"
+
 
 @dataclass(frozen=True, slots=True)
 class Scope:
@@ -88,8 +90,10 @@ class Wiring:
         if target is None:
             if pointer.target in self.embedded:
                 return []  # found, but never satisfies a dependency: see pending()
-            close = get_close_matches(pointer.target, list(self.by_name), n=3, cutoff=0.7)
-            return [at("CFG031", f"{who}: {self.scope.nowhere()}; {missing_target_effect(root.type)}",
+            candidates = self.embedded if "/" in pointer.target else self.by_name
+            close = get_close_matches(pointer.target, list(candidates), n=3, cutoff=0.7)
+            effect = missing_target_effect(root.type, root.name, pointer.element is not root)
+            return [at("CFG031", f"{who}: {self.scope.nowhere()}; {effect}",
                        pointer.value.location,
                        severity=Severity.ERROR if self.scope.complete else None,
                        hint=f"Did you mean {', '.join(repr(c) for c in close)}?" if close else None)]
@@ -103,26 +107,28 @@ class Wiring:
 
     # -- pending ---------------------------------------------------------------------
 
-    def _blocked(self, element: ConfigElement) -> str | None:
-        """Why the element can never become active whatever the others do, or None."""
+    def _blocked(self, element: ConfigElement) -> tuple[str, Severity] | None:
+        """Why the element can never become active whatever the others do, and how bad that
+        is; None when it can."""
         view = self.reports[id(element)].views.get(id(element))
         if view is None or view.definition.abstract:
-            return "unhandled"  # reported as CFG010 / CFG011
+            return UNHANDLED, Severity.ERROR  # reported as CFG010 / CFG011
         minimum = MINIMUM_VERSIONS.get(element.type)
         if minimum is not None and (element.version or 0) < minimum:
             return (f"VR Juggler refuses {element.type} elements older than version {minimum} "
-                    f"(this one is version {element.version or 0})")
-        return NEVER_HANDLED.get(element.type)
+                    f"(this one is version {element.version or 0})"), Severity.ERROR
+        reason = NEVER_HANDLED.get(element.type)
+        return (reason, Severity.WARNING) if reason else None
 
     def pending(self) -> list[Diagnostic]:
         waiting: dict[str, list[ConfigElement]] = defaultdict(list)
         unmet: dict[int, int] = {}
         ready: list[ConfigElement] = []
-        blocked: dict[int, str] = {}
+        self.blocked: dict[int, tuple[str, Severity]] = {}
         for element in self.effective:
-            reason = self._blocked(element)
-            if reason is not None:
-                blocked[id(element)] = reason
+            blocker = self._blocked(element)
+            if blocker is not None:
+                self.blocked[id(element)] = blocker
                 continue
             deps = set() if element.type in NO_DEPENDENCY_CHECK else \
                 {p.target for p in self.reports[id(element)].pointers}
@@ -145,14 +151,12 @@ class Wiring:
         for element in self.effective:
             if element.name in active:
                 continue
-            reason = blocked.get(id(element))
-            if reason == "unhandled":
-                continue
-            if reason is not None:
-                found.append(at("CFG041", f"{describe(element)} would stay pending: {reason}",
-                                element.location))
-                continue
-            found.extend(self._waiting(element, active))
+            blocker = self.blocked.get(id(element))
+            if blocker is None:
+                found.extend(self._waiting(element, active))
+            elif blocker[0] != UNHANDLED:
+                found.append(at("CFG041", f"{describe(element)} would stay pending: {blocker[0]}",
+                                element.location, severity=blocker[1]))
         return found
 
     def _waiting(self, element: ConfigElement, active: set[str]) -> list[Diagnostic]:
@@ -167,7 +171,7 @@ class Wiring:
                                 "and VR Juggler only looks for top-level elements"))
             elif target is not None:
                 why = "which stays pending itself"
-                if self._blocked(target) == "unhandled":
+                if self.blocked.get(id(target), ("",))[0] == UNHANDLED:
                     why = ("whose type VR Juggler does not handle" if self.index.known(target.type)
                            else "which VR Juggler drops because its type has no definition")
                 reasons.append((pointer, f"it waits for {target.type} {name!r}, {why}"))
@@ -175,13 +179,15 @@ class Wiring:
             return []  # only missing targets: reported as CFG031
         pointer, text = reasons[0]
         more = f" (and {len(reasons) - 1} more)" if len(reasons) > 1 else ""
-        severity = None if self.scope.complete or not self._rooted_in_missing(element, active) \
-            else Severity.WARNING
         return [at("CFG041", f"{describe(element)} would stay pending: {text}{more}",
-                   pointer.value.location, severity=severity)]
+                   pointer.value.location, severity=self._root_severity(element, active))]
 
-    def _rooted_in_missing(self, element: ConfigElement, active: set[str]) -> bool:
-        """True when a chain of unmet pointers from ``element`` ends at a name no element has."""
+    def _root_severity(self, element: ConfigElement, active: set[str]) -> Severity:
+        """The worst of the causes at the ends of the chains of unmet pointers from ``element``:
+        a missing target (an error only when the configuration is complete), an element that
+        can never be active, an embedded target; a pure waiting cycle is an error."""
+        missing = Severity.ERROR if self.scope.complete else Severity.WARNING
+        causes: set[Severity] = set()
         seen: set[int] = set()
         stack = [element]
         while stack:
@@ -189,16 +195,21 @@ class Wiring:
             if id(current) in seen:
                 continue
             seen.add(id(current))
+            blocker = self.blocked.get(id(current))
+            if blocker is not None:
+                causes.add(blocker[1])
+                continue
             for pointer in self.reports[id(current)].pointers:
                 if pointer.target in active:
                     continue
                 target = self.by_name.get(pointer.target)
-                if target is None:
-                    if pointer.target not in self.embedded:
-                        return True
-                else:
+                if target is not None:
                     stack.append(target)
-        return False
+                else:
+                    causes.add(Severity.ERROR if pointer.target in self.embedded else missing)
+        if not causes or Severity.ERROR in causes:
+            return Severity.ERROR
+        return Severity.WARNING
 
 
 def check_wiring(config: Configuration, reports: dict[int, ElementReport], index: TypeIndex,

@@ -46,7 +46,7 @@ CODES += [
          "The element declares a version older than the newest version of its definition. VR "
          "Juggler's run time reads it against the newest definition anyway, so renamed or "
          "reshaped properties are silently ignored, and a few element types (input_manager, "
-         "cluster_manager, keyboard_mouse_device, input_window and some drivers) refuse old "
+         "cluster_manager, keyboard_mouse_device and some drivers) refuse old "
          "versions outright. The element is checked against the rules of the version it "
          "declares.",
          "<input_manager name=\"Input\" version=\"1\">   (input_manager is at version 2)",
@@ -177,8 +177,22 @@ CODES += [
          "pending, for an embedded element (the run time only finds top-level elements), its "
          "version is refused by the part of VR Juggler that handles it, or no part handles its "
          "type at all. At run time this shows only as a STALE pending list. An element whose own "
-         "pointer names no element is reported as CFG031 instead.",
+         "pointer names no element is reported as CFG031 instead. It is a warning when the cause "
+         "is a type VR Juggler never handles (gesture_proxy) or a target that may come from "
+         "another file.",
          "<alias name=\"Wand\"><proxy>WandCmd</proxy></alias> where the command_proxy WandCmd "
          "waits for a missing device",
          "Fix the cause the message names; the element follows."),
+]
+
+# -- upgrades ------------------------------------------------------------------------------
+CODES += [
+    Code("CFG050", C, E, "element cannot be upgraded",
+         "`gadgetctl upgrade` could not bring the element up to date: a definition version "
+         "between the element's and the newest is not on the search path, a version has no "
+         "upgrade transform, or the transform failed or did not produce an element of the "
+         "type. The file is left unchanged.",
+         "<vrpn name=\"Tracker\" version=\"1\">   (vrpn version 2 has no upgrade transform)",
+         "Add the missing definition versions to the search path, or edit the element by hand "
+         "to match the newest definition."),
 ]

@@ -1,0 +1,383 @@
+"""`gadgetctl upgrade`: bring files up to date with their definitions and file formats.
+
+Elements older than their definition are passed through the definitions' upgrade
+transforms one version at a time, as VRJConfig does: the transform stored in version N
+turns a version N-1 element into version N; the first element of its result is the
+upgraded element and any further elements are new ones, placed after it. Embedded
+elements are upgraded too. File-format markers are fixed by
+:mod:`gadgetctl.jccl.formatupgrade`.
+
+Only the changed elements are rewritten; every other byte of the file (comments, layout,
+quoting, untouched elements) stays as it was. If one element cannot be upgraded, the file
+is left unchanged and the problem reported.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from lxml import etree
+
+from gadgetctl.diagnostics import Diagnostic, Severity
+from gadgetctl.jccl.definitions import Location
+from gadgetctl.jccl.formatupgrade import Edit, configuration_format, definition_format
+from gadgetctl.jccl.namespaces import CONFIG_NS
+from gadgetctl.jccl.repository import DefinitionRepository
+from gadgetctl.jccl.searchpath import configuration_entries
+from gadgetctl.jccl.spans import Span, element_spans, indentation_before
+from gadgetctl.jccl.xmlload import FileKind, declared_encoding, guess_kind, parse_bytes
+from gadgetctl.jccl.xslt import TransformError, apply_transform, in_namespace
+
+DEFAULT_INDENT = "   "
+
+
+@dataclass(frozen=True, slots=True)
+class ElementUpgrade:
+    type: str
+    name: str
+    line: int | None
+    from_version: int
+    to_version: int
+    created: int = 0  # new elements the transforms made
+
+    def describe(self) -> str:
+        extra = f", {self.created} new element{'s' if self.created != 1 else ''}" if self.created else ""
+        return f"{self.type} {self.name!r}: version {self.from_version} -> {self.to_version}{extra}"
+
+
+@dataclass
+class FileUpgrade:
+    path: Path
+    display: str
+    original: bytes
+    upgraded: bytes | None = None
+    elements: list[ElementUpgrade] = field(default_factory=list)
+    format_notes: list[str] = field(default_factory=list)
+    problems: list[Diagnostic] = field(default_factory=list)
+
+    @property
+    def changed(self) -> bool:
+        return self.upgraded is not None and self.upgraded != self.original
+
+    @property
+    def failed(self) -> bool:
+        return any(p.severity is Severity.ERROR for p in self.problems)
+
+
+class UpgradeFailure(Exception):
+    pass
+
+
+def _local(node: etree._Element) -> str:
+    return etree.QName(node).localname
+
+
+def _embedded(node: etree._Element) -> list[etree._Element]:
+    """Embedded elements of an element: element children of its property children."""
+    return [child for prop in node if isinstance(prop.tag, str)
+            for child in prop if isinstance(child.tag, str)]
+
+
+def _version(node: etree._Element) -> int | None:
+    try:
+        return int((node.get("version") or "").strip())
+    except ValueError:
+        return None
+
+
+def indent_tree(node: etree._Element, own: str, unit: str) -> None:
+    """Lay out ``node``'s children one per line, ``unit`` deeper than ``own``; text values
+    (and mixed content) are left alone."""
+    children = [c for c in node if isinstance(c.tag, str)]
+    if not children or (node.text or "").strip():
+        return
+    inner = "\n" + own + unit
+    node.text = inner
+    for i, child in enumerate(children):
+        child.tail = inner if i < len(children) - 1 else "\n" + own
+        indent_tree(child, own + unit, unit)
+
+
+class ElementUpgrader:
+    """Upgrades element trees against one repository."""
+
+    def __init__(self, repo: DefinitionRepository) -> None:
+        self.repo = repo
+        self.warnings: list[str] = []
+
+    def needs(self, node: etree._Element) -> tuple[int, int] | None:
+        versions = self.repo.versions(_local(node))
+        declared = _version(node)
+        if not versions or declared is None or declared >= versions[-1]:
+            return None
+        return declared, versions[-1]
+
+    def upgrade(self, node: etree._Element) -> tuple[etree._Element, list[etree._Element]]:
+        """The upgraded copy of ``node`` and any new elements; ``node`` is not changed."""
+        type_name = _local(node)
+        declared, newest = self.needs(node) or (0, 0)
+        current = in_namespace(node)
+        created: list[etree._Element] = []
+        for number in range(declared + 1, newest + 1):
+            definition = self.repo.get(type_name, number)
+            if definition is None:
+                raise UpgradeFailure(f"version {number} of {type_name} is not on the search path, so "
+                                     f"there is no way from version {number - 1} to {number}")
+            if not definition.upgrade_transform:
+                raise UpgradeFailure(f"version {number} of {type_name} has no upgrade transform")
+            try:
+                result = apply_transform(definition.upgrade_transform, current)
+            except TransformError as err:
+                raise UpgradeFailure(f"{type_name} version {number - 1} -> {number}: {err}") from None
+            first = result[0]
+            if _local(first) != type_name:
+                raise UpgradeFailure(f"the {type_name} version {number} transform produced a "
+                                     f"<{_local(first)}>, not a <{type_name}>")
+            current = in_namespace(first)
+            current.set("version", str(number))
+            created += [in_namespace(extra) for extra in result[1:]]
+        self.check_counts(node, current)
+        return current, created
+
+    def check_counts(self, before: etree._Element, after: etree._Element) -> None:
+        """Warn about fixed-count properties the transforms gave more values than they have,
+        typically because the element already carried a property a newer version adds."""
+        def counts(node: etree._Element) -> dict[str, int]:
+            found: dict[str, int] = {}
+            for prop in node:
+                if isinstance(prop.tag, str):
+                    found[_local(prop)] = found.get(_local(prop), 0) + 1
+            return found
+
+        old, new = counts(before), counts(after)
+        type_name = _local(after)
+        for name, count in new.items():
+            found = self.repo.find_property(type_name, name)
+            if found is None or found.definition.variable:
+                continue
+            slots = len(found.definition.values)
+            if count > slots >= old.get(name, 0):
+                self.warnings.append(
+                    f"{type_name} {after.get('name')!r}: after the upgrade {name} has {count} values "
+                    f"but {slots} slot{'s' if slots != 1 else ''}; the element already had it before "
+                    "the transform added it. Remove the extra value.")
+
+    def upgrade_embedded(self, node: etree._Element, log: list[ElementUpgrade],
+                         lines: dict[tuple, int | None], chain: tuple = ()) -> None:
+        """Upgrade, in place, the embedded elements of an element tree that is not in a file.
+        ``lines`` maps chains of (type, name) from the top element to source lines."""
+        for child in _embedded(node):
+            key = (*chain, (_local(child), child.get("name")))
+            step = self.needs(child)
+            if step is None:
+                self.upgrade_embedded(child, log, lines, key)
+                continue
+            upgraded, created = self.upgrade(child)
+            self.upgrade_embedded(upgraded, log, lines, key)
+            upgraded.tail = child.tail
+            child.getparent().replace(child, upgraded)
+            log.append(ElementUpgrade(_local(child), child.get("name") or "", lines.get(key), *step, len(created)))
+
+
+def source_lines(node: etree._Element, chain: tuple = ()) -> dict[tuple, int | None]:
+    """Source lines of the embedded elements of ``node``, by chain of (type, name)."""
+    found: dict[tuple, int | None] = {}
+    for child in _embedded(node):
+        key = (*chain, (_local(child), child.get("name")))
+        found.setdefault(key, child.sourceline)
+        found.update(source_lines(child, key))
+    return found
+
+
+class FileUpgrader:
+    def __init__(self, path: Path, data: bytes, display: str, repo: DefinitionRepository,
+                 environ: Mapping[str, str] | None = None) -> None:
+        self.result = FileUpgrade(path, display, data)
+        self.data = data
+        self.repo = repo
+        self.environ = environ
+        self.encoding = declared_encoding(data)
+        self.newline = "\r\n" if b"\r\n" in data[:4096] else "\n"
+        self.edits: list[Edit] = []
+
+    def problem(self, message: str, line: int | None = None, code: str = "CFG050") -> None:
+        self.result.problems.append(Diagnostic.make(code, message, self.result.display, line))
+
+    def run(self) -> FileUpgrade:
+        doc = parse_bytes(self.data, self.result.display, guess_kind(self.result.path))
+        if doc.root is None:
+            self.result.problems.extend(d for d in doc.diagnostics if d.severity is Severity.ERROR)
+            return self.result
+        elements = list(doc.root.iter(etree.Element))
+        try:
+            spans = element_spans(self.data)
+        except ValueError as err:
+            self.problem(f"cannot edit the file in place: {err}", code="XML001")
+            return self.result
+        if len(spans) != len(elements):
+            self.problem("cannot match the file's elements to their positions; not changed", code="XML001")
+            return self.result
+        self.spans = dict(zip(elements, spans, strict=True))
+        if doc.kind is FileKind.DEFINITION:
+            changes = definition_format(self.data, doc.root, spans, elements)
+        elif doc.kind is FileKind.CONFIGURATION:
+            changes = configuration_format(self.data, elements, spans)
+            self.repo = self.with_definition_path(doc.root)
+            self.upgrade_elements(doc.root)
+        else:
+            return self.result
+        self.edits += changes.edits
+        self.result.format_notes += changes.notes
+        if self.result.failed:
+            return self.result
+        self.result.upgraded = self.apply()
+        self.verify()
+        return self.result
+
+    def with_definition_path(self, root: etree._Element) -> DefinitionRepository:
+        """The repository plus the file's <definition_path> directories."""
+        dirs = [((d.text or "").strip(), Location(self.result.display, d.sourceline))
+                for node in root if isinstance(node.tag, str) and _local(node) == "definition_path"
+                for d in node if isinstance(d.tag, str) and _local(d) == "dir"]
+        entries = configuration_entries(dirs, self.result.path.resolve().parent, self.environ)
+        return self.repo.extended(entries) if entries else self.repo
+
+    # -- elements --------------------------------------------------------------------
+
+    def upgrade_elements(self, root: etree._Element) -> None:
+        upgrader = ElementUpgrader(self.repo)
+        for container in root:
+            if isinstance(container.tag, str) and _local(container) == "elements":
+                for node in container:
+                    if isinstance(node.tag, str):
+                        self.visit(upgrader, node, self.spans[node])
+
+    def visit(self, upgrader: ElementUpgrader, node: etree._Element, top: Span) -> None:
+        step = upgrader.needs(node)
+        if step is None:
+            for child in _embedded(node):
+                self.visit(upgrader, child, top)
+            return
+        line = node.sourceline
+        log: list[ElementUpgrade] = []
+        try:
+            upgraded, created = upgrader.upgrade(node)
+            upgrader.upgrade_embedded(upgraded, log, source_lines(node))
+        except UpgradeFailure as err:
+            self.problem(f"{_local(node)} {node.get('name')!r} (version {step[0]}) cannot be upgraded: "
+                         f"{err}", line)
+            return
+        finally:
+            for warning in upgrader.warnings:
+                self.result.problems.append(Diagnostic.make("CFG023", warning, self.result.display, line,
+                                                            severity=Severity.WARNING))
+            upgrader.warnings.clear()
+        span = self.spans[node]
+        own = indentation_before(self.data, span.start).decode(self.encoding, "replace")
+        unit = self.indent_unit(node, own)
+        self.edits.append(Edit(span.start, span.end, self.serialise(upgraded, own, unit)))
+        for extra in created:
+            text = (self.newline + own).encode(self.encoding) + self.serialise(extra, own, unit)
+            self.edits.append(Edit(top.end, top.end, text))
+        self.result.elements.append(ElementUpgrade(_local(node), node.get("name") or "", line, *step, len(created)))
+        self.result.elements.extend(log)
+
+    def indent_unit(self, node: etree._Element, own: str) -> str:
+        children = [c for c in node if isinstance(c.tag, str)]
+        if children:
+            inner = indentation_before(self.data, self.spans[children[0]].start).decode(self.encoding, "replace")
+            if inner.startswith(own) and len(inner) > len(own):
+                return inner[len(own):]
+        return DEFAULT_INDENT
+
+    def serialise(self, node: etree._Element, own: str, unit: str) -> bytes:
+        indent_tree(node, own, unit)
+        node.tail = None
+        text = etree.tostring(node, encoding="unicode")
+        text = re.sub(r'\sxmlns="' + re.escape(CONFIG_NS) + '"', "", text, count=1)
+        if self.newline != "\n":
+            text = text.replace("\n", self.newline)
+        return text.encode(self.encoding, "xmlcharrefreplace")
+
+    # -- output ----------------------------------------------------------------------
+
+    def apply(self) -> bytes:
+        out = bytearray()
+        position = 0
+        # Insertions before replacements at the same place; a replacement before the edits
+        # it contains, which are then dropped.
+        for edit in sorted(self.edits, key=lambda e: (e.start, e.end != e.start, -e.end)):
+            if edit.start < position:
+                if edit.end <= position:
+                    continue  # inside an element that is rewritten as a whole
+                raise AssertionError("overlapping upgrade edits")
+            out += self.data[position:edit.start]
+            out += edit.text
+            position = edit.end
+        out += self.data[position:]
+        return bytes(out)
+
+    def verify(self) -> None:
+        upgraded = self.result.upgraded
+        if upgraded is None or upgraded == self.data:
+            return
+        check = parse_bytes(upgraded, self.result.display)
+        if check.root is None:
+            self.result.upgraded = None
+            self.problem("the upgraded file would not be well-formed; not changed "
+                         f"({check.diagnostics[0].message if check.diagnostics else 'unknown error'})")
+
+
+def upgrade_bytes(path: Path, data: bytes, repo: DefinitionRepository, display: str | None = None,
+                  environ: Mapping[str, str] | None = None) -> FileUpgrade:
+    """Upgrade the content ``data`` of ``path`` (which is not read or written)."""
+    return FileUpgrader(path, data, display or str(path), repo, environ).run()
+
+
+def upgrade_file(path: Path, repo: DefinitionRepository, display: str | None = None,
+                 environ: Mapping[str, str] | None = None) -> FileUpgrade:
+    return upgrade_bytes(path, path.read_bytes(), repo, display, environ)
+
+
+def write_atomic(path: Path, data: bytes, *, backup: bool = True) -> Path | None:
+    """Replace ``path`` by ``data`` atomically (a temporary file in the same directory,
+    renamed over it), keeping its permissions; with ``backup`` the old content goes to
+    ``path.bak`` first, which is returned."""
+    import os
+    import shutil
+    import tempfile
+
+    saved = None
+    if backup:
+        saved = path.with_name(path.name + ".bak")
+        shutil.copy2(path, saved)
+    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(handle, "wb") as out:
+            out.write(data)
+            out.flush()
+            os.fsync(out.fileno())
+        shutil.copymode(path, temporary)
+        os.replace(temporary, path)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+    return saved
+
+
+def with_given_definitions(repo: DefinitionRepository, paths: list[Path]) -> DefinitionRepository:
+    """``repo`` with the definitions among ``paths`` put first, as `gadgetctl validate` does."""
+    from gadgetctl.jccl.defparser import read_definition
+    from gadgetctl.jccl.xmlload import load_file
+
+    definitions = []
+    for path in paths:
+        if path.suffix == ".jdef":
+            doc = load_file(path)
+            definition = read_definition(doc, columns=False) if doc.root is not None else None
+            if definition is not None and definition.name:
+                definitions.append(definition)
+    return repo.overlay(definitions) if definitions else repo

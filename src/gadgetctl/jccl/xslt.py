@@ -1,0 +1,74 @@
+"""Applying definitions' upgrade transforms (XSLT 1.0) to single elements, safely.
+
+A stylesheet comes from a definition file, which may come from anywhere, so it runs with
+an access control that denies every file and network access (``document()``,
+``xsl:include``, ``xsl:import`` and output extensions all fail) and is parsed without DTDs,
+entities or network.
+"""
+
+from __future__ import annotations
+
+import copy
+
+from lxml import etree
+
+from gadgetctl.jccl.namespaces import CONFIG_NS
+
+
+class TransformError(Exception):
+    """A stylesheet that cannot be compiled or applied, or whose result is no element."""
+
+
+_DENY_ALL = etree.XSLTAccessControl.DENY_ALL
+_compiled: dict[bytes, etree.XSLT] = {}
+
+
+def compile_transform(stylesheet: bytes) -> etree.XSLT:
+    found = _compiled.get(stylesheet)
+    if found is None:
+        parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False)
+        try:
+            found = etree.XSLT(etree.fromstring(stylesheet, parser), access_control=_DENY_ALL)
+        except (etree.XMLSyntaxError, etree.XSLTParseError) as err:
+            raise TransformError(f"the upgrade stylesheet does not compile: {err}") from None
+        _compiled[stylesheet] = found
+    return found
+
+
+def in_namespace(node: etree._Element, namespace: str = CONFIG_NS) -> etree._Element:
+    """A deep copy of ``node`` with every element in ``namespace`` as the default namespace
+    (whatever namespace or prefix it had), comments and processing instructions dropped."""
+    def rebuild(source: etree._Element) -> etree._Element:
+        local = etree.QName(source).localname
+        target = etree.Element(f"{{{namespace}}}{local}", nsmap={None: namespace})
+        for key, value in source.attrib.items():
+            target.set(key, value)
+        target.text = source.text
+        for child in source:
+            if isinstance(child.tag, str):
+                built = rebuild(child)
+                built.tail = child.tail
+                target.append(built)
+            elif child.tail:  # keep text that followed a dropped comment
+                if len(target):
+                    target[-1].tail = (target[-1].tail or "") + child.tail
+                else:
+                    target.text = (target.text or "") + child.tail
+        return target
+
+    return rebuild(node)
+
+
+def apply_transform(stylesheet: bytes, element: etree._Element) -> list[etree._Element]:
+    """The elements a stylesheet makes of one element: the upgraded element first, then any
+    new elements it creates. ``element`` itself is not changed."""
+    transform = compile_transform(stylesheet)
+    document = etree.ElementTree(copy.deepcopy(element))
+    try:
+        result = transform(document)
+    except etree.XSLTApplyError as err:
+        raise TransformError(f"the upgrade stylesheet failed: {err}") from None
+    root = result.getroot()
+    if root is None:
+        raise TransformError("the upgrade stylesheet produced no element")
+    return [root, *(n for n in root.itersiblings() if isinstance(n.tag, str))]
