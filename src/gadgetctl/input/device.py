@@ -1,0 +1,177 @@
+"""The base class of every input device, and what the input manager gives a device.
+
+A driver's device class derives from one or more device-type classes of
+:mod:`gadgetctl.input.devicetypes` (``class Joystick(Digital, Analog)``) and implements:
+
+* ``config(access)``: call ``super().config(access)`` first, then read the element's own
+  properties; raise :class:`DeviceConfigError` with the reason when it cannot work;
+* ``start_sampling()``: open the device (raise to report a start failure);
+* ``sample()``: read what the device has and add it with the ``add_*_sample`` methods; it
+  is called in a loop by the input manager, never by the driver itself;
+* ``stop_sampling()``: close the device; it may be called again after a restart;
+* ``update_data()``: called once per frame; the default swaps the sample buffers.
+
+``SAMPLING`` says who calls ``sample()``: its own thread (the default, for drivers whose
+reads block), a shared scheduler thread at ``sample_interval`` (cheap non-blocking
+devices), or nobody (devices that compute their data in ``update_data``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import TYPE_CHECKING, ClassVar, Protocol
+
+from gadgetctl.diagnostics import Diagnostic
+from gadgetctl.input.clock import now
+from gadgetctl.input.errors import describe
+from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.samples import DEFAULT_CAP, SampleStore
+
+if TYPE_CHECKING:
+    from gadgetctl.input.events import EventSource
+    from gadgetctl.input.proxies import Proxy
+    from gadgetctl.jccl.access import ElementAccess
+
+
+class SamplingMode(StrEnum):
+    THREAD = "thread"        # sample() runs in a loop in the device's own thread; it may block
+    SCHEDULED = "scheduled"  # a shared thread calls sample() every sample_interval; must not block
+    FRAME = "frame"          # no sampling thread: update_data() produces the samples
+
+
+class DeviceState(StrEnum):
+    CONFIGURED = "configured"      # configured, not started (dry runs)
+    RUNNING = "running"
+    FAULTED = "faulted"            # sample() raised; a restart is scheduled
+    RECONNECTING = "reconnecting"  # start_sampling() is being retried after a fault
+    STOPPED = "stopped"
+
+
+@dataclass(frozen=True, slots=True)
+class DeviceStats:
+    """Counters of one device, for `gadgetctl monitor`."""
+
+    samples: int
+    dropped: int
+    faults: int
+    restarts: int
+    last_error: str | None
+
+
+class DeviceContext(Protocol):
+    """What the input manager offers a device."""
+
+    @property
+    def frame(self) -> int: ...
+
+    @property
+    def events(self) -> EventSource: ...
+
+    def proxy(self, name: str) -> Proxy | None:
+        """The proxy called ``name`` (or the one an alias of that name points at), updated
+        for the current frame."""
+
+
+class Input:
+    """Base of every device. Subclasses set ``ELEMENT_TYPE`` and mix in device types."""
+
+    #: The definition token this class configures (Gadgeteer's getElementType()).
+    ELEMENT_TYPE: ClassVar[str] = ""
+    #: Who calls sample(); see :class:`SamplingMode`.
+    SAMPLING: ClassVar[SamplingMode] = SamplingMode.THREAD
+    #: Set by each device-type class to the kind of data it provides.
+    KIND: ClassVar[DeviceKind | None] = None
+
+    #: THREAD: pause between two sample() calls (0 = none, for reads that block);
+    #: SCHEDULED: period at which the shared scheduler calls sample().
+    sample_interval: float = 0.0
+
+    def __init__(self) -> None:
+        self.name = type(self).__name__
+        self.element_type = self.ELEMENT_TYPE
+        self.context: DeviceContext | None = None
+        self.store = SampleStore(self.kinds(), DEFAULT_CAP)
+        self.state = DeviceState.CONFIGURED
+        self.error: str | None = None
+        self.faults = 0
+        self.restarts = 0
+        self.diagnostics: list[Diagnostic] = []
+        self._location: tuple[str | None, int | None, int | None] = (None, None, None)
+        self._updated_frame = -1
+
+    @classmethod
+    def kinds(cls) -> tuple[DeviceKind, ...]:
+        """The kinds of data this class provides, in base-class order."""
+        seen: list[DeviceKind] = []
+        for klass in cls.__mro__:
+            kind = klass.__dict__.get("KIND")
+            if kind is not None and kind not in seen:
+                seen.append(kind)
+        return tuple(seen)
+
+    # -- what drivers implement ----------------------------------------------------------
+
+    def config(self, access: ElementAccess) -> None:
+        """Read the element. Subclasses call ``super().config(access)`` first."""
+        self.name = access.name
+        self.element_type = access.element.type
+        loc = access.element.location
+        self._location = (loc.path, loc.line, loc.column)
+
+    def start_sampling(self) -> None:
+        """Open the device. Raise to report that it cannot start."""
+
+    def sample(self) -> None:
+        """Read available data and add it with the ``add_*_sample`` methods."""
+
+    def stop_sampling(self) -> None:
+        """Close the device. Called after a fault too, so it must tolerate a half-open device."""
+
+    def update_data(self) -> None:
+        """Once per frame: make the samples since the previous frame current."""
+        self.store.swap()
+
+    def next_sample_due(self) -> float | None:
+        """SCHEDULED devices: when the next sample comes due, so the scheduler can sleep
+        until then (but wakes at most every ``sample_interval``). None: no idea."""
+        return None
+
+    # -- services for subclasses -------------------------------------------------------
+
+    @staticmethod
+    def now() -> float:
+        """The time a sample taken now carries."""
+        return now()
+
+    def warn(self, code: str, message: str, *, hint: str | None = None) -> None:
+        """Record a diagnostic about this device's configuration (shown by `config pending`)."""
+        path, line, column = self._location
+        self.diagnostics.append(Diagnostic.make(code, f"{self.name}: {message}", path, line, column, hint=hint))
+
+    # -- used by the input manager -----------------------------------------------------
+
+    @classmethod
+    def samples_in_thread(cls) -> bool:
+        """Whether the manager must call sample(): the class overrides it and is not FRAME."""
+        return cls.SAMPLING is not SamplingMode.FRAME and cls.sample is not Input.sample
+
+    def update_for_frame(self, frame: int) -> None:
+        """Run update_data() once per frame, whoever asks first (proxies, other devices)."""
+        if self._updated_frame == frame:
+            return
+        self._updated_frame = frame
+        try:
+            self.update_data()
+        except Exception as err:  # a faulty driver must not stop the frame loop
+            self.faults += 1
+            self.error = describe(err)
+            self.state = DeviceState.FAULTED
+        else:
+            if self.state is DeviceState.FAULTED and self.SAMPLING is SamplingMode.FRAME:
+                self.state = DeviceState.RUNNING
+
+    @property
+    def stats(self) -> DeviceStats:
+        return DeviceStats(self.store.total(), self.store.dropped(), self.faults, self.restarts,
+                           self.error)

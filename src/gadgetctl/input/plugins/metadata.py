@@ -1,0 +1,132 @@
+"""Reading a plug-in's metadata from its source with ``ast``, without importing it.
+
+The metadata are literal top-level assignments::
+
+    GADGETCTL_API_VERSION = 1
+    PLUGIN_NAME = "LinuxJoydev_drv"
+    ELEMENT_TYPES = {"linux_joydev": ("digital", "analog")}
+
+and a top-level ``def register(registry)``.
+"""
+
+from __future__ import annotations
+
+import ast
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from gadgetctl.input.kinds import DeviceKind, parse_kinds
+
+API_VERSION = "GADGETCTL_API_VERSION"
+PLUGIN_NAME = "PLUGIN_NAME"
+ELEMENT_TYPES = "ELEMENT_TYPES"
+REGISTER = "register"
+_NAMES = (API_VERSION, PLUGIN_NAME, ELEMENT_TYPES)
+
+
+@dataclass
+class PluginMetadata:
+    api_version: int | None = None
+    plugin_name: str | None = None
+    element_types: dict[str, tuple[DeviceKind, ...]] = field(default_factory=dict)
+    has_register: bool = False
+    summary: str = ""
+    problems: list[str] = field(default_factory=list)
+    api_version_dynamic: bool = False  # assigned, but not as a literal
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            "api_version": self.api_version,
+            "plugin_name": self.plugin_name,
+            "element_types": {t: [k.value for k in kinds] for t, kinds in self.element_types.items()},
+            "has_register": self.has_register,
+            "summary": self.summary,
+            "problems": list(self.problems),
+        }
+
+
+def _assignments(tree: ast.Module) -> dict[str, ast.expr]:
+    found: dict[str, ast.expr] = {}
+    for node in tree.body:
+        if isinstance(node, ast.Assign):
+            for target in node.targets:
+                if isinstance(target, ast.Name) and target.id in _NAMES:
+                    found[target.id] = node.value
+        elif (isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name)
+              and node.value is not None and node.target.id in _NAMES):
+            found[node.target.id] = node.value
+    return found
+
+
+def _defines_register(tree: ast.Module) -> bool:
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name == REGISTER:
+            return True
+        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == REGISTER for t in node.targets):
+            return True
+        if isinstance(node, ast.ImportFrom) and any((a.asname or a.name) == REGISTER for a in node.names):
+            return True
+    return False
+
+
+def parse_metadata(source: str, filename: str = "<plugin>") -> PluginMetadata:
+    meta = PluginMetadata()
+    try:
+        tree = ast.parse(source, filename=filename)
+    except SyntaxError as err:
+        meta.problems.append(f"syntax error at line {err.lineno}: {err.msg}")
+        return meta
+    doc = ast.get_docstring(tree)
+    meta.summary = doc.strip().splitlines()[0] if doc else ""
+    meta.has_register = _defines_register(tree)
+    values = _assignments(tree)
+    for name, node in values.items():
+        try:
+            value = ast.literal_eval(node)
+        except (ValueError, TypeError, SyntaxError, MemoryError, RecursionError):
+            if name == API_VERSION:
+                meta.api_version_dynamic = True
+            meta.problems.append(f"{name} is not a literal, so it cannot be read without importing the plug-in")
+            continue
+        if name == API_VERSION:
+            if isinstance(value, int) and not isinstance(value, bool):
+                meta.api_version = value
+            else:
+                meta.problems.append(f"{API_VERSION} must be an integer, not {value!r}")
+        elif name == PLUGIN_NAME:
+            if isinstance(value, str):
+                meta.plugin_name = value
+            else:
+                meta.problems.append(f"{PLUGIN_NAME} must be a string, not {value!r}")
+        elif name == ELEMENT_TYPES:
+            _read_element_types(value, meta)
+    if API_VERSION not in values:
+        meta.problems.append(f"no {API_VERSION} assignment")
+    if not meta.has_register:
+        meta.problems.append(f"no {REGISTER}(registry) function")
+    return meta
+
+
+def _read_element_types(value: object, meta: PluginMetadata) -> None:
+    if not isinstance(value, dict):
+        meta.problems.append(f"{ELEMENT_TYPES} must be a dict of element type -> device types")
+        return
+    for element_type, kinds in value.items():
+        if not isinstance(element_type, str):
+            meta.problems.append(f"{ELEMENT_TYPES} key {element_type!r} is not a string")
+            continue
+        try:
+            meta.element_types[element_type] = parse_kinds(kinds)
+        except ValueError as err:
+            meta.problems.append(f"{ELEMENT_TYPES}[{element_type!r}]: {err}")
+
+
+def read_metadata(path: Path) -> PluginMetadata:
+    """Metadata of the plug-in whose source file is ``path`` (``__init__.py`` of a package)."""
+    try:
+        source = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        meta = PluginMetadata()
+        meta.problems.append(f"cannot read {path.name}: {getattr(err, 'strerror', None) or err}")
+        return meta
+    return parse_metadata(source, str(path))

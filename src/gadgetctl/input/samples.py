@@ -1,0 +1,309 @@
+"""Timestamped samples and the thread-safe buffers devices fill and frames swap.
+
+A sample holds one value per unit (a button, an axis, a sensor) and the time it was taken.
+The sampling side appends samples, one at a time or as a :class:`SampleBatch` (consecutive
+samples added together, e.g. computed with numpy); the frame side calls
+:meth:`SampleStore.swap` once per frame. After a swap, :meth:`SampleStore.frame` holds every
+sample that arrived since the previous swap (monitors and recorders read them all) and
+:meth:`SampleStore.latest` the newest sample ever received (proxies read it; it stays
+latched when a frame brings nothing new).
+
+At most ``cap`` samples per kind are kept between two swaps; older ones are dropped and
+counted, so a stalled frame loop costs memory for one frame at most.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import deque
+from collections.abc import Iterable, Iterator, Mapping
+from typing import Any, NamedTuple
+
+from gadgetctl.input.clock import now
+from gadgetctl.input.kinds import DeviceKind
+
+DEFAULT_CAP = 5000
+
+
+class Sample(NamedTuple):
+    """One sample: ``values[unit]`` is the datum of each unit."""
+
+    timestamp: float
+    values: Any
+
+
+class SampleBatch:
+    """Consecutive samples of one kind: ``timestamps`` has shape (n,), ``values`` (n, units, ...).
+
+    A batch may also be a window ``[start, stop)`` of larger arrays (see
+    :meth:`SampleStore.add_slices`), sliced only when read; while it waits for the next
+    swap, a following window of the same arrays extends it instead of adding a chunk.
+    """
+
+    __slots__ = ("_base_timestamps", "_base_values", "_timestamps", "_values", "start", "stop")
+
+    def __init__(self, timestamps: Any, values: Any) -> None:
+        if len(timestamps) != len(values):
+            raise ValueError(f"{len(timestamps)} timestamps for {len(values)} samples")
+        self._timestamps, self._values = timestamps, values
+        self._base_timestamps = self._base_values = None
+        self.start, self.stop = 0, len(timestamps)
+
+    @classmethod
+    def window(cls, timestamps: Any, values: Any, start: int, stop: int) -> SampleBatch:
+        """Samples ``start`` .. ``stop - 1`` of ``timestamps`` and ``values``, not yet sliced."""
+        batch = cls.__new__(cls)
+        batch._base_timestamps, batch._base_values = timestamps, values
+        batch._timestamps = batch._values = None
+        batch.start, batch.stop = start, stop
+        return batch
+
+    def extends(self, values: Any, start: int) -> bool:
+        """Whether ``values[start:...]`` continues this (still unsliced) window."""
+        return self._base_values is values and self._timestamps is None and self.stop == start
+
+    @property
+    def timestamps(self) -> Any:
+        if self._timestamps is None:
+            self._timestamps = self._base_timestamps[self.start:self.stop]
+        return self._timestamps
+
+    @property
+    def values(self) -> Any:
+        if self._values is None:
+            self._values = self._base_values[self.start:self.stop]
+        return self._values
+
+    def __len__(self) -> int:
+        return self.stop - self.start
+
+    def row(self, index: int) -> Sample:
+        if index < 0:
+            index += self.stop - self.start
+        if self._base_values is not None:  # read the window's arrays without slicing them
+            return Sample(float(self._base_timestamps[self.start + index]), self._base_values[self.start + index])
+        return Sample(float(self._timestamps[index]), self._values[index])
+
+    def tail(self, count: int) -> SampleBatch:
+        """The last ``count`` samples."""
+        first = len(self) - count
+        return SampleBatch(self.timestamps[first:], self.values[first:])
+
+    def __iter__(self) -> Iterator[Sample]:
+        for index in range(len(self)):
+            yield self.row(index)
+
+
+Chunk = Sample | SampleBatch
+
+
+class FrameSamples:
+    """The samples of one kind that arrived between two frames, oldest first."""
+
+    __slots__ = ("chunks", "count")
+
+    def __init__(self, chunks: Iterable[Chunk] = (), count: int | None = None) -> None:
+        self.chunks = tuple(chunks) if not isinstance(chunks, (tuple, deque)) else chunks
+        self.count = count if count is not None else sum(
+            1 if isinstance(c, Sample) else len(c) for c in self.chunks)
+
+    def __len__(self) -> int:
+        return self.count
+
+    def __bool__(self) -> bool:
+        return self.count > 0
+
+    def __iter__(self) -> Iterator[Sample]:
+        for chunk in self.chunks:
+            if isinstance(chunk, Sample):
+                yield chunk
+            else:
+                yield from chunk
+
+    @property
+    def newest(self) -> Sample | None:
+        if not self.count:
+            return None
+        last = self.chunks[-1]
+        return last if type(last) is Sample else last.row(-1)
+
+    def column(self, unit: int) -> list[Any]:
+        """The values of one unit, oldest first (samples without that unit are skipped)."""
+        result: list[Any] = []
+        for chunk in self.chunks:
+            if isinstance(chunk, Sample):
+                if unit < len(chunk.values):
+                    result.append(chunk.values[unit])
+            elif len(chunk.values) and unit < len(chunk.values[0]):
+                result.extend(chunk.values[:, unit] if hasattr(chunk.values, "shape")
+                              else [row[unit] for row in chunk.values])
+        return result
+
+    def timestamps(self) -> list[float]:
+        """Every timestamp, oldest first."""
+        result: list[float] = []
+        for chunk in self.chunks:
+            if isinstance(chunk, Sample):
+                result.append(chunk.timestamp)
+            else:
+                result.extend(float(t) for t in chunk.timestamps)
+        return result
+
+
+EMPTY_FRAME = FrameSamples((), 0)
+
+
+class _Channel:
+    """The buffers of one kind of data."""
+
+    __slots__ = ("count", "dropped", "frame", "latest", "ready", "total")
+
+    def __init__(self) -> None:
+        self.ready: deque[Chunk] = deque()
+        self.count = 0
+        self.total = 0
+        self.dropped = 0
+        self.frame = EMPTY_FRAME
+        self.latest: Sample | None = None
+
+    def trim(self, cap: int) -> None:
+        excess = self.count - cap
+        ready = self.ready
+        while excess > 0:
+            first = ready[0]
+            size = 1 if isinstance(first, Sample) else len(first)
+            if size <= excess:
+                ready.popleft()
+                excess -= size
+                self.dropped += size
+            else:
+                ready[0] = first.tail(size - excess)
+                self.dropped += excess
+                excess = 0
+        self.count = min(self.count, cap)
+
+
+class SampleStore:
+    """The sample buffers of one device, one per kind it provides, behind one lock."""
+
+    def __init__(self, kinds: Iterable[DeviceKind], cap: int = DEFAULT_CAP) -> None:
+        if cap < 1:
+            raise ValueError("the sample cap must be at least 1")
+        self.cap = cap
+        self._lock = threading.Lock()
+        self._channels: dict[DeviceKind, _Channel] = {DeviceKind(k): _Channel() for k in kinds}
+        self.swapped_at: float | None = None  # when the current frame's samples were taken over
+
+    @property
+    def kinds(self) -> tuple[DeviceKind, ...]:
+        return tuple(self._channels)
+
+    def _channel(self, kind: DeviceKind) -> _Channel:
+        try:
+            return self._channels[kind]
+        except KeyError:
+            raise KeyError(f"this device provides no {kind} data") from None
+
+    # -- sampling side ----------------------------------------------------------------
+
+    def add(self, kind: DeviceKind, timestamp: float, values: Any) -> None:
+        """Append one sample."""
+        channel = self._channel(kind)
+        with self._lock:
+            channel.ready.append(Sample(timestamp, values))
+            channel.count += 1
+            channel.total += 1
+            if channel.count > self.cap:
+                channel.trim(self.cap)
+
+    def add_batch(self, kind: DeviceKind, timestamps: Any, values: Any) -> None:
+        """Append consecutive samples of one kind."""
+        self.add_batches(timestamps, {kind: values})
+
+    def add_batches(self, timestamps: Any,
+                    values: Mapping[DeviceKind, Any] | Iterable[tuple[DeviceKind, Any]]) -> None:
+        """Append consecutive samples of several kinds taken at the same times, under one lock.
+        ``values``: kind -> array of shape (samples, units, ...), as a mapping or pairs."""
+        size = len(timestamps)
+        if not size:
+            return
+        pairs = values.items() if isinstance(values, dict) else values
+        channels = self._channels
+        try:
+            chunks = [(channels[kind], SampleBatch(timestamps, data)) for kind, data in pairs]
+        except KeyError as err:
+            raise KeyError(f"this device provides no {err.args[0]} data") from None
+        cap = self.cap
+        with self._lock:
+            for channel, batch in chunks:
+                channel.ready.append(batch)
+                channel.count += size
+                channel.total += size
+                if channel.count > cap:
+                    channel.trim(cap)
+
+    def add_slices(self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]], start: int, stop: int) -> None:
+        """Append samples ``start`` .. ``stop - 1`` of arrays computed ahead (``timestamps``
+        and, per kind, ``values`` of shape (n, units, ...)) without slicing them now."""
+        size = stop - start
+        if size <= 0:
+            return
+        channels = self._channels
+        cap = self.cap
+        with self._lock:
+            for kind, data in values:
+                channel = channels[kind]
+                ready = channel.ready
+                last = ready[-1] if ready else None
+                if type(last) is SampleBatch and last.extends(data, start):
+                    last.stop = stop
+                else:
+                    ready.append(SampleBatch.window(timestamps, data, start, stop))
+                channel.count += size
+                channel.total += size
+                if channel.count > cap:
+                    channel.trim(cap)
+
+    # -- frame side -------------------------------------------------------------------
+
+    def swap(self) -> None:
+        """Make everything added since the previous swap the current frame's samples."""
+        taken: list[tuple[_Channel, deque[Chunk], int]] = []
+        self.swapped_at = now()
+        with self._lock:
+            for channel in self._channels.values():
+                if channel.count:
+                    taken.append((channel, channel.ready, channel.count))
+                    channel.ready = deque()
+                    channel.count = 0
+                elif channel.frame.count:
+                    if channel.latest is None:
+                        channel.latest = channel.frame.newest  # keep it latched
+                    channel.frame = EMPTY_FRAME
+        for channel, chunks, count in taken:
+            channel.frame = FrameSamples(chunks, count)
+            channel.latest = None  # the frame's newest, computed when asked
+
+    def frame(self, kind: DeviceKind) -> FrameSamples:
+        return self._channel(kind).frame
+
+    def latest(self, kind: DeviceKind) -> Sample | None:
+        """The newest sample ever received (it stays when a frame brings nothing new)."""
+        channel = self._channel(kind)
+        if channel.frame.count:
+            if channel.latest is None:
+                channel.latest = channel.frame.newest
+            return channel.latest
+        return channel.latest
+
+    def total(self, kind: DeviceKind | None = None) -> int:
+        """Samples added so far (dropped ones included)."""
+        if kind is not None:
+            return self._channel(kind).total
+        return sum(c.total for c in self._channels.values())
+
+    def dropped(self, kind: DeviceKind | None = None) -> int:
+        """Samples dropped because more than ``cap`` arrived between two swaps."""
+        if kind is not None:
+            return self._channel(kind).dropped
+        return sum(c.dropped for c in self._channels.values())

@@ -1,0 +1,1 @@
+"""Built-in simulated devices driven by keyboard/mouse events (reference section 9)."""

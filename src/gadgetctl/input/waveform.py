@@ -1,0 +1,234 @@
+"""``waveform_device``: gadgetctl's own synthetic device, for demos, tests and benchmarks.
+
+Analog channels follow a sine, triangle, square or noise wave; buttons are square waves;
+positions move on a circle, spin in place or follow a figure-eight; with an event period,
+a hat switch steps through its directions and command and string samples arrive once per
+period. Sample k is taken at ``start + k / rate`` exactly, and its values depend only on
+k and the configuration (noise is a seeded stream that can be entered at any k), so a
+device is deterministic for a given seed.
+
+The shared scheduler wakes the device at most every ``sample_interval``; each wake-up
+publishes every sample that has come due since the previous one, as numpy batches cut
+from a block computed ahead (never a sample whose time has not come).
+"""
+
+from __future__ import annotations
+
+import math
+import zlib
+from dataclasses import dataclass
+from enum import StrEnum
+
+import numpy as np
+
+from gadgetctl.input.clock import now
+from gadgetctl.input.device import SamplingMode
+from gadgetctl.input.devicetypes import Analog, Command, Digital, Hat, HatState, Position, String
+from gadgetctl.input.errors import DeviceConfigError
+from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.jccl.access import ElementAccess, read_float
+
+MAX_RATE = 100_000.0
+BLOCK_SECONDS = 0.5
+HAT_SEQUENCE = (HatState.CENTERED, HatState.UP, HatState.RIGHT, HatState.DOWN, HatState.LEFT)
+
+
+class Wave(StrEnum):
+    SINE = "sine"
+    TRIANGLE = "triangle"
+    SQUARE = "square"
+    NOISE = "noise"
+
+
+class Path(StrEnum):
+    CIRCLE = "circle"
+    SPIN = "spin"
+    FIGURE_EIGHT = "figure_eight"
+
+
+@dataclass(frozen=True)
+class AnalogChannel:
+    wave: Wave
+    frequency: float
+
+
+@dataclass(frozen=True)
+class PositionChannel:
+    path: Path
+    period: float
+    radius: float
+
+
+@dataclass
+class Block:
+    """Samples ``start`` .. ``start + len - 1`` computed ahead."""
+
+    start: int
+    timestamps: np.ndarray
+    data: dict[DeviceKind, np.ndarray]
+    events: list[tuple[int, int]]  # (sample index, event number)
+
+    def __post_init__(self) -> None:
+        self.items = tuple(self.data.items())
+        self.end = self.start + len(self.timestamps)
+
+
+def _per_channel(access: ElementAccess, prop: str, count: int) -> list[float]:
+    """One number per channel: the written ones, then the property's default."""
+    return [read_float(access.string(prop, i)) for i in range(count)]
+
+
+def _enum(kind: type[StrEnum], text: str, prop: str) -> StrEnum:
+    try:
+        return kind(text)
+    except ValueError:
+        allowed = ", ".join(m.value for m in kind)
+        raise DeviceConfigError(f"{prop} {text!r} is not one of {allowed}") from None
+
+
+def _positive(value: float, what: str) -> float:
+    if not value > 0.0:
+        raise DeviceConfigError(f"{what} must be greater than 0, not {value:g}")
+    return value
+
+
+class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
+    ELEMENT_TYPE = "waveform_device"
+    SAMPLING = SamplingMode.SCHEDULED
+    sample_interval = 0.0015
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.rate = 100.0
+        self.seed = 0
+        self.analog: list[AnalogChannel] = []
+        self.button_periods: list[float] = []
+        self.positions: list[PositionChannel] = []
+        self.center = (0.0, 1.5, 0.0)
+        self.event_period = 0.0
+        self.t0 = 0.0
+        self.next_index = 0
+        self._block: Block | None = None
+        self._noise_streams: dict[int, tuple[np.random.Generator, int]] = {}
+
+    # -- configuration ------------------------------------------------------------------
+
+    def config(self, access: ElementAccess) -> None:
+        super().config(access)
+        self.rate = _positive(access.float("rate"), "rate")
+        if self.rate > MAX_RATE:
+            raise DeviceConfigError(f"rate {self.rate:g} Hz is above the {MAX_RATE:g} Hz gadgetctl supports")
+        self.seed = access.integer("seed")
+        waves = access.strings("analog_waveform")
+        frequencies = _per_channel(access, "analog_frequency", len(waves))
+        self.analog = [AnalogChannel(_enum(Wave, w, "analog_waveform"), _positive(f, "analog_frequency"))
+                       for w, f in zip(waves, frequencies, strict=True)]
+        self.button_periods = [_positive(p, "button_period") for p in access.floats("button_period")]
+        paths = access.strings("position_path")
+        periods = _per_channel(access, "position_period", len(paths))
+        radii = _per_channel(access, "position_radius", len(paths))
+        self.positions = [PositionChannel(_enum(Path, p, "position_path"), _positive(t, "position_period"), r)
+                          for p, t, r in zip(paths, periods, radii, strict=True)]
+        center = access.floats("position_center")
+        self.center = (*center, 0.0, 0.0, 0.0)[:3] if center else self.center
+        self.event_period = max(0.0, access.float("event_period"))
+
+    # -- sampling -----------------------------------------------------------------------
+
+    def start_sampling(self) -> None:
+        self.t0 = now()
+        self.next_index = 0
+        self._block = None
+
+    def next_sample_due(self) -> float:
+        return self.t0 + self.next_index / self.rate
+
+    def sample(self) -> None:
+        end = int((now() - self.t0) * self.rate) + 1  # samples whose time has come
+        while self.next_index < end:
+            block = self._block
+            if block is None or not block.start <= self.next_index < block.end:
+                size = max(1, math.ceil(self.rate * BLOCK_SECONDS))
+                if block is None:  # a shorter first block spreads the devices' block computations out
+                    size = max(1, size - zlib.crc32(self.name.encode()) % size)
+                block = self._block = self.compute(self.next_index, size)
+            stop = min(end, block.end)
+            self.publish(block, self.next_index - block.start, stop - block.start)
+            self.next_index = stop
+
+    def publish(self, block: Block, first: int, last: int) -> None:
+        self.store.add_slices(block.timestamps, block.items, first, last)
+        for index, number in block.events:
+            if block.start + first <= index < block.start + last:
+                stamp = float(block.timestamps[index - block.start])
+                self.add_command_sample([number], stamp)
+                self.add_string_sample([f"event {number}"], stamp)
+
+    # -- the signals --------------------------------------------------------------------
+
+    def compute(self, start: int, count: int) -> Block:
+        """Samples ``start`` .. ``start + count - 1`` (timestamps relative to the device start)."""
+        k = np.arange(start, start + count, dtype=np.float64)
+        t = k / self.rate
+        data: dict[DeviceKind, np.ndarray] = {}
+        if self.analog:
+            data[DeviceKind.ANALOG] = np.stack([self._analog(i, c, t, start) for i, c in enumerate(self.analog)], axis=1)
+        if self.button_periods:
+            data[DeviceKind.DIGITAL] = np.stack([(np.mod(t, p) < p / 2).astype(np.int8)
+                                                 for p in self.button_periods], axis=1)
+        if self.positions:
+            matrices = np.stack([self._path(c, t) for c in self.positions], axis=1)
+            data[DeviceKind.POSITION] = self.position_filters.apply(matrices)
+        events: list[tuple[int, int]] = []
+        if self.event_period > 0:
+            steps = np.floor(t / self.event_period).astype(np.int64)
+            data[DeviceKind.HAT] = np.asarray(HAT_SEQUENCE, dtype=np.int8)[steps % len(HAT_SEQUENCE)][:, None]
+            first = math.floor(start / self.rate / self.event_period) + 1
+            last = math.floor((start + count - 1) / self.rate / self.event_period)
+            for number in range(first, last + 1):
+                index = math.ceil(number * self.event_period * self.rate - 1e-9)
+                if start <= index < start + count:
+                    events.append((index, number))
+        return Block(start, self.t0 + t, data, events)
+
+    def _analog(self, channel: int, spec: AnalogChannel, t: np.ndarray, start: int) -> np.ndarray:
+        phase = spec.frequency * t
+        if spec.wave is Wave.SINE:
+            wave = np.sin(2 * np.pi * phase)
+        elif spec.wave is Wave.TRIANGLE:
+            wave = 1.0 - 4.0 * np.abs(np.mod(phase + 0.25, 1.0) - 0.5)
+        elif spec.wave is Wave.SQUARE:
+            wave = np.where(np.mod(phase, 1.0) < 0.5, 1.0, -1.0)
+        else:
+            wave = self._noise(channel, start, len(t)) * 2.0 - 1.0
+        middle = (self.analog_max + self.analog_min) / 2
+        half = (self.analog_max - self.analog_min) / 2
+        return middle + half * wave
+
+    def _noise(self, channel: int, start: int, count: int) -> np.ndarray:
+        """Uniform [0, 1) numbers ``start`` .. ``start + count - 1`` of the channel's seeded stream."""
+        cached = self._noise_streams.get(channel)
+        if cached is None or cached[1] != start:  # not where the previous block ended: seek
+            bits = np.random.PCG64(np.random.SeedSequence([self.seed, channel]))
+            bits.advance(start)
+            cached = (np.random.Generator(bits), start)
+        generator = cached[0]
+        self._noise_streams[channel] = (generator, start + count)
+        return generator.random(count)
+
+    def _path(self, spec: PositionChannel, t: np.ndarray) -> np.ndarray:
+        angle = 2 * np.pi * t / spec.period
+        matrices = np.zeros((len(t), 4, 4))
+        matrices[:, 0, 0] = matrices[:, 1, 1] = matrices[:, 2, 2] = matrices[:, 3, 3] = 1.0
+        cx, cy, cz = self.center
+        r = spec.radius
+        if spec.path is Path.CIRCLE:
+            x, y, z = cx + r * np.cos(angle), np.full_like(t, cy), cz + r * np.sin(angle)
+        elif spec.path is Path.FIGURE_EIGHT:
+            x, y, z = cx + r * np.sin(angle), np.full_like(t, cy), cz + r * np.sin(angle) * np.cos(angle)
+        else:  # spin: turn about +Y in place
+            c, s = np.cos(angle), np.sin(angle)
+            matrices[:, 0, 0], matrices[:, 0, 2], matrices[:, 2, 0], matrices[:, 2, 2] = c, s, -s, c
+            x, y, z = np.full_like(t, cx), np.full_like(t, cy), np.full_like(t, cz)
+        matrices[:, 0, 3], matrices[:, 1, 3], matrices[:, 2, 3] = x, y, z
+        return matrices

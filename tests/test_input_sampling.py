@@ -1,0 +1,253 @@
+"""Sampling threads, the shared scheduler, faults and restarts, blocking devices, stopping
+and Ctrl-C."""
+
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gadgetctl.input import Command, Digital, InputManager, ManagerOptions, RestartPolicy
+from gadgetctl.input.device import DeviceState, SamplingMode
+from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.registry import DeviceRegistry
+from gadgetctl.jccl.configload import load_configuration
+from gadgetctl.jccl.repository import default_repository
+from gadgetctl.jccl.searchpath import SearchPathEntry
+
+CORPUS_DEFINITIONS = Path("/work/shared/corpus/vrjuggler/modules/vrjuggler/data/definitions")
+PLUGINS = Path(__file__).parent / "data" / "plugins"
+HEAD = ('<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n<elements>\n')
+FAST_RESTART = RestartPolicy(initial_delay=0.005, factor=1.0, max_delay=0.005)
+
+
+@pytest.fixture(scope="module")
+def repo():
+    repo = default_repository([CORPUS_DEFINITIONS] if CORPUS_DEFINITIONS.is_dir() else [])
+    directory = PLUGINS / "Button_drv"
+    repo.load_entry(SearchPathEntry(raw=str(directory), path=directory, origin="test"))
+    return repo
+
+
+@pytest.fixture
+def make(repo, tmp_path):
+    managers = []
+
+    def build(body, devices=(), **options):
+        registry = DeviceRegistry.with_builtins()
+        for element_type, device_class in devices:
+            registry.register_device(device_class, element_type)
+        options.setdefault("retry_interval", None)
+        options.setdefault("entry_points", False)
+        path = tmp_path / f"test{len(managers)}.jconf"
+        path.write_text(HEAD + body + "\n</elements>\n</configuration>\n")
+        manager = InputManager(repo, ManagerOptions(**options), registry=registry)
+        managers.append(manager)
+        manager.configure(load_configuration([path]))
+        assert not manager.pending(), [(p.name, p.message) for p in manager.pending()]
+        return manager
+
+    yield build
+    for manager in managers:
+        manager.shutdown()
+
+
+def wait_for(predicate, timeout=5.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(0.005)
+    return predicate()
+
+
+class Counter(Command):
+    """A threaded driver adding sequence numbers, so lost samples show as gaps."""
+
+    sample_interval = 0.001
+
+    def __init__(self):
+        super().__init__()
+        self.sequence = 0
+
+    def sample(self):
+        self.sequence += 1
+        self.add_command_sample([self.sequence])
+
+
+class EveryThirdFails(Digital):
+    """Raises on every third sample; counts its restarts."""
+
+    sample_interval = 0.001
+
+    def __init__(self):
+        super().__init__()
+        self.calls = 0
+        self.starts = 0
+        self.stops = 0
+
+    def start_sampling(self):
+        self.starts += 1
+
+    def sample(self):
+        self.calls += 1
+        if self.calls % 3 == 0:
+            raise OSError("device unplugged")
+        self.add_digital_sample([self.calls % 2])
+
+    def stop_sampling(self):
+        self.stops += 1
+
+
+class ScheduledEveryThirdFails(EveryThirdFails):
+    SAMPLING = SamplingMode.SCHEDULED
+    sample_interval = 0.002
+
+
+@pytest.mark.timeout(20)
+@pytest.mark.parametrize("faulty", [EveryThirdFails, ScheduledEveryThirdFails], ids=["thread", "scheduler"])
+def test_a_faulting_device_is_restarted_and_the_others_lose_no_samples(make, faulty):
+    body = """
+    <command_device name="Counter" version="1"/>
+    <button_device name="Faulty" version="1"/>
+    <waveform_device name="Wave" version="1"><rate>500.0</rate><button_period>0.1</button_period><event_period>0.0</event_period></waveform_device>
+    <digital_proxy name="Faulty Proxy" version="1"><device>Faulty</device><unit>0</unit></digital_proxy>"""
+    m = make(body, devices=[("command_device", Counter), ("button_device", faulty)], restart=FAST_RESTART)
+    faulty_device, counter, wave = m.device("Faulty"), m.device("Counter"), m.device("Wave")
+    sequence, stamps = [], []
+    deadline = time.monotonic() + 10
+    while (faulty_device.restarts < 5 or len(stamps) < 200) and time.monotonic() < deadline:
+        m.update()
+        sequence.extend(s.values[0] for s in counter.store.frame(DeviceKind.COMMAND))
+        stamps.extend(wave.store.frame(DeviceKind.DIGITAL).timestamps())
+        time.sleep(0.01)
+    status = {s.name: s for s in m.statuses()}["Faulty"]
+    m.shutdown()  # the counters below are read once the sampling threads are gone
+    assert faulty_device.restarts >= 5
+    assert faulty_device.faults >= faulty_device.restarts
+    assert faulty_device.error == "OSError: device unplugged"
+    assert faulty_device.stops >= faulty_device.restarts and faulty_device.starts == faulty_device.restarts + 1
+    assert sequence == list(range(1, len(sequence) + 1))  # the threaded neighbour lost nothing
+    assert np.allclose(np.diff(stamps), 1 / 500.0)  # nor did the scheduled one
+    assert counter.store.dropped() == 0 and wave.store.dropped() == 0
+    assert status.stats.faults >= 5 and status.stats.last_error == "OSError: device unplugged"
+
+
+class GivesUp(Digital):
+    sample_interval = 0.001
+
+    def sample(self):
+        raise OSError("gone for good")
+
+
+@pytest.mark.timeout(10)
+def test_restarts_stop_at_the_policys_limit_and_the_status_keeps_the_error(make):
+    m = make('<button_device name="Dead" version="1"/>', devices=[("button_device", GivesUp)],
+             restart=RestartPolicy(initial_delay=0.001, factor=2.0, max_delay=0.01, max_restarts=3))
+    device = m.device("Dead")
+    assert wait_for(lambda: device.restarts == 3 and device.faults == 4)
+    time.sleep(0.05)
+    assert device.restarts == 3 and device.state is DeviceState.FAULTED
+    status = {s.name: s for s in m.statuses()}["Dead"]
+    assert status.state == "faulted" and status.reason == "OSError: gone for good" and status.code == "DRV042"
+
+
+class Blocking(Digital):
+    """A driver whose read blocks until the device is closed."""
+
+    def __init__(self):
+        super().__init__()
+        self.unblock = threading.Event()
+
+    def sample(self):
+        self.unblock.wait(30)
+
+    def stop_sampling(self):
+        self.unblock.set()  # like closing the socket a read waits on
+
+
+class Stubborn(Digital):
+    """A driver that ignores being stopped for a while."""
+
+    def sample(self):
+        time.sleep(1.0)
+
+
+@pytest.mark.timeout(20)
+def test_a_blocking_device_never_delays_a_frame_and_stops_within_the_timeout(make):
+    m = make('<button_device name="Slow" version="1"/><command_device name="Counter" version="1"/>',
+             devices=[("button_device", Blocking), ("command_device", Counter)], stop_timeout=0.2)
+    worst = 0.0
+    for _ in range(20):
+        start = time.perf_counter()
+        m.update()
+        worst = max(worst, time.perf_counter() - start)
+        time.sleep(0.005)
+    assert worst < 0.05
+    assert m.device("Counter").store.total() > 0
+    start = time.perf_counter()
+    m.shutdown()
+    assert time.perf_counter() - start < 2.0
+    assert m.device("Slow").state is DeviceState.STOPPED
+
+
+@pytest.mark.timeout(20)
+def test_a_thread_that_does_not_stop_is_reported_and_abandoned(make):
+    m = make('<button_device name="Stubborn" version="1"/>', devices=[("button_device", Stubborn)],
+             stop_timeout=0.1)
+    time.sleep(0.05)
+    start = time.perf_counter()
+    m.shutdown()
+    assert time.perf_counter() - start < 1.0
+    assert any(d.code == "DRV041" and "did not stop within 0.1 s" in d.message for d in m.diagnostics)
+
+
+@pytest.mark.timeout(20)
+def test_ctrl_c_in_the_frame_loop_stops_everything(make):
+    m = make('<button_device name="Slow" version="1"/><command_device name="Counter" version="1"/>'
+             '<waveform_device name="Wave" version="1"/>',
+             devices=[("button_device", Blocking), ("command_device", Counter)])
+    threads_before = {t for t in threading.enumerate() if t.name.startswith("gadgetctl-")}
+    assert threads_before
+
+    def interrupt(manager):
+        if manager.frame == 3:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        m.run(100.0, on_frame=interrupt)
+    assert all(d.state is DeviceState.STOPPED for d in m.devices.values())
+    assert wait_for(lambda: not any(t.is_alive() for t in threads_before), 3.0)
+
+
+@pytest.mark.timeout(20)
+def test_run_keeps_the_frame_rate_and_stops_on_request(make):
+    m = make('<waveform_device name="Wave" version="1"><rate>1000.0</rate></waveform_device>')
+    stop = threading.Event()
+    threading.Timer(0.3, stop.set).start()
+    start = time.perf_counter()
+    frames = m.run(50.0, stop=stop)
+    elapsed = time.perf_counter() - start
+    assert 0.25 < elapsed < 1.0
+    assert abs(frames - elapsed * 50) <= 3
+
+
+@pytest.mark.timeout(20)
+def test_threaded_plugin_device_samples_between_frames(repo, tmp_path):
+    path = tmp_path / "button.jconf"
+    path.write_text(HEAD + f"""
+    <input_manager name="IM" version="2"><driver_path>{PLUGINS}</driver_path><driver>Button_drv</driver></input_manager>
+    <button_device name="Button" version="1"/>
+    <digital_proxy name="P" version="1"><device>Button</device><unit>0</unit></digital_proxy>
+    </elements></configuration>""")
+    with InputManager(repo, ManagerOptions(retry_interval=None, entry_points=False)) as m:
+        m.configure(load_configuration([path]))
+        device = m.device("Button")
+        assert device is not None and device.state is DeviceState.RUNNING
+        time.sleep(0.1)
+        m.update()
+        assert len(device.store.frame(DeviceKind.DIGITAL)) >= 5  # every sample since the last frame
+        assert device.opened == 1
+    assert device.closed == 1 and device.state is DeviceState.STOPPED
