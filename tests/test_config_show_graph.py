@@ -8,7 +8,8 @@ import subprocess
 
 import pytest
 
-from gadgetctl.jccl.plugins import bundled_plugins, plugin_for_type, read_metadata
+from gadgetctl.input.plugins.catalog import bundled_plugins, plugin_for_type
+from gadgetctl.input.plugins.metadata import read_metadata
 from gadgetctl.resources import drivers_dir
 
 from config_samples import configuration, write_definitions
@@ -114,7 +115,8 @@ def test_dot_output_is_accepted_by_graphviz(cli, name):
 def test_plugin_metadata_is_read_without_importing(tmp_path):
     init = write(tmp_path / "Fake_drv" / "__init__.py",
                  'raise SystemExit("imported!")\nPLUGIN_NAME = "Fake_drv"\nELEMENT_TYPES = {"fake": ("digital",)}\n')
-    assert read_metadata(init)["ELEMENT_TYPES"] == {"fake": ("digital",)}
+    assert {t: tuple(k.value for k in kinds) for t, kinds in read_metadata(init).element_types.items()} == {
+        "fake": ("digital",)}
     assert bundled_plugins(tmp_path) == {"Fake_drv": ("fake",)}
     assert plugin_for_type(tmp_path)["fake"] == "Fake_drv"
     assert plugin_for_type(drivers_dir())["dtrack"] == "DTrack_drv"

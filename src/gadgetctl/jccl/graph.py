@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from gadgetctl.input.plugins.catalog import built_in_types, plugin_for_type
 from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.definitions import ValueType
-from gadgetctl.jccl.plugins import BUILT_IN_DEVICES, plugin_for_type
 from gadgetctl.jccl.resolve import judged_view
 from gadgetctl.jccl.typeindex import TypeIndex
 
@@ -82,7 +82,7 @@ class GraphBuilder:
             return "input_manager"
         if self.index.known(element.type) and self.index.is_a(element.type, "proxy"):
             return "proxy"
-        if element.type in BUILT_IN_DEVICES or (self.index.known(element.type)
+        if element.type in built_in_types() or (self.index.known(element.type)
                                                 and self.index.is_a(element.type, "input_device")):
             return "device"
         return "element"
@@ -161,8 +161,8 @@ class GraphBuilder:
         for node in list(self.graph.nodes.values()):
             if node.kind != "device" or node.element is None:
                 continue
-            if node.type in BUILT_IN_DEVICES:
-                node.note = "built into Gadgeteer"
+            if node.type in built_in_types():
+                node.note = "built in, no plug-in needed"
                 continue
             name = mapping.get(node.type)
             if name is None:

@@ -1,23 +1,27 @@
 """Which driver plug-in handles which element type, without importing any plug-in.
 
 Bundled plug-ins declare it in ``drivers/<name>/__init__.py`` as a literal
-``ELEMENT_TYPES = {"dtrack": ("position", ...)}``, read here with :mod:`ast`. Upstream
+``ELEMENT_TYPES = {"dtrack": ("position", ...)}`` (read without importing, see
+:mod:`gadgetctl.input.plugins.metadata`). Upstream
 Gadgeteer drivers that gadgetctl does not bundle are listed too, so that configurations
 written for VR Juggler show where their devices come from.
 """
 
 from __future__ import annotations
 
-import ast
 from functools import cache
 from pathlib import Path
 
-# Gadgeteer's own device types, handled without any driver plug-in.
-BUILT_IN_DEVICES = frozenset({
-    "simulated_analog_device", "simulated_digital_device", "simulated_positional_device",
-    "simulated_setable_position", "simulated_relative_position", "simulated_glove_gesture",
-    "simulated_digital_glove", "keyboard_mouse_device", "input_window",
-})
+from gadgetctl.input.plugins.metadata import read_metadata
+
+
+@cache
+def built_in_types() -> frozenset[str]:
+    """Element types the input manager handles without a plug-in (simulated devices etc.)."""
+    from gadgetctl.input.builtin import BUILTIN_DEVICES
+
+    return frozenset(cls.ELEMENT_TYPE for cls in BUILTIN_DEVICES)
+
 
 # Upstream driver plug-ins (Gadgeteer 2.x) and the element types they handle.
 UPSTREAM_DRIVERS: dict[str, tuple[str, ...]] = {
@@ -38,22 +42,6 @@ UPSTREAM_DRIVERS: dict[str, tuple[str, ...]] = {
 }
 
 
-def read_metadata(init_file: Path) -> dict[str, object]:
-    """The literal top-level assignments of a plug-in's ``__init__.py``."""
-    try:
-        tree = ast.parse(init_file.read_text(encoding="utf-8"), str(init_file))
-    except (OSError, SyntaxError, ValueError):
-        return {}
-    found: dict[str, object] = {}
-    for node in tree.body:
-        if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name):
-            try:
-                found[node.targets[0].id] = ast.literal_eval(node.value)
-            except ValueError:
-                continue
-    return found
-
-
 @cache
 def bundled_plugins(drivers_dir: Path) -> dict[str, tuple[str, ...]]:
     """Plug-in name -> element types, for every plug-in folder under ``drivers_dir``."""
@@ -62,9 +50,8 @@ def bundled_plugins(drivers_dir: Path) -> dict[str, tuple[str, ...]]:
         return plugins
     for init_file in sorted(drivers_dir.glob("*/__init__.py")):
         meta = read_metadata(init_file)
-        types = meta.get("ELEMENT_TYPES")
-        if isinstance(types, dict):
-            plugins[str(meta.get("PLUGIN_NAME") or init_file.parent.name)] = tuple(str(t) for t in types)
+        if meta.element_types:
+            plugins[meta.plugin_name or init_file.parent.name] = tuple(meta.element_types)
     return plugins
 
 
