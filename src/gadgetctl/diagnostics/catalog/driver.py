@@ -98,6 +98,13 @@ CODES += [
          "simulated_analog_device needs a decrement_keypress for every increment_keypress.",
          "simulated_positional_device with 6 key_pair entries",
          "Add or remove key_modifier_pair entries so each slot is bound."),
+    Code("DRV024", C, W, "driver finds a setting suspect",
+         "A driver accepted the element but something in it will not give what was meant: a "
+         "proxy that reads a unit the device does not have, position units that disagree with "
+         "what the hardware reports, a value the hardware clamps. The device still runs; the "
+         "message says what the driver found and what happens instead.",
+         "digital_proxy 'PinchRightPinky' reads unit 10; a pinch_glove has digital units 0-9",
+         "Correct the value the message names."),
 ]
 
 # -- pending elements -----------------------------------------------------------------------
@@ -177,4 +184,61 @@ CODES += [
          "instead, as in VR Juggler, and revives when its device appears.",
          "digital_proxy VJButton0Proxy: device 'SimWandButtons' is not configured",
          "Point the proxy at a configured device of the right type and an existing unit."),
+]
+
+# -- connections (`gadgetctl doctor`) ---------------------------------------------------------
+
+CODES += [
+    Code("DRV100", C, E, "device port does not exist",
+         "The file or serial port a device element names (from its plug-in's TRANSPORTS metadata, "
+         "or the usual upstream property) is not there, or is a symlink to nothing. The driver "
+         "cannot open it, so the device never delivers data. The hint lists the serial ports or "
+         "joystick devices that do exist.",
+         "<port_name>/dev/input/js0</port_name>   (no joystick plugged in, or joydev not loaded)",
+         "Plug the device in, correct the path, or start the plug-in's emulator "
+         "(`gadgetctl emulate DRIVER`) and point the element at what it prints."),
+    Code("DRV101", C, E, "device port not accessible to this user",
+         "The port exists but this user may not read it (and, for a serial port, write it). "
+         "Device files usually belong to a group such as input or dialout; the hint names the "
+         "group the file's owner grants access to.",
+         "/dev/input/js0 is crw-rw---- root:input and the user is not in group input",
+         "Add yourself to the group the hint names (sudo usermod -aG GROUP $USER, then log in "
+         "again), or have a udev rule grant access."),
+    Code("DRV102", C, E, "device port is not a device",
+         "The path exists but is not a character device or a FIFO: a directory, a socket, or (for "
+         "a serial port) a regular file that cannot be configured as a line. A regular file given "
+         "to a file-reading driver is a warning: it is read once to its end, then nothing comes.",
+         "<port>/dev/serial</port>   (a directory)",
+         "Name the device node itself (for example /dev/ttyUSB0 or /dev/input/js0)."),
+    Code("DRV103", C, E, "UDP port cannot be bound",
+         "The driver receives on a local UDP port, and binding that port failed: another program "
+         "holds it (another VR Juggler application, a second gadgetctl, a tracker SDK), it is "
+         "below 1024 and needs privileges, or the address is not local. The driver would get no "
+         "datagrams.",
+         "receive_port 5000 while another application already listens on UDP 5000",
+         "Stop the other program (`ss -ulpn` shows it) or configure another port on both the "
+         "tracker and the element."),
+    Code("DRV104", C, E, "TCP server does not answer",
+         "`gadgetctl doctor --probe` connected to the host and port the element names and the "
+         "connection was refused, timed out, or the host name does not resolve. The driver would "
+         "fail to start the same way. Without --probe doctor never touches the network.",
+         "<address>tracker.lab</address> <server_port>6000</server_port>   (connection refused)",
+         "Check that the server is running and reachable, and the address and port in the element."),
+    Code("DRV105", C, I, "connection not checked",
+         "Doctor cannot tell how this device reaches its hardware: its plug-in declares no "
+         "TRANSPORTS metadata and gadgetctl knows no usual property for the element type, or the "
+         "check needs a network probe that was not asked for.",
+         "a vrpn element (the VRPN library resolves its server names itself)",
+         "Add TRANSPORTS to the plug-in's __init__.py (see docs/architecture.md), or check the "
+         "connection by hand."),
+    Code("DRV106", C, E, "connection property empty or out of range",
+         "A property that names the device's port, host or path is empty, or a port number is "
+         "not between 1 and 65535, so the driver has nowhere to connect.",
+         "<receive_port>0</receive_port>",
+         "Write the port, host or path the device really uses."),
+    Code("DRV107", C, W, "TRANSPORTS names an unknown property",
+         "A plug-in's TRANSPORTS metadata names a property that the element type's definition "
+         "does not have, so doctor cannot read where the device is connected.",
+         "TRANSPORTS = {\"foo\": {\"kind\": \"serial\", \"port\": \"serial_port\"}}   (foo has port, not serial_port)",
+         "Make the TRANSPORTS values the property names of the element type's .jdef."),
 ]

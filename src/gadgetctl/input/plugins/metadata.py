@@ -5,8 +5,11 @@ The metadata are literal top-level assignments::
     GADGETCTL_API_VERSION = 1
     PLUGIN_NAME = "LinuxJoydev_drv"
     ELEMENT_TYPES = {"linux_joydev": ("digital", "analog")}
+    TRANSPORTS = {"linux_joydev": {"kind": "file", "path": "port_name"}}
 
-and a top-level ``def register(registry)``.
+and a top-level ``def register(registry)``. ``TRANSPORTS`` says which properties of each
+element type name its port (kinds and keys in :data:`TRANSPORT_KEYS`); a type with several
+transports gives a list of such dicts.
 """
 
 from __future__ import annotations
@@ -20,8 +23,17 @@ from gadgetctl.input.kinds import DeviceKind, parse_kinds
 API_VERSION = "GADGETCTL_API_VERSION"
 PLUGIN_NAME = "PLUGIN_NAME"
 ELEMENT_TYPES = "ELEMENT_TYPES"
+TRANSPORTS = "TRANSPORTS"
 REGISTER = "register"
-_NAMES = (API_VERSION, PLUGIN_NAME, ELEMENT_TYPES)
+_NAMES = (API_VERSION, PLUGIN_NAME, ELEMENT_TYPES, TRANSPORTS)
+
+#: Transport kind -> (required keys, optional keys); values are property names.
+TRANSPORT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "file": (("path",), ()),
+    "serial": (("port",), ("baud",)),
+    "udp": (("port",), ("host", "peer_port")),
+    "tcp": (("host", "port"), ()),
+}
 
 
 @dataclass
@@ -29,6 +41,7 @@ class PluginMetadata:
     api_version: int | None = None
     plugin_name: str | None = None
     element_types: dict[str, tuple[DeviceKind, ...]] = field(default_factory=dict)
+    transports: dict[str, list[dict[str, str]]] = field(default_factory=dict)
     has_register: bool = False
     summary: str = ""
     problems: list[str] = field(default_factory=list)
@@ -39,6 +52,7 @@ class PluginMetadata:
             "api_version": self.api_version,
             "plugin_name": self.plugin_name,
             "element_types": {t: [k.value for k in kinds] for t, kinds in self.element_types.items()},
+            "transports": {t: [dict(d) for d in specs] for t, specs in self.transports.items()},
             "has_register": self.has_register,
             "summary": self.summary,
             "problems": list(self.problems),
@@ -100,6 +114,8 @@ def parse_metadata(source: str, filename: str = "<plugin>") -> PluginMetadata:
                 meta.problems.append(f"{PLUGIN_NAME} must be a string, not {value!r}")
         elif name == ELEMENT_TYPES:
             _read_element_types(value, meta)
+        elif name == TRANSPORTS:
+            _read_transports(value, meta)
     if API_VERSION not in values:
         meta.problems.append(f"no {API_VERSION} assignment")
     if not meta.has_register:
@@ -119,6 +135,37 @@ def _read_element_types(value: object, meta: PluginMetadata) -> None:
             meta.element_types[element_type] = parse_kinds(kinds)
         except ValueError as err:
             meta.problems.append(f"{ELEMENT_TYPES}[{element_type!r}]: {err}")
+
+
+def _transport_problem(spec: object) -> str | None:
+    if not isinstance(spec, dict) or spec.get("kind") not in TRANSPORT_KEYS:
+        return f"must be a dict with a kind of {', '.join(TRANSPORT_KEYS)}"
+    required, optional = TRANSPORT_KEYS[spec["kind"]]
+    missing = [k for k in required if k not in spec]
+    unknown = [k for k in spec if k != "kind" and k not in required + optional]
+    if missing or unknown:
+        return f"{spec['kind']} transport: " + "; ".join(
+            ([f"missing {', '.join(missing)}"] if missing else []) + ([f"unknown {', '.join(unknown)}"] if unknown else []))
+    if not all(isinstance(v, str) and v for v in spec.values()):
+        return "values must be property names"
+    return None
+
+
+def _read_transports(value: object, meta: PluginMetadata) -> None:
+    if not isinstance(value, dict):
+        meta.problems.append(f"{TRANSPORTS} must be a dict of element type -> transport")
+        return
+    for element_type, specs in value.items():
+        specs = specs if isinstance(specs, (list, tuple)) else [specs]
+        good = []
+        for spec in specs:
+            problem = _transport_problem(spec)
+            if problem is None:
+                good.append(dict(spec))
+            else:
+                meta.problems.append(f"{TRANSPORTS}[{element_type!r}]: {problem}")
+        if good and isinstance(element_type, str):
+            meta.transports[element_type] = good
 
 
 def read_metadata(path: Path) -> PluginMetadata:
