@@ -46,6 +46,9 @@ HEADER = struct.Struct(">HH4sBBBBHH")
 ERR_NO_DEVICE = 8
 ERR_ILLEGAL_SETUP = 9
 
+#: The port ``main`` listens on unless told otherwise (the chassis's TCP port, example.jconf's).
+DEFAULT_PORT = 6000
+
 WORDS = {0: 0, 1: 3, 2: 3, 3: 9, 4: 6, 5: 12, 7: 4, 8: 7}
 BUTTON_STEPS = (0x00, 0x01, 0x00, 0x02, 0x00, 0x04, 0x03, 0x00)
 SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
@@ -495,7 +498,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--scenario", choices=SCENARIOS, default="motion")
     parser.add_argument("--rate", type=float, default=100.0, help="data packets per second")
-    parser.add_argument("--port", type=int, default=0, help="TCP port (0: the OS chooses)")
+    parser.add_argument(
+        "--port",
+        type=int,
+        default=DEFAULT_PORT,
+        help=f"TCP port (default {DEFAULT_PORT}, where drivers/MotionStar_drv/example.jconf "
+        "looks; 0: the OS chooses)",
+    )
     parser.add_argument("--birds", type=int, default=2, help="number of sensors")
     parser.add_argument(
         "--erc", action="store_true", help="put an extended range controller at address 1"

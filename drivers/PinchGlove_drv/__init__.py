@@ -3,7 +3,8 @@
 The glove box talks over a serial line: two-byte commands answered by
 ``0x82 ... 0x8F`` info frames, and asynchronous touch frames whenever a contact
 between fingers opens or closes. ``standalone.py`` holds the protocol,
-``emulator.py`` plays the glove box on a pseudo-terminal.
+``wrapper.py`` feeds the input manager, ``emulator.py`` plays the glove box on a
+pseudo-terminal.
 
 Digital units 0..4 are the left thumb..pinky, 5..9 the right thumb..pinky;
 glove units 0 and 1 are the left and right hand.
@@ -12,3 +13,10 @@ glove units 0 and 1 are the left and right hand.
 GADGETCTL_API_VERSION = 1
 PLUGIN_NAME = "PinchGlove_drv"
 ELEMENT_TYPES = {"pinch_glove": ("glove", "digital")}
+TRANSPORTS = {"pinch_glove": {"kind": "serial", "port": "port", "baud": "baud"}}
+
+
+def register(registry):
+    from .wrapper import PinchGloveDevice
+
+    registry.register_device(PinchGloveDevice)

@@ -77,6 +77,9 @@ GARBAGE_CHUNKS: tuple[bytes, ...] = (
     bytes([START_DATA_TS, END]),  # too short to hold a timestamp
 )
 
+#: Where ``main`` puts a symlink to the pty unless told otherwise (example.jconf's port).
+DEFAULT_LINK = "/tmp/gadgetctl-pinch"
+
 #: Timestamp tick: 16382 ticks saturate after 13.6511206 s (PinchGlove manual).
 TICK_SECONDS = 13.6511206 / 16382
 MAX_TICKS = 16382
@@ -321,13 +324,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--scenario", choices=SCENARIOS, default="touches")
     parser.add_argument("--rate", type=float, default=2.0, help="touch frames per second")
     parser.add_argument(
-        "--port", default=None, help="also create this symlink to the pty (e.g. /tmp/pinchglove)"
+        "--port",
+        default=DEFAULT_LINK,
+        help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
+        "drivers/PinchGlove_drv/example.jconf looks; '' for none)",
     )
     parser.add_argument("--duration", type=float, default=None, help="seconds to run")
     parser.add_argument("--disconnect-after", type=int, default=5, help="frames before hang-up")
     args = parser.parse_args(argv)
     emulator = PinchGloveEmulator(
-        args.scenario, args.rate, disconnect_after=args.disconnect_after, link=args.port
+        args.scenario, args.rate, disconnect_after=args.disconnect_after, link=args.port or None
     )
     with emulator:
         where = str(emulator.link) if emulator.link is not None else emulator.address

@@ -292,7 +292,19 @@ def test_refused_connection_is_reported_as_disconnected() -> None:
 def test_emulator_main_prints_where_to_point(capsys) -> None:
     from MotionStar_drv.emulator import main
 
-    assert main(["--scenario", "idle", "--birds", "3", "--rate", "10", "--duration", "0.1"]) == 0
+    argv = [
+        "--scenario",
+        "idle",
+        "--birds",
+        "3",
+        "--rate",
+        "10",
+        "--duration",
+        "0.1",
+        "--port",
+        "0",
+    ]
+    assert main(argv) == 0
     out = capsys.readouterr().out
     assert "3 sensors" in out and "<address>127.0.0.1</address>" in out
     assert "<server_port>" in out

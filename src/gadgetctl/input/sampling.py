@@ -24,7 +24,10 @@ from gadgetctl.input.errors import describe
 class RestartPolicy:
     initial_delay: float = 0.1
     factor: float = 2.0
-    max_delay: float = 5.0
+    # At most this long between two restart attempts, so a device that comes back (an
+    # emulator restarted, a cable plugged in again) delivers samples within about a second
+    # plus its own start-up time, however long it was away.
+    max_delay: float = 1.0
     max_restarts: int | None = None  # None: keep trying
 
     def next_delay(self, delay: float) -> float:

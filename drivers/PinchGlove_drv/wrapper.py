@@ -1,0 +1,206 @@
+"""The input-manager side of the Fakespace PinchGlove (element type ``pinch_glove``).
+
+Units, as Gadgeteer's PinchGlove driver and ``Glove::getGloveDataFromDigitalData`` give them:
+
+* digital unit ``5 * hand + finger``: 0..4 the left thumb..pinky, 5..9 the right
+  thumb..pinky, 1 while that fingertip touches another;
+* glove unit 0 the left hand, 1 the right; each finger row holds π/2 in all four joints
+  while it touches, 0 otherwise; the wrist row stays 0.
+
+Differences from the C++ wrapper, on purpose:
+
+* ``config`` runs the device types' own ``config`` (the C++ called only ``Input::config``,
+  so ``glove_position`` was never read and glove proxies had no hand position);
+* ``stop_sampling`` closes the serial port, so the device can be started again (the C++
+  only ended its thread and kept the port open);
+* a lost serial line raises from ``sample`` and the input manager restarts the device
+  (the C++ sample loop kept failing quietly);
+* proxies in the element's own file that read units the glove does not have are reported
+  (VR Juggler's ``pinch.mixin.jconf`` numbers the right hand 6..10 instead of 5..9).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from gadgetctl.diagnostics import Diagnostic
+from gadgetctl.input import DeviceConfigError, Digital, Glove
+from gadgetctl.jccl.access import ElementAccess, read_int
+
+from .standalone import DIGITAL_UNITS, FINGERS, HANDS, PinchGlove, PinchGloveError, PinchSample
+
+GLOVE_ROWS, GLOVE_JOINTS = 6, 4  # five fingers and the wrist, four joints each
+UNIT_LIMITS = {"digital_proxy": DIGITAL_UNITS, "glove_proxy": len(HANDS)}
+UNIT_HELP = {
+    "digital_proxy": "digital units 0-4 are the left thumb..pinky and 5-9 the right thumb..pinky",
+    "glove_proxy": "glove unit 0 is the left hand and 1 the right",
+}
+
+
+def glove_angles(sample: PinchSample) -> np.ndarray:
+    """The (2, 6, 4) joint angles of both hands; the wrist row stays 0."""
+    angles = np.zeros((len(HANDS), GLOVE_ROWS, GLOVE_JOINTS))
+    for unit, hand in enumerate(sample.hands):
+        angles[unit, : len(FINGERS), :] = hand.angles
+    return angles
+
+
+@dataclass(frozen=True)
+class ProxyRef:
+    """A proxy element found next to the device: its type, name, unit and line."""
+
+    type: str
+    name: str
+    unit: int
+    line: int | None
+
+
+def proxies_beside(access: ElementAccess) -> Iterator[ProxyRef]:
+    """Digital and glove proxies in the device element's own file that point at it.
+
+    Proxies are configured after devices and may live in other files; this looks only
+    at the file the device came from, where mixins such as ``pinch.mixin.jconf`` keep them.
+    """
+    node = access.element.node
+    parent = None if node is None else node.getparent()
+    if parent is None:
+        return
+    for sibling in parent:
+        kind = sibling.tag.rpartition("}")[2] if isinstance(sibling.tag, str) else ""
+        if kind not in UNIT_LIMITS:
+            continue
+        values = {
+            child.tag.rpartition("}")[2]: (child.text or "").strip()
+            for child in sibling
+            if isinstance(child.tag, str)
+        }
+        if values.get("device") == access.name:
+            yield ProxyRef(
+                kind,
+                sibling.get("name") or "",
+                read_int(values.get("unit", "0")),
+                sibling.sourceline,
+            )
+
+
+class PinchGloveDevice(Glove, Digital):
+    """Glove and digital data from a PinchGlove box on a serial port."""
+
+    ELEMENT_TYPE = "pinch_glove"
+    sample_interval = 0.0  # sample() waits for a touch frame (at most sample_timeout)
+
+    # Protocol timing in seconds. The defaults are the C++ driver's; tests shorten them.
+    command_delay = 0.1  # between the two bytes of a command
+    echo_wait = 0.1  # for a confused glove's '?' after the first byte
+    read_timeout = 5.0  # per byte of a reply or of a started frame
+    sample_timeout = 0.25  # one sample() call waiting for a frame to start
+    poll_interval = 0.05  # serial read granularity
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.port = ""
+        self.baud = 9600
+        self.info: dict[str, str] = {}
+        self.glove: PinchGlove | None = None
+        self._counts = {"frames": 0, "bad_frames": 0, "skipped_bytes": 0}
+
+    def config(self, access: ElementAccess) -> None:
+        super().config(access)  # name, and the glove_position proxy (Glove)
+        self.port = access.string("port")
+        self.baud = access.integer("baud")
+        if not self.port:
+            raise DeviceConfigError("port is empty: name the serial device the glove box is on")
+        if self.baud <= 0:
+            raise DeviceConfigError(f"baud {self.baud} is not a line speed")
+        self._check_proxy_units(access)
+
+    def start_sampling(self) -> None:
+        # The hardware description is only printed by the C++ driver; after a restart
+        # it is not asked again, which saves four command round trips.
+        glove = PinchGlove(
+            self.port,
+            self.baud,
+            timestamps=True,
+            query_info=not self.info,
+            command_delay=self.command_delay,
+            echo_wait=self.echo_wait,
+            read_timeout=self.read_timeout,
+            sample_timeout=self.sample_timeout,
+            poll_interval=self.poll_interval,
+        )
+        opened = glove.open()
+        self.info = glove.info or self.info
+        self.glove = glove
+        # The box is silent until a contact changes: start from open hands, as the C++ does.
+        self._add(opened)
+
+    def sample(self) -> None:
+        glove = self.glove
+        if glove is None:
+            raise PinchGloveError("the glove is not open")
+        frame = glove.sample()  # raises PinchGloveDisconnected when the line is lost
+        if frame is not None:
+            self._add(frame)
+
+    def stop_sampling(self) -> None:
+        glove, self.glove = self.glove, None
+        if glove is not None:
+            for key in self._counts:
+                self._counts[key] += getattr(glove, key)
+            glove.close()
+
+    # -- counters over every start, for monitors and tests ------------------------------
+
+    def _count(self, key: str) -> int:
+        glove = self.glove
+        return self._counts[key] + (getattr(glove, key) if glove is not None else 0)
+
+    @property
+    def frames(self) -> int:
+        """Touch frames decoded."""
+        return self._count("frames")
+
+    @property
+    def bad_frames(self) -> int:
+        """Malformed or truncated frames dropped."""
+        return self._count("bad_frames")
+
+    @property
+    def skipped_bytes(self) -> int:
+        """Bytes outside any frame."""
+        return self._count("skipped_bytes")
+
+    # -- internals ------------------------------------------------------------------------
+
+    def _add(self, sample: PinchSample) -> None:
+        stamp = self.now()
+        self.add_digital_sample(sample.digital, stamp)
+        self.add_glove_sample(glove_angles(sample), stamp)
+
+    def _check_proxy_units(self, access: ElementAccess) -> None:
+        """Warn about proxies beside the device that read units it does not have."""
+        loc = access.element.location
+        for ref in proxies_beside(access):
+            limit = UNIT_LIMITS[ref.type]
+            if ref.unit < limit:
+                continue
+            hint = UNIT_HELP[ref.type]
+            if ref.type == "digital_proxy":
+                hint += (
+                    "; VR Juggler's pinch.mixin.jconf numbers the right hand 6-10, which "
+                    "shifts every right-hand proxy by one finger"
+                )
+            self.diagnostics.append(
+                Diagnostic.make(
+                    "DRV024",
+                    f"{self.name}: {ref.type} {ref.name!r} reads unit {ref.unit}, but a "
+                    f"pinch_glove has {limit} {ref.type.removesuffix('_proxy')} units (0-{limit - 1})",
+                    loc.path,
+                    ref.line,
+                    None,
+                    hint=hint,
+                )
+            )
