@@ -151,7 +151,7 @@ def test_pinch_glove_answers_on_the_printed_pty(emulate, tmp_path):
 
 
 def test_motion_star_accepts_a_client_on_the_printed_port(emulate):
-    emulation = emulate("MotionStar_drv", "--duration", "10")
+    emulation = emulate("MotionStar_drv", "--port", "0", "--duration", "10")
     match = emulation.wait_for(r"<address>(.+)</address> <server_port>(\d+)</server_port>")
     host, port = match.group(1), int(match.group(2))
     assert host == "127.0.0.1"
@@ -172,8 +172,8 @@ def test_motion_star_accepts_a_client_on_the_printed_port(emulate):
 @pytest.mark.parametrize(("driver", "args", "ready"), [
     ("LinuxJoydev_drv", ("--path", "{tmp}/js0"), "Press Ctrl-C"),
     ("DTrack_drv", ("--port", "{udp}"), "Press Ctrl-C"),
-    ("PinchGlove_drv", (), "<port>"),
-    ("MotionStar_drv", (), "<server_port>"),
+    ("PinchGlove_drv", ("--port", "{tmp}/pinch"), "<port>"),
+    ("MotionStar_drv", ("--port", "0"), "<server_port>"),
 ])
 def test_ctrl_c_ends_cleanly(emulate, tmp_path, driver, args, ready):
     sink = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)

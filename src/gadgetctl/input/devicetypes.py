@@ -132,7 +132,8 @@ class Position(Input):
 
     def add_position_sample(self, matrices: Any, timestamp: float | None = None) -> None:
         """``matrices``: one 4x4 matrix per unit, shape (units, 4, 4) or a list of 4x4."""
-        data = as_matrices(matrices).reshape(-1, 4, 4)
+        # A copy: drivers may reuse their buffer for the next sample.
+        data = np.array(as_matrices(matrices), dtype=np.float64).reshape(-1, 4, 4)
         self.store.add(DeviceKind.POSITION, _stamp(timestamp), self.position_filters.apply(data))
 
     def add_position_samples(self, timestamps: Any, matrices: Any) -> None:
