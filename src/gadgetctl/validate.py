@@ -129,7 +129,20 @@ def check_configurations(result: ValidationResult, repo, options: ValidateOption
     configuration with ``options.together``."""
     from gadgetctl.jccl.configcheck import check_documents
 
-    return check_documents(result.documents, repo, together=options.together, environ=options.environ)
+    return check_documents(result.documents, repo, together=options.together, environ=options.environ,
+                           plugin_definitions=plugin_definition_finder(options.environ))
+
+
+def plugin_definition_finder(environ=None):
+    """A function giving the definition folders of the driver plug-ins a configuration can
+    load (bundled, installed, GADGETCTL_DRIVER_PATH, its input_manager driver paths)."""
+
+    def find(config) -> list[Path]:
+        from gadgetctl.input.definitions import driver_definition_dirs
+
+        return driver_definition_dirs(configuration=config, environ=environ)
+
+    return find
 
 
 def summarize(diagnostics: Iterable[Diagnostic]) -> dict[str, int]:

@@ -58,8 +58,10 @@ def show(
     from gadgetctl.errors import GadgetctlError
     from gadgetctl.jccl.configcheck import open_configuration
     from gadgetctl.jccl.resolve import resolve_configuration
+    from gadgetctl.validate import plugin_definition_finder
 
-    opened = open_configuration(files, definition_dirs=definitions, bundled=bundled)
+    opened = open_configuration(files, definition_dirs=definitions, bundled=bundled,
+                                plugin_definitions=plugin_definition_finder())
     elements = resolve_configuration(opened.configuration, opened.index, element or None)
     if element and not elements:
         raise GadgetctlError(f"no element named {', '.join(map(repr, element))} in the configuration")
@@ -85,8 +87,10 @@ def graph(
     """
     from gadgetctl.jccl.configcheck import open_configuration
     from gadgetctl.jccl.graph import RENDERERS, build_graph
+    from gadgetctl.validate import plugin_definition_finder
 
-    opened = open_configuration(files, definition_dirs=definitions, bundled=bundled)
+    opened = open_configuration(files, definition_dirs=definitions, bundled=bundled,
+                                plugin_definitions=plugin_definition_finder())
     wiring = build_graph(opened.configuration, opened.index)
     if fmt is GraphFormat.json:
         emit(json.dumps(wiring.to_dict(), indent=2))

@@ -1,25 +1,29 @@
-"""`gadgetctl demo`: the main job on the bundled defaults (what `make demo` runs)."""
+"""`gadgetctl demo`: what `make demo` runs: the monitor on the bundled waveform example."""
 
 from __future__ import annotations
 
 import typer
 
-from gadgetctl.cli.options import ColorMode, emit, use_color
+DEMO_SECONDS = 3.0
 
 
 def register(app: typer.Typer) -> None:
     app.command(name="demo")(demo)
 
 
-def demo() -> None:
-    """Validate the bundled definitions and example configurations and print the report."""
-    from gadgetctl.diagnostics import exit_code_for
-    from gadgetctl.report import render
-    from gadgetctl.resources import definitions_dir, drivers_dir, examples_dir
-    from gadgetctl.validate import validate_paths
+def demo(
+    duration: float = typer.Option(DEMO_SECONDS, "--duration", metavar="SECONDS", help="How long to monitor."),
+) -> None:
+    """Monitor the bundled waveform example (examples/waveform.jconf) for a few seconds: the
+    live view on a terminal (q ends it early), a plain-text table otherwise."""
+    from gadgetctl.cli.monitor_cmd import run_monitor
+    from gadgetctl.cli.monitor_run import interactive
+    from gadgetctl.cli.options import emit
+    from gadgetctl.resources import examples_dir
 
-    paths = [p for p in (definitions_dir(), examples_dir(), drivers_dir()) if p.is_dir()]
-    result = validate_paths(paths)
-    emit(f"Validating the bundled definitions, drivers and examples ({len(result.files)} files)")
-    emit(render("text", result.diagnostics, files_checked=len(result.files), color=use_color(ColorMode.auto)))
-    raise typer.Exit(exit_code_for(result.diagnostics))
+    config = examples_dir() / "waveform.jconf"
+    if not interactive():
+        emit(f"gadgetctl demo: monitoring the simulated devices of {config.name} for {duration:g} s "
+             f"(run `gadgetctl monitor {config}` on a terminal for the live view)")
+    code = run_monitor([config], [], duration=duration, interval=1.0, stats=True, heading="gadgetctl demo")
+    raise typer.Exit(code)

@@ -12,7 +12,7 @@ other entry, resolved against the directory of the file that names them.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -37,6 +37,9 @@ class Session:
     environ: Mapping[str, str] = field(default_factory=lambda: os.environ)
     documents: dict[Path, XmlDocument] = field(default_factory=dict)
     files: dict[Path, ConfigFile] = field(default_factory=dict)
+    #: Definition folders of driver plug-ins usable by a configuration (their own element
+    #: types); consulted only when the configuration uses a type the repository lacks.
+    plugin_definitions: Callable[[Configuration], list[Path]] | None = None
     _repos: dict[tuple[Path, ...], DefinitionRepository] = field(default_factory=dict)
     _checkers: dict[int, ElementChecker] = field(default_factory=dict)
 
@@ -52,15 +55,26 @@ class Session:
         return entries
 
     def repository(self, config: Configuration) -> tuple[DefinitionRepository, list[SearchPathEntry]]:
-        """The base repository extended by the configuration's definition_path entries."""
+        """The base repository extended by the configuration's definition_path entries and,
+        when it needs them, the definitions its driver plug-ins carry."""
         entries = self.definition_entries(config)
+        repo = self._extended(entries)
+        if self.plugin_definitions is not None and any(e.type not in repo for e in config.all_elements()):
+            known = {e.path.resolve() for e in repo.entries}
+            extra = [SearchPathEntry(raw=str(d), path=d, origin="driver plug-in")
+                     for d in self.plugin_definitions(config) if d.resolve() not in known]
+            if extra:
+                repo = self._extended(entries + extra)
+        return repo, entries
+
+    def _extended(self, entries: list[SearchPathEntry]) -> DefinitionRepository:
         if not entries:
-            return self.base, entries
+            return self.base
         key = tuple(e.path for e in entries)
         repo = self._repos.get(key)
         if repo is None:
             repo = self._repos[key] = self.base.extended(entries)
-        return repo, entries
+        return repo
 
     def checker(self, repo: DefinitionRepository) -> ElementChecker:
         checker = self._checkers.get(id(repo))
@@ -136,9 +150,11 @@ def _is_configuration(doc: XmlDocument) -> bool:
 
 
 def check_documents(documents: Iterable[XmlDocument], base: DefinitionRepository, *,
-                    together: bool = False, environ: Mapping[str, str] | None = None) -> list[Diagnostic]:
+                    together: bool = False, environ: Mapping[str, str] | None = None,
+                    plugin_definitions: Callable[[Configuration], list[Path]] | None = None,
+                    ) -> list[Diagnostic]:
     """Configuration-level findings for the configuration documents among ``documents``."""
-    session = Session(base, os.environ if environ is None else environ)
+    session = Session(base, os.environ if environ is None else environ, plugin_definitions=plugin_definitions)
     given: list[Path] = []
     for doc in documents:
         if _is_configuration(doc):
@@ -193,7 +209,9 @@ class OpenedConfiguration:
 
 
 def open_configuration(paths: Iterable[Path], *, definition_dirs: Iterable[Path] = (), bundled: bool = True,
-                       environ: Mapping[str, str] | None = None) -> OpenedConfiguration:
+                       environ: Mapping[str, str] | None = None,
+                       plugin_definitions: Callable[[Configuration], list[Path]] | None = None,
+                       ) -> OpenedConfiguration:
     """Load files as one configuration (includes followed) with the repository they are
     judged by. A file that is missing or not well-formed raises :class:`GadgetctlError`."""
     from gadgetctl.errors import GadgetctlError
@@ -207,7 +225,7 @@ def open_configuration(paths: Iterable[Path], *, definition_dirs: Iterable[Path]
         if not directory.is_dir():
             raise GadgetctlError(f"--definitions {directory}: no such directory")
     session = Session(default_repository(definition_dirs, bundled=bundled),
-                      os.environ if environ is None else environ)
+                      os.environ if environ is None else environ, plugin_definitions=plugin_definitions)
     config = session.load(paths)
     broken = [d for d in config.diagnostics if d.code == "XML001"]
     if broken:

@@ -14,7 +14,7 @@ import signal
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
-from typing import NamedTuple
+from typing import BinaryIO, NamedTuple
 
 from gadgetctl.errors import GadgetctlError
 from gadgetctl.monitor.records import (
@@ -28,6 +28,7 @@ from gadgetctl.monitor.records import (
     RecordFormatError,
     SampleRecord,
     StatsRecord,
+    StatusRecord,
     UnknownRecordType,
     decode_line,
     decode_record,
@@ -77,7 +78,7 @@ class Recorder:
 
     def __init__(self, path: str | Path, header_info: Mapping[str, object] | None = None, *,
                  overwrite: bool = False, flush_interval: float = 0.1,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic, stream: BinaryIO | None = None) -> None:
         self.path = Path(path)
         self.flush_interval = flush_interval
         self.samples = self.markers = self.frames = 0
@@ -86,19 +87,31 @@ class Recorder:
         self._pending: list[str] = []
         self._pending_samples = 0
         self._writing = False
+        self._owns_file = stream is None
         self.header = HeaderRecord.now(header_info, clock=clock)
-        try:
-            self._file = open(self.path, "wb" if overwrite else "xb")  # noqa: SIM115
-        except FileExistsError:
-            raise RecordingError(f"{self.path}: file exists (overwrite it explicitly)") from None
-        except OSError as exc:
-            raise RecordingError(f"{self.path}: cannot create recording: {exc.strerror or exc}") from None
+        if stream is not None:
+            self._file = stream
+        else:
+            try:
+                self._file = open(self.path, "wb" if overwrite else "xb")  # noqa: SIM115
+            except FileExistsError:
+                raise RecordingError(f"{self.path}: file exists (overwrite it explicitly)") from None
+            except OSError as exc:
+                raise RecordingError(f"{self.path}: cannot create recording: {exc.strerror or exc}") from None
         try:
             self._write(encode_record(self.header))
         except BaseException:
-            self._file.close()
+            if self._owns_file:
+                self._file.close()
             raise
         self._last_flush = clock()
+
+    @classmethod
+    def to_stream(cls, stream: BinaryIO, header_info: Mapping[str, object] | None = None, *,
+                  name: str = "<stdout>", clock: Callable[[], float] = time.monotonic) -> Recorder:
+        """A recorder writing to an open binary stream (e.g. ``sys.stdout.buffer``), which
+        :meth:`close` flushes but leaves open."""
+        return cls(name, header_info, clock=clock, stream=stream)
 
     def __enter__(self) -> Recorder:
         return self
@@ -153,6 +166,14 @@ class Recorder:
             self.samples += len(records)
         return len(records)
 
+    def write_encoded(self, text: str, count: int) -> None:
+        """Append ``count`` sample records already encoded as NDJSON lines (e.g. by
+        :func:`~gadgetctl.monitor.records.encode_rows`), with one write."""
+        self.flush()
+        if text:
+            self._write(text)
+            self.samples += count
+
     def write_sample(self, record: SampleRecord) -> None:
         """Append one sample; written at the latest ``flush_interval`` after the previous write
         once another record arrives (call :meth:`flush` when sampling pauses)."""
@@ -179,6 +200,10 @@ class Recorder:
         self._write_record(frame)
         self.frames += 1
 
+    def write_status(self, record: StatusRecord) -> None:
+        """Append an element status record."""
+        self._write_record(record)
+
     def write_stats(self, devices: Mapping[str, Mapping[str, object]],
                     timestamp: float | None = None) -> None:
         """Append a statistics snapshot (device name -> statistic -> value)."""
@@ -197,7 +222,8 @@ class Recorder:
                                                 self.markers, self.frames)))
         finally:
             self.closed = True
-            self._file.close()
+            if self._owns_file:
+                self._file.close()
 
 
 # --------------------------------------------------------------------------- reading

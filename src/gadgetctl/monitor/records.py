@@ -8,6 +8,7 @@ described in ``docs/recording-format.md``.
 
 from __future__ import annotations
 
+import itertools
 import json
 import re
 import time
@@ -86,6 +87,19 @@ class EndRecord:
 
 
 @dataclass(frozen=True, slots=True)
+class StatusRecord:
+    """An element's state: written for each element when a session starts and whenever its
+    state or reason changes (``element`` is device, proxy, alias, input_manager or None)."""
+
+    timestamp: float
+    name: str
+    element: str | None
+    element_type: str
+    state: str
+    reason: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
 class HeaderRecord:
     """The first line of a recording; ``info`` is free-form data from the writer."""
 
@@ -107,7 +121,8 @@ class HeaderRecord:
         return cls(created, wall, clock(), f"gadgetctl {__version__}", dict(info or {}))
 
 
-Record = SampleRecord | MarkerRecord | FrameRecord | StatsRecord | EndRecord | HeaderRecord
+Record = (SampleRecord | MarkerRecord | FrameRecord | StatsRecord | StatusRecord | EndRecord
+          | HeaderRecord)
 
 
 # --------------------------------------------------------------------------- encoding
@@ -233,6 +248,50 @@ def encode_samples(records: Iterable[SampleRecord]) -> str:
     return "".join(parts)
 
 
+def _scalar_text(value: object) -> str:
+    t = type(value)
+    if (t is float and value - value == 0.0) or t is int:
+        return repr(value)
+    return encode_value(value)
+
+
+def encode_rows(device: str, kind: str, timestamps: Iterable[float],
+                rows: Iterable[Iterable[object]], raw_rows: Iterable[Iterable[object]] | None = None) -> str:
+    """Sample records of consecutive samples of one device and kind, as NDJSON lines.
+
+    ``rows[i][unit]`` is the value of ``unit`` at ``timestamps[i]``; ``raw_rows`` (same
+    shape) the raw data, omitted where it equals the value (None: raw is the value). The
+    text is the one :func:`encode_samples` writes for the same records, without building
+    them: this is the monitor's hot path (values as Python lists, e.g. numpy ``tolist()``).
+    """
+    prefix = _PREFIXES.get((device, kind)) or _prefix(device, kind)
+    parts: list[str] = []
+    append = parts.append
+    heads: list[str] = []
+    if raw_rows is None:
+        raw_rows = itertools.repeat(None)
+    for ts, row, raws in zip(timestamps, rows, raw_rows):  # noqa: B905 - raw_rows may repeat None
+        stamp = (',"timestamp":' + (repr(ts) if type(ts) is float and ts - ts == 0.0 else _timestamp(ts))
+                 + ',"value":')
+        if len(heads) < len(row):
+            heads.extend(prefix + repr(u) for u in range(len(heads), len(row)))
+        if raws is None:
+            for unit, value in enumerate(row):
+                t = type(value)
+                append(heads[unit] + stamp
+                       + (repr(value) if (t is float and value - value == 0.0) or t is int else encode_value(value))
+                       + "}\n")
+        else:
+            for unit, (value, raw) in enumerate(zip(row, raws, strict=True)):
+                t = type(value)
+                vtext = repr(value) if (t is float and value - value == 0.0) or t is int else encode_value(value)
+                if raw is value or (type(raw) is t and t in _SCALARS and raw == value):
+                    append(heads[unit] + stamp + vtext + "}\n")
+                else:
+                    append(heads[unit] + stamp + vtext + ',"raw":' + _scalar_text(raw) + "}\n")
+    return "".join(parts)
+
+
 def encode_record(record: Record) -> str:
     """Any record as one NDJSON line ending in a newline."""
     if isinstance(record, SampleRecord):
@@ -250,6 +309,11 @@ def encode_record(record: Record) -> str:
     elif isinstance(record, StatsRecord):
         obj = {"v": FORMAT_VERSION, "type": "stats", "timestamp": record.timestamp,
                "devices": {name: dict(values) for name, values in record.devices.items()}}
+    elif isinstance(record, StatusRecord):
+        obj = {"v": FORMAT_VERSION, "type": "status", "timestamp": record.timestamp,
+               "name": record.name, "element": record.element,
+               "element_type": record.element_type, "state": record.state,
+               "reason": record.reason}
     elif isinstance(record, EndRecord):
         obj = {"v": FORMAT_VERSION, "type": "end", "timestamp": record.timestamp,
                "reason": record.reason, "samples": record.samples, "markers": record.markers,
@@ -335,6 +399,13 @@ def decode_record(obj: object) -> Record:
         if not all(isinstance(v, dict) for v in devices.values()):
             raise RecordFormatError("stats entries must be objects")
         return StatsRecord(_time(obj), devices)
+    if kind == "status":
+        element = obj.get("element")
+        reason = obj.get("reason")
+        return StatusRecord(_time(obj), _field(obj, "name", str),
+                            element if isinstance(element, str) else None,
+                            str(obj.get("element_type", "")), _field(obj, "state", str),
+                            reason if isinstance(reason, str) else None)
     if kind == "end":
         return EndRecord(_time(obj), _field(obj, "reason", str), _field(obj, "samples", int),
                          int(obj.get("markers", 0)), int(obj.get("frames", 0)))

@@ -63,7 +63,7 @@ class ReplaySchedule:
         self.max_loops = max_loops if loop else 1
         self.rebase = rebase
         self.tolerance = max(0.0, tolerance)
-        self._clock, self._sleep = clock, sleep
+        self._clock, self.sleep = clock, sleep
         kept = [r for r in records if isinstance(r, (SampleRecord, MarkerRecord))]
         kept.sort(key=lambda r: r.timestamp)
         self._records = kept
@@ -87,6 +87,11 @@ class ReplaySchedule:
         warnings += [f"{' and '.join(map(repr, sources))} all become {target!r}"
                      for target, sources in targets.items() if len(sources) > 1]
         return tuple(warnings)
+
+    @property
+    def records(self) -> tuple[ReplayRecord, ...]:
+        """The samples and markers of one pass, in time order, as recorded (not renamed)."""
+        return tuple(self._records)
 
     def __len__(self) -> int:
         """Records per pass."""
@@ -120,7 +125,7 @@ class ReplaySchedule:
                     due = start + (offsets[i] + base) / self.speed
                     now = self._clock()
                     if due - now > self.tolerance:
-                        self._sleep(due - now)
+                        self.sleep(due - now)
                         now = self._clock()
                     limit = (now + self.tolerance - start) * self.speed - base
                     j = i + 1

@@ -1,0 +1,156 @@
+"""`gadgetctl monitor`: live sample monitors on the embedded input manager."""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from pathlib import Path
+
+import typer
+
+from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION
+from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION
+
+
+class OutputFormat(StrEnum):
+    live = "live"
+    table = "table"
+    ndjson = "ndjson"
+
+
+class LengthUnits(StrEnum):
+    meters = "meters"
+    feet = "feet"
+    inches = "inches"
+    centimeters = "centimeters"
+
+
+RATE_OPTION = typer.Option(60.0, "--rate", metavar="HZ", help="Frames per second (the view refreshes once per frame).")
+DURATION_OPTION = typer.Option(None, "--duration", metavar="SECONDS", help="Stop after this many seconds (default: until q, Ctrl-C or SIGTERM).")
+FORMAT_OPTION = typer.Option(None, "--format", "-f", help="live: the dashboard (needs a terminal); table: a plain-text table every --interval seconds; ndjson: one JSON record per sample on stdout. Default: live on a terminal, table otherwise.", show_default=False)
+PER_FRAME_OPTION = typer.Option(False, "--per-frame", help="With --format ndjson: one frame record per frame instead of one record per sample.")
+RECORD_OPTION = typer.Option(None, "--record", metavar="FILE", help="Write every sample, status change and marker to FILE (the recording format); complete even after Ctrl-C or SIGTERM.")
+OVERWRITE_OPTION = typer.Option(False, "--overwrite", help="Replace an existing --record file.")
+STATS_OPTION = typer.Option(False, "--stats", help="Print end-of-run statistics per device (always written as a stats record in ndjson).")
+UNITS_OPTION = typer.Option(LengthUnits.meters, "--units", help="Length unit of displayed positions (records stay in meters).")
+QUATERNION_OPTION = typer.Option(False, "--quaternion", help="Also show orientations as quaternions (w x y z).")
+INTERVAL_OPTION = typer.Option(1.0, "--interval", metavar="SECONDS", help="Seconds between two tables of --format table.")
+MOUSE_OPTION = typer.Option(True, "--mouse/--no-mouse", help="Live view: report mouse buttons, motion and wheel to the keyboard_mouse_device.")
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="monitor")(monitor)
+
+
+def monitor(
+    arguments: list[str] = typer.Argument(..., metavar="CONFIG... [NAME...]", help="Configuration files (existing files ending in .jconf), then names or glob patterns of the devices, proxies and aliases to show (default: all).", show_default=False),
+    rate: float = RATE_OPTION,
+    duration: float | None = DURATION_OPTION,
+    fmt: OutputFormat | None = FORMAT_OPTION,
+    per_frame: bool = PER_FRAME_OPTION,
+    record: Path | None = RECORD_OPTION,
+    overwrite: bool = OVERWRITE_OPTION,
+    stats: bool = STATS_OPTION,
+    units: LengthUnits = UNITS_OPTION,
+    quaternion: bool = QUATERNION_OPTION,
+    interval: float = INTERVAL_OPTION,
+    mouse: bool = MOUSE_OPTION,
+    driver_paths: list[Path] = DRIVER_PATH_OPTION,
+    definitions: list[Path] = DEFINITIONS_OPTION,
+    bundled: bool = BUNDLED_OPTION,
+) -> None:
+    """Run the input manager on CONFIG files and show every device, proxy and alias live:
+    status, sample rate, samples per frame, dropped samples, age of the newest sample,
+    jitter, and the values.
+
+    Arguments that are existing files ending in .jconf are configurations; the others
+    select what to show by name or glob pattern ('Wave*'). Keys in the live view: q quits,
+    p pauses the display (sampling goes on), r resets the statistics, m writes a named
+    marker, PgUp/PgDn scroll; other keys and the mouse go to the configuration's
+    keyboard_mouse_device, as VR Juggler's simulator window does.
+
+    Exit status: 0; 1 when a selected element ended pending, faulted or stupefied, or a
+    device faulted; 2 for usage errors (unreadable configuration, unknown name).
+    """
+    configs, selectors = split_arguments(arguments)
+    code = run_monitor(configs, selectors, rate=rate, duration=duration, fmt=fmt, per_frame=per_frame,
+                       record=record, overwrite=overwrite, stats=stats, units=units.value,
+                       quaternion=quaternion, interval=interval, mouse=mouse, driver_paths=driver_paths,
+                       definitions=definitions, bundled=bundled)
+    raise typer.Exit(code)
+
+
+def split_arguments(arguments: list[str]) -> tuple[list[Path], list[str]]:
+    """Existing ``*.jconf`` files are configurations, the rest NAME patterns."""
+    from gadgetctl.errors import GadgetctlError
+
+    configs: list[Path] = []
+    selectors: list[str] = []
+    for argument in arguments:
+        path = Path(argument)
+        if argument.endswith(".jconf"):
+            if path.is_file():
+                configs.append(path)
+                continue
+            if path.exists():
+                raise GadgetctlError(f"{argument}: not a configuration file")
+            if "*" not in argument and "?" not in argument and "[" not in argument:
+                raise GadgetctlError(f"{argument}: no such configuration file")
+        selectors.append(argument)
+    if not configs:
+        raise GadgetctlError("no configuration given: CONFIG arguments are existing files ending in .jconf")
+    return configs, selectors
+
+
+def fatal_load_errors(configuration) -> None:
+    """A configuration that could not be read (missing, not XML, broken include) is a
+    usage error: one line, exit status 2."""
+    from gadgetctl.diagnostics import Severity
+    from gadgetctl.errors import GadgetctlError
+
+    errors = [d for d in configuration.diagnostics if d.severity is Severity.ERROR]
+    if errors:
+        first = errors[0]
+        more = f" (and {len(errors) - 1} more error(s): gadgetctl validate shows them)" if len(errors) > 1 else ""
+        raise GadgetctlError(f"{first.location}: cannot load the configuration: {first.message}{more}")
+
+
+def check_options(rate: float, duration: float | None, interval: float) -> None:
+    from gadgetctl.errors import GadgetctlError
+
+    if not rate > 0 or rate > 10_000:
+        raise GadgetctlError(f"--rate must be between 0 and 10000 frames per second, not {rate:g}")
+    if duration is not None and not duration >= 0:
+        raise GadgetctlError(f"--duration must not be negative, not {duration:g}")
+    if not interval > 0:
+        raise GadgetctlError(f"--interval must be positive, not {interval:g}")
+
+
+def run_monitor(configs: list[Path], selectors: list[str], *, rate: float = 60.0, duration: float | None = None,
+                fmt: OutputFormat | None = None, per_frame: bool = False, record: Path | None = None,
+                overwrite: bool = False, stats: bool = False, units: str = "meters", quaternion: bool = False,
+                interval: float = 1.0, mouse: bool = True, driver_paths: list[Path] | None = None,
+                definitions: list[Path] | None = None, bundled: bool = True, heading: str = "gadgetctl monitor") -> int:
+    from gadgetctl.cli.monitor_run import RunOptions, check_record_path, choose_format, run
+    from gadgetctl.input.manager import InputManager, ManagerOptions
+    from gadgetctl.monitor.session import MonitorSession
+
+    check_options(rate, duration, interval)
+    mode = choose_format(fmt)
+    check_record_path(record, overwrite)
+    options = ManagerOptions(driver_dirs=list(driver_paths or ()))
+    manager, configuration = InputManager.from_files(configs, definitions=list(definitions or ()),
+                                                     bundled=bundled, options=options)
+    fatal_load_errors(configuration)
+    info = {"config": [str(p) for p in configs]}
+    session = MonitorSession(manager, configuration, selectors=selectors, rate=rate, info=info)
+    try:
+        session.start()
+    except BaseException:
+        manager.shutdown()
+        raise
+    notes = [f"{d.location}: {d.message}" for d in configuration.diagnostics if d.severity.value == "warning"]
+    title = " ".join(str(p) for p in configs)
+    return run(session, RunOptions(format=mode, duration=duration, per_frame=per_frame, stats=stats,
+                                   record=record, overwrite=overwrite, interval=interval, length_unit=units,
+                                   quaternion=quaternion, mouse=mouse, title=title, heading=heading,
+                                   notes=notes))

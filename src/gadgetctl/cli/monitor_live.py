@@ -1,0 +1,315 @@
+"""The live dashboard of `gadgetctl monitor`: one block per device, one line per proxy
+and alias, drawn from :class:`~gadgetctl.monitor.session.MonitorSession` snapshots.
+
+Lines are lists of (text, style) segments; rich turns the styles into escape codes for the
+console's colour system (none with NO_COLOR or ``--color never`` consoles) and measures
+cells. The screen is redrawn in place on the alternate screen, one write per refresh, and
+only the lines that fit are built, so a refresh costs the same for 3 devices or 300;
+PgUp and PgDn scroll.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+
+from rich.cells import cell_len, set_cell_size
+from rich.color import ColorSystem
+from rich.console import Console
+from rich.style import Style
+
+from gadgetctl.cli.monitor_text import (
+    age_text,
+    glove_text,
+    ms_text,
+    position_text,
+    rate_text,
+    unit_value_text,
+)
+from gadgetctl.input.clock import now
+from gadgetctl.monitor.session import ElementView, MonitorSession, UnitView
+from gadgetctl.monitor.sparkline import sparkline
+
+BAR_WIDTH = 16
+SPARK_WIDTH = 20
+SPARK_REFRESH = 0.1  # seconds a sparkline is reused
+EIGHTHS = " ▏▎▍▌▋▊▉"
+STATE_STYLES = {"running": "green", "active": "green", "configured": "cyan", "faulted": "bold red",
+                "reconnecting": "yellow", "pending": "yellow", "stupefied": "yellow", "stopped": "red",
+                "removed": "red"}
+HEADER_LINES = 3
+NAME_WIDTH = 24
+TYPE_WIDTH = 28
+_SYSTEMS = {"standard": ColorSystem.STANDARD, "256": ColorSystem.EIGHT_BIT,
+            "truecolor": ColorSystem.TRUECOLOR, "windows": ColorSystem.WINDOWS}
+
+
+def bar(value: float, width: int = BAR_WIDTH) -> str:
+    """A horizontal bar for a value in [0, 1], with eighth-cell resolution."""
+    if not math.isfinite(value):
+        return "?" * width
+    cells = max(0.0, min(1.0, value)) * width
+    full = int(cells)
+    rest = int((cells - full) * 8)
+    text = "█" * full + (EIGHTHS[rest] if full < width and rest else "")
+    return text + "·" * (width - len(text))
+
+
+class Line(list):
+    """A screen line: (text, style) segments."""
+
+    def add(self, text: str, style: str = "") -> Line:
+        self.append((text, style))
+        return self
+
+    @property
+    def plain(self) -> str:
+        return "".join(text for text, _ in self)
+
+
+class Screen:
+    """Full-screen output on the alternate screen of ``console``'s terminal."""
+
+    def __init__(self, console: Console) -> None:
+        self.console = console
+        self.file = console.file
+        system = None if console.no_color else console.color_system
+        self._system = _SYSTEMS.get(system) if system else None
+        self._codes: dict[str, tuple[str, str]] = {}
+        self.active = False
+
+    def __enter__(self) -> Screen:
+        self.file.write("\x1b[?1049h\x1b[?25l\x1b[H\x1b[2J")
+        self.file.flush()
+        self.active = True
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.active:
+            self.active = False
+            self.file.write("\x1b[0m\x1b[?25h\x1b[?1049l")
+            self.file.flush()
+
+    def _style(self, style: str) -> tuple[str, str]:
+        codes = self._codes.get(style)
+        if codes is None:
+            if self._system is None or not style:
+                codes = ("", "")
+            else:
+                before, _, after = Style.parse(style).render("\0", color_system=self._system).partition("\0")
+                codes = (before, after)
+            self._codes[style] = codes
+        return codes
+
+    def draw(self, lines: Iterable[Line], width: int, height: int) -> None:
+        out = ["\x1b[H"]
+        for count, line in enumerate(lines):
+            if count >= height:
+                break
+            if count:
+                out.append("\x1b[K\r\n")
+            used = 0
+            for text, style in line:
+                if used >= width:
+                    break
+                size = cell_len(text)
+                if used + size > width:
+                    text = set_cell_size(text, width - used)
+                    size = width - used
+                used += size
+                before, after = self._style(style)
+                out.append(before + text + after if before else text)
+        out.append("\x1b[K\x1b[J")
+        self.file.write("".join(out))
+        self.file.flush()
+
+
+class LiveView:
+    """Draws the dashboard of ``session`` on ``console``'s terminal."""
+
+    def __init__(self, session: MonitorSession, console: Console, *, title: str = "",
+                 length_unit: str = "meters", quaternion: bool = False, recording: str | None = None,
+                 heading: str = "gadgetctl monitor") -> None:
+        self.session = session
+        self.console = console
+        self.title = title
+        self.length_unit = length_unit
+        self.quaternion = quaternion
+        self.recording = recording
+        self.heading = heading
+        self.paused = False
+        self.offset = 0
+        self.prompt: str | None = None
+        self.message = ""
+        self.total_lines = 0
+        self.screen = Screen(console)
+        self._sparks: dict[int, tuple[float, str]] = {}
+
+    # -- lifecycle ----------------------------------------------------------------------
+
+    def __enter__(self) -> LiveView:
+        self.screen.__enter__()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.screen.__exit__(*exc)
+
+    def draw(self, *, force: bool = False) -> None:
+        if self.paused and not force:
+            return
+        width, height = self.console.size
+        self.screen.draw(self.render(width, height), width, height)
+
+    def scroll(self, pages: int) -> None:
+        step = max(1, self.console.size.height - HEADER_LINES - 1)
+        self.offset = max(0, min(self.offset + pages * step, max(0, self.total_lines - step)))
+        self.draw(force=True)
+
+    # -- rendering ----------------------------------------------------------------------
+
+    def render(self, width: int, height: int) -> list[Line]:
+        """The screen's lines (at most ``height``)."""
+        moment = now()
+        session = self.session
+        lines = self._header(moment)
+        budget = max(1, height - HEADER_LINES - 1)
+        names = session.selected
+        line_no = shown = 0
+        index = len(names)
+        for position, name in enumerate(names):
+            if shown >= budget:
+                index = position
+                break
+            for line in self._element_lines(session.element_view(name, moment)):
+                if line_no >= self.offset and shown < budget:
+                    lines.append(line)
+                    shown += 1
+                line_no += 1
+        self.total_lines = line_no + (len(names) - index)
+        below = len(names) - index
+        if below:
+            lines.append(Line().add(f"… {below} more below; PgUp/PgDn scroll, NAME patterns narrow the view",
+                                    "dim"))
+        elif self.offset:
+            lines.append(Line().add("(scrolled: PgUp goes back)", "dim"))
+        return lines
+
+    def text(self, width: int = 200, height: int = 50) -> str:
+        """The screen as plain text (tests)."""
+        return "\n".join(line.plain for line in self.render(width, height))
+
+    def _header(self, moment: float) -> list[Line]:
+        session = self.session
+        first = Line().add(self.heading, "bold")
+        if self.title:
+            first.add(f"  {self.title}")
+        first.add(f"  frame {session.frame}  {session.frame_rate:.0f} fps  "
+                  f"{moment - (session.started_at or moment):.1f} s")
+        if self.recording:
+            first.add(f"  recording {self.recording}", "red")
+        if session.finished:
+            first.add("  FINISHED (q quits)", "bold cyan")
+        if self.paused:
+            first.add("  PAUSED (sampling goes on)", "bold yellow")
+        keyboards = session.keyboards()
+        second = Line().add("q quit  p pause  r reset stats  m marker  PgUp/PgDn scroll  ", "dim")
+        if keyboards:
+            second.add("other keys and the mouse → " + ", ".join(keyboards), "dim")
+        else:
+            second.add("(no keyboard_mouse_device: other keys are ignored)", "dim")
+        third = Line()
+        if self.prompt is not None:
+            third.add(f"marker name (Enter to write, Esc to cancel): {self.prompt}▏", "bold")
+        elif self.message:
+            third.add(self.message, "cyan")
+        return [first, second, third]
+
+    def _element_lines(self, view: ElementView) -> list[Line]:
+        if view.element == "device":
+            return self._device_lines(view)
+        line = Line().add("  ").add(f"{view.name:<{NAME_WIDTH - 2}}", "bold").add(" ")
+        if view.element == "alias":
+            target = f"alias → {view.target or '?'}"
+        elif view.element == "proxy":
+            unit = f"[{view.unit}]" if view.unit is not None else ""
+            target = f"{view.type} → {view.target or '?'}{unit}"
+        else:
+            target = view.type
+        line.add(f"{target:<40} ", "dim")
+        line.add(f"{view.state:<12}", STATE_STYLES.get(view.state, ""))
+        if view.reason:
+            line.add(f" {view.reason}", STATE_STYLES.get(view.state, ""))
+        for unit in view.values:
+            line.add(" ")
+            self._unit(line, unit, view.element)
+        return [line]
+
+    def _device_lines(self, view: ElementView) -> list[Line]:
+        head = Line().add(f"{view.name:<{NAME_WIDTH}}", "bold cyan").add(f" {view.type:<{TYPE_WIDTH}} ", "dim")
+        head.add(f"{view.state:<12}", STATE_STYLES.get(view.state, ""))
+        if view.reason:
+            head.add(f"{view.reason}  ", STATE_STYLES.get(view.state, "red"))
+        stats = view.stats
+        if stats is not None:
+            spf = stats.mean_samples_per_frame
+            head.add(f" {rate_text(stats.window_rate):>8} Hz  {'-' if spf is None else f'{spf:.1f}':>5}/frame  ")
+            head.add(f"dropped {stats.dropped:<3}", "red" if stats.dropped else "")
+            head.add(f" age {age_text(view.age):>9}  jitter {ms_text(stats.jitter):>6} ms"
+                     f"  p99 {ms_text(stats.p99_interval):>6} ms  max gap {ms_text(stats.max_gap):>6} ms")
+            if stats.faults:
+                head.add(f"  faults {stats.faults}", "red")
+        lines = [head]
+        digital = []
+        for unit in view.values:
+            if unit.kind == "digital":
+                digital.append(unit)
+                continue
+            line = Line().add(f"    {unit.kind} {unit.unit:<3}", "dim")
+            self._unit(line, unit, "device")
+            lines.append(line)
+        if digital:
+            line = Line().add("    digital    ", "dim")
+            for unit in digital:
+                line.add(f"{unit.unit}:", "dim")
+                self._button(line, unit, "device")
+            lines.append(line)
+        return lines
+
+    def _button(self, line: Line, unit: UnitView, element: str) -> None:
+        if element == "device":
+            on = bool(unit.value)
+            line.add("●" if on else "○", "bold green" if on else "")
+            line.add("↕" if unit.changed else " ", "yellow")
+        else:
+            state = int(unit.value)
+            on = state in (1, 2)
+            line.add("●" if on else "○", "bold green" if on else "")
+            line.add({2: "↑", 3: "↓"}.get(state, " "), "yellow")
+        line.add(f"×{unit.presses}  " if unit.presses else "  ", "dim")  # noqa: RUF001
+
+    def _spark(self, history: Sequence[float], moment: float) -> str:
+        """The sparkline of a unit's history, recomputed at most every SPARK_REFRESH s."""
+        cached = self._sparks.get(id(history))
+        if cached is not None and moment - cached[0] < SPARK_REFRESH:
+            return cached[1]
+        text = sparkline(list(history), SPARK_WIDTH, lo=0.0, hi=1.0)
+        self._sparks[id(history)] = (moment, text)
+        return text
+
+    def _unit(self, line: Line, unit: UnitView, element: str) -> None:
+        kind = unit.kind
+        if kind == "analog":
+            value = float(unit.value)
+            line.add(bar(value), "blue").add(f" {value:6.3f}")
+            if unit.raw is not None:
+                line.add(f" raw {unit.raw:<9.4g}", "dim")
+            if unit.history:
+                line.add(" " + self._spark(unit.history, now()), "magenta")
+        elif kind == "digital":
+            self._button(line, unit, element)
+        elif kind == "position":
+            line.add(position_text(unit.value, self.length_unit, self.quaternion))
+        elif kind == "glove":
+            line.add(glove_text(unit.value))
+        else:
+            line.add(unit_value_text(unit, element=element, length_unit=self.length_unit))

@@ -1,0 +1,256 @@
+"""Running a monitor session to the end in one of the three views, shared by `monitor`,
+`replay` and `demo`: live (rich, keys), table (plain text, periodic) or ndjson (records on
+stdout). Signals, the terminal and the writers are handled here, so that Ctrl-C, SIGTERM
+or an error always restore the terminal and leave complete recordings.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from gadgetctl.cli.monitor_cmd import OutputFormat
+from gadgetctl.errors import GadgetctlError
+from gadgetctl.input.clock import now
+from gadgetctl.monitor.recording import Recorder, RecordingError, Terminated, raise_on_stop_signals
+from gadgetctl.monitor.session import MonitorSession
+
+
+@dataclass
+class RunOptions:
+    format: OutputFormat | None = None  # None: live on a terminal, table otherwise
+    duration: float | None = None
+    per_frame: bool = False
+    stats: bool = False
+    record: Path | None = None
+    overwrite: bool = False
+    interval: float = 1.0
+    length_unit: str = "meters"
+    quaternion: bool = False
+    mouse: bool = True
+    title: str = ""
+    heading: str = "gadgetctl monitor"
+    notes: list[str] = field(default_factory=list)
+
+
+def interactive() -> bool:
+    return sys.stdin.isatty() and sys.stdout.isatty()
+
+
+def choose_format(requested: OutputFormat | None) -> OutputFormat:
+    if requested is None:
+        return OutputFormat.live if interactive() else OutputFormat.table
+    if requested is OutputFormat.live and not interactive():
+        raise GadgetctlError("the live view needs a terminal on stdin and stdout; "
+                             "use --format table or --format ndjson")
+    return requested
+
+
+def check_record_path(path: Path | None, overwrite: bool) -> None:
+    if path is None:
+        return
+    if path.exists() and not overwrite:
+        raise GadgetctlError(f"{path}: file exists (use --overwrite to replace it)")
+    if path.is_dir():
+        raise GadgetctlError(f"{path}: is a directory")
+    if not path.parent.is_dir():
+        raise GadgetctlError(f"{path.parent}: no such directory")
+
+
+def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
+    """Run the (started) session to its end; returns the exit status (0, or 1 when an
+    element ended pending, faulted or stupefied, or a device faulted during the run)."""
+    mode = choose_format(options.format)
+    check_record_path(options.record, options.overwrite)
+    if options.record is not None:
+        path, overwrite = options.record, options.overwrite
+        session.add_sink(lambda info: Recorder(path, info, overwrite=overwrite, clock=now))
+    if mode is OutputFormat.ndjson:
+        stream = sys.stdout.buffer
+        session.add_sink(lambda info: Recorder.to_stream(stream, info, clock=now), per_frame=options.per_frame)
+    for note in options.notes:
+        print(f"gadgetctl: note: {note}", file=sys.stderr)
+    reason = "closed"
+    broken_pipe = False
+    outcome: tuple[dict, list[str]] = ({}, [])
+    try:
+        with raise_on_stop_signals():
+            try:
+                if feeder is not None:
+                    feeder.start()
+                if mode is OutputFormat.live:
+                    _live(session, options)
+                elif mode is OutputFormat.table:
+                    _table(session, options)
+                else:
+                    for _ in session.frames(duration=options.duration):
+                        pass
+            except KeyboardInterrupt:
+                reason = "interrupted"
+            except Terminated:
+                reason = "terminated"
+            except RecordingError as err:
+                if mode is OutputFormat.ndjson and "Broken pipe" in str(err):
+                    broken_pipe = True  # the reader went away (`| head`): not an error
+                else:
+                    reason = "error"
+                    raise GadgetctlError(str(err)) from None
+            finally:
+                if feeder is not None:
+                    feeder.stop()
+                outcome = _evaluate(session)
+                try:
+                    if broken_pipe:
+                        _silence_stdout()
+                    session.close_sinks(reason)
+                except RecordingError as err:
+                    if not broken_pipe and "Broken pipe" not in str(err):
+                        raise GadgetctlError(str(err)) from None
+                    _silence_stdout()
+                finally:
+                    session.manager.shutdown()
+    except (KeyboardInterrupt, Terminated):
+        reason = "interrupted"  # a second signal while finishing: the files are complete up to here
+    if broken_pipe:
+        return 0
+    return _finish(session, mode, options, *outcome)
+
+
+def _silence_stdout() -> None:
+    with contextlib.suppress(OSError, ValueError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+
+
+def _evaluate(session: MonitorSession) -> tuple[dict, list[str]]:
+    """The final statistics and the problems, read before the devices are stopped."""
+    from gadgetctl.cli.monitor_text import problem_elements, status_text
+
+    final = session.final_stats()
+    snapshot = session.snapshot()
+    problems = [f"{e.name}: {status_text(e)}" for e in problem_elements(snapshot)]
+    problems += [f"{name}: {s['faults']} fault(s), last error: {s.get('error') or '-'}"
+                 for name, s in final.items() if s.get("faults") and s.get("state") == "running"]
+    return final, problems
+
+
+def _finish(session: MonitorSession, mode: OutputFormat, options: RunOptions, final: dict,
+            problems: list[str]) -> int:
+    from gadgetctl.cli.monitor_text import stats_text
+
+    if mode is not OutputFormat.ndjson and options.stats:
+        sys.stdout.write(stats_text(final))
+    if session.finished and mode is not OutputFormat.ndjson:
+        sys.stdout.write("replay finished\n")
+    sys.stdout.flush()
+    for line in problems:
+        print(f"gadgetctl: problem: {line}", file=sys.stderr)
+    return 1 if problems else 0
+
+
+def _table(session: MonitorSession, options: RunOptions) -> None:
+    from gadgetctl.cli.monitor_text import TableView
+
+    table = TableView(session, sys.stdout, interval=options.interval, length_unit=options.length_unit,
+                      quaternion=options.quaternion)
+    for frame in session.frames(duration=options.duration):
+        table.frame(frame.elapsed)
+    table.print()
+
+
+def _live(session: MonitorSession, options: RunOptions) -> None:
+    from rich.console import Console
+
+    from gadgetctl.cli.monitor_live import LiveView
+    from gadgetctl.cli.monitor_terminal import KeyDecoder, RawTerminal
+
+    console = Console()
+    decoder = KeyDecoder()
+    recording = str(options.record) if options.record else None
+    view = LiveView(session, console, title=options.title, length_unit=options.length_unit,
+                    quaternion=options.quaternion, recording=recording, heading=options.heading)
+    controls = _Controls(session, view, has_recording=options.record is not None)
+    with RawTerminal(mouse=options.mouse) as terminal, view:
+        # a finished replay stays on screen (FINISHED) until q, unless a duration was given
+        for _ in session.frames(duration=options.duration, stop_at_end=options.duration is not None):
+            moment = now()
+            events = decoder.feed(terminal.read(), moment) + decoder.flush(moment)
+            for event in events:
+                controls.handle(event)
+            if controls.quit:
+                break
+            view.draw()
+
+
+class _Controls:
+    """What the keys of the live view do: the monitor's own keys, the marker prompt, and
+    everything else forwarded to the keyboard/mouse devices."""
+
+    def __init__(self, session: MonitorSession, view, *, has_recording: bool) -> None:
+        self.session = session
+        self.view = view
+        self.has_recording = has_recording
+        self.quit = False
+
+    def handle(self, event) -> None:
+        from gadgetctl.input.keys import Key
+
+        view = self.view
+        if view.prompt is not None:
+            self._prompt(event)
+            return
+        if (event.kind == "key" and not event.modifiers) or event.text == "\x03":
+            text = event.text
+            if text in ("q", "\x03"):
+                self.quit = True
+                return
+            if text == "p":
+                view.paused = not view.paused
+                view.draw(force=True)
+                return
+            if text == "r":
+                self.session.reset_stats()
+                view.message = "statistics reset"
+                return
+            if text == "m":
+                view.prompt = ""
+                view.draw(force=True)
+                return
+            if event.key in (Key.KEY_PRIOR, Key.KEY_NEXT):
+                view.scroll(-1 if event.key is Key.KEY_PRIOR else 1)
+                return
+        self._forward(event)
+
+    def _prompt(self, event) -> None:
+        view = self.view
+        text = event.text
+        if event.kind != "key" or text is None:
+            return
+        if text in ("\r", "\n"):
+            marker = self.session.mark(view.prompt.strip() or None)
+            where = "written to the recording" if self.has_recording else "noted (no --record file)"
+            view.message = f"marker {marker.name!r} {where}"
+            view.prompt = None
+        elif text == "\x1b":
+            view.prompt = None
+            view.message = "marker cancelled"
+        elif text in ("\x7f", "\x08"):
+            view.prompt = view.prompt[:-1]
+        elif text.isprintable():
+            view.prompt += text
+        view.draw(force=True)
+
+    def _forward(self, event) -> None:
+        events = self.session.manager.events
+        if event.kind == "key" and event.key is not None:
+            events.tap(event.key, modifiers=event.modifiers)
+        elif event.kind == "button" and event.key is not None:
+            (events.press if event.pressed else events.release)(event.key)
+        elif event.kind == "move":
+            events.move(event.dx, event.dy)
+        elif event.kind == "scroll" and event.direction:
+            events.scroll(event.direction)

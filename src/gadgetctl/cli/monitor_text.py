@@ -1,0 +1,240 @@
+"""Plain-text rendering for `gadgetctl monitor` and `gadgetctl replay`: value formatting
+shared with the live view, the periodic table (``--format table``), the end-of-run
+statistics and recording summaries. No rich here: the output goes to pipes and CI logs.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any, TextIO
+
+import numpy as np
+
+from gadgetctl.monitor.session import ElementView, MonitorSession, Snapshot, UnitView
+from gadgetctl.monitor.units import euler_xyz_degrees, from_meters, quaternion_wxyz
+
+UNIT_SYMBOLS = {"meters": "m", "feet": "ft", "inches": "in", "centimeters": "cm"}
+TOGGLES = {0: "off", 1: "on", 2: "toggle on", 3: "toggle off"}
+FINGERS = ("thumb", "index", "middle", "ring", "pinky", "wrist")
+HAT = {0: "centered", 1: "up", 2: "right", 4: "down", 8: "left"}
+BAD_STATES = {"faulted", "reconnecting", "pending", "stupefied", "removed", "stopped"}
+
+
+def rate_text(rate: float | None) -> str:
+    return "-" if rate is None else f"{rate:.1f}"
+
+
+def ms_text(seconds: float | None) -> str:
+    if seconds is None or not math.isfinite(seconds):
+        return "-"
+    ms = seconds * 1000.0
+    return f"{ms:.0f}" if ms >= 100 else f"{ms:.1f}" if ms >= 1 else f"{ms:.2f}"
+
+
+def age_text(seconds: float | None) -> str:
+    if seconds is None:
+        return "-"
+    if seconds >= 10:
+        return f"{seconds:.0f} s"
+    return f"{ms_text(seconds)} ms"
+
+
+def number(value: float, digits: int = 3) -> str:
+    return f"{value:.{digits}f}" if math.isfinite(value) else str(value)
+
+
+def position_text(matrix: Any, length_unit: str = "meters", quaternion: bool = False) -> str:
+    m = np.asarray(matrix, dtype=np.float64).reshape(4, 4)
+    x, y, z = (float(from_meters(v, length_unit)) for v in m[:3, 3])
+    symbol = UNIT_SYMBOLS.get(length_unit, length_unit)
+    text = f"x {x:+.3f} y {y:+.3f} z {z:+.3f} {symbol}"
+    try:
+        rx, ry, rz = euler_xyz_degrees(m)
+        text += f"  rot {rx:+6.1f} {ry:+6.1f} {rz:+6.1f}°"
+        if quaternion:
+            w, qx, qy, qz = quaternion_wxyz(m)
+            text += f"  q {w:+.3f} {qx:+.3f} {qy:+.3f} {qz:+.3f}"
+    except ValueError:
+        text += "  rot -"
+    return text
+
+
+def glove_text(angles: Any) -> str:
+    a = np.degrees(np.asarray(angles, dtype=np.float64).reshape(6, 4))
+    return " ".join(f"{name} {'/'.join(f'{v:.0f}' for v in row)}" for name, row in zip(FINGERS, a, strict=True))
+
+
+def unit_value_text(view: UnitView, *, element: str = "device", length_unit: str = "meters",
+                    quaternion: bool = False) -> str:
+    """One unit's value as text (no bar, no sparkline)."""
+    kind, value = view.kind, view.value
+    if kind == "analog":
+        raw = "" if view.raw is None else f" (raw {view.raw:.4g})"
+        return f"{number(float(value))}{raw}"
+    if kind == "digital":
+        if element == "device":
+            state = "pressed" if value else "released"
+            mark = "*" if view.changed else ""
+            return f"{state}{mark}" + (f" x{view.presses}" if view.presses else "")
+        return TOGGLES.get(int(value), str(value)) + (f" x{view.presses}" if view.presses else "")
+    if kind == "position":
+        return position_text(value, length_unit, quaternion)
+    if kind == "glove":
+        return glove_text(value)
+    if kind == "hat":
+        return HAT.get(int(value), str(value))
+    if kind == "string":
+        return repr(value)
+    if kind == "keyboard_mouse":
+        return "held: " + (", ".join(value) if value else "none")
+    return str(value)
+
+
+def values_text(element: ElementView, *, length_unit: str = "meters", quaternion: bool = False) -> str:
+    """Every unit of an element on one line, grouped by kind."""
+    groups: dict[str, list[str]] = {}
+    for unit in element.values:
+        text = unit_value_text(unit, element=element.element, length_unit=length_unit, quaternion=quaternion)
+        if element.element == "device":
+            text = f"{unit.unit}: {text}"
+        groups.setdefault(unit.kind, []).append(text)
+    return "; ".join(f"{kind} " + ", ".join(items) for kind, items in groups.items())
+
+
+def status_text(element: ElementView) -> str:
+    return element.state if not element.reason else f"{element.state}: {element.reason}"
+
+
+# --------------------------------------------------------------------------- the table
+
+
+COLUMNS = ("NAME", "KIND", "TYPE", "STATUS", "RATE Hz", "/FRAME", "DROPPED", "AGE ms", "JITTER ms", "VALUES")
+
+
+def table_rows(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: bool = False) -> list[list[str]]:
+    rows = []
+    for element in snapshot.elements:
+        stats = element.stats
+        own = element.element == "device"
+        target = ""
+        if element.target:
+            target = f" -> {element.target}" + (f"[{element.unit}]" if element.unit is not None and element.element == "proxy" else "")
+        rows.append([
+            element.name,
+            element.element,
+            element.type + target,
+            element.state,
+            rate_text(stats.window_rate) if stats else "-",
+            (f"{stats.mean_samples_per_frame:.2f}" if stats and stats.mean_samples_per_frame is not None else "-") if own else "",
+            str(stats.dropped) if stats and own else ("-" if own else ""),
+            ms_text(element.age) if element.age is not None else "-",
+            ms_text(stats.jitter) if stats and own else ("-" if own else ""),
+            values_text(element, length_unit=length_unit, quaternion=quaternion)
+            + (f"  [{element.reason}]" if element.reason else ""),
+        ])
+    return rows
+
+
+def format_table(header: Sequence[str], rows: Sequence[Sequence[str]], *, last_free: bool = True) -> str:
+    widths = [len(h) for h in header]
+    for row in rows:
+        for i, cell in enumerate(row[:-1] if last_free else row):
+            widths[i] = max(widths[i], len(cell))
+    lines = []
+    for row in [list(header), *rows]:
+        cells = [cell.ljust(widths[i]) if i < len(row) - 1 or not last_free else cell for i, cell in enumerate(row)]
+        lines.append("  ".join(cells).rstrip())
+    return "\n".join(lines)
+
+
+def snapshot_table(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: bool = False) -> str:
+    head = (f"[{snapshot.elapsed:7.2f} s] frame {snapshot.frame}, {snapshot.frame_rate:.1f} frames/s"
+            + (f", {snapshot.samples_written} samples written" if snapshot.samples_written else ""))
+    body = format_table(COLUMNS, table_rows(snapshot, length_unit=length_unit, quaternion=quaternion))
+    return head + "\n" + body + "\n"
+
+
+class TableView:
+    """Prints a plain-text table of every selected element every ``interval`` seconds."""
+
+    def __init__(self, session: MonitorSession, stream: TextIO, *, interval: float = 1.0,
+                 length_unit: str = "meters", quaternion: bool = False) -> None:
+        self.session = session
+        self.stream = stream
+        self.interval = interval
+        self.length_unit = length_unit
+        self.quaternion = quaternion
+        self._next: float | None = None
+
+    def frame(self, elapsed: float) -> None:
+        if self._next is None:
+            self._next = self.interval
+        if elapsed >= self._next:
+            self._next += self.interval * max(1, math.floor((elapsed - self._next) / self.interval) + 1)
+            self.print()
+
+    def print(self) -> None:
+        snapshot = self.session.snapshot()
+        self.stream.write(snapshot_table(snapshot, length_unit=self.length_unit, quaternion=self.quaternion) + "\n")
+        self.stream.flush()
+
+
+# --------------------------------------------------------------------------- statistics
+
+
+STATS_COLUMNS = ("DEVICE", "STATE", "SAMPLES", "MEAN Hz", "P50 ms", "P99 ms", "MAX GAP ms", "JITTER ms",
+                 "DROPPED", "FAULTS")
+
+
+def stats_text(stats: Mapping[str, Mapping[str, Any]]) -> str:
+    """The end-of-run statistics of each device (``MonitorSession.final_stats``)."""
+    if not stats:
+        return "statistics: no device was monitored\n"
+    rows = []
+    for name, s in stats.items():
+        rows.append([name, str(s.get("state", "-")), str(s.get("samples", s.get("count", 0))),
+                     rate_text(s.get("mean_rate")), ms_text(s.get("p50_interval")),
+                     ms_text(s.get("p99_interval")), ms_text(s.get("max_gap")), ms_text(s.get("jitter")),
+                     str(s.get("dropped", 0)), str(s.get("faults", 0))])
+    return "statistics:\n" + format_table(STATS_COLUMNS, rows, last_free=False) + "\n"
+
+
+def summary_text(summary: Any) -> str:
+    """A recording summary (``gadgetctl replay --summary``)."""
+    lines = [f"{summary.path}: {summary.samples} samples from {len(summary.devices)} device(s) over "
+             f"{summary.duration:.3f} s" + (f", {summary.frames} frames" if summary.frames else "")
+             + f"; ended: {summary.end_reason or 'cut off (no end record)'}"]
+    if summary.created:
+        lines.append(f"created {summary.created}")
+    start = summary.first_timestamp
+    for marker in summary.markers:
+        offset = "" if start is None else f" at {marker.timestamp - start:.3f} s"
+        lines.append(f"marker {marker.name!r}{offset}")
+    for device in summary.devices:
+        median = ms_text(device.median_interval)
+        largest = ms_text(device.max_interval)
+        gaps = device.gaps
+        gap_text = (f"{gaps.count} gap(s) > {ms_text(gaps.threshold)} ms, largest {ms_text(gaps.largest)} ms"
+                    if gaps.count else "no gaps")
+        lines.append(f"{device.name}: {device.updates} updates, {device.samples} samples, "
+                     f"{device.mean_rate:.1f} Hz over {device.duration:.3f} s, interval median {median} ms, "
+                     f"max {largest} ms, {gap_text}")
+        for unit in device.units:
+            if unit.translation_min is not None and unit.translation_max is not None:
+                lo, hi = unit.translation_min, unit.translation_max
+                span = f"x {lo[0]:+.3f}..{hi[0]:+.3f} y {lo[1]:+.3f}..{hi[1]:+.3f} z {lo[2]:+.3f}..{hi[2]:+.3f} m"
+            elif unit.minimum is not None and unit.maximum is not None:
+                span = f"{unit.minimum:.4g}..{unit.maximum:.4g}"
+            else:
+                span = "-"
+            spark = f"  {unit.sparkline}" if unit.sparkline else ""
+            lines.append(f"    {unit.kind} {unit.unit}: {unit.samples} samples, range {span}{spark}")
+    for problem in summary.problems:
+        lines.append(f"{problem}")
+    return "\n".join(lines) + "\n"
+
+
+def problem_elements(snapshot: Snapshot) -> list[ElementView]:
+    """Elements that end the run in a bad state (pending, faulted, stupefied...)."""
+    return [e for e in snapshot.elements if e.state in BAD_STATES]

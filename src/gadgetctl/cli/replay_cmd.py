@@ -1,0 +1,171 @@
+"""`gadgetctl replay`: play a recording back through the input manager, or summarise it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION
+from gadgetctl.cli.monitor_cmd import (
+    DURATION_OPTION,
+    FORMAT_OPTION,
+    INTERVAL_OPTION,
+    MOUSE_OPTION,
+    OVERWRITE_OPTION,
+    PER_FRAME_OPTION,
+    QUATERNION_OPTION,
+    RATE_OPTION,
+    STATS_OPTION,
+    UNITS_OPTION,
+    LengthUnits,
+    OutputFormat,
+)
+from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION, emit
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="replay")(replay)
+
+
+def replay(
+    recording: Path = typer.Argument(..., metavar="FILE", help="A recording made with `gadgetctl monitor --record`.", show_default=False),
+    names: list[str] = typer.Argument(None, metavar="[NAME...]", help="Names or glob patterns of the devices, proxies and aliases to show (default: all).", show_default=False),
+    speed: float = typer.Option(1.0, "--speed", metavar="X", help="Replay X times as fast as recorded (0.5: half speed)."),
+    loop: bool = typer.Option(False, "--loop", help="Start again at the end, until stopped (timestamps keep increasing)."),
+    configs: list[Path] = typer.Option([], "--config", "-c", metavar="FILE", help="Replay against this configuration: its elements named like recorded devices become replay devices; proxies, filters and aliases stay. Repeatable. Default: a configuration synthesised from the recording's header."),
+    mapping: list[str] = typer.Option([], "--map", metavar="OLD=NEW", help="Feed the recorded device OLD to the device NEW of the configuration. Repeatable."),
+    summary: bool = typer.Option(False, "--summary", help="Print per-device counts, rates, gaps and value ranges with sparklines instead of replaying (--format ndjson: as one JSON object)."),
+    rate: float = RATE_OPTION,
+    duration: float | None = DURATION_OPTION,
+    fmt: OutputFormat | None = FORMAT_OPTION,
+    per_frame: bool = PER_FRAME_OPTION,
+    record: Path | None = typer.Option(None, "--record", metavar="FILE", help="Record the replayed session to FILE."),
+    overwrite: bool = OVERWRITE_OPTION,
+    stats: bool = STATS_OPTION,
+    units: LengthUnits = UNITS_OPTION,
+    quaternion: bool = QUATERNION_OPTION,
+    interval: float = INTERVAL_OPTION,
+    mouse: bool = MOUSE_OPTION,
+    driver_paths: list[Path] = DRIVER_PATH_OPTION,
+    definitions: list[Path] = DEFINITIONS_OPTION,
+    bundled: bool = BUNDLED_OPTION,
+) -> None:
+    """Feed a recording back through a replay driver into the input manager, so proxies,
+    filters, aliases and the monitor behave as with the live devices; the views and
+    options are those of `gadgetctl monitor`. The replay ends with the recording (unless
+    --loop).
+
+    Exit status: 0; 1 when an element ended pending or stupefied; 2 when FILE is not a
+    readable recording or an option is wrong.
+    """
+    if summary:
+        _summary(recording, fmt)
+        return
+    code = run_replay(recording, list(names or ()), speed=speed, loop=loop, configs=configs, mapping=mapping,
+                      rate=rate, duration=duration, fmt=fmt, per_frame=per_frame, record=record,
+                      overwrite=overwrite, stats=stats, units=units.value, quaternion=quaternion,
+                      interval=interval, mouse=mouse, driver_paths=driver_paths, definitions=definitions,
+                      bundled=bundled)
+    raise typer.Exit(code)
+
+
+def parse_mapping(items: list[str]) -> dict[str, str]:
+    from gadgetctl.errors import GadgetctlError
+
+    result: dict[str, str] = {}
+    for item in items:
+        old, sep, new = item.partition("=")
+        if not sep or not old or not new:
+            raise GadgetctlError(f"--map {item!r}: expected OLD=NEW (recorded name=name in the configuration)")
+        if old in result:
+            raise GadgetctlError(f"--map: {old!r} is mapped twice")
+        result[old] = new
+    return result
+
+
+def _summary(recording: Path, fmt: OutputFormat | None) -> None:
+    import json
+
+    from gadgetctl.cli.monitor_text import summary_text
+    from gadgetctl.errors import GadgetctlError
+    from gadgetctl.monitor.recording import RecordingError
+    from gadgetctl.monitor.summary import summarize_recording
+
+    try:
+        result = summarize_recording(recording)
+    except RecordingError as err:
+        raise GadgetctlError(str(err)) from None
+    if fmt is OutputFormat.ndjson:
+        emit(json.dumps(result.to_dict()))
+    else:
+        emit(summary_text(result))
+
+
+def run_replay(recording: Path, names: list[str], *, speed: float = 1.0, loop: bool = False,
+               configs: list[Path] | None = None, mapping: list[str] | None = None, rate: float = 60.0,
+               duration: float | None = None, fmt: OutputFormat | None = None, per_frame: bool = False,
+               record: Path | None = None, overwrite: bool = False, stats: bool = False,
+               units: str = "meters", quaternion: bool = False, interval: float = 1.0, mouse: bool = True,
+               driver_paths: list[Path] | None = None, definitions: list[Path] | None = None,
+               bundled: bool = True) -> int:
+    import math
+
+    from gadgetctl.cli.monitor_cmd import check_options, fatal_load_errors
+    from gadgetctl.cli.monitor_run import RunOptions, check_record_path, choose_format, run
+    from gadgetctl.errors import GadgetctlError
+    from gadgetctl.input.manager import InputManager, ManagerOptions
+    from gadgetctl.monitor import replaydevice
+    from gadgetctl.monitor.recording import RecordingError, read_recording
+    from gadgetctl.monitor.session import MonitorSession
+
+    check_options(rate, duration, interval)
+    if not (speed > 0 and math.isfinite(speed)):
+        raise GadgetctlError(f"--speed must be a positive number, not {speed:g}")
+    renames = parse_mapping(list(mapping or ()))
+    mode = choose_format(fmt)
+    check_record_path(record, overwrite)
+    if record is not None and record.exists() and record.resolve() == recording.resolve():
+        raise GadgetctlError(f"{record}: cannot record over the recording being replayed")
+    configs = list(configs or ())
+    for path in configs:
+        if not path.is_file():
+            raise GadgetctlError(f"{path}: no such configuration file")
+    try:
+        source = read_recording(recording)
+        schedule = replaydevice.make_schedule(source.records, speed=speed, loop=loop, mapping=renames)
+    except RecordingError as err:
+        raise GadgetctlError(str(err)) from None
+    except ValueError as err:
+        raise GadgetctlError(f"{recording}: {err}") from None
+    notes = [f"{recording}: {problem}" for problem in source.problems if problem.severity != "info"]
+    notes += [f"--map: {warning}" for warning in schedule.mapping_warnings]
+    options = ManagerOptions(driver_dirs=list(driver_paths or ()))
+    if configs:
+        manager, configuration = InputManager.from_files(configs, definitions=list(definitions or ()),
+                                                         bundled=bundled, options=options)
+        fatal_load_errors(configuration)
+    else:
+        from gadgetctl.input.definitions import repository_for
+
+        manager = InputManager(repository_for(None, definitions=list(definitions or ()), bundled=bundled,
+                                              driver_dirs=options.driver_dirs), options)
+        configuration = None
+    try:
+        replaydevice.install(manager)
+        plan = replaydevice.plan_replay(source.header, schedule, recording, configuration, renames)
+        notes += plan.notes
+        feeder = replaydevice.ReplayFeeder(schedule, manager.device,
+                                           {name: device.units for name, device in plan.devices.items()})
+        info = {"replay_of": str(recording), "speed": speed, "config": [str(p) for p in configs]}
+        session = MonitorSession(manager, plan.configuration, selectors=names, rate=rate, source=feeder,
+                                 info=info)
+        session.start()
+    except BaseException:
+        manager.shutdown()
+        raise
+    title = f"{recording} at x{speed:g}" + (" (loop)" if loop else "")
+    return run(session, RunOptions(format=mode, duration=duration, per_frame=per_frame, stats=stats,
+                                   record=record, overwrite=overwrite, interval=interval, length_unit=units,
+                                   quaternion=quaternion, mouse=mouse, title=title, heading="gadgetctl replay",
+                                   notes=notes), feeder=feeder)

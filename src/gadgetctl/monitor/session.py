@@ -1,0 +1,943 @@
+"""The data side of `gadgetctl monitor` and `gadgetctl replay`: a session runs the embedded
+input manager frame by frame and hands out what the views and writers need.
+
+:class:`MonitorSession` configures an :class:`~gadgetctl.input.manager.InputManager`,
+resolves the selected names (exact names or glob patterns of devices, proxies and aliases)
+and, once per frame, reads *every* sample each watched device delivered since the previous
+frame (``SampleStore.frame``): it feeds the running statistics (rates, intervals, jitter,
+gaps, dropped samples, faults), counts button presses, keeps a short history of analog values
+for sparklines, and writes sample, frame, status and marker records to its sinks
+(:class:`~gadgetctl.monitor.recording.Recorder` objects: a recording file or an NDJSON
+stream). Renderers (the live and table views of the CLI) ask for a :class:`Snapshot` when
+they draw, at their own pace; the session itself never prints.
+
+Nothing here imports rich or typer.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import gc
+import time
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from gadgetctl.errors import GadgetctlError
+from gadgetctl.input.clock import now
+from gadgetctl.input.device import DeviceState, Input
+from gadgetctl.input.devicetypes import Analog
+from gadgetctl.input.events import KeyEvent, MouseMoveEvent, ScrollEvent
+from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.manager import InputManager
+from gadgetctl.input.proxies import (
+    AnalogProxy,
+    DigitalProxy,
+    GestureProxy,
+    GloveProxy,
+    KeyboardMouseProxy,
+    PositionProxy,
+    Proxy,
+)
+from gadgetctl.input.samples import FrameSamples, Sample
+from gadgetctl.input.status import ElementKind, ElementStatus
+from gadgetctl.jccl.configuration import Configuration
+from gadgetctl.monitor.recording import Recorder
+from gadgetctl.monitor.records import (
+    FrameDevice,
+    FrameRecord,
+    MarkerRecord,
+    SampleRecord,
+    StatusRecord,
+    encode_rows,
+    encode_samples,
+)
+from gadgetctl.monitor.stats import DeviceSnapshot, DeviceStats
+
+DEVICE, PROXY, ALIAS = ElementKind.DEVICE.value, ElementKind.PROXY.value, ElementKind.ALIAS.value
+PENDING = "pending"
+DEFAULT_HISTORY_SECONDS = 5.0
+STATS_REFRESH = 0.25  # seconds between recomputations of interval percentiles and jitter
+SINK_WARMUP = 0.5  # seconds a session waits for every device's first sample before its header
+
+
+class SelectionError(GadgetctlError):
+    """A NAME pattern that matches no device, proxy or alias."""
+
+
+class ReplaySource(Protocol):
+    """What a session needs from a replay feeder (see :mod:`gadgetctl.monitor.replaydevice`)."""
+
+    @property
+    def done(self) -> bool: ...
+
+    def drain_markers(self) -> list[MarkerRecord]: ...
+
+
+# --------------------------------------------------------------------------- snapshots
+
+
+@dataclass(slots=True)
+class UnitView:
+    """One unit of one kind, as a view shows it.
+
+    ``value``: analog normalised to [0, 1]; digital 0/1 for devices and the toggle state
+    0-3 (off, on, toggle on, toggle off) for proxies; position a 4x4 array in meters; glove
+    a (6, 4) array of radians; gesture, command and hat integers; string text; keyboard and
+    mouse the names of the keys held. ``raw`` is the device datum where it differs.
+    """
+
+    kind: str
+    unit: int
+    value: Any
+    raw: Any = None
+    changed: bool = False  # digital: the state changed during this frame
+    presses: int = 0  # digital: presses (off -> on) counted since the start or the last reset
+    history: Sequence[float] | None = None  # analog: the normalised value, one per frame
+
+
+@dataclass(slots=True)
+class ElementView:
+    """One device, proxy or alias: its status, the statistics of the device that feeds it
+    and its current values."""
+
+    name: str
+    element: str  # device, proxy, alias
+    type: str
+    state: str
+    reason: str | None = None
+    target: str | None = None  # a proxy's device, an alias's proxy
+    unit: int | None = None  # a proxy's unit
+    device: str | None = None  # the device whose statistics are shown
+    stats: DeviceSnapshot | None = None
+    age: float | None = None  # seconds since the newest sample
+    count: int = 0  # samples this frame (sampling instants)
+    values: list[UnitView] = field(default_factory=list)
+
+
+@dataclass(slots=True)
+class Snapshot:
+    frame: int
+    timestamp: float
+    elapsed: float
+    frame_rate: float
+    elements: list[ElementView]
+    markers: list[MarkerRecord]
+    keyboards: list[str]
+    samples_written: int
+    finished: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class Frame:
+    """What :meth:`MonitorSession.frames` yields once per frame."""
+
+    number: int
+    timestamp: float
+    elapsed: float
+    samples: int  # samples of the watched devices this frame (sampling instants)
+
+
+# --------------------------------------------------------------------------- per device
+
+
+def _chunk_timestamps(frame: FrameSamples) -> np.ndarray:
+    parts = []
+    singles: list[float] = []
+    for chunk in frame.chunks:
+        if type(chunk) is Sample:
+            singles.append(chunk.timestamp)
+        else:
+            if singles:
+                parts.append(np.asarray(singles, dtype=np.float64))
+                singles = []
+            parts.append(np.asarray(chunk.timestamps, dtype=np.float64))
+    if singles:
+        parts.append(np.asarray(singles, dtype=np.float64))
+    if len(parts) == 1:
+        return parts[0]
+    return np.concatenate(parts) if parts else np.empty(0)
+
+
+def frame_timestamps(frames: Mapping[DeviceKind, FrameSamples]) -> np.ndarray:
+    """The distinct sampling instants of one device's frame, over all its kinds, in order."""
+    arrays = [_chunk_timestamps(f) for f in frames.values() if f.count]
+    if not arrays:
+        return np.empty(0)
+    if len(arrays) == 1:
+        return arrays[0]
+    longest = max(arrays, key=len)
+    if all(len(a) == len(longest) and a[0] == longest[0] and a[-1] == longest[-1] for a in arrays):
+        return longest  # the kinds were sampled together (the usual multi-kind driver)
+    return np.unique(np.concatenate(arrays))
+
+
+def _rows(values: Any) -> np.ndarray:
+    array = np.asarray(values)
+    return array.reshape(len(array), -1) if array.ndim != 2 else array
+
+
+class DeviceTrack:
+    """What a session keeps about one device between frames."""
+
+    def __init__(self, name: str, device: Input, history: int) -> None:
+        self.name = name
+        self.device = device
+        self.stats = DeviceStats(name)
+        self.history_length = history
+        self.frames: dict[DeviceKind, FrameSamples] = {}
+        self.count = 0
+        self.units: dict[str, int] = {}
+        self._dropped_seen = device.store.dropped()
+        self._faults_seen = device.faults
+        self.digital_state: np.ndarray | None = None
+        self.presses: np.ndarray | None = None
+        self.changed: np.ndarray | None = None
+        self.analog_history: list[deque[float]] = []
+        self._snapshot: DeviceSnapshot | None = None
+        self._snapshot_at = -1.0
+        self._swapped_at: float | None = None
+
+    def reset(self) -> None:
+        self.stats.reset()
+        if self.presses is not None:
+            self.presses[:] = 0
+        self._snapshot = None
+        self._dropped_seen = self.device.store.dropped()
+        self._faults_seen = self.device.faults
+
+    def update(self) -> int:
+        device = self.device
+        store = device.store
+        frames = {}
+        dropped = 0
+        fresh = store.swapped_at != self._swapped_at  # a failed update_data leaves the old frame
+        self._swapped_at = store.swapped_at
+        for kind in store.kinds:
+            samples = store.frame(kind)
+            if samples.count and fresh:
+                frames[kind] = samples
+            lost = store.dropped(kind)
+            if lost > dropped:
+                dropped = lost
+        self.frames = frames
+        stamps = frame_timestamps(frames) if frames else ()
+        count = len(stamps)
+        if count:
+            self.stats.add_timestamps(stamps)
+        self.count = count
+        self.stats.end_frame()
+        if dropped != self._dropped_seen:
+            self.stats.add_dropped(max(0, dropped - self._dropped_seen))
+            self._dropped_seen = dropped
+        faults = device.faults
+        if faults != self._faults_seen:
+            self.stats.add_fault(max(0, faults - self._faults_seen))
+            self._faults_seen = faults
+        digital = frames.get(DeviceKind.DIGITAL)
+        if digital is not None:
+            self._scan_digital(digital)
+        elif self.changed is not None and self.changed.any():
+            self.changed[:] = False
+        if DeviceKind.ANALOG in store.kinds:
+            self._note_analog(store.latest(DeviceKind.ANALOG))
+        for kind, samples in frames.items():
+            newest = samples.newest
+            if newest is not None:
+                self.units[kind.value] = max(self.units.get(kind.value, 0), len(newest.values))
+        return count
+
+    def _scan_digital(self, frame: FrameSamples) -> None:
+        try:
+            parts = [np.asarray([chunk.values]) if type(chunk) is Sample else _rows(chunk.values)
+                     for chunk in frame.chunks]
+            rows = (np.concatenate(parts) if len(parts) > 1 else parts[0]) != 0
+        except ValueError:  # units changed within the frame: look at the newest sample only
+            newest = frame.newest
+            rows = np.asarray([newest.values]) != 0 if newest is not None else np.zeros((0, 0), bool)
+        if not rows.size:
+            return
+        units = rows.shape[1]
+        previous = self.digital_state
+        if previous is None or len(previous) != units:
+            previous = rows[0]
+            presses = np.zeros(units, dtype=np.int64)
+            if self.presses is not None:
+                presses[:min(units, len(self.presses))] = self.presses[:units]
+            self.presses = presses
+        stacked = np.vstack((previous[None, :], rows)).astype(np.int8)
+        steps = np.diff(stacked, axis=0)
+        self.presses += (steps > 0).sum(axis=0)
+        self.changed = (steps != 0).any(axis=0)
+        self.digital_state = rows[-1].copy()
+
+    def _note_analog(self, newest: Sample | None) -> None:
+        if newest is None:
+            return
+        values = newest.values
+        histories = self.analog_history
+        while len(histories) < len(values):
+            histories.append(deque(maxlen=self.history_length))
+        device = self.device
+        normalize = device.normalize if isinstance(device, Analog) else float
+        for unit, raw in enumerate(values):
+            histories[unit].append(normalize(float(raw)))
+
+    def snapshot(self, moment: float) -> DeviceSnapshot:
+        if self._snapshot is None or moment - self._snapshot_at >= STATS_REFRESH:
+            self._snapshot = self.stats.snapshot(moment)
+            self._snapshot_at = moment
+        return self._snapshot
+
+    # -- values -------------------------------------------------------------------------
+
+    def unit_views(self) -> list[UnitView]:
+        device = self.device
+        store = device.store
+        views: list[UnitView] = []
+        for kind in store.kinds:
+            latest = store.latest(kind)
+            if latest is None:
+                continue
+            values = latest.values
+            if kind is DeviceKind.ANALOG:
+                for unit, raw in enumerate(values):
+                    raw = float(raw)
+                    value = device.normalize(raw) if isinstance(device, Analog) else raw
+                    history = self.analog_history[unit] if unit < len(self.analog_history) else None
+                    views.append(UnitView(kind.value, unit, value, raw, history=history))
+            elif kind is DeviceKind.DIGITAL:
+                for unit, state in enumerate(values):
+                    changed = bool(self.changed[unit]) if self.changed is not None and unit < len(self.changed) else False
+                    presses = int(self.presses[unit]) if self.presses is not None and unit < len(self.presses) else 0
+                    views.append(UnitView(kind.value, unit, int(state), changed=changed, presses=presses))
+            elif kind is DeviceKind.KEYBOARD_MOUSE:
+                held = getattr(device, "held", frozenset())
+                views.append(UnitView(kind.value, 0, sorted(k.name for k in held)))
+            else:
+                for unit, value in enumerate(values):
+                    views.append(UnitView(kind.value, unit, _plain(kind, value)))
+        return views
+
+
+def _plain(kind: DeviceKind, value: Any) -> Any:
+    if kind is DeviceKind.POSITION or kind is DeviceKind.GLOVE:
+        return np.asarray(value, dtype=np.float64)
+    if kind is DeviceKind.STRING:
+        return str(value)
+    try:
+        return int(value)
+    except (TypeError, ValueError):
+        return value
+
+
+def event_value(event: Any) -> dict[str, object]:
+    """A keyboard/mouse event as a JSON object for sample records."""
+    if isinstance(event, KeyEvent):
+        return {"event": "key", "key": event.key.name, "pressed": event.pressed}
+    if isinstance(event, MouseMoveEvent):
+        return {"event": "move", "dx": float(event.dx), "dy": float(event.dy)}
+    if isinstance(event, ScrollEvent):
+        return {"event": "scroll", "direction": str(event.direction)}
+    return {"event": str(event)}
+
+
+def _plain_json(value: Any) -> Any:
+    tolist = getattr(value, "tolist", None)
+    return tolist() if tolist is not None else value
+
+
+def _json_value(kind: DeviceKind, value: Any) -> Any:
+    if kind is DeviceKind.KEYBOARD_MOUSE:
+        return event_value(value)
+    tolist = getattr(value, "tolist", None)
+    return tolist() if tolist is not None else value
+
+
+def encode_frame(name: str, kind: DeviceKind, frame: FrameSamples, device: Input) -> tuple[str, int]:
+    """Sample records (NDJSON text, count) of every sample of one kind in one frame."""
+    parts: list[str] = []
+    count = 0
+    label = kind.value
+    analog = kind is DeviceKind.ANALOG and isinstance(device, Analog)
+    low, high = (device.analog_min, device.analog_max) if analog else (0.0, 1.0)
+    for chunk in frame.chunks:
+        if type(chunk) is Sample:
+            stamps = [chunk.timestamp]
+            row = [_json_value(kind, v) for v in chunk.values]
+            rows = [row]
+            count += len(row)
+            if analog:
+                parts.append(encode_rows(name, label, stamps, [[device.normalize(float(v)) for v in row]], rows))
+            else:
+                parts.append(encode_rows(name, label, stamps, rows))
+            continue
+        values = np.asarray(chunk.values)
+        stamps = np.asarray(chunk.timestamps, dtype=np.float64).tolist()
+        if not len(stamps):
+            continue
+        count += values.shape[0] * (values.shape[1] if values.ndim > 1 else 1)
+        if values.ndim == 1:
+            values = values[:, None]
+        if analog:
+            if high <= low:
+                normalised = np.zeros(values.shape)
+            else:
+                normalised = (np.clip(values.astype(np.float64), low, high) - low) / (high - low)
+            parts.append(encode_rows(name, label, stamps, normalised.tolist(), values.tolist()))
+        else:
+            parts.append(encode_rows(name, label, stamps, values.tolist()))
+    return "".join(parts), count
+
+
+# --------------------------------------------------------------------------- proxies
+
+
+def proxy_value(proxy: Proxy) -> tuple[Any, Any]:
+    """(value, raw) of a proxy for records and views; raw is None where it equals the value."""
+    device = proxy.device
+    if isinstance(proxy, AnalogProxy):
+        return float(proxy.data), (proxy.raw if proxy.raw is not None else None)
+    if isinstance(proxy, DigitalProxy):
+        raw = None
+        if device is not None:
+            latest = device.store.latest(DeviceKind.DIGITAL)
+            if latest is not None and proxy.unit < len(latest.values):
+                raw = int(latest.values[proxy.unit])
+        return int(proxy.data), raw
+    if isinstance(proxy, PositionProxy):
+        return proxy.matrix, None
+    if isinstance(proxy, GloveProxy):
+        return proxy.data, None
+    if isinstance(proxy, GestureProxy):
+        return int(proxy.data), None
+    if isinstance(proxy, KeyboardMouseProxy):
+        return sorted(k.name for k in proxy.data), None
+    data = proxy.data
+    return (str(data) if isinstance(data, str) else int(data)), None
+
+
+# --------------------------------------------------------------------------- the session
+
+
+@dataclass(slots=True)
+class _Sink:
+    open: Callable[[Mapping[str, object]], Recorder]
+    per_frame: bool
+    recorder: Recorder | None = None
+
+
+class MonitorSession:
+    """Runs an input manager for monitoring; see the module documentation.
+
+    ``selectors``: names or glob patterns (``fnmatch``, case-sensitive, then case-insensitive
+    when nothing matched); none selects every device, proxy and alias. Sample records are
+    written for the selected devices, and for proxies and aliases only when ``selectors``
+    name them (one record per frame with new data).
+    """
+
+    def __init__(self, manager: InputManager, configuration: Configuration | None = None, *,
+                 selectors: Sequence[str] = (), rate: float = 60.0,
+                 history: float = DEFAULT_HISTORY_SECONDS, source: ReplaySource | None = None,
+                 info: Mapping[str, object] | None = None) -> None:
+        if not rate > 0:
+            raise ValueError("the frame rate must be positive")
+        self.manager = manager
+        self.configuration = configuration
+        self.selectors = tuple(selectors)
+        self.rate = rate
+        self.history = max(2, round(history * rate))
+        self.source = source
+        self.info = dict(info or {})
+        self.frame = 0
+        self.started_at: float | None = None
+        self.frame_timestamp = 0.0
+        self.markers: list[MarkerRecord] = []
+        self.finished = False
+        self._selected: list[str] = []
+        self._order: dict[str, int] = {}
+        self._tracks: dict[str, DeviceTrack] = {}
+        self._sinks: list[_Sink] = []
+        self._buffer: list[tuple[str, object, int]] = []
+        self._sinks_open = False
+        self._statuses: dict[str, tuple[str, str | None]] = {}
+        self._proxy_stamps: dict[str, float | None] = {}
+        self._frame_interval = 1.0 / rate
+        self._last_frame_at: float | None = None
+        self._stop = False
+        self._samples_written = 0
+        self._watch: list[str] = []
+
+    # -- setting up ---------------------------------------------------------------------
+
+    def start(self) -> list[str]:
+        """Configure the manager (when a configuration was given) and resolve the selection.
+        Raises :class:`SelectionError` when a pattern matches nothing. Returns the names."""
+        if self.configuration is not None:
+            self.manager.configure(self.configuration)
+            for index, element in enumerate(self.configuration.elements):
+                self._order.setdefault(element.full_name, index)
+        self._selected = self._resolve(self.selectors)
+        return list(self._selected)
+
+    def known(self) -> dict[str, str]:
+        """Every selectable name and what it is (device, proxy, alias), pending ones included."""
+        manager = self.manager
+        names: dict[str, str] = {}
+        for name in manager.devices:
+            names[name] = DEVICE
+        for name in manager.proxies:
+            names.setdefault(name, PROXY)
+        for name in manager.aliases:
+            names.setdefault(name, ALIAS)
+        for status in self._pending_statuses().values():
+            if status.kind in (ElementKind.DEVICE, ElementKind.PROXY, ElementKind.ALIAS):
+                names.setdefault(status.name, status.kind.value)
+        return names
+
+    def _pending_statuses(self) -> dict[str, ElementStatus]:
+        if not self.manager.pending():
+            return {}
+        return {s.name: s for s in self.manager.statuses() if s.state == PENDING}
+
+    def _resolve(self, selectors: Sequence[str]) -> list[str]:
+        known = self.known()
+        group = {DEVICE: 0, PROXY: 1, ALIAS: 2}
+
+        def order(name: str) -> tuple[int, int, str]:
+            return group[known[name]], self._order.get(name, 1 << 30), name
+
+        if not selectors:
+            return sorted(known, key=order)
+        chosen: set[str] = set()
+        unmatched = []
+        for pattern in selectors:
+            hits = [n for n in known if n == pattern or fnmatch.fnmatchcase(n, pattern)]
+            if not hits:
+                lowered = pattern.lower()
+                hits = [n for n in known if fnmatch.fnmatchcase(n.lower(), lowered)]
+            if not hits:
+                unmatched.append(pattern)
+            chosen.update(hits)
+        if unmatched:
+            available = ", ".join(sorted(known, key=order)[:12]) or "nothing"
+            more = "" if len(known) <= 12 else f" and {len(known) - 12} more"
+            quoted = ", ".join(repr(p) for p in unmatched)
+            raise SelectionError(f"no device, proxy or alias matches {quoted} (available: {available}{more})")
+        return sorted(chosen, key=order)
+
+    @property
+    def selected(self) -> list[str]:
+        return list(self._selected)
+
+    def add_sink(self, opener: Callable[[Mapping[str, object]], Recorder], *, per_frame: bool = False) -> None:
+        """Add a writer: ``opener(header_info)`` makes the :class:`Recorder` once the header is
+        known (after the first samples, at most :data:`SINK_WARMUP` seconds in). With
+        ``per_frame`` it gets frame records instead of sample records."""
+        self._sinks.append(_Sink(opener, per_frame))
+
+    @property
+    def recorders(self) -> list[Recorder]:
+        return [s.recorder for s in self._sinks if s.recorder is not None]
+
+    # -- header -------------------------------------------------------------------------
+
+    def header_info(self) -> dict[str, object]:
+        """What replay needs: every selected element with its type, kinds, units and links."""
+        manager = self.manager
+        elements: dict[str, dict[str, object]] = {}
+        devices = []
+        for name in self._names_with_targets():
+            device = manager.device(name)
+            if device is not None:
+                devices.append(name)
+                entry: dict[str, object] = {"element": DEVICE, "type": device.element_type,
+                                            "kinds": [k.value for k in device.kinds()]}
+                track = self._tracks.get(name)
+                units = dict(track.units) if track is not None else {}
+                for kind in device.store.kinds:
+                    latest = device.store.latest(kind)
+                    if latest is not None and kind.value not in units:
+                        units[kind.value] = len(latest.values)
+                entry["units"] = units
+                if isinstance(device, Analog):
+                    entry["min"], entry["max"] = device.analog_min, device.analog_max
+                elements[name] = entry
+                continue
+            proxy = manager.proxies.get(name)
+            if proxy is not None:
+                elements[name] = {"element": PROXY, "type": proxy.element_type,
+                                  "device": proxy.device_name, "unit": proxy.unit}
+                continue
+            target = manager.aliases.get(name)
+            if target is not None:
+                elements[name] = {"element": ALIAS, "type": "alias", "proxy": target}
+        return {**self.info, "devices": devices, "elements": elements,
+                "selection": list(self.selectors), "frame_rate": self.rate}
+
+    def _names_with_targets(self) -> list[str]:
+        """The selected names plus the proxies and devices they lead to."""
+        manager = self.manager
+        names = list(self._selected)
+        seen = set(names)
+        for name in list(names):
+            target = manager.aliases.get(name)
+            if target is not None and target not in seen:
+                names.append(target)
+                seen.add(target)
+        for name in list(names):
+            proxy = manager.proxies.get(name)
+            if proxy is not None and proxy.device_name and proxy.device_name not in seen:
+                names.append(proxy.device_name)
+                seen.add(proxy.device_name)
+        return names
+
+    # -- running ------------------------------------------------------------------------
+
+    def stop(self) -> None:
+        """End :meth:`frames` after the current frame."""
+        self._stop = True
+
+    def frames(self, *, duration: float | None = None, frames: int | None = None,
+               sleep: Callable[[float], object] = time.sleep, stop_at_end: bool = True) -> Iterator[Frame]:
+        """Run frames at the session's rate until ``duration`` seconds or ``frames`` frames,
+        :meth:`stop`, or the end of a replay (unless ``stop_at_end`` is false: then
+        :attr:`finished` is set and frames go on); yields each frame after its data were
+        gathered and written."""
+        period = 1.0 / self.rate
+        gc.collect()
+        gc.freeze()  # keep frames free of long full collections (as InputManager.run does)
+        try:
+            start = now()
+            self.started_at = start
+            count = 0
+            while not self._stop:
+                if frames is not None and count >= frames:
+                    break
+                if duration is not None and now() - start >= duration:
+                    break
+                source_done = self.source is not None and self.source.done
+                frame = self.step()
+                count += 1
+                yield frame
+                if source_done and not self.finished:  # the feeder had finished before this frame swapped
+                    self.finished = True
+                    if stop_at_end:
+                        break
+                delay = start + count * period - now()
+                if delay > 0:
+                    sleep(delay)
+                elif delay < -period:  # fell behind: do not try to catch up
+                    start = now() - count * period
+        finally:
+            gc.unfreeze()
+
+    def step(self) -> Frame:
+        """One frame: update the manager, gather every watched device's samples, write."""
+        moment = now()
+        if self._last_frame_at is not None:
+            self._frame_interval += 0.1 * ((moment - self._last_frame_at) - self._frame_interval)
+        self._last_frame_at = moment
+        if self.started_at is None:
+            self.started_at = moment
+        manager = self.manager
+        configured = len(manager.devices) + len(manager.proxies)
+        self.frame = manager.update()
+        self.frame_timestamp = moment
+        if len(manager.devices) + len(manager.proxies) != configured or not self._watch:
+            self._watch = self._names_with_targets()
+        samples = 0
+        tracks = self._tracks
+        for name in self._watch:
+            device = manager.device(name)
+            if device is None:
+                continue
+            track = tracks.get(name)
+            if track is None or track.device is not device:
+                track = tracks[name] = DeviceTrack(name, device, self.history)
+            samples += track.update()
+        if self.source is not None:
+            for marker in self.source.drain_markers():
+                self._note_marker(marker)
+        if self._sinks:
+            self._write_frame(moment)
+        return Frame(self.frame, moment, moment - self.started_at, samples)
+
+    # -- writing ------------------------------------------------------------------------
+
+    def _write_frame(self, moment: float) -> None:
+        self._check_statuses(moment)
+        if any(not s.per_frame for s in self._sinks):
+            text, count = self.encode_samples()
+            if count:
+                self._emit("samples", text, count, per_frame=False)
+        if any(s.per_frame for s in self._sinks):
+            self._emit("frame", self.frame_record(), 0, per_frame=True)
+        if not self._sinks_open and (self._warm() or moment - (self.started_at or moment) >= SINK_WARMUP):
+            self._open_sinks()
+
+    def _warm(self) -> bool:
+        """Whether every watched running device has delivered something (so the header can
+        tell its units)."""
+        for name in self._watch:
+            device = self.manager.device(name)
+            if device is None or device.state is not DeviceState.RUNNING:
+                continue
+            if not any(device.store.latest(kind) is not None for kind in device.store.kinds):
+                return False
+        return True
+
+    def _open_sinks(self) -> None:
+        info = self.header_info()
+        for sink in self._sinks:
+            if sink.recorder is None:
+                sink.recorder = sink.open(info)
+        self._sinks_open = True
+        buffered, self._buffer = self._buffer, []
+        for what, payload, count in buffered:
+            self._deliver(what, payload, count)
+
+    def open_sinks(self) -> None:
+        """Open every sink now (normally done after the first samples)."""
+        if not self._sinks_open:
+            self._open_sinks()
+
+    def _emit(self, what: str, payload: object, count: int, *, per_frame: bool | None = None) -> None:
+        if not self._sinks_open:
+            self._buffer.append((what, payload, count))
+            return
+        self._deliver(what, payload, count)
+
+    def _deliver(self, what: str, payload: object, count: int) -> None:
+        for sink in self._sinks:
+            recorder = sink.recorder
+            if recorder is None or recorder.closed:
+                continue
+            if what == "samples":
+                if not sink.per_frame:
+                    recorder.write_encoded(payload, count)  # type: ignore[arg-type]
+            elif what == "frame":
+                if sink.per_frame:
+                    recorder.write_frame(payload)  # type: ignore[arg-type]
+            elif what == "status":
+                recorder.write_status(payload)  # type: ignore[arg-type]
+            elif what == "marker":
+                marker = payload
+                recorder.write_marker(marker.name, marker.timestamp)  # type: ignore[attr-defined]
+        if what == "samples":
+            self._samples_written += count
+
+    def encode_samples(self) -> tuple[str, int]:
+        """This frame's sample records of the selected devices (and of proxies and aliases
+        named by the selectors), as NDJSON text and count."""
+        manager = self.manager
+        parts: list[str] = []
+        count = 0
+        stream_proxies = bool(self.selectors)
+        for name in self._selected:
+            track = self._tracks.get(name)
+            if track is not None and manager.device(name) is track.device:
+                for kind, samples in track.frames.items():
+                    text, n = encode_frame(name, kind, samples, track.device)
+                    parts.append(text)
+                    count += n
+                continue
+            if stream_proxies:
+                proxy = manager.proxy(name)
+                if proxy is None or proxy.stupefied or proxy.timestamp is None:
+                    continue
+                if self._proxy_stamps.get(name) == proxy.timestamp:
+                    continue
+                self._proxy_stamps[name] = proxy.timestamp
+                value, raw = proxy_value(proxy)
+                value = _plain_json(value)
+                raw = value if raw is None else raw
+                unit = proxy.unit if proxy.HAS_UNIT else 0
+                parts.append(encode_samples([SampleRecord(name, proxy.KIND.value, unit, proxy.timestamp,
+                                                          value, raw)]))
+                count += 1
+        return "".join(parts), count
+
+    def frame_record(self) -> FrameRecord:
+        """What every selected element delivered this frame, with its newest values."""
+        manager = self.manager
+        devices: dict[str, FrameDevice] = {}
+        for name in self._selected:
+            track = self._tracks.get(name)
+            if track is not None and manager.device(name) is track.device:
+                values: dict[str, dict[int, object]] = {}
+                store = track.device.store
+                for kind in store.kinds:
+                    latest = store.latest(kind)
+                    if latest is None:
+                        continue
+                    if kind is DeviceKind.ANALOG and isinstance(track.device, Analog):
+                        values[kind.value] = {u: track.device.normalize(float(v)) for u, v in enumerate(latest.values)}
+                    else:
+                        values[kind.value] = {u: _json_value(kind, v) for u, v in enumerate(latest.values)}
+                devices[name] = FrameDevice(track.count, values)
+                continue
+            proxy = manager.proxy(name)
+            if proxy is None:
+                continue
+            value, _ = proxy_value(proxy)
+            fresh = proxy.timestamp is not None and self._proxy_stamps.get("frame:" + name) != proxy.timestamp
+            self._proxy_stamps["frame:" + name] = proxy.timestamp
+            unit = proxy.unit if proxy.HAS_UNIT else 0
+            devices[name] = FrameDevice(1 if fresh else 0, {proxy.KIND.value: {unit: _plain_json(value)}})
+        return FrameRecord(self.frame, self.frame_timestamp, devices)
+
+    def _check_statuses(self, moment: float) -> None:
+        for name in self._selected:
+            element, element_type, state, reason = self._status_of(name)
+            current = (state, reason)
+            if self._statuses.get(name) != current:
+                self._statuses[name] = current
+                self._emit("status", StatusRecord(moment, name, element, element_type, state, reason), 0)
+
+    def mark(self, name: str | None = None) -> MarkerRecord:
+        """Write a marker (named ``marker N`` when no name is given) to every sink."""
+        marker = MarkerRecord(name or f"marker {len(self.markers) + 1}", now())
+        self._note_marker(marker)
+        return marker
+
+    def _note_marker(self, marker: MarkerRecord) -> None:
+        self.markers.append(marker)
+        if self._sinks:
+            self._emit("marker", marker, 0)
+
+    def reset_stats(self) -> None:
+        """Forget statistics and press counts (the r key)."""
+        for track in self._tracks.values():
+            track.reset()
+
+    def close_sinks(self, reason: str = "closed", *, stats: bool = True) -> None:
+        """Write the final statistics record and the end record of every sink."""
+        if self._sinks and not self._sinks_open:
+            self._open_sinks()
+        final = self.final_stats() if stats else None
+        moment = now()
+        for sink in self._sinks:
+            recorder = sink.recorder
+            if recorder is None or recorder.closed:
+                continue
+            if final is not None:
+                recorder.write_stats(final, moment)
+            recorder.close(reason)
+
+    # -- reading ------------------------------------------------------------------------
+
+    def _status_of(self, name: str) -> tuple[str | None, str, str, str | None]:
+        """(element, type, state, reason) of a selected name."""
+        manager = self.manager
+        device = manager.device(name)
+        if device is not None:
+            state = device.state
+            reason = device.error if state in (DeviceState.FAULTED, DeviceState.RECONNECTING) else None
+            return DEVICE, device.element_type, state.value, reason
+        proxy = manager.proxies.get(name)
+        if proxy is not None:
+            return PROXY, proxy.element_type, proxy.state.value, proxy.reason if proxy.stupefied else None
+        target = manager.aliases.get(name)
+        if target is not None:
+            proxy = manager.proxies.get(target)
+            if proxy is None:
+                return ALIAS, "alias", "stupefied", f"its proxy {target!r} is not configured"
+            return ALIAS, "alias", proxy.state.value, proxy.reason if proxy.stupefied else None
+        status = self._pending_statuses().get(name)
+        if status is not None:
+            return (status.kind.value if status.kind is not None else None), status.type, PENDING, status.reason
+        element = manager.element(name)
+        return None, element.type if element is not None else "", "removed", "no longer configured"
+
+    def device_stats(self, name: str, moment: float | None = None) -> DeviceSnapshot | None:
+        track = self._tracks.get(name)
+        return None if track is None else track.snapshot(now() if moment is None else moment)
+
+    def final_stats(self) -> dict[str, dict[str, object]]:
+        """Per selected device: the fields of :class:`DeviceSnapshot` plus ``samples``
+        (sampling instants), ``state``, ``type``, ``kinds`` and ``units``."""
+        moment = now()
+        result: dict[str, dict[str, object]] = {}
+        for name in self._selected:
+            track = self._tracks.get(name)
+            device = self.manager.device(name)
+            if track is None or device is None:
+                continue
+            snap = track.stats.snapshot(moment)
+            entry = snap.to_dict()
+            entry.pop("name", None)
+            entry["samples"] = snap.count
+            entry["state"] = device.state.value
+            entry["error"] = device.error
+            entry["type"] = device.element_type
+            entry["kinds"] = [k.value for k in device.kinds()]
+            entry["units"] = dict(track.units)
+            result[name] = entry
+        return result
+
+    @property
+    def frame_rate(self) -> float:
+        return 1.0 / self._frame_interval if self._frame_interval > 0 else 0.0
+
+    def keyboards(self) -> list[str]:
+        """Names of keyboard/mouse devices that receive terminal keys."""
+        return [name for name, device in self.manager.devices.items()
+                if DeviceKind.KEYBOARD_MOUSE in device.kinds()]
+
+    def snapshot(self, moment: float | None = None, *, names: Iterable[str] | None = None) -> Snapshot:
+        """Everything a view shows, for the selected elements (or ``names`` of them)."""
+        moment = now() if moment is None else moment
+        views = [self.element_view(name, moment) for name in (self._selected if names is None else names)]
+        return Snapshot(self.frame, self.frame_timestamp, moment - (self.started_at or moment),
+                        self.frame_rate, views, self.markers[-5:], self.keyboards(),
+                        self._samples_written, self.finished)
+
+    def element_view(self, name: str, moment: float | None = None) -> ElementView:
+        """One element's status, statistics and values now."""
+        moment = now() if moment is None else moment
+        manager = self.manager
+        element, element_type, state, reason = self._status_of(name)
+        view = ElementView(name, element or PENDING, element_type, state, reason)
+        device = manager.device(name)
+        if device is not None:
+            track = self._tracks.get(name)
+            if track is not None and track.device is device:
+                self._fill_from_track(view, track, moment)
+                view.values = track.unit_views()
+            return view
+        proxy = manager.proxy(name)
+        if proxy is None:
+            if element == ALIAS:
+                view.target = manager.aliases.get(name)
+            return view
+        view.target = manager.aliases.get(name) if element == ALIAS else proxy.device_name
+        view.unit = proxy.unit if proxy.HAS_UNIT else None
+        track = self._tracks.get(proxy.device_name)
+        live = track is not None and track.device is proxy.device
+        if live:
+            self._fill_from_track(view, track, moment)
+        if not proxy.stupefied:
+            value, raw = proxy_value(proxy)
+            unit = proxy.unit if proxy.HAS_UNIT else 0
+            history = None
+            presses = 0
+            if live:
+                if isinstance(proxy, AnalogProxy) and unit < len(track.analog_history):
+                    history = track.analog_history[unit]
+                if isinstance(proxy, DigitalProxy) and track.presses is not None and unit < len(track.presses):
+                    presses = int(track.presses[unit])
+            changed = isinstance(proxy, DigitalProxy) and value in (2, 3)
+            view.values = [UnitView(proxy.KIND.value, unit, value, raw, changed, presses, history)]
+        return view
+
+    @staticmethod
+    def _fill_from_track(view: ElementView, track: DeviceTrack, moment: float) -> None:
+        view.device = track.name
+        view.stats = track.snapshot(moment)
+        newest = track.stats.newest_timestamp
+        view.age = None if newest is None else max(0.0, moment - newest)
+        view.count = track.count
