@@ -12,10 +12,21 @@ from conftest import REPO
 EXAMPLE = re.compile(r"^\$ (gadgetctl .*?)(?:\s+#\s*exit (\d+))?$")
 
 
+DOCUMENTS = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+
+
 def readme_examples() -> list[tuple[str, int]]:
+    """``$ gadgetctl`` lines of ```console blocks in the README and docs/ (not ```sh ones)."""
+    examples = []
+    for document in DOCUMENTS:
+        examples += _examples(document)
+    return examples
+
+
+def _examples(document) -> list[tuple[str, int]]:
     examples = []
     in_console = False
-    for line in (REPO / "README.md").read_text(encoding="utf-8").splitlines():
+    for line in document.read_text(encoding="utf-8").splitlines():
         if line.startswith("```"):
             in_console = line.strip() == "```console"
             continue
@@ -26,7 +37,7 @@ def readme_examples() -> list[tuple[str, int]]:
 
 
 def test_readme_has_examples():
-    assert len(readme_examples()) >= 8
+    assert len(_examples(REPO / "README.md")) >= 20
 
 
 @pytest.mark.parametrize(("command", "expected"), readme_examples(), ids=lambda v: str(v)[:60])
