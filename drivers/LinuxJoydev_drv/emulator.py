@@ -40,6 +40,7 @@ AXIS_LOW = -32767
 AXIS_HIGH = 32767
 
 SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+DEFAULT_PATH = "/tmp/gadgetctl-js0"  # the command line's FIFO, named in example.jconf
 MOTION_PERIOD = 64  # ticks per full sine period in the motion scenario
 
 Event = tuple[int, int, int]  # (type, number, value)
@@ -305,7 +306,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--scenario", choices=SCENARIOS, default="motion")
     parser.add_argument("--rate", type=float, default=100.0, help="ticks per second (default 100)")
-    parser.add_argument("--path", help="FIFO to create (default: js0 in a temporary directory)")
+    parser.add_argument(
+        "--path",
+        default=DEFAULT_PATH,
+        help=f"FIFO to create (default {DEFAULT_PATH}, where example.jconf points)",
+    )
     parser.add_argument("--duration", type=float, help="stop after this many seconds")
     parser.add_argument("--buttons", type=int, default=12)
     parser.add_argument("--axes", type=int, default=6)

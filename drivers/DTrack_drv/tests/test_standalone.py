@@ -27,7 +27,9 @@ from DTrack_drv.standalone import (
     DTrackFrame,
     DTrackStandalone,
     DTrackUnits,
+    _decimals,
     parse_frame,
+    parse_frames,
 )
 
 pytestmark = pytest.mark.timeout(10)
@@ -407,3 +409,151 @@ def test_emulator_is_loopback_only() -> None:
         DTrackEmulator(0)
     with pytest.raises(ValueError):
         DTrackEmulator(5999, scenario="dance")
+
+
+# -- the fast body decoder against the general parser ----------------------------------------------
+
+EYE = "[1 0 0 0 1 0 0 0 1]"
+
+
+def _same(a: DTrackFrame | None, b: DTrackFrame | None) -> None:
+    assert (a is None) == (b is None)
+    if a is None or b is None:
+        return
+    assert (a.frame, a.timestamp, a.bad_lines, a.calibrated_bodies) == (
+        b.frame,
+        b.timestamp,
+        b.bad_lines,
+        b.calibrated_bodies,
+    )
+    assert len(a.bodies) == len(b.bodies)
+    for x, y in zip(a.bodies, b.bodies, strict=True):
+        assert (x.id, x.quality, x.location_mm, x.inertial, x.drift_error) == (
+            y.id,
+            y.quality,
+            y.location_mm,
+            y.inertial,
+            y.drift_error,
+        )
+        np.testing.assert_array_equal(x.matrix, y.matrix)
+    np.testing.assert_array_equal(a.bodies.matrices, b.bodies.matrices)
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        f"6d 2 [0 1.000][10.5 -20.25 3000 1 2 3]{EYE} [7 -1.000][1 2 3 4 5 6]{EYE}",  # DTrack's layout
+        f"6d 1 [007 0.5][1e2 2E-1 -0.0]{EYE}",  # short middle block, exponents, leading zeros
+        f"6d 1 [0 1][1 2 3 4]{EYE}",  # a layout the fast path leaves to the general parser
+        f"6d 1 [0 1 9][1 2 3]{EYE}",  # a longer first block: likewise
+        f"6d 2 [0 1][1 2 3]{EYE}",  # says 2, holds 1
+        "6d 1 [0 1][1 2 3][1 0 0 0 1 0 0 0]",  # 8 rotation values
+        f"6d 1 [0 1][1 2 3]{EYE}[",  # unbalanced
+        f"6d 1 [0 nan][1 2 3]{EYE}",  # not finite
+        f"6d 1 [-1 1][1 2 3]{EYE}",  # negative id
+        f"6d 1 [0 x][1 2 3]{EYE}",  # not a number
+        f"6d 1 [0 1]x[1 2 3]{EYE}",  # stray text between blocks
+        f"6d 1  [0 1] [1 2 3] {EYE} ",  # blanks between blocks
+        "6d 0",
+        f"6d 1 [0 1][1 2 3]{EYE}\r\n6di 1 [1 2 0.5][1 2 3]{EYE}",  # both kinds of body
+    ],
+)
+def test_fast_body_decoding_agrees_with_the_general_parser(body: str) -> None:
+    data = f"fr 3\r\nts 1.25\r\n6dcal 4\r\n{body}\r\n".encode()
+    _same(parse_frame(data), parse_frame(data, fast=False))
+
+
+def test_fast_decoding_agrees_on_every_emulator_scenario() -> None:
+    for scenario in ("motion", "idle", "buttons", "garbage"):
+        for flystick_format in ("6df2", "6df"):
+            emulator = DTrackEmulator(
+                5999, scenario=scenario, bodies=12, flystick_format=flystick_format
+            )
+            for n in range(1, 9):  # body 1 is missing from frame 3 and 7 in motion
+                text = emulator.writer.frame(n)
+                _same(parse_frame(text), parse_frame(text, fast=False))
+
+
+# -- many frames merged at once ------------------------------------------------------------------
+
+
+def _step_by_step(frames: list[DTrackFrame]) -> list[tuple[np.ndarray, list, list, list]]:
+    units = DTrackUnits(extra_units=True)
+    states = []
+    for frame in frames:
+        units.update(frame)
+        states.append((units.position_array(), units.qualities(), units.digital(), units.analog()))
+    return states
+
+
+@pytest.mark.parametrize("scenario", ["motion", "buttons", "idle"])
+def test_merging_many_frames_equals_merging_them_one_by_one(scenario: str) -> None:
+    emulator = DTrackEmulator(5999, scenario=scenario, bodies=4, flysticks=2, flystick_buttons=11)
+    frames = [parse_frame(emulator.writer.frame(n)) for n in range(1, 13)]
+    merged = DTrackUnits(extra_units=True).merge(frames)
+    for k, (positions, qualities, digital, analog) in enumerate(_step_by_step(frames)):
+        np.testing.assert_array_equal(merged.positions[k], positions)
+        assert merged.qualities[k].tolist() == qualities
+        assert merged.digital[k].tolist() == digital and merged.analog[k].tolist() == analog
+    assert merged.digital.shape == (12, 2 * 8 + 2 * 3)  # 8 per Flystick, then 3 more each
+
+
+def test_objects_appearing_in_a_batch_take_the_last_layout() -> None:
+    body = "[1 0 0 0 1 0 0 0 1]"
+    frames = [
+        parse_frame(f"fr 1\r\n6d 2 [0 1.0][1 2 3]{body} [1 -1][4 5 6]{body}\r\n"),
+        parse_frame(
+            f"fr 2\r\n6df2 1 1 [0 1.0 10 2][7 8 9]{body}[512 0.5 -0.5]\r\n6d 1 [1 1.0][4 5 6]{body}\r\n"
+        ),
+    ]
+    merged = DTrackUnits(extra_units=True).merge(frames)
+    assert merged.positions.shape == (2, 3, 4, 4)  # the Flystick, then bodies 0 and 1
+    np.testing.assert_array_equal(merged.positions[0, 0], np.eye(4))  # not seen yet
+    np.testing.assert_allclose(merged.positions[0, 1, :3, 3], [0.001, 0.002, 0.003])
+    np.testing.assert_array_equal(merged.positions[0, 2], np.eye(4))  # untracked so far
+    assert merged.qualities.tolist() == [[-1.0, 1.0, -1.0], [1.0, -1.0, 1.0]]
+    np.testing.assert_allclose(merged.positions[1, 1, :3, 3], [0.001, 0.002, 0.003])  # kept
+    np.testing.assert_allclose(merged.positions[1, 2, :3, 3], [0.004, 0.005, 0.006])
+    assert merged.digital.tolist() == [[0] * 10, [0] * 8 + [0, 1]]  # button 9 (bit 9 of 512)
+    assert merged.analog.tolist() == [[0.0, 0.0], [0.5, -0.5]]
+
+
+def test_decoding_many_datagrams_at_once_agrees_with_the_general_parser() -> None:
+    emulator = DTrackEmulator(5999, scenario="motion", bodies=12, flysticks=2, flystick_buttons=40)
+    texts = [emulator.writer.frame(n) for n in range(1, 30)]
+    texts[3] += "6d 1 [0 -1.000][-0.000 0 -0][-0.000000 1 0 -.5 1. 0 0 0 1]\r\n"  # signed zeros
+    for batched, text in zip(parse_frames(texts), texts, strict=True):
+        general = parse_frame(text, fast=False)
+        _same(batched, general)
+        assert batched is not None and general is not None
+        assert np.array_equal(
+            np.signbit(batched.bodies.matrices), np.signbit(general.bodies.matrices)
+        )
+        for a, b in zip(batched.flysticks, general.flysticks, strict=True):
+            assert (a.id, a.quality, a.location_mm, a.buttons, a.joystick) == (
+                b.id,
+                b.quality,
+                b.location_mm,
+                b.buttons,
+                b.joystick,
+            )
+            np.testing.assert_array_equal(a.matrix, b.matrix)
+
+
+def test_a_bad_number_in_a_batch_costs_only_its_own_line() -> None:
+    good = "fr {n}\r\n6d 1 [0 1.000][100.000 200.000 300.000][1 0 0 0 1 0 0 0 1]\r\n"
+    bad = "fr 2\r\n6d 1 [0 1.000][100.000 2x0.000 300.000][1 0 0 0 1 0 0 0 1]\r\nts 1.0\r\n"
+    frames = parse_frames([good.format(n=1), bad, good.format(n=3)] * 40)
+    assert [f.frame for f in frames[:3]] == [1, 2, 3]  # type: ignore[union-attr]
+    assert frames[1].bad_lines == 1 and not frames[1].bodies  # type: ignore[union-attr]
+    assert all(len(f.bodies) == 1 and f.bad_lines == 0 for f in frames[0::3] + frames[2::3])  # type: ignore[union-attr]
+
+
+def test_decimal_tokens_are_read_exactly_as_float_reads_them() -> None:
+    tokens = ["-0.000", "0", "-0", "12.25", "-.5", "7.", "0.1", "123456789.012345", "-1.000001"]
+    values = _decimals(" ".join(tokens).encode(), tokens)
+    assert values is not None
+    assert values.tolist() == [float(t) for t in tokens]
+    assert np.signbit(values).tolist() == [t.startswith("-") for t in tokens]
+    for odd in (["1.2.3"], ["1-2"], ["-"], ["-."], ["1", "."], ["1" * 20], ["1." + "0" * 23]):
+        assert _decimals(" ".join(odd).encode(), odd) is None, odd

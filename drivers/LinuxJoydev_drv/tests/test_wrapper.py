@@ -1,0 +1,309 @@
+"""The joydev device in the input manager, against the FIFO emulator: configurations, units
+through proxies and aliases, garbage, disconnection and reconnection, the corpus example."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+from LinuxJoydev_drv.emulator import AXIS_HIGH, AXIS_LOW, JoydevEmulator
+
+from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
+
+pytestmark = pytest.mark.timeout(30)
+
+DRIVER = Path(__file__).resolve().parents[1]
+CORPUS = Path(__file__).resolve().parents[3].parent / "shared" / "corpus" / "vrjuggler"
+CORPUS_CONFIG = (
+    CORPUS / "modules" / "vrjuggler" / "data" / "configFiles" / "example.linux_joydev.jconf"
+)
+HEAD = """<?xml version="1.0" encoding="UTF-8"?>
+<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
+<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">
+<elements>
+<input_manager name="IM" version="2"><driver>LinuxJoydev_drv</driver></input_manager>
+"""
+PRESSED = (DigitalState.ON, DigitalState.TOGGLE_ON)
+
+
+def joystick(name: str, fifo: Path, *extra: str) -> str:
+    return f'<linux_joydev name="{name}" version="1"><port_name>{fifo}</port_name>{"".join(extra)}</linux_joydev>\n'
+
+
+def proxy(kind: str, name: str, device: str, unit: int) -> str:
+    return f'<{kind}_proxy name="{name}" version="1"><device>{device}</device><unit>{unit}</unit></{kind}_proxy>\n'
+
+
+def alias(name: str, target: str) -> str:
+    return f'<alias name="{name}" version="1"><proxy>{target}</proxy></alias>\n'
+
+
+@pytest.fixture
+def managers() -> Iterator[list[InputManager]]:
+    made: list[InputManager] = []
+    yield made
+    for manager in made:
+        manager.shutdown()
+
+
+@pytest.fixture
+def build(tmp_path: Path, managers: list[InputManager]) -> Callable[..., InputManager]:
+    """A running input manager for a configuration file (a body of elements, or a path)."""
+
+    def make(config: str | Path) -> InputManager:
+        if isinstance(config, str):
+            path = tmp_path / f"test{len(managers)}.jconf"
+            path.write_text(HEAD + config + "</elements>\n</configuration>\n")
+            config = path
+        options = ManagerOptions(retry_interval=None, entry_points=False)
+        manager, configuration = InputManager.from_files([config], options=options)
+        managers.append(manager)
+        manager.configure(configuration)
+        assert not manager.pending(), [(p.name, p.message) for p in manager.pending()]
+        return manager
+
+    return make
+
+
+def frames_until(manager: InputManager, done: Callable[[], bool], timeout: float = 3.0) -> float:
+    """Run frames until ``done()``; returns the seconds it took (fails after ``timeout``)."""
+    start = time.monotonic()
+    while True:
+        manager.update()
+        if done():
+            return time.monotonic() - start
+        assert time.monotonic() - start < timeout, "timed out"
+        time.sleep(0.002)
+
+
+def state(manager: InputManager, name: str) -> str:
+    return next(s for s in manager.statuses() if s.name == name).state
+
+
+# -- units through proxies and aliases --------------------------------------------------------
+
+
+def test_every_button_toggles_on_and_off_through_its_alias(tmp_path: Path, build) -> None:
+    body = joystick("Stick", tmp_path / "js0")
+    for b in range(12):
+        body += proxy("digital", f"Button {b}", "Stick", b) + alias(f"VJButton{b}", f"Button {b}")
+    with JoydevEmulator(directory=tmp_path, scenario="buttons", rate=500.0):
+        manager = build(body)
+        seen: dict[int, set[DigitalState]] = {b: set() for b in range(12)}
+
+        def all_toggled() -> bool:
+            for b in range(12):
+                seen[b].add(manager.proxy(f"VJButton{b}").data)
+            return all(
+                {DigitalState.TOGGLE_ON, DigitalState.TOGGLE_OFF} <= s for s in seen.values()
+            )
+
+        frames_until(manager, all_toggled)
+    # one sample per event: a press and its release never merge into one state
+    assert manager.device("Stick").store.total(DeviceKind.DIGITAL) > 24
+
+
+def test_axes_are_normalised_and_axis_buttons_follow_the_middle(tmp_path: Path, build) -> None:
+    body = joystick(
+        "Stick", tmp_path / "js0", "<axis_buttons>2</axis_buttons><axis_buttons>0</axis_buttons>"
+    )
+    body += proxy("analog", "Axis 2", "Stick", 2) + alias("VJAxis2", "Axis 2")
+    body += proxy("digital", "Axis 2 Low", "Stick", 12) + proxy(
+        "digital", "Axis 2 High", "Stick", 13
+    )
+    body += proxy("digital", "Axis 0 Low", "Stick", 14)
+    with JoydevEmulator(directory=tmp_path, scenario="buttons", rate=400.0):
+        manager = build(body)
+        seen: set[tuple[float, bool, bool]] = set()
+
+        def swept() -> bool:
+            value = manager.proxy("VJAxis2").data
+            low = manager.proxy("Axis 2 Low").data in PRESSED
+            high = manager.proxy("Axis 2 High").data in PRESSED
+            seen.add((value, low, high))
+            return {(0.0, True, False), (0.5, False, False), (1.0, False, True)} <= seen
+
+        frames_until(manager, swept)
+    device = manager.device("Stick")
+    assert device.analog_min == -32767 and device.analog_max == 32767  # the definition's defaults
+    assert manager.proxy("Axis 2").raw in (AXIS_LOW, 0, AXIS_HIGH)
+    assert manager.proxy("Axis 0 Low").reason is None  # units 12-15: two pairs after 12 buttons
+
+
+def test_the_elements_min_and_max_set_the_analog_range(tmp_path: Path, build) -> None:
+    range_ = "<axis_buttons>1</axis_buttons><min>0.0</min><max>32767.0</max>"
+    body = joystick("Stick", tmp_path / "js0", range_)
+    body += proxy("analog", "Axis 1", "Stick", 1) + proxy("digital", "Axis 1 High", "Stick", 3)
+    with JoydevEmulator(directory=tmp_path, scenario="buttons", rate=400.0, buttons=2, axes=2):
+        manager = build(body)
+        seen: set[tuple[float, bool]] = set()
+
+        def swept() -> bool:
+            seen.add((manager.proxy("Axis 1").data, manager.proxy("Axis 1 High").data in PRESSED))
+            return {(0.0, False), (1.0, True)} <= seen
+
+        frames_until(manager, swept)
+    # the middle of 0..32767 decides the virtual buttons: raw 0 is "low", never 0.5
+    assert all(value in (0.0, 1.0) for value, _ in seen)
+
+
+def test_garbage_is_skipped_counted_and_never_becomes_a_value(tmp_path: Path, build) -> None:
+    body = joystick("Stick", tmp_path / "js0")
+    body += "".join(proxy("analog", f"Axis {a}", "Stick", a) for a in range(6))
+    with JoydevEmulator(directory=tmp_path, scenario="garbage", rate=1000.0, seed=5) as emu:
+        manager = build(body)
+        device = manager.device("Stick")
+        values: dict[int, set[float]] = {a: set() for a in range(6)}
+
+        def collected() -> bool:
+            frame = device.store.frame(DeviceKind.ANALOG)
+            for a in range(6):
+                values[a].update(frame.column(a))
+            return device.counters.get("resyncs", 0) >= 20 and device.store.total() > 200
+
+        frames_until(manager, collected)
+        sent = emu.sent_events()
+        assert state(manager, "Stick") == "running" and device.faults == 0
+    for a in range(6):
+        assert values[a] <= {0.0} | {float(v) for _t, v, kind, n in sent if kind & 0x02 and n == a}
+    assert device.counters["skipped_bytes"] > 0
+
+
+# -- disconnection ------------------------------------------------------------------------------
+
+
+def test_a_lost_device_faults_and_resumes_within_two_seconds(tmp_path: Path, build) -> None:
+    fifo, other_fifo = tmp_path / "js0", tmp_path / "js1"
+    body = joystick("Stick", fifo) + joystick("Other", other_fifo)
+    body += proxy("analog", "Axis", "Stick", 0) + proxy("analog", "Other Axis", "Other", 0)
+    with JoydevEmulator(other_fifo, scenario="motion", rate=500.0):
+        emulator = JoydevEmulator(fifo, scenario="motion", rate=500.0).start()
+        manager = build(body)
+        stick, other = manager.device("Stick"), manager.device("Other")
+        frames_until(manager, lambda: stick.store.total() > 20)
+        emulator.stop()
+        frames_until(manager, lambda: state(manager, "Stick") == "faulted")
+        status = next(s for s in manager.statuses() if s.name == "Stick")
+        assert status.reason and status.code == "DRV042" and status.stats.faults >= 1
+        other_before = other.store.total()
+        time.sleep(0.6)  # away for a while: the restarts fail and back off
+        manager.update()
+        assert state(manager, "Stick") in ("faulted", "reconnecting")
+        assert other.store.total() > other_before + 100  # the other device went on
+
+        with JoydevEmulator(fifo, scenario="motion", rate=500.0):
+            before = stick.store.total()
+            resumed = frames_until(manager, lambda: stick.store.total() > before + 5, timeout=4.0)
+            assert resumed < 2.0
+            frames_until(manager, lambda: manager.proxy("Axis").timestamp is not None)
+            assert state(manager, "Stick") == "running" and stick.restarts >= 1
+        assert other.faults == 0
+
+
+def test_an_unplugged_device_file_is_reopened(tmp_path: Path, build) -> None:
+    body = joystick("Stick", tmp_path / "js0") + proxy("analog", "Axis", "Stick", 0)
+    with JoydevEmulator(
+        directory=tmp_path, scenario="disconnect", rate=1000.0, disconnect_after=30
+    ) as emu:
+        manager = build(body)
+        stick = manager.device("Stick")
+        frames_until(manager, lambda: emu.connections >= 3 and stick.restarts >= 2)
+    assert stick.faults >= 2 and stick.store.total() > 60
+
+
+# -- configuration problems ----------------------------------------------------------------------
+
+
+def test_unusable_elements_stay_pending_with_a_reason(tmp_path: Path) -> None:
+    path = tmp_path / "bad.jconf"
+    path.write_text(
+        HEAD
+        + '<linux_joydev name="Empty" version="1"><port_name></port_name></linux_joydev>\n'
+        + joystick("Negative", tmp_path / "js0", "<axis_buttons>-1</axis_buttons>")
+        + joystick("Missing", tmp_path / "nothing-here")
+        + "</elements>\n</configuration>\n"
+    )
+    manager, configuration = InputManager.from_files(
+        [path], options=ManagerOptions(retry_interval=None)
+    )
+    try:
+        manager.configure(configuration)
+        reasons = {p.name: p.message for p in manager.pending()}
+    finally:
+        manager.shutdown()
+    assert reasons["Empty"] == "port_name is empty"
+    assert "axis_buttons: -1" in reasons["Negative"]
+    assert "failed to start" in reasons["Missing"] and "nothing-here" in reasons["Missing"]
+
+
+# -- the corpus example and ours -------------------------------------------------------------------
+
+
+@pytest.fixture
+def corpus_config(tmp_path: Path) -> Path:
+    """VR Juggler's example.linux_joydev.jconf with only its port_name pointing at a FIFO."""
+    assert CORPUS_CONFIG.is_file(), f"corpus not found at {CORPUS}"
+    text = CORPUS_CONFIG.read_text()
+    assert text.count("<port_name>/dev/input/js0</port_name>") == 1
+    path = tmp_path / CORPUS_CONFIG.name
+    path.write_text(text.replace("/dev/input/js0", str(tmp_path / "js0")))
+    return path
+
+
+def test_the_corpus_example_delivers_through_its_proxies_and_aliases(
+    tmp_path: Path, build, corpus_config: Path
+) -> None:
+    with JoydevEmulator(directory=tmp_path, scenario="buttons", rate=500.0):
+        manager = build(corpus_config)
+        toggled: set[int] = set()
+        axes: dict[int, set[float]] = {a: set() for a in range(6)}
+
+        def everything() -> bool:
+            toggled.update(
+                b for b in range(12) if manager.proxy(f"VJButton{b}").data == DigitalState.TOGGLE_ON
+            )
+            for a in range(6):
+                axes[a].add(manager.proxy(f"VJAxis{a}").data)
+            return len(toggled) == 12 and all({0.0, 0.5, 1.0} <= v for v in axes.values())
+
+        frames_until(manager, everything)
+        statuses = {s.name: s.state for s in manager.statuses()}
+    assert statuses["Logitech Dual Action"] == "running"
+    assert all(statuses[f"DigitalProxy{b}"] == "active" for b in range(12))
+
+
+def run_cli(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "gadgetctl", *args], capture_output=True, text=True, timeout=60
+    )
+
+
+def test_our_example_validates_and_configures_without_pending() -> None:
+    example = DRIVER / "example.jconf"
+    validated = run_cli("validate", str(example))
+    assert validated.returncode == 0, validated.stdout + validated.stderr
+    pending = run_cli("config", "pending", str(example))
+    assert pending.returncode == 0, pending.stdout + pending.stderr
+    assert "0 pending, 0 stupefied" in pending.stdout
+
+
+def test_monitor_shows_samples_of_the_corpus_example(tmp_path: Path, corpus_config: Path) -> None:
+    with JoydevEmulator(directory=tmp_path, scenario="motion", rate=200.0):
+        result = subprocess.run(
+            [sys.executable, "-m", "gadgetctl", "monitor", str(corpus_config), "--duration", "1", "--format", "ndjson"],
+            capture_output=True, text=True, timeout=60, env={**os.environ, "NO_COLOR": "1"},
+        )  # fmt: skip
+    assert result.returncode == 0, result.stderr[-2000:]
+    records = [json.loads(line) for line in result.stdout.splitlines() if line.strip()]
+    samples = [
+        r
+        for r in records
+        if r.get("type") == "sample" and r.get("device") == "Logitech Dual Action"
+    ]
+    assert samples, records[:5]
