@@ -111,7 +111,7 @@ def test_upgrade_check_lists_every_older_element_and_upgrading_removes_them(corp
     assert result.exit_code == 1
     import json
 
-    listed = {(Path(entry["path"]).resolve().relative_to(corpus).as_posix(), element["line"])
+    listed = {(Path(entry["path"]).resolve().relative_to(corpus.resolve()).as_posix(), element["line"])
               for entry in json.loads(result.stdout) for element in entry["elements"]}
     assert listed == older
 

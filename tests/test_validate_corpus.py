@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 from gadgetctl.validate import validate_paths
 
@@ -24,7 +25,7 @@ EXPECTED = {
 
 def _xml_and_schema(result, corpus):
     return {
-        (str(__import__("pathlib").Path(d.path).relative_to(corpus)), d.code, d.line)
+        (str(Path(d.path).relative_to(corpus)), d.code, d.line)
         for d in result.diagnostics if d.category.value in ("xml", "schema")
     }
 
