@@ -141,7 +141,7 @@ complete -c gadgetctl -n '__fish_seen_subcommand_from replay' -l help -s h -d 'S
 complete -c gadgetctl -n '__fish_seen_subcommand_from scaffold ; and not __fish_seen_subcommand_from driver' -a driver -d 'Generate a driver plug-in that validates, loads, runs against its emulator and passes'
 complete -c gadgetctl -n '__fish_seen_subcommand_from scaffold' -l help -s h -d 'Show help and exit'
 complete -c gadgetctl -n '__fish_seen_subcommand_from scaffold ; and __fish_seen_subcommand_from driver' -F
-complete -c gadgetctl -n '__fish_seen_subcommand_from scaffold ; and __fish_seen_subcommand_from driver' -l type -s t -r -F -d 'A device type the driver provides: analog, digital, position, glove, gesture, command, string, hat'
+complete -c gadgetctl -n '__fish_seen_subcommand_from scaffold ; and __fish_seen_subcommand_from driver' -l type -s t -x -a 'analog digital position glove gesture command string hat' -d 'A device type the driver provides: analog, digital, position, glove, gesture, command, string, hat'
 complete -c gadgetctl -n '__fish_seen_subcommand_from scaffold ; and __fish_seen_subcommand_from driver' -l transport -x -a 'serial udp tcp file none' -d 'How the driver reaches the device: serial (pyserial, port and baud), udp (a port it receives on), tcp (host and port it connects to), file (a device file; a FIFO works) or none (the driver makes its own data)'
 complete -c gadgetctl -n '__fish_seen_subcommand_from scaffold ; and __fish_seen_subcommand_from driver' -l vendor -r -F -d 'The maker'\''s name, for labels and documentation'
 complete -c gadgetctl -n '__fish_seen_subcommand_from scaffold ; and __fish_seen_subcommand_from driver' -l dir -r -F -d 'Where to create the plug-in folder (or the project, with --package)'

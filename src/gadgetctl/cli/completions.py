@@ -62,6 +62,9 @@ def _choices(param) -> list[str]:
     """Choices of an option whose annotation is an Enum (typer's way to declare choices)."""
     from enum import Enum
 
+    choices = getattr(getattr(param, "type", None), "choices", None)
+    if choices:
+        return [str(getattr(c, "value", c)) for c in choices]
     annotation = getattr(getattr(param, "type_descriptor", None), "annotation", None)
     if isinstance(annotation, type) and issubclass(annotation, Enum):
         return [str(member.value) for member in annotation]
