@@ -23,6 +23,7 @@ from DTrack_drv.standalone import (
 )
 
 from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
+from gadgetctl.input.testing import frames_until
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -91,19 +92,10 @@ def build(tmp_path: Path, managers: list[InputManager]) -> Callable[..., InputMa
     return make
 
 
-def frames_until(manager: InputManager, done: Callable[[], bool], timeout: float = 3.0) -> float:
-    """Run frames until ``done()``; returns the seconds it took (fails after ``timeout``)."""
-    start = time.monotonic()
-    while True:
-        manager.update()
-        if done():
-            return time.monotonic() - start
-        assert time.monotonic() - start < timeout, "timed out"
-        time.sleep(0.002)
 
 
 def state(manager: InputManager, name: str) -> str:
-    return next(s for s in manager.statuses() if s.name == name).state
+    return manager.status(name).state
 
 
 def expected_pose(index: int) -> np.ndarray:
@@ -196,7 +188,7 @@ def test_a_silent_tracker_faults_and_resumes_within_two_seconds(tmp_path: Path, 
         with DTrackEmulator(port, scenario="motion", rate=RATE):
             frames_until(manager, lambda: device.store.total() > 10)
         frames_until(manager, lambda: state(manager, "DT") == "faulted")
-        status = next(s for s in manager.statuses() if s.name == "DT")
+        status = manager.status("DT")
         assert "DTrack" in status.reason and status.code == "DRV042"
         before = other.store.total()
         time.sleep(0.6)  # silent for a while: the restarts find nothing and back off

@@ -15,6 +15,7 @@ import pytest
 from LinuxJoydev_drv.emulator import AXIS_HIGH, AXIS_LOW, JoydevEmulator
 
 from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
+from gadgetctl.input.testing import frames_until
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -71,19 +72,10 @@ def build(tmp_path: Path, managers: list[InputManager]) -> Callable[..., InputMa
     return make
 
 
-def frames_until(manager: InputManager, done: Callable[[], bool], timeout: float = 3.0) -> float:
-    """Run frames until ``done()``; returns the seconds it took (fails after ``timeout``)."""
-    start = time.monotonic()
-    while True:
-        manager.update()
-        if done():
-            return time.monotonic() - start
-        assert time.monotonic() - start < timeout, "timed out"
-        time.sleep(0.002)
 
 
 def state(manager: InputManager, name: str) -> str:
-    return next(s for s in manager.statuses() if s.name == name).state
+    return manager.status(name).state
 
 
 # -- units through proxies and aliases --------------------------------------------------------
@@ -189,7 +181,7 @@ def test_a_lost_device_faults_and_resumes_within_two_seconds(tmp_path: Path, bui
         frames_until(manager, lambda: stick.store.total() > 20)
         emulator.stop()
         frames_until(manager, lambda: state(manager, "Stick") == "faulted")
-        status = next(s for s in manager.statuses() if s.name == "Stick")
+        status = manager.status("Stick")
         assert status.reason and status.code == "DRV042" and status.stats.faults >= 1
         other_before = other.store.total()
         time.sleep(0.6)  # away for a while: the restarts fail and back off

@@ -17,6 +17,7 @@ from MotionStar_drv.emulator import MotionStarEmulator
 from gadgetctl.input import InputManager, LengthUnit, ManagerOptions, RestartPolicy
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.pending import PendingKind
+from gadgetctl.input.testing import wait_until
 
 pytestmark = pytest.mark.timeout(20)
 
@@ -103,21 +104,10 @@ def poses_sent(emu: MotionStarEmulator, sequence: int, scale: float = 0.0254) ->
     return [sensor_pose(records[d.address], scale) for d in emu.sensors]
 
 
-def wait_until(
-    predicate: Callable[[], bool], timeout: float = 3.0, step: Callable[[], object] | None = None
-) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if step is not None:
-            step()
-        if predicate():
-            return True
-        time.sleep(0.005)
-    return predicate()
 
 
 def status_of(manager: InputManager, name: str):
-    return next(s for s in manager.statuses() if s.name == name)
+    return manager.status(name)
 
 
 def corpus_file(name: str) -> Path:

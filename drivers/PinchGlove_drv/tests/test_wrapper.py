@@ -28,6 +28,7 @@ from PinchGlove_drv.emulator import (
 from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.testing import wait_until
 
 pytestmark = pytest.mark.timeout(20)
 
@@ -88,21 +89,10 @@ def digital_of(groups: tuple[tuple[int, int], ...]) -> tuple[int, ...]:
     return tuple(left >> k & 1 for k in range(5)) + tuple(right >> k & 1 for k in range(5))
 
 
-def wait_until(
-    predicate: Callable[[], bool], timeout: float = 3.0, step: Callable[[], object] | None = None
-) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if step is not None:
-            step()
-        if predicate():
-            return True
-        time.sleep(0.005)
-    return predicate()
 
 
 def status_of(manager: InputManager, name: str):
-    return next(s for s in manager.statuses() if s.name == name)
+    return manager.status(name)
 
 
 @pytest.fixture

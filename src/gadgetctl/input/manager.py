@@ -645,6 +645,10 @@ class InputManager:
             found.extend(proxy.diagnostics)
         return found
 
+    def status(self, name: str) -> ElementStatus | None:
+        """The status of the device, proxy, alias or input manager element called ``name``."""
+        return next((s for s in self.statuses() if s.name == name), None)
+
     def statuses(self) -> list[ElementStatus]:
         result: list[ElementStatus] = []
         for name, entry in self._devices.items():
