@@ -92,8 +92,6 @@ def build(tmp_path: Path, managers: list[InputManager]) -> Callable[..., InputMa
     return make
 
 
-
-
 def state(manager: InputManager, name: str) -> str:
     return manager.status(name).state
 
@@ -303,25 +301,25 @@ def test_the_corpus_example_delivers_through_its_proxies(
     )
 
 
-def run_cli(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "gadgetctl", *args], capture_output=True, text=True, timeout=60
-    )
-
-
-def test_our_example_validates_and_configures_without_pending() -> None:
-    example = DRIVER / "example.jconf"
-    validated = run_cli("validate", str(example))
-    assert validated.returncode == 0, validated.stdout + validated.stderr
-    pending = run_cli("config", "pending", str(example))
-    assert pending.returncode == 0, pending.stdout + pending.stderr
-    assert "0 pending, 0 stupefied" in pending.stdout
-
-
 def test_monitor_shows_samples_of_the_corpus_example(corpus_config: tuple[Path, int]) -> None:
     path, port = corpus_config
     with DTrackEmulator(port, scenario="motion", rate=100.0, bodies=1):
-        result = run_cli("monitor", str(path), "--duration", "1", "--format", "ndjson")
+        result = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "gadgetctl",
+                "monitor",
+                str(path),
+                "--duration",
+                "1",
+                "--format",
+                "ndjson",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
     assert result.returncode == 0, result.stderr[-2000:]
     records = [json.loads(line) for line in result.stdout.splitlines() if line.strip()]
     kinds = {

@@ -72,8 +72,6 @@ def build(tmp_path: Path, managers: list[InputManager]) -> Callable[..., InputMa
     return make
 
 
-
-
 def state(manager: InputManager, name: str) -> str:
     return manager.status(name).state
 
@@ -268,21 +266,6 @@ def test_the_corpus_example_delivers_through_its_proxies_and_aliases(
         statuses = {s.name: s.state for s in manager.statuses()}
     assert statuses["Logitech Dual Action"] == "running"
     assert all(statuses[f"DigitalProxy{b}"] == "active" for b in range(12))
-
-
-def run_cli(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "gadgetctl", *args], capture_output=True, text=True, timeout=60
-    )
-
-
-def test_our_example_validates_and_configures_without_pending() -> None:
-    example = DRIVER / "example.jconf"
-    validated = run_cli("validate", str(example))
-    assert validated.returncode == 0, validated.stdout + validated.stderr
-    pending = run_cli("config", "pending", str(example))
-    assert pending.returncode == 0, pending.stdout + pending.stderr
-    assert "0 pending, 0 stupefied" in pending.stdout
 
 
 def test_monitor_shows_samples_of_the_corpus_example(tmp_path: Path, corpus_config: Path) -> None:

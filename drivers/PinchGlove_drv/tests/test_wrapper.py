@@ -89,8 +89,6 @@ def digital_of(groups: tuple[tuple[int, int], ...]) -> tuple[int, ...]:
     return tuple(left >> k & 1 for k in range(5)) + tuple(right >> k & 1 for k in range(5))
 
 
-
-
 def status_of(manager: InputManager, name: str):
     return manager.status(name)
 
@@ -328,16 +326,6 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
         "failed to start" in pending["No Box"].message
         and "/nonexistent/tty" in pending["No Box"].message
     )
-
-
-def test_example_is_valid_and_nothing_is_pending() -> None:
-    gadgetctl = [sys.executable, "-m", "gadgetctl"]
-    for command in (["validate", str(EXAMPLE)], ["config", "pending", str(EXAMPLE)]):
-        done = subprocess.run(
-            gadgetctl + command, capture_output=True, text=True, timeout=30, cwd=REPO
-        )
-        assert done.returncode == 0, done.stdout + done.stderr
-    assert "0 pending, 0 stupefied" in done.stdout
 
 
 # -- the VR Juggler configuration -------------------------------------------------------------
