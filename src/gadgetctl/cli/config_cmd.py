@@ -85,13 +85,15 @@ def graph(
 
     For a picture: gadgetctl config graph -f dot FILE | dot -Tsvg > wiring.svg
     """
+    from gadgetctl.input.plugins.catalog import built_in_types, plugin_for_type
     from gadgetctl.jccl.configcheck import open_configuration
     from gadgetctl.jccl.graph import RENDERERS, build_graph
     from gadgetctl.validate import plugin_definition_finder
 
     opened = open_configuration(files, definition_dirs=definitions, bundled=bundled,
                                 plugin_definitions=plugin_definition_finder())
-    wiring = build_graph(opened.configuration, opened.index)
+    wiring = build_graph(opened.configuration, opened.index, built_in=built_in_types(),
+                         plugins=plugin_for_type())
     if fmt is GraphFormat.json:
         emit(json.dumps(wiring.to_dict(), indent=2))
     else:

@@ -8,13 +8,8 @@ from pathlib import Path
 import typer
 
 from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION
+from gadgetctl.cli.monitor_format import OutputFormat
 from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION
-
-
-class OutputFormat(StrEnum):
-    live = "live"
-    table = "table"
-    ndjson = "ndjson"
 
 
 class LengthUnits(StrEnum):

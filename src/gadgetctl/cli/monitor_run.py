@@ -12,7 +12,7 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from gadgetctl.cli.monitor_cmd import OutputFormat
+from gadgetctl.cli.monitor_format import OutputFormat
 from gadgetctl.errors import GadgetctlError
 from gadgetctl.input.clock import now
 from gadgetctl.monitor.recording import Recorder, RecordingError, Terminated, raise_on_stop_signals

@@ -10,7 +10,7 @@ import importlib
 from dataclasses import dataclass
 from functools import cache
 
-from gadgetctl.diagnostics.model import Category, Severity
+from gadgetctl.diagnostics.levels import Category, Severity
 
 CATALOG_MODULES = ("xml", "schema", "definition", "config", "driver")
 

@@ -4,25 +4,11 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
-from enum import StrEnum
 
+from gadgetctl.diagnostics.codes import lookup
+from gadgetctl.diagnostics.levels import Category, Severity
 
-class Severity(StrEnum):
-    ERROR = "error"
-    WARNING = "warning"
-    INFO = "info"
-
-    @property
-    def rank(self) -> int:
-        return {"error": 0, "warning": 1, "info": 2}[self.value]
-
-
-class Category(StrEnum):
-    XML = "xml"
-    SCHEMA = "schema"
-    DEFINITION = "definition"
-    CONFIG = "config"
-    DRIVER = "driver"
+__all__ = ["Category", "Diagnostic", "Severity", "exit_code_for", "sort_key"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -51,8 +37,6 @@ class Diagnostic:
         severity: Severity | None = None,
     ) -> Diagnostic:
         """Build a diagnostic whose category and default severity come from the catalog."""
-        from gadgetctl.diagnostics.codes import lookup
-
         entry = lookup(code)
         return cls(
             code=code,

@@ -30,7 +30,6 @@ from gadgetctl.input.samples import DEFAULT_CAP, SampleStore
 
 if TYPE_CHECKING:
     from gadgetctl.input.events import EventSource
-    from gadgetctl.input.proxies import Proxy
     from gadgetctl.jccl.access import ElementAccess
 
 
@@ -68,9 +67,11 @@ class DeviceContext(Protocol):
     @property
     def events(self) -> EventSource: ...
 
-    def proxy(self, name: str) -> Proxy | None:
+    def proxy(self, name: str) -> object | None:
         """The proxy called ``name`` (or the one an alias of that name points at), updated
-        for the current frame."""
+        for the current frame: a :mod:`gadgetctl.input.proxies` object, which the device
+        checks with ``isinstance`` (this module does not import the proxies, which build on
+        it)."""
 
 
 class Input:

@@ -2,14 +2,17 @@
 devices to the driver plug-ins the input manager loads, with every other pointer and the
 embedded elements of the elements shown.
 
-Rendered as a text tree, Graphviz DOT or a Mermaid flowchart.
+Rendered as a text tree, Graphviz DOT or a Mermaid flowchart. Which element types are
+built in and which plug-in handles the others is the input manager's knowledge: the caller
+passes it in (``gadgetctl.input.plugins.catalog``), so the JCCL layer does not depend on
+the input layer.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from gadgetctl.input.plugins.catalog import built_in_types, plugin_for_type
 from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.definitions import ValueType
 from gadgetctl.jccl.resolve import judged_view
@@ -66,9 +69,12 @@ class WiringGraph:
 
 
 class GraphBuilder:
-    def __init__(self, config: Configuration, index: TypeIndex) -> None:
+    def __init__(self, config: Configuration, index: TypeIndex, built_in: frozenset[str] = frozenset(),
+                 plugins: Mapping[str, str] | None = None) -> None:
         self.config = config
         self.index = index
+        self.built_in = built_in  # element types handled without a plug-in
+        self.plugins = plugins or {}  # element type -> driver plug-in name
         self.graph = WiringGraph()
         self.ids: dict[int, str] = {}
         self.special_ids: dict[str, str] = {}
@@ -82,7 +88,7 @@ class GraphBuilder:
             return "input_manager"
         if self.index.known(element.type) and self.index.is_a(element.type, "proxy"):
             return "proxy"
-        if element.type in built_in_types() or (self.index.known(element.type)
+        if element.type in self.built_in or (self.index.known(element.type)
                                                 and self.index.is_a(element.type, "input_device")):
             return "device"
         return "element"
@@ -157,11 +163,11 @@ class GraphBuilder:
                         plugin = self.special(f"plugin:{name}", "plugin", "plug-in", name, None)
                         loaded[name] = plugin
                         self.graph.edges.append(Edge(node.id, plugin, DRIVER, "driver"))
-        mapping = plugin_for_type()
+        mapping = self.plugins
         for node in list(self.graph.nodes.values()):
             if node.kind != "device" or node.element is None:
                 continue
-            if node.type in built_in_types():
+            if node.type in self.built_in:
                 node.note = "built in, no plug-in needed"
                 continue
             name = mapping.get(node.type)
@@ -173,8 +179,11 @@ class GraphBuilder:
             self.graph.edges.append(Edge(node.id, plugin, HANDLED_BY, "handled by"))
 
 
-def build_graph(config: Configuration, index: TypeIndex) -> WiringGraph:
-    return GraphBuilder(config, index).build()
+def build_graph(config: Configuration, index: TypeIndex, *, built_in: frozenset[str] = frozenset(),
+                plugins: Mapping[str, str] | None = None) -> WiringGraph:
+    """The wiring of ``config``; ``built_in`` are the element types that need no plug-in,
+    ``plugins`` maps the others to the plug-in that handles them."""
+    return GraphBuilder(config, index, built_in, plugins).build()
 
 
 # -- rendering ---------------------------------------------------------------------------

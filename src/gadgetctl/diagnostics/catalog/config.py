@@ -1,7 +1,7 @@
 """Diagnostic codes of the `config` category."""
 
 from gadgetctl.diagnostics.codes import Code
-from gadgetctl.diagnostics.model import Category, Severity
+from gadgetctl.diagnostics.levels import Category, Severity
 
 C = Category.CONFIG
 E, W, I = Severity.ERROR, Severity.WARNING, Severity.INFO

@@ -1,7 +1,7 @@
 """Diagnostic codes of the `definition` category: .jdef files and the search path."""
 
 from gadgetctl.diagnostics.codes import Code
-from gadgetctl.diagnostics.model import Category, Severity
+from gadgetctl.diagnostics.levels import Category, Severity
 
 C = Category.DEFINITION
 E, W, I = Severity.ERROR, Severity.WARNING, Severity.INFO

@@ -2,7 +2,7 @@
 elements the input manager leaves pending."""
 
 from gadgetctl.diagnostics.codes import Code
-from gadgetctl.diagnostics.model import Category, Severity
+from gadgetctl.diagnostics.levels import Category, Severity
 
 C = Category.DRIVER
 E, W, I = Severity.ERROR, Severity.WARNING, Severity.INFO

@@ -1,7 +1,7 @@
 """Diagnostic codes of the `xml` category: reading files and their format markers."""
 
 from gadgetctl.diagnostics.codes import Code
-from gadgetctl.diagnostics.model import Category, Severity
+from gadgetctl.diagnostics.levels import Category, Severity
 
 C = Category.XML
 E, W, I = Severity.ERROR, Severity.WARNING, Severity.INFO
