@@ -15,6 +15,10 @@ Differences from Gadgeteer's C++ driver, on purpose:
   datagram that is not a frame at all (binary garbage, no known line) is counted and skipped.
 * Integers are read as decimal. ``strtol(..., 0)`` would take a leading 0 as octal; DTrack never
   sends one, so this only matters for damaged input, which is now rejected.
+* Every count, id and number has a limit (:class:`DTrackLimits`): a line asking for more
+  objects, buttons or joystick values than that, an id beyond the object cap, or an integer
+  too long to be one DTrack sends is a malformed line, counted and skipped. The units therefore
+  never grow past the cap, whatever a peer sends (upstream resized its arrays to any id).
 * Silence longer than ``peer_timeout`` is reported with :class:`DTrackDisconnected`, so a caller can
   reconnect (and re-send the start commands) instead of waiting for ever.
 * Every datagram waiting is decoded (:meth:`DTrackStandalone.sample_all`), not just the newest,
@@ -60,6 +64,31 @@ def cmd_send_frames(n: int) -> str:
 
 class DTrackFormatError(ValueError):
     """A line does not follow the DTrack output format."""
+
+
+@dataclass(frozen=True)
+class DTrackLimits:
+    """What one datagram may ask for; a line beyond a limit is malformed (counted, skipped).
+
+    ``objects``: ids of each kind (bodies, Flysticks, tools, markers, gloves) run from 0 to
+    ``objects - 1`` (markers from 1 to ``objects``), and no count is larger (``6dcal`` counts
+    bodies, old Flysticks and old tools together, so it may reach three times that). DTrack
+    systems track a few dozen objects; raise the cap for more. ``buttons`` and
+    ``valuators`` per Flystick or tool are well above DTrack's own 16 and 8 (gadgetctl keeps
+    the buttons beyond the eighth, which upstream rejected).
+    """
+
+    objects: int = 128
+    buttons: int = 128
+    valuators: int = 32
+    fingers: int = 5
+
+
+DEFAULT_LIMITS = DTrackLimits()
+#: Frame counters are unsigned 32-bit numbers.
+MAX_FRAME_COUNTER = 2**32 - 1
+#: No integer DTrack sends has more digits than this (a 32-bit button field has 10).
+_MAX_DIGITS = 12
 
 
 class DTrackDisconnected(ConnectionError):
@@ -300,19 +329,21 @@ class DTrackFrame:
 
 
 def _int(token: str) -> int:
+    if len(token) > _MAX_DIGITS + 1:  # also keeps int() away from its digit limit
+        raise DTrackFormatError(f"integer too long: {token[:20]!r}...")
     try:
         return int(token, 10)
     except ValueError:
-        raise DTrackFormatError(f"not an integer: {token!r}") from None
+        raise DTrackFormatError(f"not an integer: {token[:40]!r}") from None
 
 
 def _float(token: str) -> float:
     try:
         value = float(token)
     except ValueError:
-        raise DTrackFormatError(f"not a number: {token!r}") from None
+        raise DTrackFormatError(f"not a number: {token[:40]!r}") from None
     if not math.isfinite(value):
-        raise DTrackFormatError(f"not a finite number: {token!r}")
+        raise DTrackFormatError(f"not a finite number: {token[:40]!r}")
     return value
 
 
@@ -341,11 +372,22 @@ def _blocks(tail: str) -> list[list[str]]:
     return blocks
 
 
-def _count(token: str, what: str) -> int:
+def _count(token: str, what: str, limit: int | None = None) -> int:
+    """A count (or id) from 0 to ``limit``."""
     n = _int(token)
     if n < 0:
         raise DTrackFormatError(f"negative {what}: {n}")
+    if limit is not None and n > limit:
+        raise DTrackFormatError(f"{what} {n} is over the limit of {limit}")
     return n
+
+
+def _small(token: str, limit: int) -> int | None:
+    """``token`` as an integer from 0 to ``limit`` if it is plain ASCII digits, else None."""
+    if len(token) > _MAX_DIGITS or not token.isascii() or not token.isdigit():
+        return None
+    n = int(token)
+    return n if n <= limit else None
 
 
 _BIT_VALUES = bytes.maketrans(b"01", b"\x00\x01")
@@ -395,7 +437,8 @@ class _Line:
 class _FrameBuilder:
     """Collects the decoded lines of one datagram."""
 
-    def __init__(self) -> None:
+    def __init__(self, limits: DTrackLimits = DEFAULT_LIMITS) -> None:
+        self.limits = limits
         self.values: dict[str, object] = {}
         # decoded objects, or (row, ...) records whose numbers a _Batch converts first
         self.bodies: list[BodySet | tuple[int, np.ndarray]] = []
@@ -421,35 +464,44 @@ class _FrameBuilder:
     # Each method parses one tag into local lists first, so a bad line adds nothing.
 
     def fr(self, line: _Line) -> None:
-        self.values["frame"] = _count(line.head(0), "frame counter")
+        self.values["frame"] = _count(line.head(0), "frame counter", MAX_FRAME_COUNTER)
 
     def ts(self, line: _Line) -> None:
         self.values["timestamp"] = _float(line.head(0))
 
     def cal6d(self, line: _Line) -> None:
-        self.values["calibrated_bodies"] = _count(line.head(0), "body count")
+        limit = 3 * self.limits.objects
+        self.values["calibrated_bodies"] = _count(line.head(0), "body count", limit)
 
     def glcal(self, line: _Line) -> None:
-        self.values["calibrated_gloves"] = _count(line.head(0), "glove count")
+        limit = self.limits.objects
+        self.values["calibrated_gloves"] = _count(line.head(0), "glove count", limit)
+
+    def _n(self, line: _Line, what: str, index: int = 0) -> int:
+        """The object count in header value ``index``."""
+        return _count(line.head(index), what, self.limits.objects)
+
+    def _id(self, token: str) -> int:
+        return _count(token, "id", self.limits.objects - 1)
 
     def body6d(self, line: _Line) -> None:
         found = []
-        for _ in range(_count(line.head(0), "body count")):
+        for _ in range(self._n(line, "body count")):
             ident, quality = line.block(2)
             loc = line.location()
             found.append(
-                Body(_count(ident, "id"), _float(quality), loc, pose_matrix(loc, line.floats(9)))
+                Body(self._id(ident), _float(quality), loc, pose_matrix(loc, line.floats(9)))
             )
         self.bodies.append(BodySet.of(found))
 
     def body6di(self, line: _Line) -> None:
         found = []
-        for _ in range(_count(line.head(0), "body count")):
+        for _ in range(self._n(line, "body count")):
             ident, state, error = line.block(3)
             loc = line.location()
             found.append(
                 Body(
-                    _count(ident, "id"),
+                    self._id(ident),
                     float(_int(state) - 1),
                     loc,
                     pose_matrix(loc, line.floats(9)),
@@ -461,7 +513,7 @@ class _FrameBuilder:
 
     def flystick6df(self, line: _Line) -> None:
         found = []
-        for k in range(_count(line.head(0), "Flystick count")):
+        for k in range(self._n(line, "Flystick count")):
             ident, quality, bt = line.block(3)
             if _int(ident) != k:
                 raise DTrackFormatError(f"6df: Flystick id {ident} at index {k}")
@@ -484,14 +536,15 @@ class _FrameBuilder:
         self.values["old_flysticks"] = len(found)
 
     def flystick6df2(self, line: _Line) -> None:
-        calibrated = _count(line.head(0), "calibrated Flystick count")
+        calibrated = self._n(line, "calibrated Flystick count")
         found = []
-        for k in range(_count(line.head(1), "Flystick count")):
+        for k in range(self._n(line, "Flystick count", 1)):
             ident, quality, nbt, nvt = line.block(4)
             if _int(ident) != k:
                 raise DTrackFormatError(f"6df2: Flystick id {ident} at index {k}")
-            # Fixed: upstream rejected nbt > 8 (it meant nvt); any count the block holds is fine.
-            n_buttons, n_valuators = _count(nbt, "button count"), _count(nvt, "valuator count")
+            # Fixed: upstream rejected nbt > 8 (it meant nvt); up to the limits is fine.
+            n_buttons = _count(nbt, "button count", self.limits.buttons)
+            n_valuators = _count(nvt, "valuator count", self.limits.valuators)
             loc = line.location()
             matrix = pose_matrix(loc, line.floats(9))
             n_fields = -(-n_buttons // 32)
@@ -506,12 +559,12 @@ class _FrameBuilder:
 
     def meatool6dmt(self, line: _Line) -> None:
         found = []
-        for _ in range(_count(line.head(0), "tool count")):
+        for _ in range(self._n(line, "tool count")):
             ident, quality, bt = line.block(3)
             loc = line.location()
             found.append(
                 MeasurementTool(
-                    _count(ident, "id"),
+                    self._id(ident),
                     _float(quality),
                     loc,
                     pose_matrix(loc, line.floats(9)),
@@ -523,16 +576,16 @@ class _FrameBuilder:
 
     def meatool6dmt2(self, line: _Line) -> None:
         found = []
-        for _ in range(_count(line.head(0), "tool count")):
+        for _ in range(self._n(line, "tool count")):
             ident, quality, nbt, radius = line.block(4)
-            n_buttons = _count(nbt, "button count")
+            n_buttons = _count(nbt, "button count", self.limits.buttons)
             loc = line.location()
             matrix = pose_matrix(loc, line.floats(9))
             fields = [_int(v) & 0xFFFFFFFF for v in line.block(-(-n_buttons // 32))]
             covariance = tuple(line.floats(6))
             found.append(
                 MeasurementTool(
-                    _count(ident, "id"),
+                    self._id(ident),
                     _float(quality),
                     loc,
                     matrix,
@@ -545,18 +598,17 @@ class _FrameBuilder:
 
     def marker3d(self, line: _Line) -> None:
         found = []
-        for _ in range(_count(line.head(0), "marker count")):
+        for _ in range(self._n(line, "marker count")):
             ident, quality = line.block(2)
-            found.append(Marker(_count(ident, "id"), _float(quality), line.location()))
+            marker = _count(ident, "marker id", self.limits.objects)
+            found.append(Marker(marker, _float(quality), line.location()))
         self.markers.extend(found)
 
     def glove(self, line: _Line) -> None:
         found = []
-        for _ in range(_count(line.head(0), "glove count")):
+        for _ in range(self._n(line, "glove count")):
             ident, quality, lr, nf = line.block(4)
-            n_fingers = _count(nf, "finger count")
-            if n_fingers > 5:
-                raise DTrackFormatError(f"gl: {n_fingers} fingers")
+            n_fingers = _count(nf, "finger count", self.limits.fingers)
             if lr not in ("0", "1"):
                 raise DTrackFormatError(f"gl: hand {lr!r} is neither 0 (left) nor 1 (right)")
             loc = line.location()
@@ -568,7 +620,7 @@ class _FrameBuilder:
                 tip, l_out, a_om, l_mid, a_mi, l_in = line.floats(6)
                 fingers.append(Finger(floc, fmatrix, tip, (l_out, l_mid, l_in), (a_om, a_mi)))
             found.append(
-                Glove(_count(ident, "id"), _float(quality), lr == "1", loc, matrix, tuple(fingers))
+                Glove(self._id(ident), _float(quality), lr == "1", loc, matrix, tuple(fingers))
             )
         self.gloves.extend(found)
 
@@ -724,13 +776,16 @@ class _Batch:
         )
 
 
-def _fast_bodies(count: str, tail: str, batch: _Batch) -> tuple[int, np.ndarray] | None:
+def _fast_bodies(
+    count: str, tail: str, batch: _Batch, limits: DTrackLimits
+) -> tuple[int, np.ndarray] | None:
     """The bodies of a ``6d`` line in a usual layout, their numbers queued in ``batch``.
 
     ``tail`` is the line from its first ``[``. Returns ``None`` for anything unusual (another
-    layout, a bad id); the general parser then decides, so results never differ.
+    layout, a bad id, a count or id over the limits); the general parser then decides, so
+    results never differ.
     """
-    if not count.isdigit() or not (n := int(count)):
+    if not (n := _small(count, limits.objects)):
         return None
     if tail.count("[") != 3 * n or tail.count("]") != 3 * n:
         return None
@@ -740,9 +795,13 @@ def _fast_bodies(count: str, tail: str, batch: _Batch) -> tuple[int, np.ndarray]
         return None
     layout = _body_layout(n, stride)
     ids = layout.ids(tokens)
-    if layout.brackets(tokens) != layout.expected or not all(map(str.isdigit, ids)):
+    if layout.brackets(tokens) != layout.expected:
         return None
-    return batch.add(layout.values(tokens)), np.array(list(map(int, ids)), dtype=np.int64)
+    last = limits.objects - 1
+    numbers = [_small(i, last) for i in ids]
+    if None in numbers:
+        return None
+    return batch.add(layout.values(tokens)), np.array(numbers, dtype=np.int64)
 
 
 # Where a 6df2 record's tokens are, brackets included:
@@ -755,27 +814,32 @@ _STICK_POSE = operator.itemgetter(
 )
 
 
-def _fast_flysticks(words: list[str], tail: str, batch: _Batch) -> list[tuple] | None:
+def _fast_flysticks(
+    words: list[str], tail: str, batch: _Batch, limits: DTrackLimits
+) -> list[tuple] | None:
     """The Flysticks of a ``6df2`` line whose blocks hold exactly what they must, their
     pose numbers queued in ``batch``; ``None`` leaves the line to the general parser."""
-    if len(words) != 3 or not words[2].isdigit():
+    if len(words) != 3 or _small(words[1], limits.objects) is None:
+        return None
+    if (count := _small(words[2], limits.objects)) is None:
         return None
     tokens = tail.replace("[", " [ ").replace("]", " ] ").split()
     found: list[tuple] = []
     at = 0
-    for k in range(int(words[2])):
+    for k in range(count):
         head = tokens[at : at + 23]
         if len(head) < 23 or _STICK_BRACKETS(head) != _STICK_EXPECTED:
             return None
-        if head[1] != str(k) or not head[3].isdigit() or not head[4].isdigit():
+        n_buttons = _small(head[3], limits.buttons)
+        n_valuators = _small(head[4], limits.valuators)
+        if head[1] != str(k) or n_buttons is None or n_valuators is None:
             return None
-        n_buttons, n_valuators = int(head[3]), int(head[4])
         n_fields = -(-n_buttons // 32)
         end = at + 23 + n_fields + n_valuators
         if len(tokens) <= end or tokens[end] != "]":
             return None
         try:
-            fields = [int(v, 10) & 0xFFFFFFFF for v in tokens[at + 23 : at + 23 + n_fields]]
+            fields = [_int(v) & 0xFFFFFFFF for v in tokens[at + 23 : at + 23 + n_fields]]
             joystick = tuple(_floats(tokens[at + 23 + n_fields : end]))
         except (ValueError, DTrackFormatError):
             return None
@@ -801,53 +865,63 @@ _HANDLERS: dict[str, Callable[[_FrameBuilder, _Line], None]] = {
 
 
 # Lines holding one number and no block, read without splitting into blocks.
-_SCALARS: dict[str, tuple[str, Callable[[str], object]]] = {
-    "fr": ("frame", lambda t: _count(t, "frame counter")),
-    "ts": ("timestamp", _float),
-    "6dcal": ("calibrated_bodies", lambda t: _count(t, "body count")),
-    "glcal": ("calibrated_gloves", lambda t: _count(t, "glove count")),
+_SCALARS: dict[str, tuple[str, Callable[[str, DTrackLimits], object]]] = {
+    "fr": ("frame", lambda t, _: _count(t, "frame counter", MAX_FRAME_COUNTER)),
+    "ts": ("timestamp", lambda t, _: _float(t)),
+    "6dcal": ("calibrated_bodies", lambda t, lim: _count(t, "body count", 3 * lim.objects)),
+    "glcal": ("calibrated_gloves", lambda t, lim: _count(t, "glove count", lim.objects)),
 }
 
 
 def parse_frame(
-    data: bytes | str, truncated: bool = False, *, fast: bool = True
+    data: bytes | str,
+    truncated: bool = False,
+    *,
+    fast: bool = True,
+    limits: DTrackLimits = DEFAULT_LIMITS,
 ) -> DTrackFrame | None:
     """Decode one datagram; ``None`` when it holds no valid DTrack line at all.
 
     Lines with an unknown tag are ignored. Malformed lines are skipped and counted in the
     frame's ``bad_lines``. With ``truncated`` (the datagram did not fit the receive buffer) the
     last line is taken as cut off and counted as bad. ``fast=False`` decodes every line with
-    the general parser (the result is the same; for comparisons).
+    the general parser (the result is the same; for comparisons). A line over ``limits`` is
+    malformed.
     """
-    return parse_frames([data], [truncated], fast=fast)[0]
+    return parse_frames([data], [truncated], fast=fast, limits=limits)[0]
 
 
 def parse_frames(
-    datagrams: Sequence[bytes | str], truncated: Sequence[bool] | None = None, *, fast: bool = True
+    datagrams: Sequence[bytes | str],
+    truncated: Sequence[bool] | None = None,
+    *,
+    fast: bool = True,
+    limits: DTrackLimits = DEFAULT_LIMITS,
 ) -> list[DTrackFrame | None]:
     """Decode several datagrams, as :func:`parse_frame` each. The numbers of their usual body
     and Flystick lines are converted all at once, which makes a busy tracker cheap to follow."""
     flags = truncated if truncated is not None else [False] * len(datagrams)
     batch = _Batch() if fast else None
-    scanned = [_scan(data, cut, batch) for data, cut in zip(datagrams, flags, strict=True)]
+    pairs = list(zip(datagrams, flags, strict=True))
+    scanned = [_scan(data, cut, batch, limits) for data, cut in pairs]
     if batch is not None and not batch.convert():
         # a bad number somewhere: decode datagram by datagram, so only its own lines suffer
-        return [_decode_alone(data, cut) for data, cut in zip(datagrams, flags, strict=True)]
+        return [_decode_alone(data, cut, limits) for data, cut in pairs]
     return [None if s is None else s[0].build(s[1], batch) for s in scanned]
 
 
-def _decode_alone(data: bytes | str, truncated: bool) -> DTrackFrame | None:
+def _decode_alone(data: bytes | str, truncated: bool, limits: DTrackLimits) -> DTrackFrame | None:
     """One datagram with its own batch, or through the general parser if that fails."""
     batch: _Batch | None = _Batch()
-    scanned = _scan(data, truncated, batch)
+    scanned = _scan(data, truncated, batch, limits)
     if batch is not None and not batch.convert():
         batch = None
-        scanned = _scan(data, truncated, None)
+        scanned = _scan(data, truncated, None, limits)
     return None if scanned is None else scanned[0].build(scanned[1], batch)
 
 
 def _scan(
-    data: bytes | str, truncated: bool, batch: _Batch | None
+    data: bytes | str, truncated: bool, batch: _Batch | None, limits: DTrackLimits
 ) -> tuple[_FrameBuilder, int] | None:
     """Parse the lines of one datagram: (builder, bad lines), or None if nothing was valid.
     With a ``batch``, usual body and Flystick lines leave their numbers to it; without,
@@ -862,7 +936,7 @@ def _scan(
     lines = text.rstrip("\0").splitlines()
     if truncated and lines:
         lines.pop()
-    builder = _FrameBuilder()
+    builder = _FrameBuilder(limits)
     good, bad = 0, int(truncated)
     for raw in lines:
         head, bracket, tail = raw.partition("[")
@@ -895,17 +969,17 @@ def _fast_line(builder: _FrameBuilder, words: list[str], tail: str, batch: _Batc
     if len(words) == 2 and not tail and tag in _SCALARS:
         name, read = _SCALARS[tag]
         try:
-            builder.values[name] = read(words[1])
+            builder.values[name] = read(words[1], builder.limits)
         except DTrackFormatError:
             return False  # the general parser counts it as bad
         return True
     if tag == "6d" and len(words) == 2 and tail:
-        bodies = _fast_bodies(words[1], tail, batch)
+        bodies = _fast_bodies(words[1], tail, batch, builder.limits)
         if bodies is not None:
             builder.bodies.append(bodies)
             return True
-    elif tag == "6df2" and tail and words[1:2] and words[1].isdigit():
-        sticks = _fast_flysticks(words, tail, batch)
+    elif tag == "6df2" and tail:
+        sticks = _fast_flysticks(words, tail, batch, builder.limits)
         if sticks is not None:
             builder.flysticks.extend(sticks)
             builder.values["calibrated_flysticks"] = int(words[1])
@@ -945,6 +1019,7 @@ class DTrackStandalone:
         start_delay: float = 1.0,
         buffer_size: int = 20000,
         receive_buffer: int | None = None,
+        limits: DTrackLimits = DEFAULT_LIMITS,
     ) -> None:
         self.receive_port = receive_port
         self.bind_address = bind_address
@@ -955,6 +1030,7 @@ class DTrackStandalone:
         self.start_delay = start_delay
         self.buffer_size = buffer_size
         self.receive_buffer = receive_buffer
+        self.limits = limits
         self.datagrams = 0  # datagrams received
         self.bad_datagrams = 0  # datagrams that held no valid frame
         self.bad_lines = 0  # malformed lines skipped inside otherwise valid frames
@@ -1076,7 +1152,7 @@ class DTrackStandalone:
         got_any = bool(datagrams)
         self.datagrams += len(datagrams)
         self.truncated_datagrams += sum(truncated)
-        for frame in parse_frames(datagrams, truncated):
+        for frame in parse_frames(datagrams, truncated, limits=self.limits):
             if frame is None:
                 self.bad_datagrams += 1
                 continue
@@ -1157,6 +1233,15 @@ class _Sent:
     def slots(self) -> int:
         """Slots the ids need."""
         return int(self.ids.max()) + 1 if len(self.ids) else 0
+
+    def below(self, cap: int) -> _Sent:
+        """Only the objects whose id is below ``cap``."""
+        keep = self.ids < cap
+        if keep.all():
+            return self
+        frame_of = np.repeat(np.arange(len(self.counts)), self.counts)[keep]
+        counts = np.bincount(frame_of, minlength=len(self.counts)).tolist()
+        return _Sent(counts, self.ids[keep], self.quality[keep], self.matrices[keep])
 
 
 def _merge_poses(
@@ -1264,7 +1349,9 @@ class DTrackUnits:
         buttons_per_meatool: int = 4,
         *,
         extra_units: bool = False,
+        limits: DTrackLimits = DEFAULT_LIMITS,
     ) -> None:
+        self.limits = limits
         self.buttons_per_flystick = buttons_per_flystick
         self.valuators_per_flystick = valuators_per_flystick
         self.buttons_per_meatool = buttons_per_meatool
@@ -1288,18 +1375,19 @@ class DTrackUnits:
     def merge(self, frames: Sequence[DTrackFrame]) -> UnitSamples:
         """Merge frames in order; the units after each of them."""
         n = len(frames)
-        sticks = _Sent.of_objects([f.flysticks for f in frames])
-        tools = _Sent.of_objects([f.meatools for f in frames])
-        bodies = _Sent.of_bodies([BodySet.of(f.bodies) for f in frames])
+        cap = self.limits.objects  # however the frames were parsed, never more units
+        sticks = _Sent.of_objects([f.flysticks for f in frames]).below(cap)
+        tools = _Sent.of_objects([f.meatools for f in frames]).below(cap)
+        bodies = _Sent.of_bodies([BodySet.of(f.bodies) for f in frames]).below(cap)
         calibrated_sticks = [f.calibrated_flysticks or 0 for f in frames]
         calibrated_bodies = [
             f.calibrated_bodies - f.old_flysticks - f.old_meatools
             for f in frames
             if f.calibrated_bodies is not None
         ]
-        self._flysticks.grow(max([sticks.slots(), *calibrated_sticks]))
+        self._flysticks.grow(min(cap, max([sticks.slots(), *calibrated_sticks])))
         self._meatools.grow(tools.slots())
-        self._bodies.grow(max([bodies.slots(), *calibrated_bodies]))
+        self._bodies.grow(min(cap, max([bodies.slots(), *calibrated_bodies])))
         positions, qualities = _merge_poses(
             ((self._flysticks, sticks), (self._meatools, tools), (self._bodies, bodies)), n
         )
@@ -1324,11 +1412,14 @@ class DTrackUnits:
     def _controls(self, frame: DTrackFrame) -> tuple[tuple, tuple, tuple]:
         """Buttons of the Flysticks, of the tools and joystick values after ``frame``."""
         n_sticks, n_tools = len(self._flysticks), len(self._meatools)
-        sticks = [(s.id, s.buttons) for s in frame.flysticks]
-        values = [(s.id, s.joystick) for s in frame.flysticks]
+        most_buttons, most_values = self.limits.buttons, self.limits.valuators
+        known = [s for s in frame.flysticks if s.id < n_sticks]
+        sticks = [(s.id, s.buttons[:most_buttons]) for s in known]
+        values = [(s.id, s.joystick[:most_values]) for s in known]
+        tools = [(t.id, t.buttons[:most_buttons]) for t in frame.meatools if t.id < n_tools]
         return (
             self._stick_buttons.update(sticks, n_sticks),
-            self._tool_buttons.update([(t.id, t.buttons) for t in frame.meatools], n_tools),
+            self._tool_buttons.update(tools, n_tools),
             self._stick_values.update(values, n_sticks),
         )
 

@@ -27,7 +27,14 @@ import numpy as np
 from gadgetctl.input import Analog, DeviceConfigError, Digital, Position
 from gadgetctl.jccl.access import ElementAccess
 
-from .standalone import DTrackDisconnected, DTrackFrame, DTrackStandalone, DTrackUnits
+from .standalone import (
+    DEFAULT_LIMITS,
+    DTrackDisconnected,
+    DTrackFrame,
+    DTrackLimits,
+    DTrackStandalone,
+    DTrackUnits,
+)
 
 
 def _udp_port(access: ElementAccess, prop: str) -> int:
@@ -56,6 +63,9 @@ class DTrackDevice(Position, Digital, Analog):
     receive_buffer = 4 * 1024 * 1024
     #: Remote control: seconds between "cameras and tracking on" and "start sending" (upstream: 1).
     start_delay = 1.0
+    #: Objects per kind, buttons and joystick values a datagram may ask for: a line beyond them
+    #: is counted as bad and skipped, so no peer can grow the units past them.
+    limits: DTrackLimits = DEFAULT_LIMITS
 
     def __init__(self) -> None:
         super().__init__()
@@ -66,7 +76,7 @@ class DTrackDevice(Position, Digital, Analog):
         self._driver: DTrackStandalone | None = None
         self._open = False
         self._started = False
-        self._units = DTrackUnits(extra_units=True)
+        self._units = DTrackUnits(extra_units=True, limits=self.limits)
         self._last_stamp = -math.inf
 
     @property
@@ -99,6 +109,7 @@ class DTrackDevice(Position, Digital, Analog):
                 peer_timeout=self._peer_timeout,
                 receive_buffer=self.receive_buffer,
                 start_delay=self.start_delay,
+                limits=self.limits,
             )
         return self._driver
 
