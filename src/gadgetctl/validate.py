@@ -41,10 +41,12 @@ def check_document(doc: XmlDocument, options: ValidateOptions) -> None:
     """XML-level and schema-level checks of one loaded document."""
     from gadgetctl.jccl.formats import check_format
     from gadgetctl.jccl.schema import check_schema
+    from gadgetctl.jccl.straytext import stray_text
 
     if doc.root is None:
         return
     check_format(doc)
+    doc.diagnostics.extend(stray_text(doc))
     if LEVELS.index(options.level) >= LEVELS.index("schema"):
         check_schema(doc)
 

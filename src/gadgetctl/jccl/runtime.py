@@ -7,6 +7,8 @@ and which string properties are paths that get environment variables expanded.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 # gadget::ProxyDepChecker: these proxies count as configured even when their device is
 # missing (they return default data); command_proxy and string_proxy are not among them.
 STUPEFIED_PROXIES = frozenset({
@@ -17,7 +19,8 @@ STUPEFIED_PROXIES = frozenset({
 # cluster::ClusterDepChecker lets cluster_node elements through unconditionally.
 NO_DEPENDENCY_CHECK = STUPEFIED_PROXIES | {"cluster_node"}
 
-# Handlers that refuse elements older than a version: the element stays pending.
+# Handlers of VR Juggler 3.0 that refuse elements older than a version: the element stays
+# pending. Use minimum_version(), which scales these to the release the definitions describe.
 MINIMUM_VERSIONS = {
     "input_manager": 2,
     "cluster_manager": 3,
@@ -26,6 +29,19 @@ MINIMUM_VERSIONS = {
     "motion_star": 2,
     "fastrak": 2,
 }
+
+
+
+def minimum_version(type_name: str, versions: Sequence[int]) -> int | None:
+    """The oldest version of ``type_name`` the run time of the release the definitions in use
+    describe accepts: VR Juggler 3.0's threshold, capped at the newest version present in
+    those definitions (an older release's handlers accept their own newest elements), or
+    None when the type's handler checks no version."""
+    minimum = MINIMUM_VERSIONS.get(type_name)
+    if minimum is None or not versions:
+        return minimum
+    return min(minimum, max(versions))
+
 
 # Types that have a definition but that no handler accepts.
 NEVER_HANDLED = {

@@ -17,9 +17,9 @@ from gadgetctl.diagnostics import Diagnostic, Severity
 from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.elementcheck import ElementReport, PointerValue, at, describe
 from gadgetctl.jccl.runtime import (
-    MINIMUM_VERSIONS,
     NEVER_HANDLED,
     NO_DEPENDENCY_CHECK,
+    minimum_version,
     missing_target_effect,
 )
 from gadgetctl.jccl.typeindex import TypeIndex
@@ -113,7 +113,7 @@ class Wiring:
         view = self.reports[id(element)].views.get(id(element))
         if view is None or view.definition.abstract:
             return UNHANDLED, Severity.ERROR  # reported as CFG010 / CFG011
-        minimum = MINIMUM_VERSIONS.get(element.type)
+        minimum = minimum_version(element.type, self.index.versions(element.type))
         if minimum is not None and (element.version or 0) < minimum:
             return (f"VR Juggler refuses {element.type} elements older than version {minimum} "
                     f"(this one is version {element.version or 0})"), Severity.ERROR

@@ -65,4 +65,12 @@ CODES: list[Code] = [
          "(root <definition>).",
          "<config name=\"x\"/>",
          "Check that this is a JCCL file, or that the root element is spelled right."),
+    Code("XML015", C, W, "stray text between child elements",
+         "An element that holds child elements (<elements>, an element instance, a definition's "
+         "<definition_version>) also holds text of its own. JCCL elements hold either a value "
+         "or child elements, never both; the schemas let it pass and VR Juggler ignores the "
+         "text without a word, so whatever it was meant to say is lost. Generators that write a "
+         "count or a stray value into the file are the usual cause.",
+         "<surface_viewport ...>\n  <origin>0.0</origin>\n  8\n  <size>1.0</size>",
+         "Remove the text, or move it into the property it was meant for."),
 ]

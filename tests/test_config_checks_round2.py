@@ -1,0 +1,108 @@
+"""Configuration checks, round two (issue 17): each check with a small configuration made for
+it that triggers it and one that does not."""
+
+from __future__ import annotations
+
+import pytest
+
+from gadgetctl.diagnostics import Category, Severity
+from gadgetctl.validate import ValidateOptions, validate_paths
+
+from config_samples import configuration, definition, prop, version, write_definitions
+from conftest import write
+
+ALL = (Category.CONFIG, Category.XML)
+
+
+@pytest.fixture
+def defs(tmp_path):
+    return write_definitions(tmp_path / "defs")
+
+
+@pytest.fixture
+def check(tmp_path, defs):
+    def run(
+        elements: str = "",
+        *,
+        files: dict[str, str] | None = None,
+        together: bool = False,
+        only: tuple[str, ...] | None = None,
+        definitions=None,
+        categories=ALL,
+    ):
+        files = files if files is not None else {"test.jconf": configuration(elements)}
+        paths = [write(tmp_path / name, text) for name, text in files.items()]
+        if only is not None:
+            paths = [tmp_path / name for name in only]
+        options = ValidateOptions(
+            bundled=False, definition_dirs=[definitions or defs], together=together, environ={}
+        )
+        result = validate_paths(paths, options)
+        return [d for d in result.diagnostics if d.category in categories]
+
+    return run
+
+
+def codes(found) -> list[str]:
+    return [d.code for d in found]
+
+
+# -- 1. stray text -------------------------------------------------------------------------
+
+
+def test_stray_text_between_child_elements_is_reported_with_line_and_column(check):
+    elements = (
+        '      <position_proxy name="Head" version="1">\n'
+        "         <device>Tracker</device>\n"
+        "         8\n"
+        "         <unit>0</unit>\n"
+        "      </position_proxy>\n"
+        '      <tracker name="Tracker" version="1"/> stray\n'
+    )
+    found = [d for d in check(elements) if d.code == "XML015"]
+    assert [(d.line, d.column) for d in found] == [(7, 10), (10, 45)]
+    assert "'8'" in found[0].message and "position_proxy" in found[0].message
+    assert "'stray'" in found[1].message and "<elements>" in found[1].message
+    assert all(d.severity is Severity.WARNING for d in found)
+
+
+def test_text_of_a_property_and_blank_layout_are_not_stray(check):
+    elements = (
+        '      <position_proxy name="Head" version="1">\n'
+        "         <device>Tracker</device><unit> 0 </unit>\n"
+        "         <!-- a comment is not text -->\n"
+        "      </position_proxy>\n"
+        '      <tracker name="Tracker" version="1"/>\n'
+    )
+    assert check(elements) == []
+
+
+def test_stray_text_in_a_definition_file(check, tmp_path):
+    text = definition("widget", version(1, prop("size", "integer", defaults=("1",))))
+    text = text.replace("<category>", "oops<category>")
+    found = check(files={"widget.jdef": text})
+    (stray,) = [d for d in found if d.code == "XML015"]
+    assert stray.line == 3 and "definition_version" in stray.message
+    assert text.splitlines()[2][stray.column - 1 :].startswith("oops")
+    clean = definition("widget", version(1, prop("size", "integer", defaults=("1",))))
+    assert [d for d in check(files={"widget.jdef": clean}) if d.code == "XML015"] == []
+
+
+# -- 3. run-time version thresholds follow the definitions in use --------------------------
+
+
+def test_version_threshold_is_capped_at_the_newest_version_of_the_definitions_in_use(
+    check, tmp_path
+):
+    old_manager = (
+        '      <input_manager name="IM" version="1"><driver>X_drv</driver></input_manager>\n'
+    )
+    # VR Juggler 3.0's definitions (input_manager up to version 2): version 1 is refused
+    (refused,) = [d for d in check(old_manager) if d.code == "CFG041"]
+    assert refused.severity is Severity.ERROR and "older than version 2" in refused.message
+    # an older release whose input_manager definition stops at version 1 accepts it
+    older = write_definitions(tmp_path / "older")
+    (older / "input_manager.jdef").write_text(
+        definition("input_manager", version(1, prop("driver", count=None))), encoding="utf-8"
+    )
+    assert check(old_manager, definitions=older) == []
