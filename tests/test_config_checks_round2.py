@@ -106,3 +106,67 @@ def test_version_threshold_is_capped_at_the_newest_version_of_the_definitions_in
         definition("input_manager", version(1, prop("driver", count=None))), encoding="utf-8"
     )
     assert check(old_manager, definitions=older) == []
+
+
+# -- 4. overrides ----------------------------------------------------------------------------
+
+TRACKER = '      <tracker name="Tracker" version="1"><port>{port}</port></tracker>\n'
+
+
+def tracker(port: str = "/dev/ttyS0") -> str:
+    return TRACKER.format(port=port)
+
+
+def test_an_including_file_overrides_its_include(check):
+    files = {
+        "site.jconf": configuration(tracker("/dev/ttyUSB0"), includes=("base.jconf",)),
+        "base.jconf": configuration(tracker()),
+    }
+    (found,) = check(files=files, only=("site.jconf",))
+    assert found.code == "CFG042" and found.severity is Severity.INFO
+    assert (
+        "overrides" in found.message
+        and "base.jconf" in found.message
+        and "includes" in found.message
+    )
+    assert found.path.endswith("site.jconf") and found.line == 6
+
+
+def test_a_later_command_line_file_overrides_an_earlier_one(check):
+    files = {
+        "base.jconf": configuration(tracker()),
+        "local.jconf": configuration(tracker("/dev/ttyUSB0")),
+    }
+    (found,) = check(files=files, together=True)
+    assert found.code == "CFG042" and "given after base.jconf" in found.message
+    assert found.path.endswith("local.jconf")
+
+
+def test_an_identical_copy_is_info_and_unrelated_files_are_warned(check):
+    # two side-by-side includes: neither includes the other
+    files = {
+        "top.jconf": configuration("", includes=("a.jconf", "b.jconf")),
+        "a.jconf": configuration(tracker()),
+        "b.jconf": configuration(tracker("/dev/ttyUSB0")),
+    }
+    (found,) = check(files=files, only=("top.jconf",))
+    assert (
+        found.code == "CFG040"
+        and found.severity is Severity.WARNING
+        and found.path.endswith("b.jconf")
+    )
+    # the same, byte for byte: harmless
+    files["b.jconf"] = configuration(tracker())
+    (found,) = check(files=files, only=("top.jconf",))
+    assert found.code == "CFG042" and "identical copy" in found.message
+
+
+def test_a_duplicate_within_one_file_stays_an_error(check):
+    elements = tracker() + tracker("/dev/ttyUSB0")
+    (found,) = check(elements)
+    assert (
+        found.code == "CFG040"
+        and found.severity is Severity.ERROR
+        and "in this file" in found.message
+    )
+    assert check(tracker()) == []

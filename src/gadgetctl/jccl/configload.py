@@ -118,6 +118,8 @@ class ConfigurationLoader:
     def load(self, paths: Iterable[Path]) -> Configuration:
         for path in paths:
             resolved = path if path in self.documents else path.resolve()
+            if resolved not in self.configuration.roots:
+                self.configuration.roots.append(resolved)
             self._load(path, resolved, stack=[], display=None)
         return self.configuration
 
@@ -161,6 +163,9 @@ class ConfigurationLoader:
                 "CFG002", f"include cycle: {chain}", location.path, location.line, location.column,
                 hint="VR Juggler would recurse until it crashes; remove one of these includes."))
             return
+        edges = self.configuration.includes.setdefault(parent, [])
+        if resolved not in edges:
+            edges.append(resolved)
         try:
             self._load(target, resolved, stack, display=_display(target))
         except OSError as err:

@@ -164,6 +164,20 @@ class Configuration:
     files: list[ConfigFile] = field(default_factory=list)
     loaded: list[ConfigElement] = field(default_factory=list)  # every top-level element, in load order
     diagnostics: list[Diagnostic] = field(default_factory=list)
+    #: The files given, in order (resolved paths), and each file's resolved includes.
+    roots: list[Path] = field(default_factory=list)
+    includes: dict[Path, list[Path]] = field(default_factory=dict)
+
+    def reachable(self, start: Path) -> set[Path]:
+        """``start`` and every file it includes, directly or not."""
+        seen = {start}
+        stack = [start]
+        while stack:
+            for target in self.includes.get(stack.pop(), ()):
+                if target not in seen:
+                    seen.add(target)
+                    stack.append(target)
+        return seen
 
     @property
     def elements(self) -> list[ConfigElement]:

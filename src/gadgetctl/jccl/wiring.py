@@ -12,6 +12,9 @@ from __future__ import annotations
 from collections import defaultdict
 from dataclasses import dataclass
 from difflib import get_close_matches
+from pathlib import Path
+
+from lxml import etree
 
 from gadgetctl.diagnostics import Diagnostic, Severity
 from gadgetctl.jccl.configuration import ConfigElement, Configuration
@@ -63,22 +66,44 @@ class Wiring:
     # -- names -----------------------------------------------------------------------
 
     def duplicates(self) -> list[Diagnostic]:
+        """Elements whose name an earlier element already has. VR Juggler keeps the later
+        one, which is JCCL's documented way to override: a file supersedes the files it
+        includes and a later file given supersedes earlier ones (info, CFG042), as does a
+        byte-identical copy. Within one file it is a mistake (CFG040, error); between files
+        that neither include each other nor are ordered as given files it may be an
+        accident (CFG040, warning)."""
         found = []
         first: dict[str, ConfigElement] = {}
+        relation = _FileRelation(self.config)
         for element in self.config.loaded:
             if not element.name.strip():
                 continue
             earlier = first.setdefault(element.name, element)
             if earlier is element:
                 continue
-            same_file = earlier.file == element.file
+            first[element.name] = element  # the next duplicate is compared with the one kept
+            if earlier.file == element.file:
+                found.append(at(
+                    "CFG040", f"element name {element.name!r} ({element.type}) is used before in this "
+                    f"file, by the {earlier.type} at {earlier.location}; VR Juggler keeps only the later "
+                    "one, at the earlier one's place", element.location, severity=Severity.ERROR,
+                    hint="Rename or remove one of them."))
+                continue
+            why = relation.override(earlier, element)
+            if why is None and _same_text(earlier, element):
+                why = "an identical copy"
+            if why is not None:
+                verb = "repeats" if why == "an identical copy" else "overrides"
+                found.append(at(
+                    "CFG042", f"{element.type} {element.name!r} {verb} the {earlier.type} of that name "
+                    f"from {earlier.location} ({why})", element.location))
+                continue
             found.append(at(
                 "CFG040", f"element name {element.name!r} ({element.type}) is used before, by the "
                 f"{earlier.type} at {earlier.location}; VR Juggler keeps only the later one, at the "
-                "earlier one's place", element.location,
-                severity=Severity.ERROR if same_file else None,
-                hint="Rename or remove one of them." if same_file else
-                "If this element is meant to override the other, remove the other; otherwise rename one."))
+                "earlier one's place, although neither file includes the other", element.location,
+                hint="If this element is meant to override the other, include the other's file from "
+                "this one (or give the files in that order with --together); otherwise rename one."))
         return found
 
     # -- pointers --------------------------------------------------------------------
@@ -210,6 +235,48 @@ class Wiring:
         if not causes or Severity.ERROR in causes:
             return Severity.ERROR
         return Severity.WARNING
+
+
+class _FileRelation:
+    """Whether the file of a later element supersedes the file of an earlier one."""
+
+    def __init__(self, config: Configuration) -> None:
+        self.config = config
+        self.file_of = {id(e): f.path for f in config.files for e in f.elements}
+        self._reach: dict[Path, set[Path]] = {}
+        self._root_index: dict[Path, int] | None = None
+
+    def reach(self, path: Path) -> set[Path]:
+        found = self._reach.get(path)
+        if found is None:
+            found = self._reach[path] = self.config.reachable(path)
+        return found
+
+    def root_index(self, path: Path) -> int | None:
+        """The position of the first given file that reaches ``path``."""
+        if self._root_index is None:
+            self._root_index = {}
+            for index, root in enumerate(self.config.roots):
+                for reached in self.reach(root):
+                    self._root_index.setdefault(reached, index)
+        return self._root_index.get(path)
+
+    def override(self, earlier: ConfigElement, later: ConfigElement) -> str | None:
+        old, new = self.file_of.get(id(earlier)), self.file_of.get(id(later))
+        if old is None or new is None:
+            return None
+        if old in self.reach(new):
+            return f"{new.name} includes {old.name}"
+        first, second = self.root_index(old), self.root_index(new)
+        if first is not None and second is not None and first < second:
+            return f"{new.name} is given after {old.name}"
+        return None
+
+
+def _same_text(one: ConfigElement, other: ConfigElement) -> bool:
+    if one.node is None or other.node is None:
+        return False
+    return etree.tostring(one.node, with_tail=False) == etree.tostring(other.node, with_tail=False)
 
 
 def check_wiring(config: Configuration, reports: dict[int, ElementReport], index: TypeIndex,

@@ -168,10 +168,22 @@ CODES += [
     Code("CFG040", C, W, "duplicate element name",
          "Two elements of the configuration have the same name. VR Juggler silently keeps the "
          "one loaded last, at the first one's position, and every pointer to the name reaches "
-         "that one. Within one file this is an error; across files (an including file "
-         "overriding an included one) it may be intended.",
+         "that one. Within one file this is an error. Between two files neither of which "
+         "includes the other (two mixins included side by side, say) it is a warning: it may "
+         "be an accident. An including file or a later given file overriding an element is "
+         "reported as CFG042 (info) instead.",
          "C4.base.jconf: <alias name=\"VJHead\">  and  C4.mstar.jconf: <alias name=\"VJHead\">",
-         "Rename or remove one of them."),
+         "Rename or remove one of them, or, when one file is meant to override the other, "
+         "include the other file from it."),
+    Code("CFG042", C, I, "element overrides an element of an included or earlier file",
+         "An element has the name of an element loaded before it from a file it supersedes: a "
+         "file the later element's file includes (directly or not), or a file given before it "
+         "on the command line (--together). JCCL's rule is that the later element replaces "
+         "the earlier one at the earlier one's place, and modular configurations rely on it "
+         "(a mixin that replaces VJHead, a device file that redefines a tracker of its base). "
+         "A byte-identical copy of an element from another file is reported the same way.",
+         "site.jconf includes base.jconf and redefines its <alias name=\"VJHead\">",
+         "Nothing to do if the override is meant; otherwise rename one of the elements."),
     Code("CFG041", C, E, "element would stay pending",
          "VR Juggler would never activate the element: it waits for an element that itself stays "
          "pending, for an embedded element (the run time only finds top-level elements), its "
