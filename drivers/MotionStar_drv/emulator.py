@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
+import queue
 import random
 import select
 import socket
@@ -178,6 +179,9 @@ class MotionStarEmulator:
     second while running continuously. ``received`` logs ``(type, xtype,
     sequence)`` of each client message; ``sent_data`` maps a data packet's
     sequence number to ``{address: (format code, words, buttons)}``.
+
+    For junk tests: :meth:`inject` sends bytes as they are between two messages, and
+    while ``noise`` is set a running stream carries random bytes instead of data packets.
     """
 
     def __init__(
@@ -220,6 +224,8 @@ class MotionStarEmulator:
         self.disconnected = threading.Event()
         self.client_left = threading.Event()
         self._rng = random.Random(seed)
+        self.noise = threading.Event()
+        self._injections: queue.SimpleQueue[bytes] = queue.SimpleQueue()
         self._listener: socket.socket | None = None
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
@@ -288,6 +294,10 @@ class MotionStarEmulator:
                     _Session(self, conn).run()
             self.client_left.set()
 
+    def inject(self, data: bytes) -> None:
+        """Send ``data`` to the connected client as it is, before the next message."""
+        self._injections.put(data)
+
     def _record_sent(self, sequence: int, records: dict) -> None:
         self.sent_data[sequence] = records
         self._sent_order.append(sequence)
@@ -320,10 +330,21 @@ class _Session:
                     return
                 self.buffer += chunk
                 self._handle_messages()
+            self._send_injections()
             if self.running and time.monotonic() >= self.next_due:
                 self.next_due += 1.0 / self.emu.rate
                 if not self._stream_one():
                     return
+
+    def _send_injections(self) -> None:
+        injections = self.emu._injections
+        while not injections.empty():
+            data = injections.get()
+            self.conn.settimeout(60.0)  # however slowly the client reads junk
+            try:
+                self.conn.sendall(data)
+            finally:
+                self.conn.settimeout(1.0)
 
     def _handle_messages(self) -> None:
         while len(self.buffer) >= HEADER.size:
@@ -412,6 +433,9 @@ class _Session:
             self.conn.shutdown(socket.SHUT_RDWR)
             emu.disconnected.set()
             return False
+        if emu.noise.is_set():
+            self._send_raw(emu._rng.randbytes(1024))
+            return True
         self.data_sequence = (self.data_sequence + 1) % 65536
         if emu.scenario == "garbage":
             self._send_raw(self._junk())

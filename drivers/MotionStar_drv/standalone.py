@@ -25,6 +25,12 @@ Differences from the C++ driver, on purpose:
 * records are decoded by their own format code and mapped to units by their
   FBB address; records that do not parse make the packet count as garbage and
   the stream is re-synchronised on the next plausible header;
+* re-synchronisation skips a whole run of junk at once (a scan for the
+  protocol byte, not a header parse per byte), and takes only the message
+  types it waits for: a reply-like header inside junk can no longer swallow
+  the data packet that follows it; when a data packet's sequence number is
+  not the expected one and a data packet with the expected number starts
+  inside it, the first is junk (a packet cut short by the next one);
 * a data packet whose header carries an error code (missed or repeated packets
   on the server side) is still decoded; the code is kept in the sample;
 * after a failed wake-up the server is shut down and woken again, as the
@@ -153,6 +159,10 @@ class MotionStarCommandError(MotionStarError):
 
 class MotionStarDisconnected(MotionStarError):
     """The connection is gone (EOF, reset); reconnect with a new ``open()``."""
+
+
+class MotionStarNoData(MotionStarError):
+    """No data packet for too long although the connection stands (silence or only junk)."""
 
 
 @dataclass(frozen=True)
@@ -453,29 +463,164 @@ def decode_record(record: Record, unit: int, full_scale: float) -> BirdSample:
     )
 
 
-class _Stream:
-    """Buffered reads from a TCP socket against deadlines."""
+DATA_ONLY = frozenset({DATA_PACKET_MULTI})
+PROTOCOL_OFFSET = 10  # of the protocol byte in a header
+TYPE_OFFSET = 8
+LENGTH_OFFSET = 14
+MAX_RECORD = 2 + 2 * 15 + 2  # address, info, at most 15 words, buttons
 
-    def __init__(self, sock: socket.socket) -> None:
-        self.sock = sock
+
+def record_start_plausible(address: int, info: int) -> bool:
+    """Whether two bytes can start a data record (an FBB address and a known format)."""
+    code, count = info >> 4, info & 0x0F
+    if not 1 <= address & 0x7F <= 126:
+        return False
+    return code == ERROR_FORMAT or (
+        code in FORMAT_WORDS and FORMAT_WORDS[DataFormat(code)] == count
+    )
+
+
+Message = tuple[Header, bytes, "list[Record] | None"]
+
+
+class Framer:
+    """Cuts server messages out of a byte stream, skipping junk a whole run at a time.
+
+    Bytes go in with :meth:`feed`; :meth:`next` returns the next well-formed
+    message of an accepted type, or None until more bytes are needed. A run of
+    bytes between two good messages counts once in ``bad_packets`` and byte by
+    byte in ``skipped_bytes``. ``max_data`` bounds a data packet's length (the
+    driver sets it from the number of FBB devices).
+    """
+
+    def __init__(self) -> None:
         self.buffer = bytearray()
+        self.bad_packets = 0
+        self.skipped_bytes = 0
+        self.max_data = MAX_PAYLOAD
+        self._in_junk = False
 
-    def fill(self, size: int, deadline: float) -> bool:
-        """Read until ``size`` bytes are buffered; False at the deadline."""
-        while len(self.buffer) < size:
-            remaining = deadline - time.monotonic()
-            if remaining <= 0:
-                return False
-            self.sock.settimeout(remaining)
-            try:
-                chunk = self.sock.recv(65536)
-            except TimeoutError:
-                return False
-            except OSError as exc:
-                raise MotionStarDisconnected(f"connection lost: {exc}") from exc
-            if not chunk:
-                raise MotionStarDisconnected("the server closed the connection")
-            self.buffer += chunk
+    def feed(self, data: bytes) -> None:
+        self.buffer += data
+
+    def clear(self) -> None:
+        self.buffer.clear()
+        self._in_junk = False
+
+    def next(self, accept: frozenset[int], expected: int | None = None) -> Message | None:
+        """The next message whose type is in ``accept``; None when more bytes are needed.
+
+        ``expected`` is the sequence number the next message should carry: a data packet
+        with another number that has a data packet with this number starting inside it is
+        taken for a packet cut short by the next one, and skipped.
+        """
+        buf = self.buffer
+        while True:
+            start = self._candidate(0, accept)
+            if start:
+                self._skip(start)
+            if len(buf) < HEADER.size:
+                return None
+            header = Header.unpack(bytes(buf[: HEADER.size]))
+            size = HEADER.size + header.length
+            if len(buf) < size:
+                return None  # wait for the rest of the packet
+            payload = bytes(buf[HEADER.size : size])
+            records = None
+            if header.type == DATA_PACKET_MULTI:
+                records = parse_records(payload)
+                if records is None:
+                    self._skip(1)  # a false header: look for the next one after it
+                    continue
+                if expected is not None and header.sequence != expected:
+                    inner = self._data_with_sequence(size, expected)
+                    if inner is not None:
+                        self._skip(inner)
+                        continue
+            del buf[:size]
+            self._in_junk = False
+            return header, payload, records
+
+    # -- internals --------------------------------------------------------------------
+
+    def _plausible_at(self, i: int, accept: frozenset[int]) -> bool:
+        """Whether a header starting at ``i`` (entirely in the buffer) may be real."""
+        buf = self.buffer
+        kind = buf[i + TYPE_OFFSET]
+        if kind not in accept or buf[i + PROTOCOL_OFFSET] != BN_PROTOCOL:
+            return False
+        length = buf[i + LENGTH_OFFSET] << 8 | buf[i + LENGTH_OFFSET + 1]
+        if kind != DATA_PACKET_MULTI:
+            return length <= MAX_PAYLOAD
+        if length > self.max_data or length == 1:
+            return False
+        first = i + HEADER.size
+        return (
+            length == 0
+            or len(buf) < first + 2
+            or record_start_plausible(buf[first], buf[first + 1])
+        )
+
+    def _candidate(self, begin: int, accept: frozenset[int], end: int | None = None) -> int:
+        """The first plausible header start at or after ``begin`` (before ``end``); if
+        there is none, the first position whose header is not entirely buffered yet."""
+        buf = self.buffer
+        last = len(buf) - HEADER.size  # the last start whose header is complete
+        if end is not None:
+            last = min(last, end - 1)
+        pos = begin
+        while pos <= last:
+            found = buf.find(BN_PROTOCOL, pos + PROTOCOL_OFFSET, last + PROTOCOL_OFFSET + 1)
+            if found < 0:
+                break
+            i = found - PROTOCOL_OFFSET
+            if self._plausible_at(i, accept):
+                return i
+            pos = i + 1
+        return max(begin, last + 1)
+
+    def _data_with_sequence(self, size: int, expected: int) -> int | None:
+        """Start of a plausible data header numbered ``expected`` inside the first ``size`` bytes."""
+        buf = self.buffer
+        pos = 1
+        while True:
+            i = self._candidate(pos, DATA_ONLY, end=size)
+            if i >= size or i + HEADER.size > len(buf):
+                return None
+            if buf[i] << 8 | buf[i + 1] == expected:
+                return i
+            pos = i + 1
+
+    def _skip(self, count: int) -> None:
+        if not self._in_junk:
+            self.bad_packets += 1
+            self._in_junk = True
+        self.skipped_bytes += count
+        del self.buffer[:count]
+
+
+class _Stream:
+    """Reads from a TCP socket into a :class:`Framer`, against deadlines."""
+
+    def __init__(self, sock: socket.socket, framer: Framer) -> None:
+        self.sock = sock
+        self.framer = framer
+
+    def receive(self, deadline: float) -> bool:
+        """One read of whatever is there; False at the deadline."""
+        remaining = deadline - time.monotonic()
+        if remaining <= 0:
+            return False
+        self.sock.settimeout(remaining)
+        try:
+            chunk = self.sock.recv(65536)
+        except TimeoutError:
+            return False
+        except OSError as exc:
+            raise MotionStarDisconnected(f"connection lost: {exc}") from exc
+        if not chunk:
+            raise MotionStarDisconnected("the server closed the connection")
+        self.framer.feed(chunk)
         return True
 
     def send(self, data: bytes, timeout: float) -> None:
@@ -537,8 +682,7 @@ class MotionStar:
         self.units = ""
         self.warnings: list[str] = []
         self.packets = 0
-        self.bad_packets = 0
-        self.skipped_bytes = 0
+        self.framer = Framer()
         self.sequence_resyncs = 0
         self.unknown_records = 0
         self.sensor_errors = 0
@@ -546,7 +690,6 @@ class MotionStar:
         self._given_sock = sock
         self._stream: _Stream | None = None
         self._running = False
-        self._in_junk = False
         self._units_of: dict[int, int] = {}
 
     # -- life cycle -------------------------------------------------------------------
@@ -567,7 +710,9 @@ class MotionStar:
                 ) from exc
         with contextlib.suppress(OSError):
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self._stream = _Stream(sock)
+        self.framer.clear()
+        self.framer.max_data = MAX_PAYLOAD
+        self._stream = _Stream(sock, self.framer)
         self.sequence = 0
         self.full_scale = None
         self.units = ""
@@ -605,6 +750,15 @@ class MotionStar:
     def is_open(self) -> bool:
         return self._stream is not None
 
+    @property
+    def bad_packets(self) -> int:
+        """Runs of bytes between two good messages that were not a message we wait for."""
+        return self.framer.bad_packets
+
+    @property
+    def skipped_bytes(self) -> int:
+        return self.framer.skipped_bytes
+
     def __enter__(self) -> MotionStar:
         self.open()
         return self
@@ -632,13 +786,11 @@ class MotionStar:
         if self.mode == RunMode.SAMPLE_INDIVIDUALLY:
             self._send(MSG_SINGLE_SHOT)
         deadline = time.monotonic() + self.sample_timeout
-        while True:
-            packet = self._read_packet(deadline)
-            if packet is None:
-                return None
-            header, _payload, records = packet
-            if header.type == DATA_PACKET_MULTI and records is not None:
-                return self._decode(header, records)
+        packet = self._read_packet(deadline, DATA_ONLY)
+        if packet is None:
+            return None
+        header, _payload, records = packet
+        return self._decode(header, records or [])
 
     # -- internals ------------------------------------------------------------------------
 
@@ -668,8 +820,9 @@ class MotionStar:
         """Send a command and wait for its reply, passing over data packets."""
         self._send(kind, xtype, payload)
         deadline = time.monotonic() + (self.read_timeout if timeout is None else timeout)
+        accept = frozenset({reply, RSP_ILLEGAL, RSP_UNKNOWN, DATA_PACKET_MULTI})
         while True:
-            packet = self._read_packet(deadline)
+            packet = self._read_packet(deadline, accept)
             if packet is None:
                 raise MotionStarTimeout(f"no reply to message {kind} (xtype {xtype})")
             header, body, _records = packet
@@ -682,40 +835,18 @@ class MotionStar:
             if header.type in (RSP_ILLEGAL, RSP_UNKNOWN):
                 raise MotionStarCommandError(f"message {kind} refused with type {header.type}")
 
-    def _read_packet(self, deadline: float) -> tuple[Header, bytes, list[Record] | None] | None:
-        """Next well-formed server message, re-synchronising over junk."""
+    def _read_packet(self, deadline: float, accept: frozenset[int]) -> Message | None:
+        """Next well-formed server message of an accepted type, re-synchronising over junk;
+        None at the deadline (a partial packet is kept for the next call)."""
         stream = self._stream
         assert stream is not None
         while True:
-            if not stream.fill(HEADER.size, deadline):
+            message = self.framer.next(accept, self.sequence)
+            if message is not None:
+                self._track_sequence(message[0])
+                return message
+            if not stream.receive(deadline):
                 return None
-            header = Header.unpack(bytes(stream.buffer[: HEADER.size]))
-            if not header.plausible():
-                self._skip_byte(stream)
-                continue
-            size = HEADER.size + header.length
-            if not stream.fill(size, deadline):
-                return None  # keep the partial packet for the next call
-            payload = bytes(stream.buffer[HEADER.size : size])
-            records = None
-            if header.type == DATA_PACKET_MULTI:
-                records = parse_records(payload)
-                if records is None:
-                    # A false header or a packet cut short by the next one:
-                    # rescan from the following byte.
-                    self._skip_byte(stream)
-                    continue
-            del stream.buffer[:size]
-            self._in_junk = False
-            self._track_sequence(header)
-            return header, payload, records
-
-    def _skip_byte(self, stream: _Stream) -> None:
-        if not self._in_junk:
-            self.bad_packets += 1
-            self._in_junk = True
-        self.skipped_bytes += 1
-        del stream.buffer[0]
 
     def _track_sequence(self, header: Header) -> None:
         """Adopt the server's sequence number if it differs, then count on."""
@@ -764,6 +895,8 @@ class MotionStar:
             self._transact(MSG_SEND_SETUP, RSP_SEND_SETUP, address, block)
             self.birds[address] = BirdStatus(address, block)
         self.sensors = tuple(sensors)
+        # one record per FBB device at most, each at most MAX_RECORD bytes
+        self.framer.max_data = min(MAX_PAYLOAD, MAX_RECORD * max(1, len(status.devices)))
         self._units_of = {address: unit for unit, address in enumerate(self.sensors)}
 
     def _decode(self, header: Header, records: list[Record]) -> MotionStarSample:

@@ -22,6 +22,10 @@ Differences, on purpose:
 * a sensor whose record is missing or failed keeps its last pose (the C++ reset it);
 * a lost connection raises from ``sample`` and the input manager restarts the device with
   back-off (the C++ sample loop only logged the failure);
+* no data packet for ``data_timeout`` seconds (silence, or only junk on the stream) is a
+  fault too, whose reason says how much junk was skipped; a (re)start counts as done only
+  when the first data packet has arrived, so the device never reads "running" while only
+  junk arrives;
 * the standalone driver fixes the decoding defects (signed matrix and quaternion words,
   button bytes after each record, rotations of the matrix formats); see its docstring.
 """
@@ -29,6 +33,7 @@ Differences, on purpose:
 from __future__ import annotations
 
 import math
+import time
 from enum import IntEnum
 
 import numpy as np
@@ -45,6 +50,8 @@ from .standalone import (
     Hemisphere,
     MotionStar,
     MotionStarError,
+    MotionStarNoData,
+    MotionStarSample,
     RunMode,
 )
 
@@ -74,6 +81,7 @@ class MotionStarDevice(Position):
     read_timeout = 5.0  # per command reply
     sample_timeout = 0.25  # one sample() call waiting for a data packet
     close_timeout = 1.0  # stop-data and shut-down replies
+    data_timeout = 2.0  # no data packet for this long (silence or only junk): a fault
 
     def __init__(self) -> None:
         super().__init__()
@@ -93,6 +101,9 @@ class MotionStarDevice(Position):
         self._poses = np.zeros((0, 4, 4))
         self._counts = {"bad_packets": 0, "skipped_bytes": 0, "sensor_errors": 0}
         self._told: set[str] = set()
+        self._first: tuple[MotionStarSample, float] | None = None  # read by start_sampling
+        self._last_data = 0.0  # monotonic time of the newest data packet
+        self._junk_mark = 0  # skipped_bytes at that time
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)  # name, device-level position_filters
@@ -145,12 +156,26 @@ class MotionStarDevice(Position):
             self._poses = np.tile(np.eye(4), (len(ms.sensors), 1, 1))
         self._next_sequence = None
         self.ms = ms
+        self._last_data, self._junk_mark = time.monotonic(), ms.skipped_bytes
+        try:  # started means data arrive: wait for the first packet
+            first = None
+            while first is None:
+                first = self._next_packet(ms)
+        except BaseException:
+            self.stop_sampling()
+            raise
+        self._first = (first, self.now())
 
     def sample(self) -> None:
         ms = self.ms
         if ms is None:
             raise MotionStarError("the MotionStar is not open")
-        packet = ms.sample()  # raises MotionStarDisconnected when the connection is lost
+        if self._first is not None:
+            (packet, stamp), self._first = self._first, None
+        else:
+            # raises MotionStarDisconnected when the connection is lost, MotionStarNoData
+            # when only junk (or nothing) arrives for data_timeout seconds
+            packet, stamp = self._next_packet(ms), self.now()
         if packet is None:
             return
         self._track(packet.sequence)
@@ -159,10 +184,28 @@ class MotionStarDevice(Position):
             if bird.unit < len(poses):
                 poses[bird.unit] = bird.matrix
         # A copy: the store keeps what it is given, and the poses change with the next packet.
-        self.add_position_sample(poses.copy(), self.now())
+        self.add_position_sample(poses.copy(), stamp)
+
+    def _next_packet(self, ms: MotionStar) -> MotionStarSample | None:
+        """One ``ms.sample()``; raises MotionStarNoData after data_timeout without data."""
+        packet = ms.sample()
+        now = time.monotonic()
+        if packet is not None:
+            self._last_data, self._junk_mark = now, ms.skipped_bytes
+            return packet
+        quiet = now - self._last_data
+        if quiet >= self.data_timeout:
+            junk = ms.skipped_bytes - self._junk_mark
+            if junk:
+                raise MotionStarNoData(
+                    f"only junk for {quiet:.1f} s: {junk} bytes skipped, no data packet"
+                )
+            raise MotionStarNoData(f"no data packet for {quiet:.1f} s")
+        return None
 
     def stop_sampling(self) -> None:
         ms, self.ms = self.ms, None
+        self._first = None
         if ms is not None:
             for key in self._counts:
                 self._counts[key] += getattr(ms, key)
@@ -187,6 +230,17 @@ class MotionStarDevice(Position):
     def sensor_errors(self) -> int:
         """Records in which a sensor reported a sampling error."""
         return self._count("sensor_errors")
+
+    @property
+    def counters(self) -> dict[str, int]:
+        """The device's health counters since it was made, reconnections included."""
+        return {
+            "packets": self.packets,
+            "bad_packets": self.bad_packets,
+            "skipped_bytes": self.skipped_bytes,
+            "sensor_errors": self.sensor_errors,
+            "sequence_gaps": self.sequence_gaps,
+        }
 
     # -- internals ------------------------------------------------------------------------
 

@@ -308,3 +308,75 @@ def test_emulator_main_prints_where_to_point(capsys) -> None:
     out = capsys.readouterr().out
     assert "3 sensors" in out and "<address>127.0.0.1</address>" in out
     assert "<server_port>" in out
+
+
+# -- junk on the stream -------------------------------------------------------------------------
+
+
+def test_a_reply_like_header_in_junk_does_not_swallow_the_next_packets(emulator) -> None:
+    """A false header inside junk that claims a payload must not eat the data that follows."""
+    emu = emulator("motion", birds=2)
+    fake = struct.pack(
+        ">HH4sBBBBHH", 7, 0, bytes(4), 20, 0, 3, 0, 0, 200
+    )  # wake-up reply, 200 bytes
+    with client(emu) as ms:
+        samples = take(ms, 3)
+        emu.inject(b"\x55" * 5 + fake)
+        while ms.skipped_bytes == 0:
+            samples += take(ms, 1)
+        samples += take(ms, 10)
+        assert ms.skipped_bytes == 5 + len(fake) and ms.bad_packets == 1
+    sequences = [s.sequence for s in samples]
+    assert sequences == list(range(sequences[0], sequences[0] + len(samples)))
+
+
+@pytest.mark.timeout(30)  # a hang guard; bench/motionstar_resync.py measures the speed
+def test_a_long_junk_run_is_skipped_whole_and_no_packet_is_lost(emulator) -> None:
+    import random
+
+    emu = emulator("motion", birds=2)
+    junk = random.Random(12).randbytes(16 << 20)
+    with client(emu) as ms:
+        samples = take(ms, 3)
+        emu.inject(junk)
+        while ms.skipped_bytes < len(junk):
+            samples += take(ms, 1)
+        samples += take(ms, 3)
+        assert ms.skipped_bytes == len(junk) and ms.bad_packets == 1
+    sequences = [s.sequence for s in samples]
+    assert sequences == list(range(sequences[0], sequences[0] + len(samples)))
+
+
+def packet(sequence: int, payload: bytes, kind: int = 210) -> bytes:
+    return (
+        struct.pack(">HH4sBBBBHH", sequence, 0, bytes(4), kind, 0, 3, 0, 0, len(payload)) + payload
+    )
+
+
+def test_framer_prefers_the_expected_packet_over_a_cut_short_one() -> None:
+    """A data packet cut short by the next one can parse with the next header as its tail
+    (here: sequence 0x02F7 reads as an error record of address 2 with 7 words)."""
+    from MotionStar_drv.standalone import Framer
+
+    record = bytes([0x81, 0x46]) + bytes(12) + bytes(2)  # address 1, position/angles, buttons
+    real = packet(0x02F7, record + bytes([0x82, 0x46]) + bytes(14))
+    cut = packet(0xFFFF, record + bytes(16))[: 16 + 16]
+    framer = Framer()
+    framer.feed(cut + real)
+    header, _payload, records = framer.next(frozenset({210}), expected=0x02F7)
+    assert header.sequence == 0x02F7 and [r.address for r in records] == [1, 2]
+    assert framer.skipped_bytes == len(cut) and framer.bad_packets == 1
+    assert framer.next(frozenset({210}), expected=0x02F8) is None and not framer.buffer
+
+
+def test_framer_skips_types_it_does_not_wait_for_and_keeps_partial_packets() -> None:
+    from MotionStar_drv.standalone import Framer
+
+    framer = Framer()
+    data = packet(4, bytes([0x81, 0x13]) + bytes(8))
+    framer.feed(packet(3, b"", kind=20) + data[:20])
+    assert framer.next(frozenset({210})) is None  # the reply is junk here; the packet is cut
+    assert framer.skipped_bytes == 16 and len(framer.buffer) == 20
+    framer.feed(data[20:])
+    header, _payload, records = framer.next(frozenset({210}))
+    assert header.sequence == 4 and records[0].words == (0, 0, 0)

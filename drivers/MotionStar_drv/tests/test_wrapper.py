@@ -295,6 +295,43 @@ def test_garbage_is_skipped_without_a_fault(tmp_path, emulator, managers) -> Non
     assert device.faults == 0 and device.sequence_gaps == 0
 
 
+def test_only_junk_faults_the_device_and_samples_resume_when_data_return(
+    tmp_path, emulator, managers, monkeypatch
+) -> None:
+    emu = emulator("motion", birds=2)
+    manager = managers(write(tmp_path, star("Star", emu.port)))
+    device = manager.device("Star")
+    monkeypatch.setattr(type(device), "data_timeout", 0.5)
+    assert wait_until(lambda: device.packets > 0, step=manager.update)
+
+    emu.noise.set()  # random bytes instead of data packets, on this and later connections
+    assert wait_until(lambda: device.faults >= 1, timeout=10, step=manager.update)
+    status = status_of(manager, "Star")
+    assert status.code == "DRV042" and "only junk for" in status.reason, status
+    assert "bytes skipped, no data packet" in status.reason
+    states: list[str] = []
+
+    def watch() -> None:
+        manager.update()
+        state = status_of(manager, "Star").state
+        if not states or states[-1] != state:
+            states.append(state)
+
+    # reconnections do not help while only junk arrives, and none of them reads "running"
+    assert wait_until(lambda: states.count("reconnecting") >= 2, timeout=15, step=watch)
+    assert "running" not in states and {"faulted", "reconnecting"} >= set(states)
+    assert "only junk for" in status_of(manager, "Star").reason
+    assert device.counters["skipped_bytes"] > 0 and device.counters["bad_packets"] >= 2
+
+    packets = device.packets
+    emu.noise.clear()
+    assert wait_until(
+        lambda: device.packets > packets and status_of(manager, "Star").state == "running",
+        timeout=10,
+        step=manager.update,
+    )
+
+
 # -- faults and restarts ----------------------------------------------------------------------
 
 
