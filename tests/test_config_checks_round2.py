@@ -170,3 +170,91 @@ def test_a_duplicate_within_one_file_stays_an_error(check):
         and "in this file" in found.message
     )
     assert check(tracker()) == []
+
+
+# -- 2. proxies reading units beyond their device --------------------------------------------
+
+KEYBOARD = (
+    '      <keyboard_mouse_device name="Keys" version="2"/>\n'
+    '      <keyboard_mouse_proxy name="Keys Proxy" version="1"><device>Keys</device></keyboard_mouse_proxy>\n'
+)
+
+
+def key(name: str, key_name: str) -> str:
+    return (
+        f'<key_pair><key_modifier_pair name="{name}" version="1"><modifier_key>ANY</modifier_key>'
+        f"<key>{key_name}</key></key_modifier_pair></key_pair>"
+    )
+
+
+def sim_buttons(unit: int) -> str:
+    return (
+        KEYBOARD + '      <simulated_digital_device name="Buttons" version="2">'
+        f"<keyboard_mouse_proxy>Keys Proxy</keyboard_mouse_proxy>{key('A', 'KEY_A')}{key('B', 'KEY_B')}"
+        "</simulated_digital_device>\n"
+        f'      <digital_proxy name="Second" version="1"><device>Buttons</device><unit>{unit}</unit></digital_proxy>\n'
+    )
+
+
+def bundled_check(tmp_path, text: str, name: str = "units.jconf"):
+    path = write(tmp_path / name, configuration(text))
+    result = validate_paths([path], ValidateOptions(environ={}))
+    return [d for d in result.diagnostics if d.code == "CFG034"], path
+
+
+def test_vrpn_counts_stated_by_the_configuration_bound_the_proxies(tmp_path):
+    server = (
+        '      <vrpn name="Server" version="3"><tracker_server>T@host</tracker_server>'
+        "<button_server>B@host</button_server><analog_server>A@host</analog_server>"
+        "<button_count>14</button_count></vrpn>\n"
+    )
+    proxies = (
+        '      <digital_proxy name="Last" version="1"><device>Server</device><unit>13</unit></digital_proxy>\n'
+        '      <digital_proxy name="Beyond" version="1"><device>Server</device><unit>14</unit></digital_proxy>\n'
+        '      <position_proxy name="Tracker 2" version="1"><device>Server</device><unit>2</unit></position_proxy>\n'
+        '      <analog_proxy name="Axis" version="1"><device>Server</device><unit>0</unit></analog_proxy>\n'
+    )
+    found, _ = bundled_check(tmp_path, server + proxies)
+    assert [(d.line, d.severity) for d in found] == [(7, Severity.ERROR), (8, Severity.ERROR)]
+    beyond, tracker = found
+    assert (
+        "'Beyond' reads digital unit 14" in beyond.message
+        and "units 0-13 (button_count 14)" in beyond.message
+    )
+    assert "'Tracker 2' reads position unit 2" in tracker.message
+    assert "units 0-1 (tracker_count 2 (the default))" in tracker.message
+    assert "raise tracker_count" in tracker.hint
+
+
+def test_fixed_counts_and_key_lists(tmp_path):
+    glove = (
+        '      <pinch_glove name="Pinch" version="2"><port>/dev/ttyS0</port></pinch_glove>\n'
+        '      <glove_proxy name="Right" version="1"><device>Pinch</device><unit>1</unit></glove_proxy>\n'
+        '      <glove_proxy name="Third" version="1"><device>Pinch</device><unit>2</unit></glove_proxy>\n'
+    )
+    (third,), _ = bundled_check(tmp_path, glove)
+    assert "'Third' reads glove unit 2" in third.message and "units 0-1" in third.message
+    (second,), _ = bundled_check(tmp_path, sim_buttons(2))
+    assert "units 0-1 (2 key_pair bindings)" in second.message
+    assert bundled_check(tmp_path, sim_buttons(1))[0] == []
+    waves = (
+        '      <waveform_device name="Wave" version="1"><analog_waveform>sine</analog_waveform></waveform_device>\n'
+        '      <analog_proxy name="A1" version="1"><device>Wave</device><unit>1</unit></analog_proxy>\n'
+    )
+    (beyond,), _ = bundled_check(tmp_path, waves)
+    assert "unit 0 (1 analog_waveform channels)" in beyond.message
+    assert bundled_check(tmp_path, waves.replace("<unit>1</unit>", "<unit>0</unit>"))[0] == []
+
+
+def test_config_pending_applies_the_same_rule(tmp_path, cli):
+    _, path = bundled_check(tmp_path, sim_buttons(2))
+    result = cli("config", "pending", path, "--format", "json")
+    import json
+
+    report = json.loads(result.stdout)
+    (problem,) = [d for d in report["diagnostics"] if d["code"] == "CFG034"]
+    (validated,), _ = bundled_check(tmp_path, sim_buttons(2))
+    assert problem["message"] == validated.message and problem["line"] == validated.line
+    assert result.exit_code == 1
+    _, path = bundled_check(tmp_path, sim_buttons(1), "fine.jconf")
+    assert cli("config", "pending", path).exit_code == 0

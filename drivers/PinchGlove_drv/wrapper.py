@@ -15,29 +15,21 @@ Differences from the C++ wrapper, on purpose:
   only ended its thread and kept the port open);
 * a lost serial line raises from ``sample`` and the input manager restarts the device
   (the C++ sample loop kept failing quietly);
-* proxies in the element's own file that read units the glove does not have are reported
-  (VR Juggler's ``pinch.mixin.jconf`` numbers the right hand 6..10 instead of 5..9).
+* proxies that read units the glove does not have are reported (VR Juggler's
+  ``pinch.mixin.jconf`` numbers the right hand 6..10 instead of 5..9) by the input manager,
+  with the rule ``gadgetctl validate`` applies (``gadgetctl.jccl.units``, CFG034).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from dataclasses import dataclass
-
 import numpy as np
 
-from gadgetctl.diagnostics import Diagnostic
 from gadgetctl.input import DeviceConfigError, Digital, Glove
-from gadgetctl.jccl.access import ElementAccess, read_int
+from gadgetctl.jccl.access import ElementAccess
 
-from .standalone import DIGITAL_UNITS, FINGERS, HANDS, PinchGlove, PinchGloveError, PinchSample
+from .standalone import FINGERS, HANDS, PinchGlove, PinchGloveError, PinchSample
 
 GLOVE_ROWS, GLOVE_JOINTS = 6, 4  # five fingers and the wrist, four joints each
-UNIT_LIMITS = {"digital_proxy": DIGITAL_UNITS, "glove_proxy": len(HANDS)}
-UNIT_HELP = {
-    "digital_proxy": "digital units 0-4 are the left thumb..pinky and 5-9 the right thumb..pinky",
-    "glove_proxy": "glove unit 0 is the left hand and 1 the right",
-}
 
 
 def glove_angles(sample: PinchSample) -> np.ndarray:
@@ -46,44 +38,6 @@ def glove_angles(sample: PinchSample) -> np.ndarray:
     for unit, hand in enumerate(sample.hands):
         angles[unit, : len(FINGERS), :] = hand.angles
     return angles
-
-
-@dataclass(frozen=True)
-class ProxyRef:
-    """A proxy element found next to the device: its type, name, unit and line."""
-
-    type: str
-    name: str
-    unit: int
-    line: int | None
-
-
-def proxies_beside(access: ElementAccess) -> Iterator[ProxyRef]:
-    """Digital and glove proxies in the device element's own file that point at it.
-
-    Proxies are configured after devices and may live in other files; this looks only
-    at the file the device came from, where mixins such as ``pinch.mixin.jconf`` keep them.
-    """
-    node = access.element.node
-    parent = None if node is None else node.getparent()
-    if parent is None:
-        return
-    for sibling in parent:
-        kind = sibling.tag.rpartition("}")[2] if isinstance(sibling.tag, str) else ""
-        if kind not in UNIT_LIMITS:
-            continue
-        values = {
-            child.tag.rpartition("}")[2]: (child.text or "").strip()
-            for child in sibling
-            if isinstance(child.tag, str)
-        }
-        if values.get("device") == access.name:
-            yield ProxyRef(
-                kind,
-                sibling.get("name") or "",
-                read_int(values.get("unit", "0")),
-                sibling.sourceline,
-            )
 
 
 class PinchGloveDevice(Glove, Digital):
@@ -115,7 +69,6 @@ class PinchGloveDevice(Glove, Digital):
             raise DeviceConfigError("port is empty: name the serial device the glove box is on")
         if self.baud <= 0:
             raise DeviceConfigError(f"baud {self.baud} is not a line speed")
-        self._check_proxy_units(access)
 
     def start_sampling(self) -> None:
         # The hardware description is only printed by the C++ driver; after a restart
@@ -180,27 +133,3 @@ class PinchGloveDevice(Glove, Digital):
         self.add_digital_sample(sample.digital, stamp)
         self.add_glove_sample(glove_angles(sample), stamp)
 
-    def _check_proxy_units(self, access: ElementAccess) -> None:
-        """Warn about proxies beside the device that read units it does not have."""
-        loc = access.element.location
-        for ref in proxies_beside(access):
-            limit = UNIT_LIMITS[ref.type]
-            if ref.unit < limit:
-                continue
-            hint = UNIT_HELP[ref.type]
-            if ref.type == "digital_proxy":
-                hint += (
-                    "; VR Juggler's pinch.mixin.jconf numbers the right hand 6-10, which "
-                    "shifts every right-hand proxy by one finger"
-                )
-            self.diagnostics.append(
-                Diagnostic.make(
-                    "DRV024",
-                    f"{self.name}: {ref.type} {ref.name!r} reads unit {ref.unit}, but a "
-                    f"pinch_glove has {limit} {ref.type.removesuffix('_proxy')} units (0-{limit - 1})",
-                    loc.path,
-                    ref.line,
-                    None,
-                    hint=hint,
-                )
-            )

@@ -347,8 +347,9 @@ def test_corpus_pinch_mixin_delivers_through_its_proxies(tmp_path, emulator, man
     )
     pending = {p.name for p in manager.pending()}
     assert pending == {"VJGlove", "VJGesture"}  # aliases whose proxy is left empty upstream
-    warnings = [d for d in manager.diagnostics if d.code == "DRV024"]
-    assert len(warnings) == 1 and "'PinchRightPinky' reads unit 10" in warnings[0].message
+    warnings = [d for d in manager.diagnostics if d.code == "CFG034"]  # the rule validate applies
+    assert len(warnings) == 1 and "'PinchRightPinky' reads digital unit 10" in warnings[0].message
+    assert "units 0-9" in warnings[0].message
     assert warnings[0].line is not None and "6-10" in warnings[0].hint
 
     device = manager.device("FakespacePinchGlove")

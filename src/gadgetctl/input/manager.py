@@ -60,6 +60,7 @@ from gadgetctl.jccl.access import ElementAccess
 from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.definitions import Location
 from gadgetctl.jccl.repository import DefinitionRepository
+from gadgetctl.jccl.units import proxy_unit_problem
 
 MIN_INPUT_MANAGER_VERSION = 2
 NOT_PROCESSED = "not processed yet"
@@ -387,6 +388,9 @@ class InputManager:
             proxy.config(access)
         except Exception as err:
             return PendingEntry(element, PendingKind.CONFIG_FAILED, _error_text(err))
+        problem = proxy_unit_problem(element, self._known.get(proxy.device_name), self.repo)
+        if problem is not None and problem not in proxy.diagnostics:
+            proxy.diagnostics.append(problem)
         proxy.refresh(self._device_objects, self._why_missing(proxy.device_name))
         self._proxies[name] = proxy
         self._proxy_elements[name] = element

@@ -25,6 +25,7 @@ from gadgetctl.jccl.repository import DefinitionRepository
 from gadgetctl.jccl.runtime import PATH_PROPERTIES
 from gadgetctl.jccl.searchpath import SearchPathEntry, configuration_entries
 from gadgetctl.jccl.typeindex import TypeIndex
+from gadgetctl.jccl.units import proxy_unit_problems
 from gadgetctl.jccl.wiring import Scope, check_wiring
 from gadgetctl.jccl.xmlload import FileKind, XmlDocument
 
@@ -98,6 +99,7 @@ def check_configuration(config: Configuration, session: Session, scope: Scope) -
         found += report.diagnostics
         found += _path_variables(element, session.environ)
     found += check_wiring(config, reports, checker.index, scope)
+    found += proxy_unit_problems(config.elements, repo)
     return found
 
 

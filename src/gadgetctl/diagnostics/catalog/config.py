@@ -161,6 +161,17 @@ CODES += [
          "forever, a simulated device without a keyboard_mouse_proxy never sees a key.",
          "<digital_proxy name=\"Button\" version=\"1\"><device/></digital_proxy>",
          "Name the element it should use."),
+    Code("CFG034", C, E, "proxy reads a unit its device does not have",
+         "The proxy's unit is beyond the units its device publishes, as the configuration "
+         "states them (a vrpn device's tracker_count, button_count and analog_count) or the "
+         "device type fixes them (ten contacts and two gloves of a pinch_glove or "
+         "simulated_digital_glove, one unit per key binding of a simulated digital or analog "
+         "device, one per channel of a waveform_device, one position of a simulated position "
+         "device). Gadgeteer publishes only that many units, so the proxy reads default data "
+         "for ever (and the C++ bounds check lets the first unit past the end through). The "
+         "message gives the valid range. `gadgetctl config pending` applies the same rule.",
+         "<vrpn ...><button_count>14</button_count>   and   <digital_proxy ...><unit>14</unit>",
+         "Use a unit within the range, or correct the count the device states."),
 ]
 
 # -- the configuration as a whole --------------------------------------------------------

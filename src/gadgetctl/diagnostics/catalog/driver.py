@@ -99,11 +99,11 @@ CODES += [
          "simulated_positional_device with 6 key_pair entries",
          "Add or remove key_modifier_pair entries so each slot is bound."),
     Code("DRV024", C, W, "driver finds a setting suspect",
-         "A driver accepted the element but something in it will not give what was meant: a "
-         "proxy that reads a unit the device does not have, position units that disagree with "
-         "what the hardware reports, a value the hardware clamps. The device still runs; the "
-         "message says what the driver found and what happens instead.",
-         "digital_proxy 'PinchRightPinky' reads unit 10; a pinch_glove has digital units 0-9",
+         "A driver accepted the element but something in it will not give what was meant: "
+         "position units that disagree with what the hardware reports, a value the hardware "
+         "clamps. The device still runs; the message says what the driver found and what "
+         "happens instead. (A proxy reading a unit the device does not have is CFG034.)",
+         "motion_star 'Tracker': measurement_rate 200 Hz is outside 20-144 Hz",
          "Correct the value the message names."),
 ]
 

@@ -1,0 +1,167 @@
+"""How many units of each kind a device has, and proxies that read a unit beyond them.
+
+Gadgeteer publishes exactly as many units as a device has (a vrpn device's button_count
+buttons, one unit per key binding of a simulated device, ten contacts of a pinch glove), so
+a proxy whose unit is beyond them reads default data for ever (and the C++ bounds check is
+off by one). The count is known before run time when the configuration states it or the
+definition fixes it; :func:`proxy_unit_problem` is the one rule `gadgetctl validate` and the
+input manager (`gadgetctl config pending`) both apply.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+
+from gadgetctl.diagnostics import Diagnostic
+from gadgetctl.jccl.access import ElementAccess, UnknownProperty, read_int
+from gadgetctl.jccl.configuration import ConfigElement
+from gadgetctl.jccl.repository import DefinitionRepository
+
+#: Proxy element types with a unit, and the kind of data the unit indexes.
+PROXY_KINDS = {
+    "analog_proxy": "analog",
+    "digital_proxy": "digital",
+    "position_proxy": "position",
+    "glove_proxy": "glove",
+}
+
+
+@dataclass(frozen=True, slots=True)
+class UnitRange:
+    kind: str
+    count: int
+    source: str  # what sets the count, for messages: "button_count 14", "3 key_pair bindings"
+    hint: str | None = None
+
+
+def _stated(prop: str, hint: str) -> Callable[[ElementAccess, str], UnitRange | None]:
+    """A count the configuration states in an integer property (or its default)."""
+
+    def count(access: ElementAccess, kind: str) -> UnitRange | None:
+        if not access.has(prop):
+            return None
+        value = access.integer(prop)
+        shown = f"{prop} {value}" if access.count(prop) else f"{prop} {value} (the default)"
+        return UnitRange(kind, value, shown, hint.format(prop=prop))
+
+    return count
+
+
+def _listed(prop: str, what: str) -> Callable[[ElementAccess, str], UnitRange | None]:
+    """One unit per value of a variable property."""
+
+    def count(access: ElementAccess, kind: str) -> UnitRange | None:
+        if not access.has(prop):
+            return None
+        written = access.count(prop)
+        return UnitRange(
+            kind,
+            written,
+            f"{written} {prop} {what}",
+            f"Add a {prop} for each unit the proxies read.",
+        )
+
+    return count
+
+
+def _fixed(
+    number: int, hint: str | None = None
+) -> Callable[[ElementAccess, str], UnitRange | None]:
+    def count(access: ElementAccess, kind: str) -> UnitRange | None:
+        return UnitRange(kind, number, f"a {access.element.type} has {number}", hint)
+
+    return count
+
+
+_PINCH = (
+    "A pinch_glove numbers the left hand's contacts 0-4 (thumb to pinky) and the right "
+    "hand's 5-9; VR Juggler's pinch.mixin.jconf numbers the right hand 6-10, which shifts "
+    "every right-hand proxy by one finger."
+)
+_SERVER = "Use a unit below the count, or raise {prop} if the server provides more."
+
+#: Element type -> kind -> how its unit count is found.
+UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]]] = {
+    "vrpn": {
+        "position": _stated("tracker_count", _SERVER),
+        "digital": _stated("button_count", _SERVER),
+        "analog": _stated("analog_count", _SERVER),
+    },
+    "pinch_glove": {
+        "digital": _fixed(10, _PINCH),
+        "glove": _fixed(2, "Glove 0 is the left hand, glove 1 the right."),
+    },
+    "simulated_digital_device": {"digital": _listed("key_pair", "bindings")},
+    "simulated_analog_device": {"analog": _listed("increment_keypress", "bindings")},
+    "simulated_digital_glove": {"digital": _fixed(10), "glove": _fixed(2)},
+    "simulated_positional_device": {"position": _fixed(1)},
+    "simulated_relative_position": {"position": _fixed(1)},
+    "simulated_setable_position": {"position": _fixed(1)},
+    "waveform_device": {
+        "analog": _listed("analog_waveform", "channels"),
+        "digital": _listed("button_period", "buttons"),
+        "position": _listed("position_path", "paths"),
+    },
+}
+
+
+def unit_range(device: ConfigElement, kind: str, repo: DefinitionRepository) -> UnitRange | None:
+    """The number of ``kind`` units ``device`` has, when known before run time."""
+    rule = UNIT_RULES.get(device.type, {}).get(kind)
+    if rule is None or device.type not in repo:
+        return None
+    try:
+        return rule(ElementAccess(device, repo), kind)
+    except UnknownProperty:
+        return None
+
+
+def proxy_unit_problem(
+    proxy: ConfigElement, device: ConfigElement | None, repo: DefinitionRepository
+) -> Diagnostic | None:
+    """CFG034 when ``proxy`` reads a unit ``device`` does not have; None otherwise (also when
+    the count is not known before run time)."""
+    kind = PROXY_KINDS.get(proxy.type)
+    if kind is None or device is None:
+        return None
+    units = unit_range(device, kind, repo)
+    if units is None:
+        return None
+    values = proxy.values("unit")
+    unit = read_int(values[0].stripped) if values else 0
+    if 0 <= unit < units.count:
+        return None
+    valid = (
+        f"units 0-{units.count - 1}"
+        if units.count > 1
+        else ("unit 0" if units.count == 1 else "no units")
+    )
+    location = values[0].location if values else proxy.location
+    return Diagnostic.make(
+        "CFG034",
+        f"{proxy.type} {proxy.full_name!r} reads {kind} unit {unit}, but {device.type} "
+        f"{device.full_name!r} has {valid} ({units.source}); the proxy only ever reads default data",
+        location.path,
+        location.line,
+        location.column,
+        hint=units.hint,
+    )
+
+
+def proxy_unit_problems(
+    elements: Iterable[ConfigElement], repo: DefinitionRepository
+) -> list[Diagnostic]:
+    """:func:`proxy_unit_problem` for every proxy among ``elements`` (the effective top-level
+    elements of a configuration), against the element its device property names."""
+    elements = list(elements)
+    by_name = {e.name: e for e in elements}
+    found = []
+    for element in elements:
+        if element.type in PROXY_KINDS:
+            values = element.values("device")
+            device = by_name.get(values[0].stripped) if values else None
+            problem = proxy_unit_problem(element, device, repo)
+            if problem is not None:
+                found.append(problem)
+    return found
