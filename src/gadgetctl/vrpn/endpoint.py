@@ -1,0 +1,293 @@
+"""One VRPN connection once its TCP socket exists, shared by the client and the server side.
+
+An :class:`Endpoint` writes the cookie, checks the peer's, frames and unframes messages,
+keeps the per-connection translation tables (the peer's sender and type ids to names), opens
+the outgoing UDP channel when the peer announces one, and holds a bounded output buffer: a
+message that does not fit is dropped and counted, so a peer that stops reading never blocks
+the side that sends.
+
+Whatever the C++ side answers by dropping the connection (a refused cookie, a message too
+long, a malformed description, a system type at or below -2000) raises
+:class:`ConnectionDropped` with the reason.
+"""
+
+from __future__ import annotations
+
+import socket
+from collections import Counter
+from collections.abc import Iterator
+
+from .wire import (
+    COOKIE_SIZE,
+    DISCONNECT_MESSAGE,
+    FATAL_SYSTEM_TYPE,
+    LOG_DESCRIPTION,
+    MAX_DATAGRAM,
+    MAX_IDS,
+    SENDER_DESCRIPTION,
+    TYPE_DESCRIPTION,
+    UDP_DESCRIPTION,
+    CookieError,
+    FramingError,
+    Message,
+    StreamDecoder,
+    check_cookie,
+    decode_datagram,
+    decode_description,
+    decode_udp_description,
+    make_cookie,
+    pack_description,
+)
+
+RECV_CHUNK = 256 * 1024
+
+
+class ConnectionDropped(ConnectionError):
+    """The connection ended; ``reason`` says why (peer closed, protocol violation...)."""
+
+    def __init__(self, reason: str) -> None:
+        super().__init__(reason)
+        self.reason = reason
+
+
+class NameTable:
+    """One side's own senders or types: ids 0, 1, 2... in registration order."""
+
+    def __init__(self, limit: int = MAX_IDS) -> None:
+        self.limit = limit
+        self.names: list[str] = []
+        self._ids: dict[str, int] = {}
+
+    def register(self, name: str) -> tuple[int, bool]:
+        """(id, whether it is new); registering a known name returns its id."""
+        ident = self._ids.get(name)
+        if ident is not None:
+            return ident, False
+        if len(self.names) >= self.limit:
+            raise ValueError(f"more than {self.limit} VRPN names")
+        pack_description(SENDER_DESCRIPTION, 0, name)  # checks the name's length
+        ident = len(self.names)
+        self.names.append(name)
+        self._ids[name] = ident
+        return ident, True
+
+    def id(self, name: str) -> int | None:
+        return self._ids.get(name)
+
+    def __iter__(self) -> Iterator[tuple[int, str]]:
+        return iter(enumerate(list(self.names)))
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+
+class Endpoint:
+    """The protocol state of one TCP connection (non-blocking socket)."""
+
+    def __init__(
+        self,
+        sock: socket.socket,
+        *,
+        out_limit: int = 1 << 20,
+        tcp_only: bool = False,
+        log_mode: int = 0,
+    ) -> None:
+        self.sock = sock
+        sock.setblocking(False)
+        try:
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        except OSError:
+            pass
+        try:
+            self.peer = sock.getpeername()
+        except OSError:
+            self.peer = ("?", 0)
+        self.tcp_only = tcp_only
+        self.out_limit = out_limit
+        self.out = bytearray(make_cookie(log_mode=log_mode))
+        self.opened = False  # the peer's cookie was accepted
+        self.closed = False
+        self.peer_version: str | None = None
+        self.remote_senders: dict[int, str] = {}
+        self.remote_types: dict[int, str] = {}
+        self.udp: socket.socket | None = None  # outgoing unreliable channel, once announced
+        self._udp_batch = bytearray()
+        self._cookie = bytearray()
+        self._decoder = StreamDecoder()
+        self.dropped = 0  # messages not queued because the output buffer was full
+        self.sent_messages = 0
+        self.counters: Counter[str] = Counter()
+
+    # -- reading ------------------------------------------------------------------------------
+
+    def fileno(self) -> int:
+        return self.sock.fileno()
+
+    def read(self, received: float) -> list[Message]:
+        """Read what the socket has; the peer's user messages, ids translated to names."""
+        try:
+            data = self.sock.recv(RECV_CHUNK)
+        except (BlockingIOError, InterruptedError):
+            return []
+        except OSError as exc:
+            raise ConnectionDropped(f"connection error: {exc.strerror or exc}") from None
+        if not data:
+            raise ConnectionDropped("closed by the peer")
+        if not self.opened:
+            need = COOKIE_SIZE - len(self._cookie)
+            self._cookie += data[:need]
+            data = data[need:]
+            if len(self._cookie) < COOKIE_SIZE:
+                return []
+            try:
+                self.peer_version = check_cookie(bytes(self._cookie))
+            except CookieError as exc:
+                self.counters["bad_cookies"] += 1
+                raise ConnectionDropped(f"cookie refused: {exc}") from None
+            self.opened = True
+            if not data:
+                return []
+        try:
+            messages = self._decoder.feed(data, received)
+        except FramingError as exc:
+            self.counters["oversized" if "too long" in str(exc) else "bad_frames"] += 1
+            raise ConnectionDropped(str(exc)) from None
+        return self.translate(messages)
+
+    def read_datagram(self, data: bytes, received: float) -> list[Message]:
+        """The user messages of a datagram that came on this connection's UDP channel."""
+        try:
+            messages = decode_datagram(data, received)
+        except FramingError:
+            self.counters["bad_datagrams"] += 1
+            return []
+        return self.translate(messages, udp=True)
+
+    def translate(self, messages: list[Message], udp: bool = False) -> list[Message]:
+        out: list[Message] = []
+        senders, types = self.remote_senders, self.remote_types
+        for m in messages:
+            if m.type_id < 0:
+                if udp:
+                    self.counters["udp_system_ignored"] += 1  # system messages go by TCP only
+                else:
+                    self._system(m)
+                continue
+            self.counters["messages"] += 1
+            type_name = types.get(m.type_id)
+            if type_name is None:
+                self.counters["undescribed"] += 1  # as the C++ side: silently dropped
+                continue
+            out.append(m._replace(sender=senders.get(m.sender_id), type=type_name))
+        return out
+
+    def _system(self, m: Message) -> None:
+        kind = m.type_id
+        if kind in (SENDER_DESCRIPTION, TYPE_DESCRIPTION):
+            if not 0 <= m.sender_id < MAX_IDS:
+                self.counters["bad_descriptions"] += 1
+                raise ConnectionDropped(
+                    f"description of id {m.sender_id} (ids are 0 to {MAX_IDS - 1})"
+                )
+            try:
+                name = decode_description(m.payload)
+            except FramingError as exc:
+                self.counters["bad_descriptions"] += 1
+                raise ConnectionDropped(f"bad description: {exc}") from None
+            table = self.remote_senders if kind == SENDER_DESCRIPTION else self.remote_types
+            table[m.sender_id] = name
+        elif kind == UDP_DESCRIPTION:
+            self._open_udp(m)
+        elif kind == DISCONNECT_MESSAGE:
+            self.remote_senders.clear()
+            self.remote_types.clear()
+        elif kind == LOG_DESCRIPTION:
+            self.counters["log_requests_ignored"] += 1
+        elif kind <= FATAL_SYSTEM_TYPE:
+            self.counters["bad_system_messages"] += 1
+            raise ConnectionDropped(f"system message type {kind}")
+        else:
+            self.counters["unknown_system_messages"] += 1
+
+    def _open_udp(self, m: Message) -> None:
+        if self.tcp_only:
+            self.counters["udp_descriptions_ignored"] += 1
+            return
+        try:
+            ip, port = decode_udp_description(m)
+        except ValueError:
+            self.counters["bad_udp_descriptions"] += 1
+            return
+        if ip != self.peer[0]:
+            # Unreliable traffic only ever goes back to the host at the other end of the TCP
+            # connection, never to a third address a peer names (C++ would send anywhere).
+            self.counters["udp_descriptions_refused"] += 1
+            return
+        if self.udp is not None:
+            self.udp.close()
+        udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        udp.setblocking(False)
+        try:
+            udp.connect((ip, port))
+        except OSError:
+            udp.close()
+            self.counters["bad_udp_descriptions"] += 1
+            return
+        self.udp = udp
+
+    # -- writing ------------------------------------------------------------------------------
+
+    def queue(self, data: bytes, reliable: bool = True) -> bool:
+        """Queue one framed message (or several); False (and counted) when the buffer is full."""
+        if not reliable and self.udp is not None and len(data) <= MAX_DATAGRAM:
+            if len(self._udp_batch) + len(data) > MAX_DATAGRAM:
+                self._send_udp()
+            self._udp_batch += data
+            self.sent_messages += 1
+            return True
+        if len(self.out) + len(data) > self.out_limit:
+            self.dropped += 1
+            return False
+        self.out += data
+        self.sent_messages += 1
+        return True
+
+    def _send_udp(self) -> None:
+        batch = self._udp_batch
+        if not batch or self.udp is None:
+            return
+        try:
+            self.udp.send(batch)
+        except OSError:
+            self.counters["udp_send_errors"] += 1
+        self._udp_batch = bytearray()
+
+    @property
+    def wants_write(self) -> bool:
+        return bool(self.out)
+
+    def flush(self) -> None:
+        """Write what the socket takes now, never waiting; raises :class:`ConnectionDropped`."""
+        if self._udp_batch:
+            self._send_udp()
+        out = self.out
+        while out:
+            try:
+                n = self.sock.send(out)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:
+                raise ConnectionDropped(f"connection error: {exc.strerror or exc}") from None
+            del out[:n]
+
+    def close(self) -> None:
+        if self.closed:
+            return
+        self.closed = True
+        for s in (self.sock, self.udp):
+            if s is not None:
+                try:
+                    s.close()
+                except OSError:
+                    pass
+        self.udp = None
