@@ -43,3 +43,20 @@ def expand_paths(paths: Iterable[Path]) -> list[Path]:
 
 def _hidden(relative: Path) -> bool:
     return any(part.startswith(".") for part in relative.parts)
+
+
+def is_file(path: Path) -> bool:
+    """``path.is_file()``, False instead of an error for a path the OS refuses to look up
+    (a name over 255 bytes, a permission denied on the way)."""
+    try:
+        return path.is_file()
+    except OSError:
+        return False
+
+
+def is_dir(path: Path) -> bool:
+    """``path.is_dir()``, False instead of an error for a path the OS refuses to look up."""
+    try:
+        return path.is_dir()
+    except OSError:
+        return False

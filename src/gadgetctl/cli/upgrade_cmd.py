@@ -68,8 +68,10 @@ def upgrade(
     if in_place:
         _write_in_place(results, backup)
     elif output is not None:
+        from gadgetctl.safewrite import replace_file
+
         result = results[0]
-        output.write_bytes(result.upgraded if result.upgraded is not None else result.original)
+        replace_file(output, result.upgraded if result.upgraded is not None else result.original)
     elif not (check or diff):
         result = results[0]
         sys.stdout.buffer.write(result.upgraded if result.upgraded is not None else result.original)
@@ -105,8 +107,12 @@ def _listing(results, fmt: DataFormat) -> None:
                   for e in r.elements]
     count = sum(r.changed for r in results)
     elements = sum(len(r.elements) for r in results if r.changed)
+    failed = sum(r.failed for r in results)
+    if failed:
+        lines.append(f"{failed} of {len(results)} files could not be upgraded (see above)")
     lines.append(f"{count} of {len(results)} files would change ({elements} elements upgraded)"
-                 if count else f"{len(results)} files checked: all up to date")
+                 if count else f"{len(results)} files checked: all up to date" if not failed
+                 else f"{len(results) - failed} other files up to date")
     emit("\n".join(lines))
 
 
@@ -123,10 +129,22 @@ def _diff(results) -> None:
 
 
 def _write_in_place(results, backup: bool) -> None:
-    from gadgetctl.jccl.upgrade import write_atomic
+    """Rewrite each changed file (its target, when it is a symbolic link), refusing one that
+    changed since it was read; the others are still written."""
+    from gadgetctl.safewrite import FileChangedError, replace_file
 
+    refused = None
     for r in results:
-        if r.changed:
-            write_atomic(r.path, r.upgraded, backup=backup)
-            emit(f"upgraded {r.display} ({len(r.elements)} elements"
-                 + (f"; {'; '.join(r.format_notes)})" if r.format_notes else ")"))
+        if not r.changed:
+            continue
+        try:
+            done = replace_file(r.path, r.upgraded, expected=r.original, backup=backup)
+        except FileChangedError as err:
+            sys.stderr.write(f"gadgetctl: {err}\n")
+            refused = err
+            continue
+        what = f"{done.target} (through the symbolic link {r.display})" if done.via_link else r.display
+        emit(f"upgraded {what} ({len(r.elements)} elements"
+             + (f"; {'; '.join(r.format_notes)})" if r.format_notes else ")"))
+    if refused is not None:
+        raise typer.Exit(refused.exit_code)

@@ -210,26 +210,32 @@ class OpenedConfiguration:
     session: Session
 
 
+# Diagnostics of a file that could not be read or parsed at all: nothing to show.
+UNREADABLE_CODES = frozenset({"XML001", "XML004", "XML005"})
+
+
 def open_configuration(paths: Iterable[Path], *, definition_dirs: Iterable[Path] = (), bundled: bool = True,
                        environ: Mapping[str, str] | None = None,
                        plugin_definitions: Callable[[Configuration], list[Path]] | None = None,
                        ) -> OpenedConfiguration:
     """Load files as one configuration (includes followed) with the repository they are
     judged by. A file that is missing or not well-formed raises :class:`GadgetctlError`."""
+    from gadgetctl.boundedread import check_readable_file
     from gadgetctl.errors import GadgetctlError
     from gadgetctl.jccl.repository import default_repository
 
     paths = list(paths)
     for path in paths:
-        if not path.is_file():
-            raise GadgetctlError(f"{path}: no such file")
+        problem = check_readable_file(path)
+        if problem is not None:
+            raise GadgetctlError(f"{path}: {problem}")
     for directory in definition_dirs:
         if not directory.is_dir():
             raise GadgetctlError(f"--definitions {directory}: no such directory")
     session = Session(default_repository(definition_dirs, bundled=bundled),
                       os.environ if environ is None else environ, plugin_definitions=plugin_definitions)
     config = session.load(paths)
-    broken = [d for d in config.diagnostics if d.code == "XML001"]
+    broken = [d for d in config.diagnostics if d.code in UNREADABLE_CODES]
     if broken:
         raise GadgetctlError(f"{broken[0].location}: {broken[0].message}")
     repo, _ = session.repository(config)

@@ -16,6 +16,7 @@ from lxml import etree
 
 from gadgetctl.diagnostics import Diagnostic
 from gadgetctl.envvars import expand
+from gadgetctl.files import is_file
 from gadgetctl.jccl.configuration import (
     ConfigElement,
     ConfigFile,
@@ -179,9 +180,9 @@ class ConfigurationLoader:
             return None
         candidate = Path(name).expanduser()
         if candidate.is_absolute():
-            return candidate if candidate.is_file() else None
+            return candidate if is_file(candidate) else None
         for base in (directory, Path.cwd()):
-            if (base / candidate).is_file():
+            if is_file(base / candidate):
                 return base / candidate
         return None
 

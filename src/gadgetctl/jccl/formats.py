@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from copy import deepcopy
 
 from lxml import etree
 
@@ -133,8 +134,9 @@ def normalised_copy(doc: XmlDocument) -> etree._Element:
     target = ns.CONFIG_NS if doc.kind is FileKind.CONFIGURATION else ns.DEFINITION_NS
     if etree.QName(doc.root).namespace == target:
         return doc.root
-    root = etree.fromstring(etree.tostring(doc.root))
-    # fromstring loses source lines, so map element order back to the original.
+    # A copy of the tree, not a serialise-and-parse round trip: lxml writes a non-ASCII
+    # attribute name as a character reference, which does not parse back.
+    root = deepcopy(doc.root)
     for copy, original in zip(root.iter(), doc.root.iter(), strict=True):
         copy.sourceline = original.sourceline
         if not isinstance(copy.tag, str):

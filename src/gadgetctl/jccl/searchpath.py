@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gadgetctl.envvars import expand
+from gadgetctl.files import is_dir
 from gadgetctl.jccl.definitions import Location
 from gadgetctl.resources import definitions_dir
 
@@ -37,7 +38,7 @@ class SearchPathEntry:
 
     @property
     def exists(self) -> bool:
-        return self.path.is_dir()
+        return is_dir(self.path)
 
     def to_dict(self) -> dict[str, object]:
         return {

@@ -21,6 +21,7 @@ from pathlib import Path
 
 from lxml import etree
 
+from gadgetctl.boundedread import DEFAULT_MAX_SIZE, FileTooLarge, NotRegularFile, read_limited
 from gadgetctl.diagnostics import Diagnostic, Severity
 from gadgetctl.jccl.definitions import Location
 from gadgetctl.jccl.formatupgrade import Edit, configuration_format, definition_format
@@ -28,7 +29,7 @@ from gadgetctl.jccl.namespaces import CONFIG_NS
 from gadgetctl.jccl.repository import DefinitionRepository
 from gadgetctl.jccl.searchpath import configuration_entries
 from gadgetctl.jccl.spans import Span, element_spans, indentation_before
-from gadgetctl.jccl.xmlload import FileKind, declared_encoding, guess_kind, parse_bytes
+from gadgetctl.jccl.xmlload import FileKind, declared_encoding, guess_kind, parse_bytes, text_codec
 from gadgetctl.jccl.xslt import TransformError, apply_transform, in_namespace
 
 DEFAULT_INDENT = "   "
@@ -208,7 +209,7 @@ class FileUpgrader:
 
     def run(self) -> FileUpgrade:
         doc = parse_bytes(self.data, self.result.display, guess_kind(self.result.path))
-        if doc.root is None:
+        if doc.root is None or not text_codec(self.encoding):
             self.result.problems.extend(d for d in doc.diagnostics if d.severity is Severity.ERROR)
             return self.result
         elements = list(doc.root.iter(etree.Element))
@@ -338,34 +339,19 @@ def upgrade_bytes(path: Path, data: bytes, repo: DefinitionRepository, display: 
 
 
 def upgrade_file(path: Path, repo: DefinitionRepository, display: str | None = None,
-                 environ: Mapping[str, str] | None = None) -> FileUpgrade:
-    return upgrade_bytes(path, path.read_bytes(), repo, display, environ)
-
-
-def write_atomic(path: Path, data: bytes, *, backup: bool = True) -> Path | None:
-    """Replace ``path`` by ``data`` atomically (a temporary file in the same directory,
-    renamed over it), keeping its permissions; with ``backup`` the old content goes to
-    ``path.bak`` first, which is returned."""
-    import os
-    import shutil
-    import tempfile
-
-    saved = None
-    if backup:
-        saved = path.with_name(path.name + ".bak")
-        shutil.copy2(path, saved)
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+                 environ: Mapping[str, str] | None = None, max_size: int = DEFAULT_MAX_SIZE) -> FileUpgrade:
+    """Upgrade the file ``path`` (read with the size limit; not written). A file above the
+    limit or not a regular file is a failed upgrade with its diagnostic; other I/O errors
+    raise :class:`OSError`."""
     try:
-        with os.fdopen(handle, "wb") as out:
-            out.write(data)
-            out.flush()
-            os.fsync(out.fileno())
-        shutil.copymode(path, temporary)
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
-    return saved
+        data = read_limited(path, max_size)
+    except (FileTooLarge, NotRegularFile) as err:
+        shown = display or str(path)
+        result = FileUpgrade(path, shown, b"")
+        code = "XML004" if isinstance(err, FileTooLarge) else "XML005"
+        result.problems.append(Diagnostic.make(code, err.strerror, shown))
+        return result
+    return upgrade_bytes(path, data, repo, display, environ)
 
 
 def with_given_definitions(repo: DefinitionRepository, paths: list[Path]) -> DefinitionRepository:

@@ -16,9 +16,8 @@ from pathlib import Path
 
 from lxml import etree
 
+from gadgetctl.boundedread import DEFAULT_MAX_SIZE, FileTooLarge, NotRegularFile, read_limited
 from gadgetctl.diagnostics import Diagnostic
-
-DEFAULT_MAX_SIZE = 16 * 1024 * 1024
 
 _DECLARED_ENCODING = re.compile(rb"^<\?xml[^>]*?encoding\s*=\s*[\"']([A-Za-z][A-Za-z0-9._-]*)[\"']")
 _DOCTYPE = re.compile(rb"<!DOCTYPE", re.IGNORECASE)
@@ -107,6 +106,21 @@ def declared_encoding(data: bytes) -> str:
     return match.group(1).decode("ascii") if match else "utf-8"
 
 
+def text_codec(name: str) -> bool:
+    """Whether ``name`` is an encoding Python decodes text with (not ``rot13``, ``base64``,
+    ``zlib`` or an unknown name)."""
+    try:
+        info = codecs.lookup(name)
+    except LookupError:
+        return False
+    return getattr(info, "_is_text_encoding", True) and info.name not in _NOT_FOR_XML
+
+
+# Text codecs that cannot be an XML file's encoding: they do not decode ASCII as ASCII.
+_NOT_FOR_XML = frozenset({"punycode", "idna", "raw-unicode-escape", "unicode-escape", "undefined",
+                          "uu", "quopri"})
+
+
 def _position_of_offset(data: bytes, offset: int, encoding: str) -> tuple[int, int]:
     """1-based line and column (in characters) of a byte offset."""
     line_start = data.rfind(b"\n", 0, offset) + 1
@@ -118,15 +132,16 @@ def _position_of_offset(data: bytes, offset: int, encoding: str) -> tuple[int, i
 def _decode(doc: XmlDocument, data: bytes) -> str | None:
     """Decode ``data``; on a bad byte report it and return the encoding to parse with."""
     encoding = declared_encoding(data)
+    if not text_codec(encoding):
+        doc.text = data.decode("latin-1")
+        line, column = _encoding_position(data)
+        doc.diagnostics.append(Diagnostic.make(
+            "XML002", f"unknown encoding {encoding!r} declared; read as Latin-1", doc.path, line, column,
+            hint="Declare encoding=\"UTF-8\" and save the file as UTF-8."))
+        return "ISO-8859-1"
     try:
         doc.text = data.decode(encoding)
         return None
-    except LookupError:
-        doc.text = data.decode("latin-1")
-        doc.diagnostics.append(Diagnostic.make(
-            "XML002", f"unknown encoding {encoding!r} declared; read as Latin-1", doc.path, 1, 1,
-            hint="Declare encoding=\"UTF-8\" and save the file as UTF-8."))
-        return "ISO-8859-1"
     except UnicodeDecodeError as err:
         line, column = _position_of_offset(data, err.start, encoding)
         bad = data[err.start:err.start + 1].hex().upper()
@@ -138,6 +153,12 @@ def _decode(doc: XmlDocument, data: bytes) -> str | None:
                  f"{data[err.start:err.start + 1].decode('latin-1')!r} in Latin-1)."))
         doc.text = data.decode("latin-1")
         return "ISO-8859-1"
+
+
+def _encoding_position(data: bytes) -> tuple[int, int]:
+    """Line and column of the encoding name in the XML declaration."""
+    match = _DECLARED_ENCODING.match(data)
+    return _position_of_offset(data, match.start(1), "latin-1") if match else (1, 1)
 
 
 def _report_doctype(doc: XmlDocument, data: bytes) -> None:
@@ -181,12 +202,14 @@ def parse_bytes(data: bytes, path: str, kind: FileKind = FileKind.UNKNOWN) -> Xm
 
 
 def load_file(path: Path, *, max_size: int = DEFAULT_MAX_SIZE, display: str | None = None) -> XmlDocument:
-    """Read and parse one file. I/O errors propagate as :class:`OSError`."""
+    """Read (at most ``max_size`` bytes) and parse one file. A file above the limit or not a
+    regular file is a diagnostic; other I/O errors propagate as :class:`OSError`."""
     shown = display or str(path)
-    size = path.stat().st_size
-    if size > max_size:
+    try:
+        data = read_limited(path, max_size)
+    except (FileTooLarge, NotRegularFile) as err:
         doc = XmlDocument(path=shown, kind=guess_kind(path))
-        doc.diagnostics.append(Diagnostic.make(
-            "XML004", f"file is {size} bytes, above the limit of {max_size}; not read", shown))
+        code = "XML004" if isinstance(err, FileTooLarge) else "XML005"
+        doc.diagnostics.append(Diagnostic.make(code, err.strerror, shown))
         return doc
-    return parse_bytes(path.read_bytes(), shown, guess_kind(path))
+    return parse_bytes(data, shown, guess_kind(path))

@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import signal
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import BinaryIO, NamedTuple
 
+from gadgetctl.boundedread import NotRegularFile, bounded_lines, open_regular
 from gadgetctl.errors import GadgetctlError
 from gadgetctl.monitor.records import (
     FORMAT_NAME,
@@ -35,8 +37,10 @@ from gadgetctl.monitor.records import (
     encode_record,
     encode_samples,
 )
+from gadgetctl.safewrite import WriteError, create_new
 
 MAX_HEADER_BYTES = 1 << 20
+MAX_RECORD_BYTES = 16 << 20  # one record line; far above what the recorder writes
 
 
 class RecordingError(GadgetctlError):
@@ -92,17 +96,16 @@ class Recorder:
         if stream is not None:
             self._file = stream
         else:
-            try:
-                self._file = open(self.path, "wb" if overwrite else "xb")  # noqa: SIM115
-            except FileExistsError:
-                raise RecordingError(f"{self.path}: file exists (overwrite it explicitly)") from None
-            except OSError as exc:
-                raise RecordingError(f"{self.path}: cannot create recording: {exc.strerror or exc}") from None
+            try:  # never through a symbolic link, even with overwrite
+                self._file = os.fdopen(create_new(self.path, overwrite=overwrite), "wb")
+            except WriteError as exc:
+                raise RecordingError(str(exc)) from None
         try:
             self._write(encode_record(self.header))
         except BaseException:
             if self._owns_file:
-                self._file.close()
+                with contextlib.suppress(OSError):  # the write error is the one to report
+                    self._file.close()
             raise
         self._last_flush = clock()
 
@@ -223,7 +226,13 @@ class Recorder:
         finally:
             self.closed = True
             if self._owns_file:
-                self._file.close()
+                self._close_file()
+
+    def _close_file(self) -> None:
+        try:
+            self._file.close()
+        except OSError as exc:  # buffered bytes that could not be written
+            raise RecordingError(f"{self.path}: cannot write: {exc.strerror or exc}") from None
 
 
 # --------------------------------------------------------------------------- reading
@@ -255,11 +264,13 @@ def _not_a_recording(path: Path, why: str) -> RecordingError:
 
 def _read_header(path: Path) -> HeaderRecord:
     try:
-        with open(path, "rb") as f:
+        with open_regular(path) as f:
             first = f.readline(MAX_HEADER_BYTES)
             at_end = not f.read(1)
     except IsADirectoryError:
         raise RecordingError(f"{path}: is a directory, not a recording") from None
+    except NotRegularFile as exc:
+        raise RecordingError(f"{path}: {exc.strerror}") from None
     except OSError as exc:
         raise RecordingError(f"{path}: cannot read: {exc.strerror or exc}") from None
     if not first:
@@ -292,9 +303,13 @@ def _looks_truncated(line: bytes) -> bool:
 
 
 def _records(path: Path, problems: list[RecordingProblem]) -> Iterator[Record]:
-    with open(path, "rb") as f:
+    with open_regular(path) as f:
         f.readline(MAX_HEADER_BYTES)
-        for number, line in enumerate(f, start=2):
+        for number, line in enumerate(bounded_lines(f, MAX_RECORD_BYTES), start=2):
+            if line is None:
+                problems.append(RecordingProblem(
+                    number, "error", f"record longer than {MAX_RECORD_BYTES} bytes skipped"))
+                continue
             last = not line.endswith(b"\n")
             if not line.strip():
                 continue

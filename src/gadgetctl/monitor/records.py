@@ -427,4 +427,9 @@ def decode_line(line: str | bytes) -> Record:
         obj = _DECODER.decode(line if isinstance(line, str) else line.decode("utf-8"))
     except (ValueError, UnicodeDecodeError) as exc:
         raise RecordFormatError(f"not valid JSON: {exc}") from None
-    return decode_record(obj)
+    except RecursionError:
+        raise RecordFormatError("not valid JSON: nested too deeply") from None
+    try:
+        return decode_record(obj)
+    except RecursionError:
+        raise RecordFormatError("nested too deeply") from None

@@ -8,13 +8,17 @@ columns, and otherwise exploded one item per line with a trailing comma, which b
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
+import shutil
+import tempfile
 import textwrap
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
+from gadgetctl.safewrite import current_umask
 from gadgetctl.scaffold.model import DEVICE_TYPES, DriverSpec, ScaffoldError
 from gadgetctl.scaffold.render import render
 
@@ -459,20 +463,55 @@ def scaffold(spec: DriverSpec, *, force: bool = False, dry_run: bool = False) ->
     files = generate(spec)
     if dry_run:
         return ScaffoldResult(spec, files, written=False)
-    for generated in files:
-        path = target / generated.path
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            _write_atomically(path, generated.text)
-        except OSError as err:
-            raise ScaffoldError(f"cannot write {path}: {err.strerror or err}") from None
+    _write_tree(target, files, force=force)
     return ScaffoldResult(spec, files, written=True)
 
 
-def _write_atomically(path: Path, text: str) -> None:
-    temporary = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    temporary.write_text(text, encoding="utf-8")
-    os.replace(temporary, path)
+def _write_tree(target: Path, files: list[GeneratedFile], *, force: bool) -> None:
+    """Write ``files`` into a temporary directory beside ``target`` and move it into place
+    whole (with ``force`` into an existing ``target``, file by file once all are complete),
+    so a failure (full disk, permissions) leaves neither half a plug-in nor a stray
+    temporary file, and a second run starts afresh."""
+    created = _missing_ancestors(target.parent)
+    staging = None
+    moving = False
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
+        for generated in files:
+            path = staging / generated.path
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(generated.text, encoding="utf-8")
+        mode = 0o777 & ~current_umask()
+        for directory in [staging, *(p for p in staging.rglob("*") if p.is_dir())]:
+            directory.chmod(mode)
+        if not force or not target.exists():
+            os.rename(staging, target)
+            staging = None
+            return
+        moving = True
+        for generated in files:
+            (target / generated.path).parent.mkdir(parents=True, exist_ok=True)
+            os.replace(staging / generated.path, target / generated.path)
+    except OSError as err:
+        if not target.exists():
+            for directory in reversed(created):
+                with contextlib.suppress(OSError):
+                    directory.rmdir()
+        done = "" if moving else "; nothing written"
+        raise ScaffoldError(f"cannot write {target}: {err.strerror or err}{done}") from None
+    finally:
+        if staging is not None:
+            shutil.rmtree(staging, ignore_errors=True)
+
+
+def _missing_ancestors(directory: Path) -> list[Path]:
+    """``directory`` and its parents that do not exist yet, outermost first."""
+    missing = []
+    while not directory.exists() and directory != directory.parent:
+        missing.append(directory)
+        directory = directory.parent
+    return missing[::-1]
 
 
 def run_steps(spec: DriverSpec, plugin_dir: str, where: str) -> list[tuple[str, str]]:

@@ -33,6 +33,12 @@ CODES: list[Code] = [
          "It is not read, which keeps time and memory bounded.",
          "a 100 MB .jconf",
          "Check that the path is right, or raise --max-size."),
+    Code("XML005", C, E, "not a regular file",
+         "The path names a device, a FIFO, a socket or a directory, not a file. Reading it could "
+         "block for ever (a FIFO without a writer) or never end (/dev/zero), so gadgetctl refuses "
+         "it before reading anything.",
+         "gadgetctl validate /dev/zero",
+         "Give the path of a saved .jconf or .jdef file (copy a stream to a file first)."),
     Code("XML010", C, W, "missing file-format processing instruction",
          "JCCL files start with <?org-vrjuggler-jccl-settings ...?> naming the file-format "
          "version (configuration.version=\"3.0\" in .jconf files, definition.version=\"3.1\" in "

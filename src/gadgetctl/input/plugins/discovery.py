@@ -27,6 +27,7 @@ from importlib import metadata as importlib_metadata
 from pathlib import Path
 
 from gadgetctl.envvars import expand
+from gadgetctl.files import is_dir, is_file
 from gadgetctl.input.kinds import BASE_DEFINITIONS, DeviceKind
 from gadgetctl.input.plugins.metadata import ELEMENT_TYPES, PluginMetadata, read_metadata
 from gadgetctl.jccl.definitions import Location
@@ -56,7 +57,7 @@ class DriverDirectory:
 
     @property
     def exists(self) -> bool:
-        return self.path.is_dir()
+        return is_dir(self.path)
 
     def __str__(self) -> str:
         return f"{self.path} ({self.source})"
@@ -130,9 +131,9 @@ def definition_types(files: Iterable[Path]) -> dict[str, tuple[DeviceKind, ...]]
 def plugin_at(path: Path) -> PluginInfo | None:
     """The plug-in at ``path`` (a package folder or a module file), or None."""
     path = path.resolve()
-    if path.is_dir() and (path / "__init__.py").is_file():
+    if is_dir(path) and (path / "__init__.py").is_file():
         return _plugin(path.name, path, True, PluginSource.OPTION, str(path.parent))
-    if path.is_file() and path.suffix == ".py":
+    if is_file(path) and path.suffix == ".py":
         return _plugin(path.stem, path, False, PluginSource.OPTION, str(path.parent))
     return None
 
