@@ -25,6 +25,8 @@ def doctor(
     bundled: bool = BUNDLED_OPTION,
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
     fmt: DataFormat = typer.Option(DataFormat.text, "--format", "-f", help="Output format."),
+    serve_port: str | None = typer.Option(None, "--serve-port", metavar="[ADDR:]PORT",
+                                          help="Check that `gadgetctl serve` could bind this TCP and UDP port (on ADDR, default 127.0.0.1); a taken port names the process holding it."),
 ) -> None:
     """Explain why no data arrive: which definitions and driver plug-ins are found and
     whether each loads; for each configured device, its driver and whether its port exists
@@ -37,9 +39,11 @@ def doctor(
     arriving, 2 on usage or tool errors.
     """
     from gadgetctl.doctor import DoctorOptions, diagnose, render_text
+    from gadgetctl.serve.address import parse_serve_port
 
     options = DoctorOptions(definitions=list(definitions), bundled=bundled, driver_dirs=list(driver_paths),
-                            probe=probe, timeout=timeout)
+                            probe=probe, timeout=timeout,
+                            serve_port=None if serve_port is None else parse_serve_port(serve_port))
     report = diagnose(list(configs or []), options)
     if fmt is DataFormat.json:
         emit(json.dumps(report.to_dict(), indent=2))

@@ -94,6 +94,7 @@ class DoctorReport:
     serial_ports: list[SerialPort] | None = None  # None: pyserial cannot list them
     joysticks: list[PortCheck] = field(default_factory=list)
     diagnostics: list[Diagnostic] = field(default_factory=list)
+    serve_port: PortCheck | None = None  # --serve-port: whether `gadgetctl serve` could bind it
 
     @property
     def blocking(self) -> list[Diagnostic]:
@@ -105,6 +106,7 @@ class DoctorReport:
         return 1 if self.blocking else 0
 
     def to_dict(self) -> dict[str, object]:
+        serve = {} if self.serve_port is None else {"serve_port": self.serve_port.to_dict()}
         return {
             "configurations": self.configurations,
             "definition_path": self.definition_path,
@@ -114,6 +116,7 @@ class DoctorReport:
             "serial_ports": None if self.serial_ports is None else [p.to_dict() for p in self.serial_ports],
             "joysticks": [j.to_dict() for j in self.joysticks],
             "diagnostics": [d.to_dict() for d in self.diagnostics],
+            **serve,
             "blocking": len(self.blocking),
             "exit_code": self.exit_code,
         }

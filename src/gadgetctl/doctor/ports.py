@@ -135,3 +135,34 @@ def check_tcp(host: str, port: int, *, probe: bool, timeout: float) -> PortCheck
     with contextlib.suppress(OSError):
         sock.close()
     return PortCheck("tcp", target, Status.OK, f"{target} accepts TCP connections")
+
+
+def check_serve_port(host: str, port: int) -> PortCheck:
+    """Whether `gadgetctl serve` could bind TCP and UDP ``host:port`` (as it does: TCP with
+    SO_REUSEADDR); a taken port names the process holding it when this user can see it."""
+    from gadgetctl.doctor.owners import describe_owners
+
+    target = f"{host}:{port}"
+    if not 1 <= port <= 65535:
+        return _problem("serve", target, "DRV106", f"port {port} is not between 1 and 65535")
+    for protocol, kind in (("tcp", socket.SOCK_STREAM), ("udp", socket.SOCK_DGRAM)):
+        sock = socket.socket(socket.AF_INET, kind)
+        try:
+            if protocol == "tcp":
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            sock.bind((host, port))
+        except OSError as err:
+            if err.errno == errno.EADDRINUSE:
+                return _problem("serve", target, "DRV120",
+                                f"{protocol.upper()} port {port} is taken {describe_owners(protocol, port)}",
+                                "stop that program, or serve on another port (--port) and name it in "
+                                "the clients (NAME@host:PORT)")
+            if err.errno == errno.EACCES:
+                return _problem("serve", target, "DRV120", f"binding port {port} needs privileges",
+                                "use a port above 1023 (VRPN's default is 3883)")
+            return _problem("serve", target, "DRV120", f"cannot bind {protocol.upper()} {target}: "
+                                                       f"{err.strerror or err}",
+                            "--bind takes an address of this machine (127.0.0.1, 0.0.0.0 or one of its NICs)")
+        finally:
+            sock.close()
+    return PortCheck("serve", target, Status.OK, f"TCP and UDP port {port} are free on {host} for gadgetctl serve")

@@ -86,6 +86,8 @@ def _findings(report: DoctorReport) -> list[str]:
 def render_text(report: DoctorReport) -> str:
     lines = _definitions(report) + _plugins(report)
     lines += _devices(report) if report.configurations else _system(report)
+    if report.serve_port is not None:
+        lines += ["gadgetctl serve port:", _check_line(report.serve_port)]
     lines += _findings(report)
     blocking = len(report.blocking)
     lines.append(f"{blocking} finding{'s' if blocking != 1 else ''} would stop data from arriving" if blocking

@@ -10,7 +10,12 @@ from gadgetctl.diagnostics import Diagnostic, Severity
 from gadgetctl.doctor.devices import CheckSettings, check_transport
 from gadgetctl.doctor.model import DeviceReport, DoctorReport, PluginReport, PortCheck, Status
 from gadgetctl.doctor.permissions import Identity
-from gadgetctl.doctor.ports import JOYSTICK_GLOB, list_joysticks, list_serial_ports
+from gadgetctl.doctor.ports import (
+    JOYSTICK_GLOB,
+    check_serve_port,
+    list_joysticks,
+    list_serial_ports,
+)
 from gadgetctl.doctor.transports import transports_for
 from gadgetctl.errors import GadgetctlError
 from gadgetctl.input.kinds import INPUT_DEVICE, INPUT_MANAGER, UNSUPPORTED_TYPES
@@ -35,6 +40,7 @@ class DoctorOptions:
     identity: Identity | None = None  # whose access is judged; None: the current user
     joystick_glob: str = JOYSTICK_GLOB
     environ: Mapping[str, str] | None = None
+    serve_port: tuple[str, int] | None = None  # (bind address, port) to check for `gadgetctl serve`
 
 
 def diagnose(configs: Sequence[Path] = (), options: DoctorOptions | None = None) -> DoctorReport:
@@ -62,6 +68,11 @@ def diagnose(configs: Sequence[Path] = (), options: DoctorOptions | None = None)
         found, used = _configured(configuration, repo, search, options, report)
         report.plugins, listed = _plugins(search, repo, used)
         found += listed
+    if options.serve_port is not None:
+        report.serve_port = check_serve_port(*options.serve_port)
+        if report.serve_port.code:
+            found.append(_diagnostic(report.serve_port, f"gadgetctl serve on {report.serve_port.target}: "
+                                                        f"{report.serve_port.detail}"))
     report.diagnostics = _unique(found)
     return report
 

@@ -68,3 +68,56 @@ def as_matrices(data: object) -> np.ndarray:
     if array.shape[-2:] != (4, 4):
         raise ValueError(f"expected 4x4 matrices, got shape {array.shape}")
     return array
+
+
+def quaternions_xyzw(matrices: object) -> np.ndarray:
+    """The unit quaternions (x, y, z, w), w >= 0, of the rotations of 4x4 (or 3x3) matrices,
+    shape (..., 4). Vectorised: each matrix takes the branch of its largest diagonal term."""
+    r = np.asarray(matrices, dtype=np.float64)[..., :3, :3]
+    m00, m11, m22 = r[..., 0, 0], r[..., 1, 1], r[..., 2, 2]
+    trace = m00 + m11 + m22
+    q = np.empty((*r.shape[:-2], 4))
+    # four candidate solutions; pick per matrix the numerically best one
+    branch = np.argmax(np.stack([trace, m00, m11, m22], axis=-1), axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.sqrt(np.maximum(1e-300, 1.0 + trace)) * 2.0
+        w_branch = np.stack([(r[..., 2, 1] - r[..., 1, 2]) / s, (r[..., 0, 2] - r[..., 2, 0]) / s,
+                             (r[..., 1, 0] - r[..., 0, 1]) / s, 0.25 * s], axis=-1)
+        s = np.sqrt(np.maximum(1e-300, 1.0 + m00 - m11 - m22)) * 2.0
+        x_branch = np.stack([0.25 * s, (r[..., 0, 1] + r[..., 1, 0]) / s, (r[..., 0, 2] + r[..., 2, 0]) / s,
+                             (r[..., 2, 1] - r[..., 1, 2]) / s], axis=-1)
+        s = np.sqrt(np.maximum(1e-300, 1.0 + m11 - m00 - m22)) * 2.0
+        y_branch = np.stack([(r[..., 0, 1] + r[..., 1, 0]) / s, 0.25 * s, (r[..., 1, 2] + r[..., 2, 1]) / s,
+                             (r[..., 0, 2] - r[..., 2, 0]) / s], axis=-1)
+        s = np.sqrt(np.maximum(1e-300, 1.0 + m22 - m00 - m11)) * 2.0
+        z_branch = np.stack([(r[..., 0, 2] + r[..., 2, 0]) / s, (r[..., 1, 2] + r[..., 2, 1]) / s, 0.25 * s,
+                             (r[..., 1, 0] - r[..., 0, 1]) / s], axis=-1)
+    for index, candidate in enumerate((w_branch, x_branch, y_branch, z_branch)):
+        chosen = branch == index
+        q[chosen] = candidate[chosen]
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    q[q[..., 3] < 0] *= -1.0
+    return q
+
+
+def matrices_from_pos_quat(positions: object, quaternions: object) -> np.ndarray:
+    """4x4 matrices from translations (..., 3) and quaternions (x, y, z, w) (..., 4); the
+    quaternions are normalised first (a zero quaternion gives the identity rotation)."""
+    p = np.asarray(positions, dtype=np.float64)
+    q = np.asarray(quaternions, dtype=np.float64)
+    norm = np.linalg.norm(q, axis=-1, keepdims=True)
+    q = np.where(norm > 0, q / np.where(norm > 0, norm, 1.0), np.array([0.0, 0.0, 0.0, 1.0]))
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    m = np.zeros((*np.broadcast_shapes(p.shape[:-1], q.shape[:-1]), 4, 4))
+    m[..., 0, 0] = 1 - 2 * (y * y + z * z)
+    m[..., 0, 1] = 2 * (x * y - w * z)
+    m[..., 0, 2] = 2 * (x * z + w * y)
+    m[..., 1, 0] = 2 * (x * y + w * z)
+    m[..., 1, 1] = 1 - 2 * (x * x + z * z)
+    m[..., 1, 2] = 2 * (y * z - w * x)
+    m[..., 2, 0] = 2 * (x * z - w * y)
+    m[..., 2, 1] = 2 * (y * z + w * x)
+    m[..., 2, 2] = 1 - 2 * (x * x + y * y)
+    m[..., :3, 3] = p
+    m[..., 3, 3] = 1.0
+    return m

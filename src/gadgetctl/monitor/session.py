@@ -68,6 +68,12 @@ class SelectionError(GadgetctlError):
     """A NAME pattern that matches no device, proxy or alias."""
 
 
+FrameConsumer = Callable[["MonitorSession", float], object]
+"""Called once per frame, after the session gathered every watched device's samples, with
+the session and the frame's time. The recording writers are one consumer; `gadgetctl serve`
+is another. Consumers read :meth:`MonitorSession.frame_samples` and the manager's proxies."""
+
+
 class ReplaySource(Protocol):
     """What a session needs from a replay feeder (see :mod:`gadgetctl.monitor.replaydevice`)."""
 
@@ -470,6 +476,7 @@ class MonitorSession:
         self._stop = False
         self._samples_written = 0
         self._watch: list[str] = []
+        self._consumers: list[FrameConsumer] = []
 
     # -- setting up ---------------------------------------------------------------------
 
@@ -533,11 +540,32 @@ class MonitorSession:
     def selected(self) -> list[str]:
         return list(self._selected)
 
+    @property
+    def watched(self) -> list[str]:
+        """The devices whose samples are gathered every frame (the selected ones and those
+        the selected proxies and aliases read)."""
+        return list(self._watch)
+
+    def frame_samples(self, name: str) -> Mapping[DeviceKind, FrameSamples]:
+        """Every sample the watched device ``name`` delivered this frame, per kind (empty
+        when it delivered nothing or is not watched)."""
+        track = self._tracks.get(name)
+        if track is None or self.manager.device(name) is not track.device:
+            return {}
+        return track.frames
+
     def add_sink(self, opener: Callable[[Mapping[str, object]], Recorder], *, per_frame: bool = False) -> None:
         """Add a writer: ``opener(header_info)`` makes the :class:`Recorder` once the header is
         known (after the first samples, at most :data:`SINK_WARMUP` seconds in). With
         ``per_frame`` it gets frame records instead of sample records."""
+        if not self._sinks:
+            self.add_consumer(MonitorSession._write_frame)
         self._sinks.append(_Sink(opener, per_frame))
+
+    def add_consumer(self, consumer: FrameConsumer) -> None:
+        """Call ``consumer(session, moment)`` once per frame, after the frame's samples were
+        gathered (see :data:`FrameConsumer`)."""
+        self._consumers.append(consumer)
 
     @property
     def recorders(self) -> list[Recorder]:
@@ -662,8 +690,8 @@ class MonitorSession:
         if self.source is not None:
             for marker in self.source.drain_markers():
                 self._note_marker(marker)
-        if self._sinks:
-            self._write_frame(moment)
+        for consumer in self._consumers:
+            consumer(self, moment)
         return Frame(self.frame, moment, moment - self.started_at, samples)
 
     # -- writing ------------------------------------------------------------------------
@@ -678,6 +706,10 @@ class MonitorSession:
             self._emit("frame", self.frame_record(), 0, per_frame=True)
         if not self._sinks_open and (self._warm() or moment - (self.started_at or moment) >= SINK_WARMUP):
             self._open_sinks()
+
+    def warm(self) -> bool:
+        """Whether every watched running device has delivered a sample."""
+        return self._warm()
 
     def _warm(self) -> bool:
         """Whether every watched running device has delivered something (so the header can

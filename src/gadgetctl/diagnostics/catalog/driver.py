@@ -241,4 +241,13 @@ CODES += [
          "does not have, so doctor cannot read where the device is connected.",
          "TRANSPORTS = {\"foo\": {\"kind\": \"serial\", \"port\": \"serial_port\"}}   (foo has port, not serial_port)",
          "Make the TRANSPORTS values the property names of the element type's .jdef."),
+    Code("DRV120", C, E, "VRPN serve port cannot be bound",
+         "`gadgetctl serve` listens on one TCP and one UDP port with the same number (VRPN's "
+         "default 3883), and one of them cannot be bound: another program holds it (a "
+         "vrpn_server, a second gadgetctl serve), the port is below 1024 and needs privileges, or "
+         "the --bind address is not one of this machine's. The message names the process holding "
+         "the port when this user may see it.",
+         "gadgetctl serve lab.jconf --port 3883   (a vrpn_server already runs on 3883)",
+         "Stop the other server, or serve on another --port and write NAME@host:PORT in the "
+         "clients; `gadgetctl doctor --serve-port PORT` checks a port beforehand."),
 ]

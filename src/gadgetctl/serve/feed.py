@@ -1,0 +1,183 @@
+"""The per-frame consumer of `gadgetctl serve`: it reads what the monitor session gathered
+in a frame (every sample of every served device, and the proxies' new values) and hands
+it, as VRPN reports, to an :class:`Outlet` (the server that fans them out to clients).
+
+Sample times are the input manager's clock (:func:`gadgetctl.input.clock.now`); VRPN
+carries wall-clock time, so the feed adds a fixed offset measured once at start.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterable, Iterator, Sequence
+from typing import Any, Protocol
+
+import numpy as np
+
+from gadgetctl.input.clock import now
+from gadgetctl.input.devicetypes import DigitalState
+from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.proxies import Proxy
+from gadgetctl.input.samples import FrameSamples, Sample
+from gadgetctl.input.transforms import quaternions_xyzw
+from gadgetctl.serve.catalog import Role, ServedElement, proxy_role
+
+_PRESSED = (DigitalState.ON, DigitalState.TOGGLE_ON)
+
+
+class Outlet(Protocol):
+    """Where the feed puts reports; ``sender`` is a VRPN device name, times are wall-clock
+    seconds (Unix epoch)."""
+
+    def tracker(
+        self, sender: str, times: np.ndarray, positions: np.ndarray, quaternions: np.ndarray
+    ) -> None:
+        """``times`` (n,), ``positions`` (n, sensors, 3) in meters, ``quaternions``
+        (n, sensors, 4) as x, y, z, w; sensor numbers are the second index."""
+
+    def buttons(
+        self, sender: str, changes: Sequence[tuple[float, int, int]], states: np.ndarray
+    ) -> None:
+        """Button transitions (time, button, 0/1) in order; ``states`` every button's state
+        after them (what a client that connects later is told first)."""
+
+    def analog(self, sender: str, times: np.ndarray, values: np.ndarray) -> None:
+        """``times`` (n,), ``values`` (n, channels)."""
+
+    def text(self, sender: str, moment: float, level: int, text: str) -> None:
+        """One text message; ``level`` is the unit number."""
+
+
+def wall_clock_offset() -> float:
+    """Seconds to add to an input-manager timestamp to get Unix time."""
+    return time.time() - now()
+
+
+def chunk_arrays(frame: FrameSamples) -> Iterator[tuple[np.ndarray, Any]]:
+    """(timestamps, values) per chunk of a frame; a single sample gives arrays of one."""
+    for chunk in frame.chunks:
+        if type(chunk) is Sample:
+            yield np.array([chunk.timestamp]), [chunk.values]
+        else:
+            yield np.asarray(chunk.timestamps, dtype=np.float64), chunk.values
+
+
+class _ButtonState:
+    """The states a Button sender reported last, to turn samples into transitions."""
+
+    __slots__ = ("states",)
+
+    def __init__(self) -> None:
+        self.states = np.zeros(0, dtype=np.int8)
+
+    def changes(self, times: np.ndarray, rows: np.ndarray) -> list[tuple[float, int, int]]:
+        """Transitions of ``rows`` (n, buttons) of 0/1 against the states so far."""
+        if rows.ndim != 2 or not rows.size:
+            return []
+        units = rows.shape[1]
+        previous = self.states
+        if len(previous) < units:  # new buttons start released
+            previous = np.concatenate([previous, np.zeros(units - len(previous), dtype=np.int8)])
+        stacked = np.vstack([previous[None, :units], rows])
+        steps = np.nonzero(np.diff(stacked, axis=0))
+        result = [(float(times[i]), int(j), int(rows[i, j])) for i, j in zip(*steps, strict=True)]
+        previous = previous.copy()
+        previous[:units] = rows[-1]
+        self.states = previous
+        return result
+
+
+class ServeFeed:
+    """A :data:`~gadgetctl.monitor.session.FrameConsumer` that serves ``catalog``."""
+
+    def __init__(
+        self, catalog: Iterable[ServedElement], outlet: Outlet, *, offset: float | None = None
+    ) -> None:
+        self.outlet = outlet
+        self.offset = wall_clock_offset() if offset is None else offset
+        self.devices = [e for e in catalog if e.kind == "device" and e.roles]
+        self.proxies = [e for e in catalog if e.kind != "device" and e.roles]
+        self._buttons: dict[str, _ButtonState] = {}
+        self._proxy_stamps: dict[str, float | None] = {}
+        self.reports = (
+            0  # reports handed to the outlet (one per sensor, button change, analog row, text)
+        )
+
+    def __call__(self, session: Any, moment: float) -> None:
+        for entry in self.devices:
+            frames = session.frame_samples(entry.element)
+            if frames:
+                self._device(entry, frames)
+        manager = session.manager
+        for entry in self.proxies:
+            target = manager.aliases.get(entry.element) if entry.kind == "alias" else entry.element
+            proxy = manager.proxies.get(target) if target is not None else None
+            if proxy is not None:
+                self._proxy(entry, proxy)
+
+    # -- devices ------------------------------------------------------------------------
+
+    def _device(self, entry: ServedElement, frames: dict[DeviceKind, FrameSamples]) -> None:
+        sender = entry.vrpn_name
+        outlet = self.outlet
+        offset = self.offset
+        for kind, frame in frames.items():
+            if kind is DeviceKind.POSITION:
+                for stamps, values in chunk_arrays(frame):
+                    matrices = np.asarray(values, dtype=np.float64)
+                    if matrices.ndim != 4 or not matrices.shape[1]:
+                        continue
+                    outlet.tracker(
+                        sender, stamps + offset, matrices[..., :3, 3], quaternions_xyzw(matrices)
+                    )
+                    self.reports += matrices.shape[0] * matrices.shape[1]
+            elif kind is DeviceKind.DIGITAL:
+                state = self._buttons.setdefault(sender, _ButtonState())
+                changes: list[tuple[float, int, int]] = []
+                for stamps, values in chunk_arrays(frame):
+                    rows = (np.asarray(values) != 0).astype(np.int8)
+                    changes += state.changes(stamps + offset, rows)
+                if changes:
+                    outlet.buttons(sender, changes, state.states)
+                    self.reports += len(changes)
+            elif kind is DeviceKind.ANALOG:
+                for stamps, values in chunk_arrays(frame):
+                    rows = np.asarray(values, dtype=np.float64)
+                    if rows.ndim == 2 and rows.shape[1]:
+                        outlet.analog(sender, stamps + offset, rows)
+                        self.reports += rows.shape[0]
+            elif kind is DeviceKind.STRING or kind is DeviceKind.COMMAND:
+                for sample in frame:
+                    for unit, value in enumerate(sample.values):
+                        text = str(value) if kind is DeviceKind.STRING else str(int(value))
+                        outlet.text(sender, sample.timestamp + offset, unit, text)
+                        self.reports += 1
+
+    # -- proxies and aliases ------------------------------------------------------------
+
+    def _proxy(self, entry: ServedElement, proxy: Proxy) -> None:
+        stamp = proxy.timestamp
+        if stamp is None or proxy.stupefied or self._proxy_stamps.get(entry.element) == stamp:
+            return
+        self._proxy_stamps[entry.element] = stamp
+        sender = entry.vrpn_name
+        moment = stamp + self.offset
+        role = proxy_role(proxy)
+        outlet = self.outlet
+        if role is Role.TRACKER:
+            matrix = np.asarray(proxy.data, dtype=np.float64)[None, None]
+            outlet.tracker(sender, np.array([moment]), matrix[..., :3, 3], quaternions_xyzw(matrix))
+        elif role is Role.BUTTON:
+            state = self._buttons.setdefault(sender, _ButtonState())
+            pressed = 1 if proxy.data in _PRESSED else 0
+            changes = state.changes(np.array([moment]), np.array([[pressed]], dtype=np.int8))
+            if not changes:
+                return
+            outlet.buttons(sender, changes, state.states)
+        elif role is Role.ANALOG:
+            outlet.analog(sender, np.array([moment]), np.array([[float(proxy.data)]]))
+        elif role is Role.TEXT:
+            outlet.text(sender, moment, 0, str(proxy.data))
+        else:
+            return
+        self.reports += 1
