@@ -258,3 +258,68 @@ def test_config_pending_applies_the_same_rule(tmp_path, cli):
     assert result.exit_code == 1
     _, path = bundled_check(tmp_path, sim_buttons(1), "fine.jconf")
     assert cli("config", "pending", path).exit_code == 0
+
+
+# -- 5. reporting once, one rule for malformed includes, search path, unknown types ---------
+
+BROKEN = '<?xml version="1.0"?>\n<configuration><elements><alias name="A" version="1"></elements></configuration>\n'
+KEYS_ONLY = '      <keyboard_mouse_device name="Keys" version="2"/>\n'
+
+
+def test_a_malformed_file_given_and_included_is_reported_once(check, tmp_path):
+    files = {
+        "main.jconf": configuration(tracker(), includes=("broken.jconf",)),
+        "broken.jconf": BROKEN,
+    }
+    found = check(files=files)
+    assert codes(found) == ["XML001"] and found[0].path.endswith("broken.jconf")
+    # included only: still reported, once
+    assert codes(check(files=files, only=("main.jconf",))) == ["XML001"]
+
+
+@pytest.mark.parametrize(
+    "command", [("config", "show"), ("config", "graph"), ("config", "pending"), ("monitor",)]
+)
+def test_every_command_refuses_a_malformed_include_the_same_way(tmp_path, cli, command):
+    main = write(tmp_path / "main.jconf", configuration(KEYS_ONLY, includes=("broken.jconf",)))
+    write(tmp_path / "broken.jconf", BROKEN)
+    extra = ("--duration", "0.1", "--format", "table") if command == ("monitor",) else ()
+    result = cli(*command, main, *extra)
+    assert result.exit_code == 2
+    assert "broken.jconf:2:" in result.stderr and "cannot load the configuration" in result.stderr
+    write(tmp_path / "broken.jconf", configuration(""))
+    assert cli(*command, main, *extra).exit_code == 0
+
+
+def test_a_repeated_search_path_entry_is_ignored(tmp_path, cli, defs):
+    path = write(tmp_path / "t.jconf", configuration(tracker()))
+    result = cli("validate", "--no-bundled", "-d", defs, "-d", defs, "--format", "json", path)
+    assert result.exit_code == 0 and "DEF021" not in result.stdout
+    # two different directories defining the same type still shadow
+    other = write_definitions(tmp_path / "other")
+    result = cli("validate", "--no-bundled", "-d", defs, "-d", other, "--format", "json", path)
+    assert "DEF021" in result.stdout
+
+
+def test_elements_of_unknown_type_are_shown_as_such_and_do_not_fail(tmp_path, cli):
+    path = write(
+        tmp_path / "unknown.jconf",
+        configuration(KEYS_ONLY + '      <mystery_box name="Box" version="1"/>\n'),
+    )
+    result = cli("config", "pending", path)
+    assert result.exit_code == 0, result.stdout
+    assert (
+        "info DRV040 Box is of type mystery_box" in result.stdout
+        and "1 of unknown type" in result.stdout
+    )
+    result = cli("monitor", path, "--duration", "0.2", "--format", "table")
+    assert result.exit_code == 0, result.stdout
+    (row,) = [line for line in result.stdout.splitlines() if line.startswith("Box ")]
+    assert "unknown type" in row and "pending" not in row
+    # a real pending element still fails both
+    stuck = (
+        KEYS_ONLY
+        + '      <keyboard_mouse_proxy name="KP" version="1"><device>Nowhere</device></keyboard_mouse_proxy>\n'
+    )
+    path = write(tmp_path / "stuck.jconf", configuration(stuck))
+    assert cli("config", "pending", path).exit_code == 1

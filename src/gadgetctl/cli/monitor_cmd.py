@@ -98,15 +98,10 @@ def split_arguments(arguments: list[str]) -> tuple[list[Path], list[str]]:
 
 def fatal_load_errors(configuration) -> None:
     """A configuration that could not be read (missing, not XML, broken include) is a
-    usage error: one line, exit status 2."""
-    from gadgetctl.diagnostics import Severity
-    from gadgetctl.errors import GadgetctlError
+    usage error: one line, exit status 2 (the rule of every command that runs one)."""
+    from gadgetctl.jccl.configload import require_loadable
 
-    errors = [d for d in configuration.diagnostics if d.severity is Severity.ERROR]
-    if errors:
-        first = errors[0]
-        more = f" (and {len(errors) - 1} more error(s): gadgetctl validate shows them)" if len(errors) > 1 else ""
-        raise GadgetctlError(f"{first.location}: cannot load the configuration: {first.message}{more}")
+    require_loadable(configuration)
 
 
 def check_options(rate: float, duration: float | None, interval: float) -> None:

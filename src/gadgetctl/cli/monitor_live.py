@@ -35,7 +35,7 @@ SPARK_WIDTH = 20
 SPARK_REFRESH = 0.1  # seconds a sparkline is reused
 EIGHTHS = " ▏▎▍▌▋▊▉"
 STATE_STYLES = {"running": "green", "active": "green", "configured": "cyan", "faulted": "bold red",
-                "reconnecting": "yellow", "pending": "yellow", "stupefied": "yellow", "stopped": "red",
+                "reconnecting": "yellow", "pending": "yellow", "unknown type": "dim", "stupefied": "yellow", "stopped": "red",
                 "removed": "red"}
 HEADER_LINES = 3
 NAME_WIDTH = 24

@@ -33,12 +33,14 @@ def pending(
     from gadgetctl.errors import GadgetctlError
     from gadgetctl.input.manager import InputManager, ManagerOptions
     from gadgetctl.input.report import pending_report
+    from gadgetctl.jccl.configload import require_loadable
 
     for path in files:
         if not path.is_file():
             raise GadgetctlError(f"{path}: no such configuration file")
     options = ManagerOptions(start_devices=start, driver_dirs=list(driver_paths), retry_interval=None)
     manager, configuration = InputManager.from_files(files, definitions=definitions, bundled=bundled, options=options)
+    require_loadable(configuration)
     with manager:
         manager.configure(configuration)
         if start:

@@ -55,7 +55,7 @@ from gadgetctl.input.sampling import (
     SharedScheduler,
     ThreadRunner,
 )
-from gadgetctl.input.status import ACTIVE, PENDING, ElementKind, ElementStatus
+from gadgetctl.input.status import ACTIVE, PENDING, UNKNOWN_TYPE, ElementKind, ElementStatus
 from gadgetctl.jccl.access import ElementAccess
 from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.definitions import Location
@@ -669,8 +669,9 @@ class InputManager:
             result.append(ElementStatus(name, element.type, ElementKind.INPUT_MANAGER, ACTIVE))
         for entry in self._pending.values():
             kind = self._classify(entry.element)
+            state = UNKNOWN_TYPE if entry.kind is PendingKind.NO_DEFINITION else PENDING
             result.append(ElementStatus(entry.name, entry.type, kind if isinstance(kind, ElementKind) else None,
-                                        PENDING, entry.message, entry.code))
+                                        state, entry.message, entry.code))
         return result
 
 

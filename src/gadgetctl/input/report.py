@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 from gadgetctl.diagnostics import Diagnostic, Severity, sort_key
 from gadgetctl.input.manager import InputManager
-from gadgetctl.input.pending import PendingEntry
+from gadgetctl.input.pending import PendingEntry, PendingKind
 from gadgetctl.input.status import ElementKind
 
 _PLURALS = {"device": "devices", "proxy": "proxies", "alias": "aliases", "input_manager": "input_managers"}
@@ -31,6 +31,9 @@ class StupefiedProxy:
 @dataclass
 class PendingReport:
     pending: list[PendingEntry] = field(default_factory=list)
+    #: Elements of a type with no definition: VR Juggler drops them when loading. Shown,
+    #: but no problem of the input manager (validate reports them as CFG010).
+    unknown: list[PendingEntry] = field(default_factory=list)
     stupefied: list[StupefiedProxy] = field(default_factory=list)
     diagnostics: list[Diagnostic] = field(default_factory=list)  # drivers, devices, filters
     configured: Counter[str] = field(default_factory=Counter)  # kind -> count
@@ -41,13 +44,15 @@ class PendingReport:
                     or any(d.severity is Severity.ERROR for d in self.diagnostics))
 
     def all_diagnostics(self) -> list[Diagnostic]:
-        found = [e.diagnostic() for e in self.pending] + [s.diagnostic for s in self.stupefied] + self.diagnostics
+        found = ([e.diagnostic() for e in self.pending] + [_unknown_diagnostic(e) for e in self.unknown]
+                 + [s.diagnostic for s in self.stupefied] + self.diagnostics)
         return sorted(found, key=sort_key)
 
     def summary(self) -> str:
         configured = ", ".join(f"{n} {_PLURALS[kind] if n != 1 else kind}" for kind, n in sorted(self.configured.items()))
+        unknown = f", {len(self.unknown)} of unknown type" if self.unknown else ""
         return (f"configured: {configured or 'nothing'}; {len(self.pending)} pending, "
-                f"{len(self.stupefied)} stupefied prox{'y' if len(self.stupefied) == 1 else 'ies'}")
+                f"{len(self.stupefied)} stupefied prox{'y' if len(self.stupefied) == 1 else 'ies'}{unknown}")
 
     def text(self) -> str:
         lines = []
@@ -61,14 +66,25 @@ class PendingReport:
     def to_dict(self) -> dict[str, object]:
         return {
             "pending": [e.to_dict() for e in self.pending],
+            "unknown_type": [e.to_dict() for e in self.unknown],
             "stupefied": [s.to_dict() for s in self.stupefied],
             "diagnostics": [d.to_dict() for d in sorted(self.diagnostics, key=sort_key)],
             "configured": dict(self.configured),
         }
 
 
+def _unknown_diagnostic(entry: PendingEntry) -> Diagnostic:
+    loc = entry.element.location
+    return Diagnostic.make("DRV040", f"{entry.name} is of type {entry.type}, which has no definition: "
+                           "VR Juggler drops it when loading", loc.path, loc.line, loc.column,
+                           severity=Severity.INFO, hint=entry.hint)
+
+
 def pending_report(manager: InputManager) -> PendingReport:
-    report = PendingReport(pending=manager.pending(), diagnostics=manager.diagnostics)
+    entries = manager.pending()
+    report = PendingReport(pending=[e for e in entries if e.kind is not PendingKind.NO_DEFINITION],
+                           unknown=[e for e in entries if e.kind is PendingKind.NO_DEFINITION],
+                           diagnostics=manager.diagnostics)
     for status in manager.statuses():
         if status.state == "pending" or status.kind is None:
             continue

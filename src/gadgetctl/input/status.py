@@ -17,12 +17,15 @@ class ElementKind(StrEnum):
 
 PENDING = "pending"
 ACTIVE = "active"
+#: An element whose type has no definition: VR Juggler drops it when loading, so it is
+#: shown as what it is rather than as a pending device (and is no reason to exit 1).
+UNKNOWN_TYPE = "unknown type"
 
 
 @dataclass(frozen=True)
 class ElementStatus:
     """``state`` is a device state (running, faulted, reconnecting, configured, stopped),
-    a proxy state (active, stupefied), ``active`` or ``pending``; ``reason`` says why when
+    a proxy state (active, stupefied), ``active``, ``pending`` or ``unknown type``; ``reason`` says why when
     it is not fine (the pending reason, the fault's error, why a proxy is stupefied)."""
 
     name: str

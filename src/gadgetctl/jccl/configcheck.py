@@ -163,6 +163,9 @@ def check_documents(documents: Iterable[XmlDocument], base: DefinitionRepository
             resolved = _real_path(doc.path)
             session.documents[resolved] = doc
             given.append(resolved)
+        elif doc.root is None and doc.kind is FileKind.CONFIGURATION:
+            # Reported with the file itself; an include of it must not report it again.
+            session.documents[_real_path(doc.path)] = doc
     if not given:
         return []
     if together:
@@ -210,10 +213,6 @@ class OpenedConfiguration:
     session: Session
 
 
-# Diagnostics of a file that could not be read or parsed at all: nothing to show.
-UNREADABLE_CODES = frozenset({"XML001", "XML004", "XML005"})
-
-
 def open_configuration(paths: Iterable[Path], *, definition_dirs: Iterable[Path] = (), bundled: bool = True,
                        environ: Mapping[str, str] | None = None,
                        plugin_definitions: Callable[[Configuration], list[Path]] | None = None,
@@ -222,6 +221,7 @@ def open_configuration(paths: Iterable[Path], *, definition_dirs: Iterable[Path]
     judged by. A file that is missing or not well-formed raises :class:`GadgetctlError`."""
     from gadgetctl.boundedread import check_readable_file
     from gadgetctl.errors import GadgetctlError
+    from gadgetctl.jccl.configload import require_loadable
     from gadgetctl.jccl.repository import default_repository
 
     paths = list(paths)
@@ -235,8 +235,6 @@ def open_configuration(paths: Iterable[Path], *, definition_dirs: Iterable[Path]
     session = Session(default_repository(definition_dirs, bundled=bundled),
                       os.environ if environ is None else environ, plugin_definitions=plugin_definitions)
     config = session.load(paths)
-    broken = [d for d in config.diagnostics if d.code in UNREADABLE_CODES]
-    if broken:
-        raise GadgetctlError(f"{broken[0].location}: {broken[0].message}")
+    require_loadable(config)
     repo, _ = session.repository(config)
     return OpenedConfiguration(config, session.checker(repo).index, session)

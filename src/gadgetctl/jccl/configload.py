@@ -198,3 +198,19 @@ def load_configuration(paths: Iterable[Path], *, environ: Mapping[str, str] | No
                        documents: dict[Path, XmlDocument] | None = None,
                        files: dict[Path, ConfigFile] | None = None) -> Configuration:
     return ConfigurationLoader(environ=environ, documents=documents, files=files).load(paths)
+
+
+def require_loadable(configuration: Configuration) -> None:
+    """Raise :class:`GadgetctlError` (one line, exit status 2) when a file of the
+    configuration could not be loaded: not well-formed, too large, a missing or cyclic
+    include. Every command that runs a configuration (config show, graph, pending,
+    monitor, replay) applies this one rule; `gadgetctl validate` reports the same problems
+    as findings instead."""
+    from gadgetctl.diagnostics import Severity
+    from gadgetctl.errors import GadgetctlError
+
+    errors = [d for d in configuration.diagnostics if d.severity is Severity.ERROR]
+    if errors:
+        first = errors[0]
+        more = f" (and {len(errors) - 1} more error(s): gadgetctl validate shows them)" if len(errors) > 1 else ""
+        raise GadgetctlError(f"{first.location}: cannot load the configuration: {first.message}{more}")

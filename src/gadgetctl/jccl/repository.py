@@ -72,10 +72,13 @@ class DefinitionRepository:
         return repo
 
     def load_entry(self, entry: SearchPathEntry) -> None:
-        """Load every ``*.jdef`` file of a directory (not recursive), in name order."""
+        """Load every ``*.jdef`` file of a directory (not recursive), in name order. A
+        directory already on the search path is ignored: it would only shadow itself."""
         from gadgetctl.jccl.defparser import read_definition
         from gadgetctl.jccl.xmlload import load_file
 
+        if any(_same_directory(entry.path, e.path) for e in self.entries):
+            return
         self.entries.append(entry)
         if not entry.exists:
             return
@@ -271,6 +274,15 @@ class DefinitionRepository:
                     if len(component) > 1 or node in self.parents_of(node):
                         result.append(tuple(sorted(component)))
         return result
+
+
+def _same_directory(one: Path, other: Path) -> bool:
+    if one == other:
+        return True
+    try:
+        return one.resolve() == other.resolve()
+    except OSError:
+        return False
 
 
 def load_repository(entries: Iterable[SearchPathEntry]) -> DefinitionRepository:

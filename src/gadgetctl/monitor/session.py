@@ -43,7 +43,7 @@ from gadgetctl.input.proxies import (
     Proxy,
 )
 from gadgetctl.input.samples import FrameSamples, Sample
-from gadgetctl.input.status import ElementKind, ElementStatus
+from gadgetctl.input.status import UNKNOWN_TYPE, ElementKind, ElementStatus
 from gadgetctl.jccl.configuration import Configuration
 from gadgetctl.monitor.recording import Recorder
 from gadgetctl.monitor.records import (
@@ -508,7 +508,7 @@ class MonitorSession:
     def _pending_statuses(self) -> dict[str, ElementStatus]:
         if not self.manager.pending():
             return {}
-        return {s.name: s for s in self.manager.statuses() if s.state == PENDING}
+        return {s.name: s for s in self.manager.statuses() if s.state in (PENDING, UNKNOWN_TYPE)}
 
     def _resolve(self, selectors: Sequence[str]) -> list[str]:
         known = self.known()
@@ -881,7 +881,7 @@ class MonitorSession:
             return ALIAS, "alias", proxy.state.value, proxy.reason if proxy.stupefied else None
         status = self._pending_statuses().get(name)
         if status is not None:
-            return (status.kind.value if status.kind is not None else None), status.type, PENDING, status.reason
+            return (status.kind.value if status.kind is not None else None), status.type, status.state, status.reason
         element = manager.element(name)
         return None, element.type if element is not None else "", "removed", "no longer configured"
 

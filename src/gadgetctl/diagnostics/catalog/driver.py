@@ -159,7 +159,9 @@ CODES += [
          "Point the alias at the proxy itself."),
     Code("DRV040", C, E, "element type has no definition",
          "The element's type is not defined by any loaded .jdef, so nothing about it can be read. "
-         "VR Juggler drops such elements at load time with only a warning.",
+         "VR Juggler drops such elements at load time with only a warning. `gadgetctl config "
+         "pending` and `gadgetctl monitor` show them as of unknown type (not as pending "
+         "devices, and no reason to exit 1); `gadgetctl validate` reports them as CFG010.",
          "<my_tracker name=\"T\"> with no my_tracker.jdef on the search path",
          "Add the definition's directory with --definitions or the configuration's definition_path."),
 ]
