@@ -365,7 +365,7 @@ def test_device_whose_driver_is_missing(cli, tmp_path):
 
 
 def test_device_type_no_plugin_provides(cli, tmp_path):
-    code, report = doctor_json(cli, config(tmp_path, '<vrpn name="Remote" version="1"/>'))
+    code, report = doctor_json(cli, config(tmp_path, '<motionnode name="Remote" version="1"/>'))
     assert code == 1
     device = report["devices"][0]
     assert device["driver"] is None

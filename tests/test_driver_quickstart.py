@@ -21,6 +21,7 @@ DRIVERS = [
     ("DTrack_drv", {"position", "digital", "analog"}),
     ("PinchGlove_drv", {"glove", "digital"}),
     ("MotionStar_drv", {"position"}),
+    ("VRPN_drv", {"position", "digital", "analog"}),
 ]
 
 

@@ -33,6 +33,7 @@ TRANSPORT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "serial": (("port",), ("baud",)),
     "udp": (("port",), ("host", "peer_port")),
     "tcp": (("host", "port"), ()),
+    "vrpn": (("name",), ("count",)),  # a Device@host name; count: 0 means unused
 }
 
 

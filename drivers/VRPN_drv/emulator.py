@@ -1,0 +1,258 @@
+"""A small VRPN server on loopback for the VRPN driver: a tracker, a button device and an
+analog device, served with gadgetctl's VRPN server (:class:`gadgetctl.vrpn.VrpnServer`).
+
+Devices (names configurable): ``Tracker0`` with ``sensors`` sensors moving on circles,
+``Button0`` with ``buttons`` buttons, ``Analog0`` with ``channels`` channels in [-1, 1].
+Scenarios: ``idle`` (everything at rest), ``motion`` (poses and analogs move, buttons still)
+and ``buttons`` (``motion``, and the buttons are pressed and released one after the other).
+Tracker reports go unreliable (by UDP to lob clients, as the C++ tracker sends them);
+buttons reliable, with the button states sent on every connection and ping.
+
+Run ``python emulator.py --help`` (or ``gadgetctl emulate VRPN_drv``) for the command line.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import signal
+import sys
+import threading
+import time
+
+from gadgetctl.vrpn import VrpnServer, codecs
+
+SCENARIOS = ("idle", "motion", "buttons")
+
+
+# -- the scenario's data (pure functions, so tests can compute what to expect) ----------------
+
+
+def sensor_pose(
+    frame: int, sensor: int, moving: bool
+) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+    """Position (metres) and (x, y, z, w) quaternion of ``sensor`` at ``frame``."""
+    t = frame if moving else 0
+    angle = 0.05 * t + sensor
+    position = (0.5 * math.cos(angle) + sensor, 1.5 + 0.1 * sensor, 0.5 * math.sin(angle))
+    half = 0.5 * angle  # a turn about the vertical axis
+    return position, (0.0, math.sin(half), 0.0, math.cos(half))
+
+
+def button_states(frame: int, buttons: int, scenario: str) -> tuple[int, ...]:
+    """Button ``(frame // 10) % buttons`` is pressed during the first half of each 10 frames."""
+    states = [0] * buttons
+    if scenario == "buttons" and buttons and frame % 10 < 5:
+        states[(frame // 10) % buttons] = 1
+    return tuple(states)
+
+
+def analog_values(frame: int, channels: int, moving: bool) -> tuple[float, ...]:
+    t = frame if moving else 0
+    return tuple(math.sin(0.05 * t + 0.7 * c) for c in range(channels))
+
+
+class VrpnEmulator:
+    """Serves the three devices at ``rate`` frames per second until :meth:`stop`."""
+
+    def __init__(
+        self,
+        port: int = 3883,
+        *,
+        host: str = "127.0.0.1",
+        scenario: str = "motion",
+        rate: float = 60.0,
+        sensors: int = 2,
+        buttons: int = 4,
+        channels: int = 2,
+        tracker: str = "Tracker0",
+        button: str = "Button0",
+        analog: str = "Analog0",
+    ) -> None:
+        if scenario not in SCENARIOS:
+            raise ValueError(f"unknown scenario {scenario!r} (one of {', '.join(SCENARIOS)})")
+        if rate <= 0 or min(sensors, buttons, channels) < 0:
+            raise ValueError("the rate must be positive and the counts not negative")
+        if buttons > codecs.MAX_BUTTONS or channels > codecs.MAX_CHANNELS:
+            raise ValueError(
+                f"at most {codecs.MAX_BUTTONS} buttons and {codecs.MAX_CHANNELS} channels"
+            )
+        self.scenario, self.rate = scenario, rate
+        self.sensors, self.buttons, self.channels = sensors, buttons, channels
+        self.server = VrpnServer(host, port)
+        s = self.server
+        self._tracker = s.register_sender(tracker) if sensors else None
+        self._button = s.register_sender(button) if buttons else None
+        self._analog = s.register_sender(analog) if channels else None
+        self._pose_type = s.register_type(codecs.TRACKER_POS_QUAT)
+        self._change_type = s.register_type(codecs.BUTTON_CHANGE)
+        self._states_type = s.register_type(codecs.BUTTON_STATES)
+        self._analog_type = s.register_type(codecs.ANALOG_CHANNEL)
+        s.on_connect = self._send_states
+        s.on_ping = lambda client, name: self._send_states(client) if name == button else None
+        self.frame = 0
+        self._states = button_states(0, buttons, scenario)
+        self._stop = threading.Event()
+        self._threads: list[threading.Thread] = []
+        self.error: BaseException | None = None
+
+    @property
+    def port(self) -> int:
+        return self.server.port
+
+    @property
+    def address(self) -> str:
+        return f"127.0.0.1:{self.server.port}"
+
+    def start(self) -> VrpnEmulator:
+        self.server.start()
+        self._stop.clear()
+        self._threads = [
+            threading.Thread(target=self._serve, name="vrpn-emulator-io", daemon=True),
+            threading.Thread(target=self._tick_loop, name="vrpn-emulator-ticks", daemon=True),
+        ]
+        for t in self._threads:
+            t.start()
+        return self
+
+    def stop(self, timeout: float = 2.0) -> None:
+        self._stop.set()
+        for t in self._threads:
+            t.join(timeout)
+        self.server.close()
+
+    def __enter__(self) -> VrpnEmulator:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def _serve(self) -> None:
+        try:
+            self.server.serve_forever(self._stop, 0.02)
+        except BaseException as exc:  # reported by main()
+            self.error = exc
+
+    def _send_states(self, client) -> None:
+        if self._button is not None:
+            self.server.send_to(
+                client, self._button, self._states_type, codecs.encode_button_states(self._states)
+            )
+
+    def _tick_loop(self) -> None:
+        period = 1.0 / self.rate
+        next_at = time.monotonic()
+        try:
+            while not self._stop.is_set():
+                self.tick()
+                next_at += period
+                delay = next_at - time.monotonic()
+                if delay > 0:
+                    self._stop.wait(delay)
+                else:
+                    next_at = time.monotonic()
+        except BaseException as exc:
+            self.error = exc
+
+    def tick(self) -> None:
+        """Send one frame: every sensor's pose, button changes, the analog channels."""
+        n, s, moving = self.frame, self.server, self.scenario != "idle"
+        stamp = time.time()
+        if self._tracker is not None:
+            for sensor in range(self.sensors):
+                position, quat = sensor_pose(n, sensor, moving)
+                s.send(
+                    self._tracker,
+                    self._pose_type,
+                    codecs.encode_pose(sensor, position, quat),
+                    timestamp=stamp,
+                    reliable=False,
+                    flush=False,
+                )
+        if self._button is not None:
+            states = button_states(n, self.buttons, self.scenario)
+            for i, (old, new) in enumerate(zip(self._states, states, strict=True)):
+                if old != new:
+                    s.send(
+                        self._button,
+                        self._change_type,
+                        codecs.encode_button_change(i, new),
+                        timestamp=stamp,
+                        flush=False,
+                    )
+            self._states = states
+        if self._analog is not None:
+            s.send(
+                self._analog,
+                self._analog_type,
+                codecs.encode_analog(analog_values(n, self.channels, moving)),
+                timestamp=stamp,
+                reliable=False,
+                flush=False,
+            )
+        s.flush()
+        self.frame += 1
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line: serve until Ctrl-C or ``--duration`` seconds."""
+    parser = argparse.ArgumentParser(
+        prog="VRPN_drv.emulator",
+        description="Serve a VRPN tracker, button and analog device on 127.0.0.1.",
+    )
+    parser.add_argument("--scenario", choices=SCENARIOS, default="buttons")
+    parser.add_argument("--rate", type=float, default=60.0, help="frames per second (default 60)")
+    parser.add_argument(
+        "--port", type=int, default=3883, help="TCP and UDP port (default 3883; 0 = any)"
+    )
+    parser.add_argument("--duration", type=float, help="stop after this many seconds")
+    parser.add_argument("--sensors", type=int, default=2, help="tracker sensors (default 2)")
+    parser.add_argument("--buttons", type=int, default=4, help="buttons (default 4)")
+    parser.add_argument("--channels", type=int, default=2, help="analog channels (default 2)")
+    args = parser.parse_args(argv)
+    try:
+        emulator = VrpnEmulator(
+            args.port,
+            scenario=args.scenario,
+            rate=args.rate,
+            sensors=args.sensors,
+            buttons=args.buttons,
+            channels=args.channels,
+        )
+    except ValueError as exc:
+        parser.error(str(exc))
+
+    def interrupted(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, interrupted)  # SIGTERM ends the emulator as Ctrl-C does
+    try:
+        emulator.start()
+    except OSError as exc:
+        print(f"cannot serve on 127.0.0.1:{args.port}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    try:
+        print(
+            f"VRPN emulator ({args.scenario}, {args.rate:g} Hz) serving on {emulator.address}: "
+            f"Tracker0 ({args.sensors} sensors), Button0 ({args.buttons}), Analog0 ({args.channels})"
+        )
+        print(
+            f"Point a vrpn element at it: <tracker_server>Tracker0@{emulator.address}</tracker_server>"
+        )
+        print("Press Ctrl-C to stop.", flush=True)
+        end = None if args.duration is None else time.monotonic() + args.duration
+        while end is None or time.monotonic() < end:
+            if emulator.error is not None:
+                print(f"emulator failed: {emulator.error}", file=sys.stderr)
+                return 1
+            time.sleep(0.1 if end is None else max(0.0, min(0.1, end - time.monotonic())))
+    except KeyboardInterrupt:
+        pass
+    finally:
+        emulator.stop()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

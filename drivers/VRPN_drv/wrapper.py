@@ -1,0 +1,169 @@
+"""The input-manager side of the VRPN driver: a ``vrpn`` element becomes a device with
+``tracker_count`` position units, ``button_count`` digital units and ``analog_count``
+analog units, read by :class:`~.standalone.VrpnInput`.
+
+A server that is down, goes away, or does not announce the named device makes ``sample()``
+raise, so the input manager shows the device faulted (with the reason) and restarts it with
+back-off (at most 1 s apart): samples resume within about a second of the server's return.
+
+Sample times are the local receive times. The server's own timestamps are kept in
+:attr:`VrpnDevice.remote_clock`: the difference (local receive wall time minus server
+time) is the clock offset plus the transport latency.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from gadgetctl.input import Analog, DeviceConfigError, Digital, Position
+from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.vrpn import VrpnNameError
+
+from .standalone import Batch, VrpnInput
+
+#: Counts above these are configuration mistakes (VRPN's own limits: 256 buttons, 128 channels).
+MAX_SENSORS = 1024
+MAX_BUTTONS = 256
+MAX_CHANNELS = 128
+
+
+class RemoteClock:
+    """Running statistics of ``received - server time`` (seconds) for one device."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.minimum: float | None = None
+        self.latest: float | None = None
+        self._sum = 0.0
+
+    def add(self, deltas: list[float]) -> None:
+        if not deltas:
+            return
+        self.count += len(deltas)
+        self._sum += sum(deltas)
+        low = min(deltas)
+        self.minimum = low if self.minimum is None else min(self.minimum, low)
+        self.latest = deltas[-1]
+
+    @property
+    def mean(self) -> float | None:
+        return self._sum / self.count if self.count else None
+
+    def to_dict(self) -> dict[str, float | int | None]:
+        """``offset``: the smallest difference (clock offset plus the least latency);
+        ``latency``: how much the mean exceeds it (transport and queueing delay)."""
+        mean = self.mean
+        return {
+            "samples": self.count,
+            "offset": self.minimum,
+            "latency": None if mean is None or self.minimum is None else mean - self.minimum,
+            "latest": self.latest,
+        }
+
+
+class VrpnDevice(Position, Digital, Analog):
+    """A VRPN client (element type ``vrpn``)."""
+
+    ELEMENT_TYPE = "vrpn"
+    sample_interval = 0.0  # sample() waits for messages itself
+
+    #: Seconds one sample() call waits for messages.
+    receive_timeout = 0.05
+    #: Seconds start_sampling() waits for every server to accept the connection.
+    connect_timeout = 1.0
+    #: A connection with nothing from the server for this long is lost (idle servers still
+    #: answer the client's pings).
+    silence_timeout = 3.0
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.tracker_server = self.button_server = self.analog_server = ""
+        self.tracker_count = self.button_count = self.analog_count = 0
+        self._input: VrpnInput | None = None
+        self.remote_clock = RemoteClock()
+        self._started = False
+
+    def config(self, access: ElementAccess) -> None:
+        super().config(access)  # name, position filters, min and max
+        for kind, limit in (
+            ("tracker", MAX_SENSORS),
+            ("button", MAX_BUTTONS),
+            ("analog", MAX_CHANNELS),
+        ):
+            server = access.string(f"{kind}_server").strip() if access.has(f"{kind}_server") else ""
+            count = access.integer(f"{kind}_count") if access.has(f"{kind}_count") else 0
+            if not 0 <= count <= limit:
+                raise DeviceConfigError(f"{kind}_count {count} is out of range (0 to {limit})")
+            setattr(self, f"{kind}_server", server)
+            setattr(self, f"{kind}_count", count)
+        try:
+            self._input = self._make_input()
+        except VrpnNameError as exc:
+            raise DeviceConfigError(str(exc)) from None
+        if not self._input.devices:
+            self.warn("DRV101", "no VRPN device to read: every *_server is empty or its count is 0")
+
+    def _make_input(self) -> VrpnInput:
+        return VrpnInput(
+            self.tracker_server,
+            self.tracker_count,
+            self.button_server,
+            self.button_count,
+            self.analog_server,
+            self.analog_count,
+            silence_timeout=self.silence_timeout,
+        )
+
+    # -- sampling ---------------------------------------------------------------------------
+
+    def start_sampling(self) -> None:
+        if self._input is None:
+            self._input = self._make_input()
+        # The first start does not wait: a server that is down then shows as a fault (and
+        # the restarts) rather than as an element that failed to start.
+        self._input.open(self.connect_timeout, wait=self._started)
+        self._started = True
+        # The first state: every unit present from the start (buttons released, analogs 0).
+        now = self.now()
+        if self.tracker_count:
+            self.add_position_sample(self._input.poses, now)
+        if self.button_count:
+            self.add_digital_sample(self._input.buttons, now)
+        if self.analog_count:
+            self.add_analog_sample(self._input.channels, now)
+
+    def sample(self) -> None:
+        if self._input is None:
+            raise ConnectionError("not configured")
+        if not self._input.devices:
+            time.sleep(self.receive_timeout)
+            return
+        batch = self._input.read(self.receive_timeout)
+        if batch:
+            self._add(batch)
+
+    def stop_sampling(self) -> None:
+        if self._input is not None:
+            self._input.close()
+
+    def _add(self, batch: Batch) -> None:
+        offset = self.now() - time.time()  # wall-clock receive times onto the sample clock
+        if batch.positions:
+            stamps = np.array([t for t, _ in batch.positions]) + offset
+            self.add_position_samples(stamps, np.stack([m for _, m in batch.positions]))
+        if batch.digital:
+            stamps = np.array([t for t, _ in batch.digital]) + offset
+            self.add_digital_samples(stamps, np.array([v for _, v in batch.digital]))
+        if batch.analog:
+            stamps = np.array([t for t, _ in batch.analog]) + offset
+            self.add_analog_samples(stamps, np.array([v for _, v in batch.analog]))
+        self.remote_clock.add([received - server for received, server in batch.remote_times])
+
+    # -- diagnostics ------------------------------------------------------------------------
+
+    @property
+    def counters(self) -> dict[str, int]:
+        """What the connections counted since the device was made, reconnections included."""
+        return dict(self._input.counts()) if self._input is not None else {}
