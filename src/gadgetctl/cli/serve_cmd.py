@@ -70,6 +70,13 @@ def serve(
         metavar="BYTES",
         help="Bytes queued per client before its messages are dropped (and counted).",
     ),
+    record: Path | None = typer.Option(
+        None,
+        "--record",
+        metavar="FILE",
+        help="Also write every served device sample to FILE (the recording format of monitor --record).",
+    ),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing --record file."),
     fmt: DataFormat = typer.Option(
         DataFormat.text,
         "--format",
@@ -118,6 +125,10 @@ def serve(
         options=ManagerOptions(driver_dirs=list(driver_paths)),
     )
     fatal_load_errors(configuration)
+    if record is not None and not list_:
+        from gadgetctl.cli.monitor_run import check_record_path
+
+        check_record_path(record, overwrite)
     service = ServeService(
         manager, configuration, options, info={"config": [str(p) for p in configs]}
     )
@@ -126,6 +137,13 @@ def serve(
         if list_:
             _print_list(catalog, fmt)
             raise typer.Exit(0)
+        if record is not None:
+            from gadgetctl.input.clock import now
+            from gadgetctl.monitor.recording import Recorder
+
+            service.session.add_sink(
+                lambda info: Recorder(record, info, overwrite=overwrite, clock=now)
+            )
         raise typer.Exit(_run(service, duration, fmt))
     finally:
         service.close()
@@ -216,7 +234,9 @@ def _run(service, duration: float | None, fmt: DataFormat) -> int:
     except ImportError:
         from gadgetctl.errors import GadgetctlError
 
-        raise GadgetctlError("this gadgetctl has no VRPN protocol library yet (gadgetctl.vrpn)") from None
+        raise GadgetctlError(
+            "this gadgetctl has no VRPN protocol library yet (gadgetctl.vrpn)"
+        ) from None
     try:
         port = service.listen()
     except OSError as err:
@@ -269,6 +289,10 @@ def _run(service, duration: float | None, fmt: DataFormat) -> int:
                 reason = "terminated"
     except (KeyboardInterrupt, Terminated):
         reason = "interrupted"
+    try:
+        service.close(reason)
+    except (KeyboardInterrupt, Terminated):
+        pass
     totals = service.totals()
     _say(
         fmt,

@@ -79,6 +79,7 @@ class ServeService:
         self.outlet = None
         self.feed: ServeFeed | None = None
         self.listeners: list[Callable[[ServeEvent], object]] = []
+        self._closed = False
 
     @property
     def manager(self) -> InputManager:
@@ -166,9 +167,15 @@ class ServeService:
     def stop(self) -> None:
         self.session.stop()
 
-    def close(self) -> None:
+    def close(self, reason: str = "closed") -> None:
+        """Close the clients, the recordings (``reason`` in their end record) and the manager;
+        may be called again."""
+        if self._closed:
+            return
+        self._closed = True
         try:
             if self.server is not None:
                 self.server.close()
+            self.session.close_sinks(reason)
         finally:
             self.manager.shutdown()

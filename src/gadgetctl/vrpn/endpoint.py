@@ -252,6 +252,31 @@ class Endpoint:
         self.sent_messages += 1
         return True
 
+    def queue_batch(self, data: bytes, size: int, reliable: bool = True) -> int:
+        """Queue messages framed back to back, each ``size`` bytes long; how many were taken.
+        Unreliable ones fill UDP datagrams (whole messages each); by TCP, the messages that
+        do not fit the output buffer are dropped and counted, whole."""
+        count = len(data) // size
+        if not count:
+            return 0
+        if not reliable and self.udp is not None and size <= MAX_DATAGRAM:
+            per_datagram = MAX_DATAGRAM // size * size
+            view = memoryview(data)
+            for start in range(0, count * size, per_datagram):
+                chunk = view[start:start + per_datagram]
+                if len(self._udp_batch) + len(chunk) > MAX_DATAGRAM:
+                    self._send_udp()
+                self._udp_batch += chunk
+            self.sent_messages += count
+            return count
+        room = max(0, self.out_limit - len(self.out)) // size
+        taken = min(count, room)
+        if taken:
+            self.out += data if taken == count else memoryview(data)[:taken * size]
+        self.sent_messages += taken
+        self.dropped += count - taken
+        return taken
+
     def _send_udp(self) -> None:
         batch = self._udp_batch
         if not batch or self.udp is None:

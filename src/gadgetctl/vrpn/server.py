@@ -250,6 +250,21 @@ class VrpnServer:
                 self._wake()
         return taken
 
+    def broadcast(self, data: bytes, size: int, *, reliable: bool = True) -> int:
+        """Queue already framed messages of ``size`` bytes each (e.g. from :mod:`.batch`) for
+        every open client, without writing yet (:meth:`flush` or :meth:`poll` does); how
+        many messages all clients together took. A client's full buffer drops whole messages,
+        counted in its ``dropped``."""
+        if size <= 0 or len(data) % size or size > MAX_SEND_MESSAGE:
+            raise ValueError(f"{len(data)} bytes are not whole messages of {size} bytes")
+        taken = 0
+        with self._lock:
+            for client in self._clients.values():
+                if client.state == OPEN and client.endpoint is not None:
+                    taken += client.endpoint.queue_batch(data, size, reliable)
+            self._wake()
+        return taken
+
     def send_to(
         self,
         client: ServerClient,

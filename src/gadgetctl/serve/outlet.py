@@ -1,0 +1,106 @@
+"""The :class:`~gadgetctl.serve.feed.Outlet` that frames reports as VRPN messages and hands
+them to the server, which queues them for every connected client (each with its own
+bounded buffer). Every message is framed once, whatever the number of clients.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+import numpy as np
+
+from gadgetctl.serve.catalog import Role, ServedElement
+from gadgetctl.serve.framing import (
+    CHANGE_SIZE,
+    POSE_SIZE,
+    analog_size,
+    pack_analogs,
+    pack_button_changes,
+    pack_poses,
+)
+from gadgetctl.vrpn import codecs
+
+#: The message types each VRPN device class registers (the C++ classes register the same).
+ROLE_TYPES: dict[Role, tuple[str, ...]] = {
+    Role.TRACKER: codecs.TRACKER_TYPES,
+    Role.BUTTON: codecs.BUTTON_TYPES,
+    Role.ANALOG: (codecs.ANALOG_CHANNEL,),
+    Role.TEXT: (),
+}
+
+
+class VrpnOutlet:
+    """Registers every served name and the types of its device classes with ``server``,
+    then frames reports for it."""
+
+    def __init__(self, server, catalog: Iterable[ServedElement]) -> None:
+        self.server = server
+        self.senders: dict[str, int] = {}
+        self.types: dict[str, int] = {}
+        for entry in catalog:
+            if entry.roles:
+                self.senders[entry.vrpn_name] = server.register_sender(entry.vrpn_name)
+        # every type of every device class, so that a kind that starts late is served too
+        for name in (*codecs.BASE_TYPES, *(t for types in ROLE_TYPES.values() for t in types)):
+            self.types[name] = server.register_type(name)
+        self._pose = self.types.get(codecs.TRACKER_POS_QUAT, -1)
+        self._change = self.types.get(codecs.BUTTON_CHANGE, -1)
+        self._states = self.types.get(codecs.BUTTON_STATES, -1)
+        self._analog = self.types.get(codecs.ANALOG_CHANNEL, -1)
+        self._text = self.types[codecs.TEXT_MESSAGE]
+        self.button_states: dict[str, np.ndarray] = {}
+        self.messages = 0
+
+    # -- Outlet -------------------------------------------------------------------------
+
+    def tracker(
+        self, sender: str, times: np.ndarray, positions: np.ndarray, quaternions: np.ndarray
+    ) -> None:
+        data = pack_poses(self.senders[sender], self._pose, times, positions, quaternions)
+        self.messages += positions.shape[0] * positions.shape[1]
+        self.server.broadcast(data, POSE_SIZE, reliable=False)
+
+    def buttons(
+        self, sender: str, changes: Sequence[tuple[float, int, int]], states: np.ndarray
+    ) -> None:
+        times, buttons, values = zip(*changes, strict=True)
+        data = pack_button_changes(
+            self.senders[sender],
+            self._change,
+            np.asarray(times),
+            np.asarray(buttons),
+            np.asarray(values),
+        )
+        self.button_states[sender] = np.array(states, copy=True)
+        self.messages += len(changes)
+        self.server.broadcast(data, CHANGE_SIZE, reliable=True)
+
+    def analog(self, sender: str, times: np.ndarray, values: np.ndarray) -> None:
+        values = values[:, : codecs.MAX_CHANNELS]
+        data = pack_analogs(self.senders[sender], self._analog, times, values)
+        self.messages += values.shape[0]
+        self.server.broadcast(data, analog_size(values.shape[1]), reliable=False)
+
+    def text(self, sender: str, moment: float, level: int, text: str) -> None:
+        self.messages += 1
+        self.server.send(
+            self.senders[sender],
+            self._text,
+            codecs.encode_text(text, 0, level),
+            timestamp=moment,
+            reliable=True,
+            flush=False,
+        )
+
+    # -- for new clients ----------------------------------------------------------------
+
+    def send_states(self, client, sender: str | None = None) -> None:
+        """``vrpn_Button States`` of every button sender (or of ``sender``) to one client, as a
+        C++ button server does when a client connects and when it is pinged."""
+        for name in self.button_states if sender is None else (sender,):
+            states = self.button_states.get(name)
+            if states is not None and name in self.senders:
+                payload = codecs.encode_button_states(
+                    [int(s) for s in states[: codecs.MAX_BUTTONS]]
+                )
+                self.server.send_to(client, self.senders[name], self._states, payload)

@@ -1,0 +1,80 @@
+"""Batched framing (gadgetctl.serve.framing) gives the bytes of one pack_message per message,
+and a server's broadcast of a batch drops whole messages for a full client, counted."""
+
+from __future__ import annotations
+
+import socket
+
+import numpy as np
+
+from gadgetctl.serve.framing import (
+    CHANGE_SIZE,
+    POSE_SIZE,
+    analog_size,
+    pack_analogs,
+    pack_button_changes,
+    pack_poses,
+)
+from gadgetctl.vrpn import codecs
+from gadgetctl.vrpn.endpoint import Endpoint
+from gadgetctl.vrpn.wire import MAX_DATAGRAM, decode_datagram, pack_message
+
+
+def times(n: int) -> np.ndarray:
+    return 1795425140.0 + np.arange(n) * 0.0013 + 0.9999996  # includes a microsecond carry
+
+
+def test_poses_match_one_message_per_sensor():
+    rng = np.random.default_rng(3)
+    t = times(5)
+    positions, quats = rng.normal(size=(5, 3, 3)), rng.normal(size=(5, 3, 4))
+    expected = b"".join(
+        pack_message(7, 2, codecs.encode_pose(s, tuple(positions[i, s]), tuple(quats[i, s])), t[i])
+        for i in range(5)
+        for s in range(3)
+    )
+    data = pack_poses(2, 7, t, positions, quats)
+    assert data == expected and len(data) == 15 * POSE_SIZE
+
+
+def test_analogs_and_button_changes_match():
+    t = times(4)
+    values = np.arange(12, dtype=float).reshape(4, 3) / 7
+    assert pack_analogs(1, 9, t, values) == b"".join(
+        pack_message(9, 1, codecs.encode_analog(list(values[i])), t[i]) for i in range(4)
+    )
+    assert len(pack_analogs(1, 9, t, values)) == 4 * analog_size(3)
+    buttons, states = np.array([0, 3, 3, 255]), np.array([1, 1, 0, 5])
+    assert pack_button_changes(0, 4, t, buttons, states) == b"".join(
+        pack_message(4, 0, codecs.encode_button_change(int(b), int(s)), t[i])
+        for i, (b, s) in enumerate(zip(buttons, states, strict=True))
+    )
+    assert CHANGE_SIZE == 32
+
+
+def test_a_full_buffer_drops_whole_messages_and_udp_datagrams_hold_whole_messages():
+    a, b = socket.socketpair()
+    try:
+        endpoint = Endpoint(a, out_limit=24 + 10 * POSE_SIZE)  # the cookie is queued first
+        data = pack_poses(1, 4, times(16), np.zeros((16, 1, 3)), np.zeros((16, 1, 4)))
+        assert endpoint.queue_batch(data, POSE_SIZE, reliable=True) == 10
+        assert endpoint.dropped == 6 and len(endpoint.out) == 24 + 10 * POSE_SIZE
+        assert endpoint.queue_batch(data, POSE_SIZE, reliable=True) == 0 and endpoint.dropped == 22
+        receiver = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        receiver.bind(("127.0.0.1", 0))
+        receiver.settimeout(5)
+        udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        udp.connect(receiver.getsockname())
+        endpoint.udp = udp
+        assert endpoint.queue_batch(data, POSE_SIZE, reliable=False) == 16
+        endpoint.flush()
+        got = 0
+        while got < 16:
+            datagram = receiver.recv(65536)
+            assert len(datagram) <= MAX_DATAGRAM and len(datagram) % POSE_SIZE == 0
+            got += len(decode_datagram(datagram))
+        assert got == 16
+        receiver.close()
+    finally:
+        a.close()
+        b.close()
