@@ -49,7 +49,7 @@ declare -gA _gadgetctl_opts=(
   ['replay']='--speed --loop --config -c --map --summary --rate --duration --format -f --per-frame --record --overwrite --stats --units --quaternion --interval --mouse --no-mouse --driver-path --definitions -d --bundled --no-bundled --help -h'
   ['scaffold']='--help -h'
   ['scaffold driver']='--type -t --transport --vendor --dir --package --dry-run --force --format -f --help -h'
-  ['serve']='--list --name --bind --port --allow --duration --rate --client-buffer --format -f --driver-path --definitions -d --bundled --no-bundled --help -h'
+  ['serve']='--list --name --bind --port --allow --duration --rate --client-buffer --record --overwrite --format -f --driver-path --definitions -d --bundled --no-bundled --help -h'
   ['upgrade']='--check --diff --in-place -i --backup --no-backup --output -o --format -f --definitions -d --bundled --no-bundled --help -h'
   ['validate']='--format -f --strict --definitions -d --bundled --no-bundled --together --level --max-size --hints --no-hints --color --help -h'
 )
@@ -162,6 +162,7 @@ declare -gA _gadgetctl_valueopts=(
   ['serve --name']=1
   ['serve --port']=1
   ['serve --rate']=1
+  ['serve --record']=1
   ['serve -d']=1
   ['upgrade --definitions']=1
   ['upgrade --output']=1
