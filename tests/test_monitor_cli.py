@@ -249,9 +249,7 @@ def _relative(rows: list[dict]) -> list[float]:
 
 @pytest.mark.parametrize("speed", [1, 10])
 def test_replay_reproduces_every_sample_sequence(recorded, speed):
-    started = time.monotonic()
     result = gadgetctl("replay", recorded, "--speed", str(speed), "--format", "ndjson")
-    elapsed = time.monotonic() - started
     assert result.returncode == 0, result.stderr
     original = samples_by_unit(records(recorded.read_text()))
     replayed_recs = records(result.stdout)
@@ -261,12 +259,13 @@ def test_replay_reproduces_every_sample_sequence(recorded, speed):
         again = replayed[key]
         assert [(r["value"], r.get("raw")) for r in again] == [(r["value"], r.get("raw")) for r in rows], key
         assert [t * speed for t in _relative(again)] == pytest.approx(_relative(rows), abs=1e-6), key
-    first = min(r["timestamp"] for r in replayed_recs if r["type"] == "sample")
-    span = replayed_recs[-1]["timestamp"] - first  # from the first sample to the end record
-    recorded_span = 2.0
-    assert span == pytest.approx(recorded_span / speed, abs=0.12 + 0.05 * recorded_span / speed)
-    if speed == 10:
-        assert elapsed < recorded_span  # a tenth of the time, plus start-up
+    # the samples span the recording's time scaled by the speed (the wall-clock side, how
+    # closely the replay keeps to that schedule on a given machine, is bench/bench_replay.py)
+    stamps = sorted(r["timestamp"] for r in replayed_recs if r["type"] == "sample")
+    recorded_stamps = sorted(r["timestamp"] for r in records(recorded.read_text()) if r["type"] == "sample")
+    assert (stamps[-1] - stamps[0]) * speed == pytest.approx(recorded_stamps[-1] - recorded_stamps[0], abs=1e-6)
+    assert [r["type"] for r in replayed_recs[-2:]] == ["stats", "end"]
+    assert replayed_recs[-1]["timestamp"] >= stamps[-1] and replayed_recs[-1]["reason"] == "closed"
 
 
 def test_replay_against_another_configuration_with_a_name_mapping(tmp_path, recorded):

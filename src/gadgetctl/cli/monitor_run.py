@@ -86,8 +86,10 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
                 elif mode is OutputFormat.table:
                     _table(session, options)
                 else:
+                    notice = RateNotice(session)
                     for _ in session.frames(duration=options.duration):
-                        pass
+                        notice.check()
+                    notice.check()
             except KeyboardInterrupt:
                 reason = "interrupted"
             except Terminated:
@@ -119,6 +121,25 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
     return _finish(session, mode, options, *outcome)
 
 
+class RateNotice:
+    """Says once that the frames do not reach the requested rate (on stderr, or through
+    ``tell`` in the live view)."""
+
+    def __init__(self, session: MonitorSession, tell=None) -> None:
+        self.session = session
+        self.tell = tell or (lambda text: print(f"gadgetctl: note: {text}", file=sys.stderr, flush=True))
+        self.told = False
+
+    def check(self) -> None:
+        shortfall = self.session.rate_shortfall
+        if shortfall is None or self.told:
+            return
+        self.told = True
+        requested, achieved = shortfall
+        self.tell(f"the frame rate of {requested:g} Hz is not reached: about {achieved:.0f} frames "
+                  "per second (--duration counts seconds all the same)")
+
+
 def _silence_stdout() -> None:
     with contextlib.suppress(OSError, ValueError):
         devnull = os.open(os.devnull, os.O_WRONLY)
@@ -140,10 +161,10 @@ def _evaluate(session: MonitorSession) -> tuple[dict, list[str]]:
 
 def _finish(session: MonitorSession, mode: OutputFormat, options: RunOptions, final: dict,
             problems: list[str]) -> int:
-    from gadgetctl.cli.monitor_text import stats_text
+    from gadgetctl.cli.monitor_text import frames_text, stats_text
 
     if mode is not OutputFormat.ndjson and options.stats:
-        sys.stdout.write(stats_text(final))
+        sys.stdout.write(frames_text(session) + stats_text(final))
     if session.finished and mode is not OutputFormat.ndjson:
         sys.stdout.write("replay finished\n")
     sys.stdout.flush()
@@ -157,9 +178,12 @@ def _table(session: MonitorSession, options: RunOptions) -> None:
 
     table = TableView(session, sys.stdout, interval=options.interval, length_unit=options.length_unit,
                       quaternion=options.quaternion)
+    notice = RateNotice(session)
     for frame in session.frames(duration=options.duration):
+        notice.check()
         table.frame(frame.elapsed)
     table.print()
+    notice.check()
 
 
 def _live(session: MonitorSession, options: RunOptions) -> None:
@@ -174,9 +198,11 @@ def _live(session: MonitorSession, options: RunOptions) -> None:
     view = LiveView(session, console, title=options.title, length_unit=options.length_unit,
                     quaternion=options.quaternion, recording=recording, heading=options.heading)
     controls = _Controls(session, view, has_recording=options.record is not None)
+    notice = RateNotice(session, lambda text: setattr(view, "message", text))
     with RawTerminal(mouse=options.mouse) as terminal, view:
         # a finished replay stays on screen (FINISHED) until q, unless a duration was given
         for _ in session.frames(duration=options.duration, stop_at_end=options.duration is not None):
+            notice.check()
             moment = now()
             events = decoder.feed(terminal.read(), moment) + decoder.flush(moment)
             for event in events:

@@ -187,6 +187,12 @@ STATS_COLUMNS = ("DEVICE", "STATE", "SAMPLES", "MEAN Hz", "P50 ms", "P99 ms", "M
                  "DROPPED", "FAULTS")
 
 
+def frames_text(session: Any) -> str:
+    """The frames a session ran: how many, over how long, at what rate against the requested."""
+    return (f"frames: {session.frames_run} in {session.run_seconds:.3f} s, "
+            f"{session.achieved_rate:.1f} Hz achieved of {session.rate:g} Hz requested\n")
+
+
 def stats_text(stats: Mapping[str, Mapping[str, Any]]) -> str:
     """The end-of-run statistics of each device (``MonitorSession.final_stats``)."""
     if not stats:

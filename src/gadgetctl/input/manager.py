@@ -543,20 +543,21 @@ class InputManager:
     def run(self, rate: float = 60.0, *, frames: int | None = None, duration: float | None = None,
             on_frame: Callable[[InputManager], bool | None] | None = None,
             stop: threading.Event | None = None) -> int:
-        """Run frames at ``rate`` Hz until ``frames`` or ``duration`` is reached, ``stop`` is
-        set or ``on_frame`` returns False. Ctrl-C shuts everything down and is re-raised."""
+        """Run frames at ``rate`` Hz until ``frames`` or ``duration`` (seconds of wall clock,
+        however many frames that is) is reached, ``stop`` is set or ``on_frame`` returns
+        False. Ctrl-C shuts everything down and is re-raised."""
         if rate <= 0:
             raise ValueError("the frame rate must be positive")
         period = 1.0 / rate
         if self.options.freeze_gc:
             self._freeze_gc(collect=True)
-        start = now()
+        began = start = now()  # start is the pacing origin: it moves when frames fall behind
         count = 0
         try:
             while not (stop is not None and stop.is_set()):
                 if frames is not None and count >= frames:
                     break
-                if duration is not None and now() - start >= duration:
+                if duration is not None and now() - began >= duration:
                     break
                 configured = len(self._known)
                 self.update()

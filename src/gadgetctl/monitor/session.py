@@ -436,6 +436,13 @@ class _Sink:
     recorder: Recorder | None = None
 
 
+#: A run that reaches less than this share of the requested frame rate says so (once),
+#: checked after RATE_CHECK_AFTER seconds or at the end of a run of RATE_CHECK_MIN seconds.
+RATE_SHORTFALL = 0.9
+RATE_CHECK_AFTER = 1.0
+RATE_CHECK_MIN = 0.25
+
+
 class MonitorSession:
     """Runs an input manager for monitoring; see the module documentation.
 
@@ -473,6 +480,11 @@ class MonitorSession:
         self._proxy_stamps: dict[str, float | None] = {}
         self._frame_interval = 1.0 / rate
         self._last_frame_at: float | None = None
+        #: Frames run by :meth:`frames` and the seconds they took (wall clock).
+        self.frames_run = 0
+        self.run_seconds = 0.0
+        #: (requested, achieved) frame rate, set once when the frames fall short of the rate.
+        self.rate_shortfall: tuple[float, float] | None = None
         self._stop = False
         self._samples_written = 0
         self._watch: list[str] = []
@@ -631,30 +643,35 @@ class MonitorSession:
 
     def frames(self, *, duration: float | None = None, frames: int | None = None,
                sleep: Callable[[float], object] = time.sleep, stop_at_end: bool = True) -> Iterator[Frame]:
-        """Run frames at the session's rate until ``duration`` seconds or ``frames`` frames,
-        :meth:`stop`, or the end of a replay (unless ``stop_at_end`` is false: then
-        :attr:`finished` is set and frames go on); yields each frame after its data were
-        gathered and written."""
+        """Run frames at the session's rate until ``duration`` seconds (wall clock, however
+        many frames that is) or ``frames`` frames, :meth:`stop`, or the end of a replay
+        (unless ``stop_at_end`` is false: then :attr:`finished` is set and frames go on);
+        yields each frame after its data were gathered and written. When the frames fall
+        short of the rate, :attr:`rate_shortfall` is set (once)."""
         period = 1.0 / self.rate
         gc.collect()
         gc.freeze()  # keep frames free of long full collections (as InputManager.run does)
+        began = now()
+        count = 0
         try:
-            start = now()
-            self.started_at = start
-            count = 0
+            start = began  # the pacing origin; moves when the frames fall behind
+            self.started_at = began
             while not self._stop:
                 if frames is not None and count >= frames:
                     break
-                if duration is not None and now() - start >= duration:
+                if duration is not None and now() - began >= duration:
                     break
                 source_done = self.source is not None and self.source.done
                 frame = self.step()
                 count += 1
+                self.frames_run, self.run_seconds = count, now() - began
                 yield frame
                 if source_done and not self.finished:  # the feeder had finished before this frame swapped
                     self.finished = True
                     if stop_at_end:
                         break
+                if self.rate_shortfall is None and now() - began >= RATE_CHECK_AFTER:
+                    self._check_rate(count, now() - began)
                 delay = start + count * period - now()
                 if delay > 0:
                     sleep(delay)
@@ -662,6 +679,19 @@ class MonitorSession:
                     start = now() - count * period
         finally:
             gc.unfreeze()
+            self.frames_run, self.run_seconds = count, now() - began
+            if self.rate_shortfall is None and self.run_seconds >= RATE_CHECK_MIN:
+                self._check_rate(count, self.run_seconds)
+
+    @property
+    def achieved_rate(self) -> float:
+        """Frames per second of the last :meth:`frames` run (0 before any)."""
+        return self.frames_run / self.run_seconds if self.run_seconds > 0 else 0.0
+
+    def _check_rate(self, count: int, elapsed: float) -> None:
+        achieved = count / elapsed
+        if achieved < RATE_SHORTFALL * self.rate:
+            self.rate_shortfall = (self.rate, achieved)
 
     def step(self) -> Frame:
         """One frame: update the manager, gather every watched device's samples, write."""
