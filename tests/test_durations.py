@@ -60,10 +60,10 @@ def test_ndjson_monitor_says_so_once_too() -> None:
 
 
 def test_a_reached_frame_rate_says_nothing() -> None:
-    result = gadgetctl("monitor", WAVEFORM, "--rate", "20", "--duration", "1", "--format", "table", "--stats")
+    result = gadgetctl("monitor", WAVEFORM, "--rate", "5", "--duration", "1", "--format", "table", "--stats")
     assert result.returncode == 0, result.stderr
     frames, seconds, _achieved, requested = frames_of(result)
-    assert requested == 20 and 1.0 <= seconds and 19 <= frames <= 21
+    assert requested == 5 and seconds >= 1.0 and 4 <= frames <= 6
     assert "not reached" not in result.stderr
 
 
