@@ -103,13 +103,18 @@ class Input:
 
     @classmethod
     def kinds(cls) -> tuple[DeviceKind, ...]:
-        """The kinds of data this class provides, in base-class order."""
+        """The kinds of data this class provides, in base-class order (worked out once per
+        class: every proxy asks its device when it binds)."""
+        known = cls.__dict__.get("_kinds_of_class")
+        if known is not None:
+            return known
         seen: list[DeviceKind] = []
         for klass in cls.__mro__:
             kind = klass.__dict__.get("KIND")
             if kind is not None and kind not in seen:
                 seen.append(kind)
-        return tuple(seen)
+        cls._kinds_of_class = tuple(seen)
+        return cls._kinds_of_class
 
     # -- what drivers implement ----------------------------------------------------------
 

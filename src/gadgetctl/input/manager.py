@@ -134,6 +134,9 @@ class InputManager:
         self._device_objects: dict[str, Input] = {}
         self._proxies: dict[str, Proxy] = {}
         self._proxy_elements: dict[str, ConfigElement] = {}
+        self._proxies_of: dict[str, set[str]] = {}  # device name -> names of proxies pointing at it
+        self._waiters: dict[str, set[str]] = {}  # name -> pending elements whose pointer waits for it
+        self._frame_order: tuple[list[Input], list[Proxy]] | None = None  # update() order; None: stale
         self._aliases: dict[str, str] = {}
         self._alias_elements: dict[str, ConfigElement] = {}
         self._input_managers: dict[str, ConfigElement] = {}
@@ -257,10 +260,30 @@ class InputManager:
                 result = self._try(entry.element)
                 if result is None:
                     del self._pending[name]
-                    processed += 1
+                    processed += 1 + self._configure_waiters(name)
                     progress = True
                 else:
                     self._pending[name] = result
+        return processed
+
+    def _configure_waiters(self, name: str) -> int:
+        """Retry at once the pending elements that waited for ``name`` (just configured),
+        and theirs in turn, so one pass configures a chain written in any order (without
+        it, a chain written backwards took one pass over every pending element per link)."""
+        processed = 0
+        ready = [name]
+        while ready:
+            for waiter in sorted(self._waiters.pop(ready.pop(), ())):
+                entry = self._pending.get(waiter)
+                if entry is None or entry.kind not in CHEAP_TO_RETRY:
+                    continue
+                result = self._try(entry.element)
+                if result is None:
+                    del self._pending[waiter]
+                    processed += 1
+                    ready.append(waiter)
+                else:
+                    self._pending[waiter] = result
         return processed
 
     # -- configuring one element ------------------------------------------------------------
@@ -294,6 +317,7 @@ class InputManager:
         for prop, target in pointer_targets(element, self.repo):
             if self._active(target):
                 continue
+            self._waiters.setdefault(target, set()).add(element.full_name)
             if target in self._pending:
                 waiting = self._pending[target]
                 return PendingEntry(element, PendingKind.WAITING,
@@ -366,6 +390,7 @@ class InputManager:
             self._aliases[name] = target
             self._alias_elements[name] = element
             return None
+        self._waiters.setdefault(target, set()).add(name)
         if target in self._aliases:
             return PendingEntry(element, PendingKind.BAD_ALIAS,
                                 f"points at alias {target!r}; an alias must point at a proxy",
@@ -394,6 +419,8 @@ class InputManager:
         proxy.refresh(self._device_objects, self._why_missing(proxy.device_name))
         self._proxies[name] = proxy
         self._proxy_elements[name] = element
+        self._proxies_of.setdefault(proxy.device_name, set()).add(name)
+        self._frame_order = None
         return None
 
     def _why_missing(self, device: str) -> str | None:
@@ -461,7 +488,8 @@ class InputManager:
                 return PendingEntry(element, PendingKind.START_FAILED, f"the device failed to start: {describe(err)}")
         self._devices[name] = _DeviceEntry(element, device, runner)
         self._device_objects[name] = device
-        self._refresh_proxies()
+        self._frame_order = None
+        self._refresh_proxies(self._proxies_of.get(name, ()))  # only its own: O(1), not O(proxies)
         return None
 
     def _runner(self, device: Input) -> Runner:
@@ -472,8 +500,11 @@ class InputManager:
             return ThreadRunner(device, policy)
         return FrameRunner(device, policy)
 
-    def _refresh_proxies(self) -> None:
-        for proxy in self._proxies.values():
+    def _refresh_proxies(self, names: Iterable[str] | None = None) -> None:
+        """Rebind (or stupefy) the proxies called ``names``, or every proxy."""
+        proxies = self._proxies
+        chosen = proxies.values() if names is None else (proxies[n] for n in names if n in proxies)
+        for proxy in chosen:
             proxy.refresh(self._device_objects, self._why_missing(proxy.device_name))
 
     # -- removal ----------------------------------------------------------------------------
@@ -494,9 +525,13 @@ class InputManager:
         entry = self._devices.pop(name, None)
         if entry is not None:
             self._device_objects.pop(name, None)
+            self._frame_order = None
             self._stop(entry)
-        if self._proxies.pop(name, None) is not None:
+        proxy = self._proxies.pop(name, None)
+        if proxy is not None:
             self._proxy_elements.pop(name, None)
+            self._proxies_of.get(proxy.device_name, set()).discard(name)
+            self._frame_order = None
         if self._aliases.pop(name, None) is not None:
             self._alias_elements.pop(name, None)
         self._input_managers.pop(name, None)
@@ -534,10 +569,14 @@ class InputManager:
             self.reconfigure()
         self.frame += 1
         frame = self.frame
-        for name in sorted(self._device_objects):
-            self._device_objects[name].update_for_frame(frame)
-        for name in sorted(self._proxies):
-            self._proxies[name].update_for_frame(frame)
+        order = self._frame_order
+        if order is None:  # sorted once per change of what is configured, not every frame
+            order = self._frame_order = ([self._device_objects[n] for n in sorted(self._device_objects)],
+                                         [self._proxies[n] for n in sorted(self._proxies)])
+        for device in order[0]:
+            device.update_for_frame(frame)
+        for proxy in order[1]:
+            proxy.update_for_frame(frame)
         return frame
 
     def run(self, rate: float = 60.0, *, frames: int | None = None, duration: float | None = None,
@@ -651,29 +690,54 @@ class InputManager:
         return found
 
     def status(self, name: str) -> ElementStatus | None:
-        """The status of the device, proxy, alias or input manager element called ``name``."""
-        return next((s for s in self.statuses() if s.name == name), None)
+        """The status of the device, proxy, alias, input manager or pending element called
+        ``name`` (looked up, not searched for in :meth:`statuses`)."""
+        entry = self._devices.get(name)
+        if entry is not None:
+            return self._device_status(name, entry)
+        proxy = self._proxies.get(name)
+        if proxy is not None:
+            return self._proxy_status(name, proxy)
+        target = self._aliases.get(name)
+        if target is not None:
+            return ElementStatus(name, ALIAS, ElementKind.ALIAS, ACTIVE, target=target)
+        element = self._input_managers.get(name)
+        if element is not None:
+            return ElementStatus(name, element.type, ElementKind.INPUT_MANAGER, ACTIVE)
+        pending = self._pending.get(name)
+        return None if pending is None else self._pending_status(pending)
 
     def statuses(self) -> list[ElementStatus]:
         result: list[ElementStatus] = []
         for name, entry in self._devices.items():
-            device = entry.device
-            reason = device.error if device.state in (DeviceState.FAULTED, DeviceState.RECONNECTING) else None
-            result.append(ElementStatus(name, entry.element.type, ElementKind.DEVICE, device.state.value,
-                                        reason, "DRV042" if reason else None, device.stats))
+            result.append(self._device_status(name, entry))
         for name, proxy in self._proxies.items():
-            result.append(ElementStatus(name, proxy.element_type, ElementKind.PROXY, proxy.state.value,
-                                        proxy.reason if proxy.stupefied else None, None, target=proxy.device_name))
+            result.append(self._proxy_status(name, proxy))
         for name, target in self._aliases.items():
             result.append(ElementStatus(name, ALIAS, ElementKind.ALIAS, ACTIVE, target=target))
         for name, element in self._input_managers.items():
             result.append(ElementStatus(name, element.type, ElementKind.INPUT_MANAGER, ACTIVE))
-        for entry in self._pending.values():
-            kind = self._classify(entry.element)
-            state = UNKNOWN_TYPE if entry.kind is PendingKind.NO_DEFINITION else PENDING
-            result.append(ElementStatus(entry.name, entry.type, kind if isinstance(kind, ElementKind) else None,
-                                        state, entry.message, entry.code))
+        for pending in self._pending.values():
+            result.append(self._pending_status(pending))
         return result
+
+    @staticmethod
+    def _device_status(name: str, entry: _DeviceEntry) -> ElementStatus:
+        device = entry.device
+        reason = device.error if device.state in (DeviceState.FAULTED, DeviceState.RECONNECTING) else None
+        return ElementStatus(name, entry.element.type, ElementKind.DEVICE, device.state.value,
+                             reason, "DRV042" if reason else None, device.stats)
+
+    @staticmethod
+    def _proxy_status(name: str, proxy: Proxy) -> ElementStatus:
+        return ElementStatus(name, proxy.element_type, ElementKind.PROXY, proxy.state.value,
+                             proxy.reason if proxy.stupefied else None, None, target=proxy.device_name)
+
+    def _pending_status(self, entry: PendingEntry) -> ElementStatus:
+        kind = self._classify(entry.element)
+        state = UNKNOWN_TYPE if entry.kind is PendingKind.NO_DEFINITION else PENDING
+        return ElementStatus(entry.name, entry.type, kind if isinstance(kind, ElementKind) else None,
+                             state, entry.message, entry.code)
 
 
 def _error_text(err: Exception) -> str:

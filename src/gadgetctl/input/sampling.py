@@ -198,22 +198,31 @@ class ScheduledRunner:
 
 
 class SharedScheduler:
-    """One daemon thread calling ``sample()`` of many non-blocking devices when due."""
+    """One daemon thread calling ``sample()`` of many non-blocking devices when due.
+
+    The membership lock is held only to change or copy the set of runners and to mark the
+    runner being stepped, never while a device samples: adding a runner never waits for a
+    pass (holding the lock for whole passes made starting N devices wait N passes, O(N^2),
+    Python's locks not being fair), and removing one waits for at most its own ``sample()``.
+    """
 
     IDLE_WAKE = 0.1
 
     def __init__(self, clock: Callable[[], float] = now) -> None:
         self._clock = clock
-        self._lock = threading.Lock()
+        self._changed = threading.Condition(threading.Lock())
         self._wake = threading.Event()
         self._stop = threading.Event()
-        self._runners: tuple[ScheduledRunner, ...] = ()
+        self._members: dict[ScheduledRunner, None] = {}  # an insertion-ordered set
+        self._order: tuple[ScheduledRunner, ...] | None = ()  # the runners of a pass; None: stale
+        self._stepping: ScheduledRunner | None = None
         self._thread: threading.Thread | None = None
 
     def add(self, runner: ScheduledRunner) -> None:
-        with self._lock:
+        with self._changed:
             runner.due = self._clock()
-            self._runners = (*self._runners, runner)
+            self._members[runner] = None
+            self._order = None
             if self._thread is None or not self._thread.is_alive():
                 self._stop.clear()
                 self._thread = threading.Thread(target=self._loop, name="gadgetctl-scheduler", daemon=True)
@@ -222,23 +231,39 @@ class SharedScheduler:
 
     def remove(self, runner: ScheduledRunner) -> None:
         """Take ``runner`` out; when this returns its device's sample() is not running."""
-        with self._lock:
-            self._runners = tuple(r for r in self._runners if r is not runner)
+        with self._changed:
+            if runner in self._members:
+                del self._members[runner]
+                self._order = None
+            while self._stepping is runner and threading.current_thread() is not self._thread:
+                self._changed.wait()
 
     def __len__(self) -> int:
-        return len(self._runners)
+        return len(self._members)
 
     def _loop(self) -> None:
-        clock, lock, wake, stop = self._clock, self._lock, self._wake, self._stop
+        clock, changed, wake, stop, members = self._clock, self._changed, self._wake, self._stop, self._members
         while not stop.is_set():
-            with lock:
-                moment = clock()
-                next_due = moment + self.IDLE_WAKE
-                for runner in self._runners:
-                    if runner.due <= moment:
+            moment = clock()
+            next_due = moment + self.IDLE_WAKE
+            order = self._order
+            if order is None:
+                with changed:
+                    order = self._order = tuple(members)
+            for runner in order:
+                if runner.due <= moment:
+                    with changed:
+                        if runner not in members:  # removed since the pass began
+                            continue
+                        self._stepping = runner
+                    try:
                         runner.step(moment)
-                    if runner.due < next_due:
-                        next_due = runner.due
+                    finally:
+                        with changed:
+                            self._stepping = None
+                            changed.notify_all()
+                if runner.due < next_due:
+                    next_due = runner.due
             delay = next_due - clock()
             if delay > 0:
                 wake.wait(delay)

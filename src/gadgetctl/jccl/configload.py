@@ -39,6 +39,9 @@ class ElementReader:
 
     def __init__(self, doc: XmlDocument) -> None:
         self.doc = doc
+        # Property tags of a name seen so far on a line, over the whole document: on a file
+        # written on one line, the n-th <device> of the line is the n-th of the document.
+        self._on_line: dict[tuple[int, str], int] = {}
 
     def location(self, node: etree._Element) -> SourceLocation:
         return SourceLocation(self.doc, node)
@@ -56,7 +59,7 @@ class ElementReader:
         )
         doc = self.doc
         properties = element.properties
-        on_line: dict[tuple[int, str], int] = {}  # tags of a name seen so far on a line
+        on_line = self._on_line
         for child in node:
             tag = child.tag
             if not isinstance(tag, str):

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -70,24 +69,8 @@ class TagLocation(SourceLocation):
 
     def _locate(self) -> tuple[int | None, int | None]:
         if self._found is None:
-            self._found = locate_tag(self._doc.lines, self._line, self._local, self._index)
+            self._found = self._doc.locate_tag(self._line, self._local, self._index)
         return self._found
-
-
-def locate_tag(lines: list[str], line: int | None, local: str, index: int) -> tuple[int | None, int | None]:
-    """Line and column of the ``index``-th ``<local`` start tag on ``line`` (the line libxml2
-    gives, where the tag ends), searching backwards for a tag that spans lines."""
-    if not line or line > len(lines):
-        return line, None
-    pattern = re.compile(r"<(?:[\w.-]+:)?" + re.escape(local) + r"(?=[\s/>]|$)")
-    matches = [m.start() + 1 for m in pattern.finditer(lines[line - 1])]
-    if matches:
-        return line, matches[min(index, len(matches) - 1)]
-    for back in range(line - 1, max(0, line - 200), -1):
-        found = list(pattern.finditer(lines[back - 1]))
-        if found:
-            return back, found[-1].start() + 1
-    return line, None
 
 
 @dataclass(slots=True)

@@ -55,6 +55,9 @@ class XmlDocument:
     text: str = ""
     diagnostics: list[Diagnostic] = field(default_factory=list)
     _lines: list[str] | None = field(default=None, repr=False)
+    _tag_starts: dict[tuple[int, str], list[int]] | None = field(default=None, repr=False)
+    _ranks: dict[etree._Element, int] | None = field(default=None, repr=False)
+    _ranked_roots: list[etree._Element] = field(default_factory=list, repr=False)
 
     @property
     def ok(self) -> bool:
@@ -74,24 +77,95 @@ class XmlDocument:
         """Line and column of the start tag's ``<``.
 
         libxml2 records the line on which a start tag *ends*, so a tag whose attributes span
-        several lines is searched for backwards from there.
+        several lines is searched for backwards from there. Each line is searched once per
+        tag name, and where several tags of a name share a line, the element's rank among
+        them comes from one index of the whole tree: a file written on one line costs one
+        scan, not one per element.
         """
         line_no = element.sourceline
         if not line_no or not isinstance(element.tag, str) or line_no > len(self.lines):
             return line_no, None
         local = etree.QName(element).localname
-        pattern = re.compile(r"<(?:[\w.-]+:)?" + re.escape(local) + r"(?=[\s/>]|$)")
-        matches = [m.start() + 1 for m in pattern.finditer(self.lines[line_no - 1])]
-        if matches:
-            # Elements of the same name earlier on the same line come first.
-            index = sum(1 for o in element.itersiblings(preceding=True)
-                        if o.sourceline == line_no and o.tag == element.tag)
-            return line_no, matches[min(index, len(matches) - 1)]
+        starts = self.tag_starts(line_no, local)
+        if len(starts) == 1:
+            return line_no, starts[0]
+        if starts:
+            return line_no, starts[min(self._rank_on_line(element), len(starts) - 1)]
+        return self._search_back(line_no, local)
+
+    def locate_tag(self, line_no: int | None, local: str, index: int) -> tuple[int | None, int | None]:
+        """Line and column of the ``index``-th ``<local`` start tag on ``line_no`` (the line
+        libxml2 gives, where the tag ends), searching backwards for a tag that spans lines."""
+        if not line_no or line_no > len(self.lines):
+            return line_no, None
+        starts = self.tag_starts(line_no, local)
+        if starts:
+            return line_no, starts[min(index, len(starts) - 1)]
+        return self._search_back(line_no, local)
+
+    def tag_starts(self, line_no: int, local: str) -> list[int]:
+        """1-based columns of every ``<local`` start tag on line ``line_no`` (searched once)."""
+        cache = self._tag_starts
+        if cache is None:
+            cache = self._tag_starts = {}
+        key = (line_no, local)
+        found = cache.get(key)
+        if found is None:
+            line = self.lines[line_no - 1]
+            found = cache[key] = [m.start() + 1 for m in _tag_pattern(local).finditer(line)]
+        return found
+
+    def _search_back(self, line_no: int, local: str) -> tuple[int | None, int | None]:
+        pattern = _tag_pattern(local)
         for back in range(line_no - 1, max(0, line_no - 200), -1):
             found = list(pattern.finditer(self.lines[back - 1]))
             if found:
                 return back, found[-1].start() + 1
         return line_no, None
+
+    def _rank_on_line(self, element: etree._Element) -> int:
+        """How many elements of ``element``'s local name start before it on its line, in
+        document order (nested ones included, as the line's tags are)."""
+        if self._ranks is None:
+            self._ranks = {}
+        rank = self._ranks.get(element)
+        if rank is None:
+            self._rank_tree(element)
+            rank = self._ranks.get(element, 0)
+        return rank
+
+    def _rank_tree(self, element: etree._Element) -> None:
+        """Rank every element of ``element``'s tree that shares its line with another element
+        of its name (only those are kept, so a usual file pins no extra lxml proxies)."""
+        root = element.getroottree().getroot()
+        if any(r is root for r in self._ranked_roots):
+            return
+        self._ranked_roots.append(root)
+        counts: dict[tuple[int, str], int] = {}
+        for node in root.iter(etree.Element):
+            key = (node.sourceline, etree.QName(node).localname)
+            counts[key] = counts.get(key, 0) + 1
+        seen: dict[tuple[int, str], int] = {}
+        ranks = self._ranks if self._ranks is not None else {}
+        for node in root.iter(etree.Element):
+            key = (node.sourceline, etree.QName(node).localname)
+            if counts[key] > 1:
+                ranks[node] = seen.get(key, 0)
+                seen[key] = ranks[node] + 1
+        self._ranks = ranks
+
+
+_TAG_PATTERNS: dict[str, re.Pattern[str]] = {}
+
+
+def _tag_pattern(local: str) -> re.Pattern[str]:
+    """A start tag ``<local`` or ``<prefix:local``."""
+    pattern = _TAG_PATTERNS.get(local)
+    if pattern is None:
+        pattern = re.compile(r"<(?:[\w.-]+:)?" + re.escape(local) + r"(?=[\s/>]|$)")
+        if len(_TAG_PATTERNS) < 4096:
+            _TAG_PATTERNS[local] = pattern
+    return pattern
 
 
 def guess_kind(path: Path) -> FileKind:

@@ -909,8 +909,8 @@ class MonitorSession:
             if proxy is None:
                 return ALIAS, "alias", "stupefied", f"its proxy {target!r} is not configured"
             return ALIAS, "alias", proxy.state.value, proxy.reason if proxy.stupefied else None
-        status = self._pending_statuses().get(name)
-        if status is not None:
+        status = manager.status(name)
+        if status is not None and status.state in (PENDING, UNKNOWN_TYPE):
             return (status.kind.value if status.kind is not None else None), status.type, status.state, status.reason
         element = manager.element(name)
         return None, element.type if element is not None else "", "removed", "no longer configured"
