@@ -37,7 +37,7 @@ def register(app: typer.Typer) -> None:
 
 
 def monitor(
-    arguments: list[str] = typer.Argument(..., metavar="CONFIG... [NAME...]", help="Configuration files (existing files ending in .jconf), then names or glob patterns of the devices, proxies and aliases to show (default: all).", show_default=False),
+    arguments: list[str] = typer.Argument(..., metavar="CONFIG... [NAME...]", help="Configuration files (existing files ending in .jconf) and VRPN devices to watch without one (vrpn:Device@host[:port], vrpn:Device@tcp://host:port), then names or glob patterns of the devices, proxies and aliases to show (default: all).", show_default=False),
     rate: float = RATE_OPTION,
     duration: float | None = DURATION_OPTION,
     fmt: OutputFormat | None = FORMAT_OPTION,
@@ -57,7 +57,8 @@ def monitor(
     status, sample rate, samples per frame, dropped samples, age of the newest sample,
     jitter, and the values.
 
-    Arguments that are existing files ending in .jconf are configurations; the others
+    Arguments that are existing files ending in .jconf are configurations; vrpn:Device@host
+    arguments watch a VRPN device with no configuration (asked first for its layout); the others
     select what to show by name or glob pattern ('Wave*'). Keys in the live view: q quits,
     p pauses the display (sampling goes on), r resets the statistics, m writes a named
     marker, PgUp/PgDn scroll; other keys and the mouse go to the configuration's
@@ -66,15 +67,24 @@ def monitor(
     Exit status: 0; 1 when a selected element ended pending, faulted or stupefied, or a
     device faulted; 2 for usage errors (unreadable configuration, unknown name).
     """
-    configs, selectors = split_arguments(arguments)
-    code = run_monitor(configs, selectors, rate=rate, duration=duration, fmt=fmt, per_frame=per_frame,
-                       record=record, overwrite=overwrite, stats=stats, units=units.value,
-                       quaternion=quaternion, interval=interval, mouse=mouse, driver_paths=driver_paths,
-                       definitions=definitions, bundled=bundled)
+    import tempfile
+
+    from gadgetctl.monitor.vrpnwatch import is_vrpn_argument, write_configuration
+
+    watched = [a for a in arguments if is_vrpn_argument(a)]
+    configs, selectors = split_arguments([a for a in arguments if not is_vrpn_argument(a)],
+                                         require_config=not watched)
+    with tempfile.TemporaryDirectory(prefix="gadgetctl-vrpn-") as scratch:
+        if watched:  # vrpn:Device@host: a vrpn element per device, laid out as the server shows
+            configs.append(write_configuration(watched, Path(scratch)))
+        code = run_monitor(configs, selectors, rate=rate, duration=duration, fmt=fmt, per_frame=per_frame,
+                           record=record, overwrite=overwrite, stats=stats, units=units.value,
+                           quaternion=quaternion, interval=interval, mouse=mouse, driver_paths=driver_paths,
+                           definitions=definitions, bundled=bundled)
     raise typer.Exit(code)
 
 
-def split_arguments(arguments: list[str]) -> tuple[list[Path], list[str]]:
+def split_arguments(arguments: list[str], *, require_config: bool = True) -> tuple[list[Path], list[str]]:
     """Existing ``*.jconf`` files are configurations, the rest NAME patterns."""
     from gadgetctl.errors import GadgetctlError
 
@@ -91,8 +101,8 @@ def split_arguments(arguments: list[str]) -> tuple[list[Path], list[str]]:
             if "*" not in argument and "?" not in argument and "[" not in argument:
                 raise GadgetctlError(f"{argument}: no such configuration file")
         selectors.append(argument)
-    if not configs:
-        raise GadgetctlError("no configuration given: CONFIG arguments are existing files ending in .jconf")
+    if not configs and require_config:
+        raise GadgetctlError("no configuration given: CONFIG arguments are existing files ending in .jconf (or vrpn:Device@host)")
     return configs, selectors
 
 

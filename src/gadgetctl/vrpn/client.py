@@ -17,6 +17,7 @@ the messages that arrived, their payloads decoded into reports (see :mod:`.codec
 from __future__ import annotations
 
 import errno
+import os
 import select
 import socket
 import time
@@ -292,7 +293,7 @@ class VrpnClient:
                 err = sock.connect_ex(addr)
                 if err not in (0, errno.EINPROGRESS, errno.EWOULDBLOCK):
                     sock.close()
-                    self._fail(f"cannot connect to {loc}: {errno.errorcode.get(err, err)}")
+                    self._fail(f"cannot connect to {loc}: {os.strerror(err)}")
                     return
                 self._tcp = sock
             else:
@@ -329,7 +330,7 @@ class VrpnClient:
         err = sock.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR)
         if err:
             sock.close()
-            self._fail(f"cannot connect to {self.location}: {errno.errorcode.get(err, err)}")
+            self._fail(f"cannot connect to {self.location}: {os.strerror(err)}")
             return
         self._endpoint = Endpoint(sock, out_limit=self.out_limit, tcp_only=True)
         self._set_state(HANDSHAKE)

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import errno
 import ipaddress
+import os
 import select
 import socket
 import threading
@@ -454,7 +455,7 @@ class VrpnServer:
         if err:
             sock.close()
             self.counters["callback_failures"] += 1
-            self._close_client(client, f"call-back failed: {errno.errorcode.get(err, err)}")
+            self._close_client(client, f"call-back failed: {os.strerror(err)}")
             return
         client.endpoint = Endpoint(sock, out_limit=self.client_buffer, tcp_only=False)
         self._by_endpoint[id(client.endpoint)] = client

@@ -1,0 +1,101 @@
+"""Ask a VRPN server what it serves: whether it answers, its version, the device (sender)
+names it announces and, for named devices, the layout their first reports show (tracker
+sensors, buttons, analog channels). Used by ``doctor --probe`` and ``monitor vrpn:NAME``.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+from .client import VrpnClient
+from .codecs import (
+    AnalogChannels,
+    ButtonChange,
+    ButtonStates,
+    TrackerAcceleration,
+    TrackerPose,
+    TrackerVelocity,
+)
+from .names import Location
+
+#: Names every C++ server announces that are not devices.
+SYSTEM_SENDERS = frozenset({"VRPN Control", "vrpn_Forwarder_Brain"})
+
+
+@dataclass
+class Layout:
+    """What the reports of one device showed: 0 means "none seen"."""
+
+    sensors: int = 0
+    buttons: int = 0
+    channels: int = 0
+    reports: int = 0
+
+    def note(self, report: object) -> None:
+        self.reports += 1
+        if isinstance(report, (TrackerPose, TrackerVelocity, TrackerAcceleration)):
+            self.sensors = max(self.sensors, report.sensor + 1)
+        elif isinstance(report, ButtonChange):
+            self.buttons = max(self.buttons, report.button + 1)
+        elif isinstance(report, ButtonStates):
+            self.buttons = max(self.buttons, len(report.states))
+        elif isinstance(report, AnalogChannels):
+            self.channels = max(self.channels, len(report.channels))
+        else:
+            self.reports -= 1
+
+
+@dataclass
+class ProbeResult:
+    location: Location
+    answered: bool = False
+    version: str | None = None
+    error: str | None = None
+    announced: list[str] = field(default_factory=list)
+    layouts: dict[str, Layout] = field(default_factory=dict)
+
+    @property
+    def devices(self) -> list[str]:
+        """Announced names without the server's own (``VRPN Control``...)."""
+        return [n for n in self.announced if n not in SYSTEM_SENDERS]
+
+    def has(self, device: str) -> bool:
+        return device in self.announced
+
+
+def probe(
+    location: Location | str, devices: list[str] = (), *, timeout: float = 2.0, observe: float = 0.5
+) -> ProbeResult:
+    """Connect (as ``location`` says: lob or direct TCP) within ``timeout``; then watch the
+    named devices' reports for ``observe`` seconds (longer, up to ``timeout``, while a named
+    and announced device has sent nothing)."""
+    client = VrpnClient(location, list(devices), retry_interval=0.25)
+    result = ProbeResult(client.location)
+    result.layouts = {d: Layout() for d in devices}
+    deadline = time.monotonic() + timeout
+    try:
+        if not client.wait_connected(timeout):
+            result.error = client.last_error or f"no VRPN server answered within {timeout:g} s"
+            return result
+        result.answered = True
+        result.version = client.server_version
+        settle = time.monotonic() + min(observe, max(0.0, deadline - time.monotonic()))
+        while True:
+            now = time.monotonic()
+            waiting = [
+                d for d in devices if d in client.announced and not result.layouts[d].reports
+            ]
+            if now >= deadline or (now >= settle and not waiting):
+                break
+            result.announced = client.announced or result.announced
+            for m in client.poll(min(0.05, max(0.0, deadline - now))):
+                if m.sender in result.layouts and m.report is not None:
+                    result.layouts[m.sender].note(m.report)
+            if client.state != "connected":
+                result.error = client.last_error
+                break
+        result.announced = client.announced or result.announced
+    finally:
+        client.close()
+    return result
