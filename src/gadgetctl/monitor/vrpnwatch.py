@@ -50,7 +50,7 @@ def resolve(arguments: list[str], *, timeout: float = 2.0) -> list[WatchedDevice
                 f"{argument}: {exc} (write vrpn:Device@host[:port] or vrpn:Device@tcp://host:port)"
             ) from None
     by_location = defaultdict(list)
-    for text, name in names:
+    for _text, name in names:
         by_location[name.location].append(name.device)
     results = {loc: probe(loc, devices, timeout=timeout) for loc, devices in by_location.items()}
     watched = []
