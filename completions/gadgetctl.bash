@@ -50,7 +50,7 @@ declare -gA _gadgetctl_opts=(
   ['scaffold']='--help -h'
   ['scaffold driver']='--type -t --transport --vendor --dir --package --dry-run --force --format -f --help -h'
   ['serve']='--list --name --bind --port --allow --duration --rate --client-buffer --record --overwrite --format -f --driver-path --definitions -d --bundled --no-bundled --help -h'
-  ['upgrade']='--check --diff --in-place -i --backup --no-backup --output -o --format -f --definitions -d --bundled --no-bundled --help -h'
+  ['upgrade']='--check --diff --in-place -i --backup --no-backup --output -o --drop-removed --format -f --definitions -d --bundled --no-bundled --help -h'
   ['validate']='--format -f --strict --definitions -d --bundled --no-bundled --together --level --max-size --hints --no-hints --color --help -h'
 )
 declare -gA _gadgetctl_choices=(

@@ -174,6 +174,7 @@ complete -c gadgetctl -n '__fish_seen_subcommand_from upgrade' -l diff -d 'Print
 complete -c gadgetctl -n '__fish_seen_subcommand_from upgrade' -l in-place -s i -d 'Rewrite the files (atomically)'
 complete -c gadgetctl -n '__fish_seen_subcommand_from upgrade' -l backup -l no-backup -d 'With --in-place, keep the old file as FILE.bak'
 complete -c gadgetctl -n '__fish_seen_subcommand_from upgrade' -l output -s o -r -F -d 'Write the upgraded file here (one input file only)'
+complete -c gadgetctl -n '__fish_seen_subcommand_from upgrade' -l drop-removed -d 'Also remove properties the element'\''s newest definition no longer has (validate'\''s CFG021, e.g'
 complete -c gadgetctl -n '__fish_seen_subcommand_from upgrade' -l format -s f -x -a 'text json' -d 'Output format of the --check listing'
 complete -c gadgetctl -n '__fish_seen_subcommand_from upgrade' -l definitions -s d -r -F -d 'Add a directory to the definition search path (after the bundled set, VJ_BASE_DIR and JCCL_DEFINITION_PATH)'
 complete -c gadgetctl -n '__fish_seen_subcommand_from upgrade' -l bundled -l no-bundled -d 'Use gadgetctl'\''s bundled standard definitions'

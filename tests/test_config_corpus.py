@@ -134,6 +134,27 @@ def test_upgrade_check_lists_every_older_element_and_upgrading_removes_them(corp
                 assert element.version == repo.versions(element.type)[-1], (path, element.full_name)
 
 
+def test_drop_removed_leaves_no_dropped_property_in_the_config_files(corpus, tmp_path, cli):
+    copy = tmp_path / "configFiles"
+    shutil.copytree(MODULES / "vrjuggler/data/configFiles", copy)
+    before = findings(copy, paths=[copy])
+    assert [d for d in before if d.code == "CFG021"]
+    assert cli("upgrade", "--in-place", "--no-backup", "--drop-removed", copy).exit_code == 0
+    after = findings(copy, paths=[copy])
+    assert not [d for d in after if d.code in ("CFG021", "CFG012")]
+    # nothing else appeared (the version-4 frame buffer config carrying a version-5 property,
+    # CFG022, is version 5 now): the other findings are those of the files before
+    gone = ("CFG021", "CFG012", "CFG022")
+    remaining = collections.Counter(d.code for d in after)
+    assert remaining == collections.Counter(d.code for d in before if d.code not in gone)
+
+
+def test_upgrade_diff_of_a_file_with_one_outdated_element_changes_only_its_lines(corpus, cli):
+    result = cli("upgrade", "--diff", MODULES / "vrjuggler/data/configFiles/example.vrpn.jconf")
+    changed = [line for line in result.stdout.splitlines() if line[:1] in "+-" and line[:3] not in ("+++", "---")]
+    assert changed == ['-      <vrpn name="Vrpn" version="2">', '+      <vrpn name="Vrpn" version="3">']
+
+
 def regenerate() -> None:
     found = keys(findings(CORPUS))
     lines = ["# code\tfile (relative to the corpus)\tline: configuration-level findings on the corpus,",

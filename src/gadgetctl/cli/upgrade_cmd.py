@@ -25,6 +25,8 @@ def upgrade(
     backup: bool = typer.Option(True, "--backup/--no-backup", help="With --in-place, keep the old file as FILE.bak."),
     output: Path = typer.Option(None, "--output", "-o", help="Write the upgraded file here (one input file only).",
                                 show_default=False),
+    drop_removed: bool = typer.Option(False, "--drop-removed", help="Also remove properties the element's "
+                                      "newest definition no longer has (validate's CFG021, e.g. device_host)."),
     fmt: DataFormat = typer.Option(DataFormat.text, "--format", "-f", help="Output format of the --check listing."),
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
@@ -56,7 +58,7 @@ def upgrade(
     results = []
     for path in files:
         try:
-            results.append(upgrade_file(path, repo))
+            results.append(upgrade_file(path, repo, drop_removed=drop_removed))
         except OSError as err:
             raise GadgetctlError(f"{path}: {err.strerror or err}") from None
     _report_problems(results)
@@ -95,7 +97,8 @@ def _listing(results, fmt: DataFormat) -> None:
             "path": r.display, "changed": r.changed, "failed": r.failed,
             "format": r.format_notes,
             "elements": [{"type": e.type, "name": e.name, "line": e.line, "from": e.from_version,
-                          "to": e.to_version, "created": e.created} for e in r.elements],
+                          "to": e.to_version, "created": e.created, "dropped": list(e.dropped)}
+                         for e in r.elements],
         } for r in results if r.changed or r.failed], indent=2))
         return
     lines = []

@@ -159,7 +159,7 @@ class ElementChecker:
             owner = "" if last.type == element.type else f" {last.type}"
             return at("CFG021", f"{describe(element)}: {name!r} is no property of {judged}; it was "
                       f"dropped after{owner} version {last.version}, and VR Juggler ignores it",
-                      first.location, hint="Remove it.")
+                      first.location, hint="Remove it (`gadgetctl upgrade --drop-removed FILE` does).")
         close = get_close_matches(name, list(view.properties), n=3, cutoff=0.6)
         hint = f"Did you mean {', '.join(close)}?" if close else (
             f"{element.type} has: {', '.join(view.properties) or 'no properties'}.")

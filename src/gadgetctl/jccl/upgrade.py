@@ -23,12 +23,14 @@ from lxml import etree
 
 from gadgetctl.boundedread import DEFAULT_MAX_SIZE, FileTooLarge, NotRegularFile, read_limited
 from gadgetctl.diagnostics import Diagnostic, Severity
-from gadgetctl.jccl.definitions import Location
+from gadgetctl.jccl.definitions import Location, ValueType
 from gadgetctl.jccl.formatupgrade import Edit, configuration_format, definition_format
 from gadgetctl.jccl.namespaces import CONFIG_NS
+from gadgetctl.jccl.patch import Patcher
 from gadgetctl.jccl.repository import DefinitionRepository
 from gadgetctl.jccl.searchpath import configuration_entries
 from gadgetctl.jccl.spans import Span, element_spans, indentation_before
+from gadgetctl.jccl.typeindex import TypeIndex
 from gadgetctl.jccl.xmlload import FileKind, declared_encoding, guess_kind, parse_bytes, text_codec
 from gadgetctl.jccl.xslt import TransformError, apply_transform, in_namespace
 
@@ -43,9 +45,18 @@ class ElementUpgrade:
     from_version: int
     to_version: int
     created: int = 0  # new elements the transforms made
+    dropped: tuple[str, ...] = ()  # properties removed (--drop-removed)
+
+    @property
+    def upgraded(self) -> bool:
+        return self.to_version != self.from_version
 
     def describe(self) -> str:
         extra = f", {self.created} new element{'s' if self.created != 1 else ''}" if self.created else ""
+        if self.dropped:
+            extra += f", removed {', '.join(self.dropped)}"
+        if not self.upgraded:
+            return f"{self.type} {self.name!r}: {extra.removeprefix(', ')}"
         return f"{self.type} {self.name!r}: version {self.from_version} -> {self.to_version}{extra}"
 
 
@@ -103,11 +114,61 @@ def indent_tree(node: etree._Element, own: str, unit: str) -> None:
 
 
 class ElementUpgrader:
-    """Upgrades element trees against one repository."""
+    """Upgrades element trees against one repository; with ``drop_removed``, also removes
+    the properties their newest definition no longer has (those `validate` reports as
+    CFG021)."""
 
-    def __init__(self, repo: DefinitionRepository) -> None:
+    def __init__(self, repo: DefinitionRepository, *, drop_removed: bool = False) -> None:
         self.repo = repo
+        self.index = TypeIndex(repo)
+        self.drop_removed = drop_removed
         self.warnings: list[str] = []
+
+    def embedded(self, node: etree._Element) -> list[etree._Element]:
+        """The embedded elements `validate` checks: only under properties the element's
+        judged definition version defines as configelement (none when its type is
+        unknown), so that upgrade and validate agree on what is outdated."""
+        type_name = _local(node)
+        versions = self.index.versions(type_name)
+        if not versions:
+            return []
+        declared = _version(node)
+        view = self.index.view(type_name, declared if declared in versions else None)
+        if view is None:
+            return []
+        found = []
+        for prop in node:
+            if not isinstance(prop.tag, str):
+                continue
+            definition = view.get(_local(prop))
+            if definition is not None and definition.valuetype is ValueType.CONFIGELEMENT:
+                found += [child for child in prop if isinstance(child.tag, str)]
+        return found
+
+    def removed_properties(self, node: etree._Element) -> list[etree._Element]:
+        """Property children that the newest definition of the element's type no longer
+        has but an older version (of it or of a type it derives from) had."""
+        if not self.drop_removed:
+            return []
+        type_name = _local(node)
+        view = self.index.view(type_name)
+        if view is None or (_version(node) or 0) < view.version:
+            return []
+        return [prop for prop in node if isinstance(prop.tag, str) and view.get(_local(prop)) is None
+                and self.index.history(type_name, _local(prop))]
+
+    def drop(self, node: etree._Element) -> list[str]:
+        """Remove, in place, the removed properties of ``node``; their names."""
+        names = []
+        for prop in self.removed_properties(node):
+            names.append(_local(prop))
+            previous = prop.getprevious()
+            if prop.tail and previous is not None:
+                previous.tail = prop.tail
+            elif prop.tail:
+                prop.getparent().text = prop.tail
+            prop.getparent().remove(prop)
+        return list(dict.fromkeys(names))
 
     def needs(self, node: etree._Element) -> tuple[int, int] | None:
         versions = self.repo.versions(_local(node))
@@ -168,19 +229,27 @@ class ElementUpgrader:
 
     def upgrade_embedded(self, node: etree._Element, log: list[ElementUpgrade],
                          lines: dict[tuple, int | None], chain: tuple = ()) -> None:
-        """Upgrade, in place, the embedded elements of an element tree that is not in a file.
-        ``lines`` maps chains of (type, name) from the top element to source lines."""
-        for child in _embedded(node):
+        """Upgrade, in place, the embedded elements of an element tree that is not in a file
+        (and drop their removed properties). ``lines`` maps chains of (type, name) from the
+        top element to source lines."""
+        for child in self.embedded(node):
             key = (*chain, (_local(child), child.get("name")))
             step = self.needs(child)
             if step is None:
+                dropped = self.drop(child)
+                if dropped:
+                    version = _version(child) or 0
+                    log.append(ElementUpgrade(_local(child), child.get("name") or "", lines.get(key), version,
+                                              version, dropped=tuple(dropped)))
                 self.upgrade_embedded(child, log, lines, key)
                 continue
             upgraded, created = self.upgrade(child)
+            dropped = self.drop(upgraded)
             self.upgrade_embedded(upgraded, log, lines, key)
             upgraded.tail = child.tail
             child.getparent().replace(child, upgraded)
-            log.append(ElementUpgrade(_local(child), child.get("name") or "", lines.get(key), *step, len(created)))
+            log.append(ElementUpgrade(_local(child), child.get("name") or "", lines.get(key), *step, len(created),
+                                      tuple(dropped)))
 
 
 def source_lines(node: etree._Element, chain: tuple = ()) -> dict[tuple, int | None]:
@@ -195,14 +264,16 @@ def source_lines(node: etree._Element, chain: tuple = ()) -> dict[tuple, int | N
 
 class FileUpgrader:
     def __init__(self, path: Path, data: bytes, display: str, repo: DefinitionRepository,
-                 environ: Mapping[str, str] | None = None) -> None:
+                 environ: Mapping[str, str] | None = None, *, drop_removed: bool = False) -> None:
         self.result = FileUpgrade(path, display, data)
         self.data = data
         self.repo = repo
         self.environ = environ
+        self.drop_removed = drop_removed
         self.encoding = declared_encoding(data)
         self.newline = "\r\n" if b"\r\n" in data[:4096] else "\n"
         self.edits: list[Edit] = []
+        self.format_edits: list[Edit] = []
 
     def problem(self, message: str, line: int | None = None, code: str = "CFG050") -> None:
         self.result.problems.append(Diagnostic.make(code, message, self.result.display, line))
@@ -226,6 +297,7 @@ class FileUpgrader:
             changes = definition_format(self.data, doc.root, spans, elements)
         elif doc.kind is FileKind.CONFIGURATION:
             changes = configuration_format(self.data, elements, spans)
+            self.format_edits = changes.edits
             self.repo = self.with_definition_path(doc.root)
             self.upgrade_elements(doc.root)
         else:
@@ -249,7 +321,8 @@ class FileUpgrader:
     # -- elements --------------------------------------------------------------------
 
     def upgrade_elements(self, root: etree._Element) -> None:
-        upgrader = ElementUpgrader(self.repo)
+        upgrader = ElementUpgrader(self.repo, drop_removed=self.drop_removed)
+        self.patcher = Patcher(self.data, self.spans, self.encoding, self.serialise, self.newline)
         for container in root:
             if isinstance(container.tag, str) and _local(container) == "elements":
                 for node in container:
@@ -259,13 +332,23 @@ class FileUpgrader:
     def visit(self, upgrader: ElementUpgrader, node: etree._Element, top: Span) -> None:
         step = upgrader.needs(node)
         if step is None:
-            for child in _embedded(node):
-                self.visit(upgrader, child, top)
+            removed = upgrader.removed_properties(node)
+            if removed:
+                names = tuple(dict.fromkeys(_local(p) for p in removed))
+                for prop in removed:
+                    self.edits.append(self.patcher.removal(node, prop))
+                version = _version(node) or 0
+                self.result.elements.append(ElementUpgrade(_local(node), node.get("name") or "", node.sourceline,
+                                                           version, version, dropped=names))
+            for child in upgrader.embedded(node):
+                if not any(child in prop for prop in removed):
+                    self.visit(upgrader, child, top)
             return
         line = node.sourceline
         log: list[ElementUpgrade] = []
         try:
             upgraded, created = upgrader.upgrade(node)
+            dropped = upgrader.drop(upgraded)
             upgrader.upgrade_embedded(upgraded, log, source_lines(node))
         except UpgradeFailure as err:
             self.problem(f"{_local(node)} {node.get('name')!r} (version {step[0]}) cannot be upgraded: "
@@ -279,11 +362,17 @@ class FileUpgrader:
         span = self.spans[node]
         own = indentation_before(self.data, span.start).decode(self.encoding, "replace")
         unit = self.indent_unit(node, own)
-        self.edits.append(Edit(span.start, span.end, self.serialise(upgraded, own, unit)))
-        for extra in created:
-            text = (self.newline + own).encode(self.encoding) + self.serialise(extra, own, unit)
+        if any(e.start < span.end and e.end > span.start for e in self.format_edits):
+            # a file-format fix edits this element's tags too: write it out whole
+            self.edits += self.patcher.whole(node, upgraded, own, unit)
+        else:
+            self.edits += self.patcher.patch(node, upgraded, own, unit)
+        top_own = indentation_before(self.data, top.start).decode(self.encoding, "replace")
+        for extra in created:  # new top-level elements, after the top-level element
+            text = (self.newline + top_own).encode(self.encoding) + self.serialise(extra, top_own, unit)
             self.edits.append(Edit(top.end, top.end, text))
-        self.result.elements.append(ElementUpgrade(_local(node), node.get("name") or "", line, *step, len(created)))
+        self.result.elements.append(ElementUpgrade(_local(node), node.get("name") or "", line, *step, len(created),
+                                                   tuple(dropped)))
         self.result.elements.extend(log)
 
     def indent_unit(self, node: etree._Element, own: str) -> str:
@@ -333,13 +422,14 @@ class FileUpgrader:
 
 
 def upgrade_bytes(path: Path, data: bytes, repo: DefinitionRepository, display: str | None = None,
-                  environ: Mapping[str, str] | None = None) -> FileUpgrade:
+                  environ: Mapping[str, str] | None = None, *, drop_removed: bool = False) -> FileUpgrade:
     """Upgrade the content ``data`` of ``path`` (which is not read or written)."""
-    return FileUpgrader(path, data, display or str(path), repo, environ).run()
+    return FileUpgrader(path, data, display or str(path), repo, environ, drop_removed=drop_removed).run()
 
 
 def upgrade_file(path: Path, repo: DefinitionRepository, display: str | None = None,
-                 environ: Mapping[str, str] | None = None, max_size: int = DEFAULT_MAX_SIZE) -> FileUpgrade:
+                 environ: Mapping[str, str] | None = None, max_size: int = DEFAULT_MAX_SIZE, *,
+                 drop_removed: bool = False) -> FileUpgrade:
     """Upgrade the file ``path`` (read with the size limit; not written). A file above the
     limit or not a regular file is a failed upgrade with its diagnostic; other I/O errors
     raise :class:`OSError`."""
@@ -351,7 +441,7 @@ def upgrade_file(path: Path, repo: DefinitionRepository, display: str | None = N
         code = "XML004" if isinstance(err, FileTooLarge) else "XML005"
         result.problems.append(Diagnostic.make(code, err.strerror, shown))
         return result
-    return upgrade_bytes(path, data, repo, display, environ)
+    return upgrade_bytes(path, data, repo, display, environ, drop_removed=drop_removed)
 
 
 def with_given_definitions(repo: DefinitionRepository, paths: list[Path]) -> DefinitionRepository:

@@ -82,7 +82,8 @@ CODES += [
          "inherits from) and has since been removed. VR Juggler ignores it; it is dead text "
          "that suggests a setting that no longer exists.",
          "<device_host>head-node</device_host>   (input_device dropped device_host in version 2)",
-         "Remove the property."),
+         "Remove the property; `gadgetctl upgrade --drop-removed FILE` removes every such "
+         "property."),
     Code("CFG022", C, E, "property of a newer version in an older element",
          "The element declares a version whose definition lacks the property, but a newer version "
          "defines it. The version attribute is most likely wrong; upgrading the element from the "
