@@ -1,5 +1,12 @@
-"""A small VRPN server on loopback for the VRPN driver: a tracker, a button device and an
-analog device, served with gadgetctl's VRPN server (:class:`gadgetctl.vrpn.VrpnServer`).
+"""The VRPN driver's emulators.
+
+:func:`main` (what `gadgetctl emulate VRPN_drv` runs) serves gadgetctl waveform devices
+named ``Tracker0``, ``Button0`` and ``Analog0`` with `gadgetctl serve`, so the example
+configuration and any VRPN client read them as from a VRPN server.
+
+:class:`VrpnEmulator` is a small scripted VRPN server for the driver's tests: a tracker, a
+button device and an analog device whose data are pure functions of the frame number,
+served with gadgetctl's VRPN server (:class:`gadgetctl.vrpn.VrpnServer`).
 
 Devices (names configurable): ``Tracker0`` with ``sensors`` sensors moving on circles,
 ``Button0`` with ``buttons`` buttons, ``Analog0`` with ``channels`` channels in [-1, 1].
@@ -15,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import signal
 import sys
 import threading
 import time
@@ -194,63 +200,86 @@ class VrpnEmulator:
         self.frame += 1
 
 
+WAVEFORM_PATHS = ("circle", "figure_eight", "spin")
+WAVEFORM_SHAPES = ("sine", "triangle", "square")
+
+
+def waveform_configuration(*, sensors: int, buttons: int, channels: int, rate: float,
+                           tracker: str = "Tracker0", button: str = "Button0",
+                           analog: str = "Analog0") -> str:
+    """A configuration of gadgetctl waveform devices named as VRPN devices: ``tracker``
+    with ``sensors`` positions, ``button`` with ``buttons`` buttons, ``analog`` with
+    ``channels`` channels in [-1, 1] (a device with a count of 0 is left out)."""
+
+    def device(name: str, body: list[str]) -> str:
+        lines = [f"<rate>{rate:g}</rate>", "<event_period>0.0</event_period>", *body]
+        return (f'      <waveform_device name="{name}" version="1">\n'
+                + "".join(f"         {line}\n" for line in lines) + "      </waveform_device>\n")
+
+    parts = []
+    if sensors:
+        parts.append(device(tracker, [f"<position_path>{WAVEFORM_PATHS[i % 3]}</position_path>"
+                                      for i in range(sensors)]
+                            + [f"<position_period>{4.0 + i:g}</position_period>" for i in range(sensors)]))
+    if buttons:
+        parts.append(device(button, [f"<button_period>{1.0 + 0.5 * i:g}</button_period>"
+                                     for i in range(buttons)]))
+    if channels:
+        parts.append(device(analog, [f"<analog_waveform>{WAVEFORM_SHAPES[i % 3]}</analog_waveform>"
+                                     for i in range(channels)]
+                            + [f"<analog_frequency>{0.5 / (i + 1):g}</analog_frequency>"
+                               for i in range(channels)]
+                            + ["<min>-1.0</min>", "<max>1.0</max>"]))
+    return ('<?xml version="1.0" encoding="UTF-8"?>\n'
+            '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+            '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" '
+            'name="VRPN_drv emulator">\n   <elements>\n' + "".join(parts)
+            + "   </elements>\n</configuration>\n")
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Command line: serve until Ctrl-C or ``--duration`` seconds."""
+    """`gadgetctl emulate VRPN_drv`: gadgetctl waveform devices served over VRPN by
+    `gadgetctl serve` (Tracker0, Button0, Analog0 as the example configuration reads them)."""
+    import tempfile
+    from pathlib import Path
+
     parser = argparse.ArgumentParser(
-        prog="VRPN_drv.emulator",
-        description="Serve a VRPN tracker, button and analog device on 127.0.0.1.",
+        prog="gadgetctl emulate VRPN_drv",
+        description="Serve waveform devices over VRPN with gadgetctl serve: Tracker0 (circles, "
+                    "figure-eights, spins), Button0 (square-wave buttons), Analog0 (sine, "
+                    "triangle and square channels in [-1, 1]).",
     )
-    parser.add_argument("--scenario", choices=SCENARIOS, default="buttons")
-    parser.add_argument("--rate", type=float, default=60.0, help="frames per second (default 60)")
-    parser.add_argument(
-        "--port", type=int, default=3883, help="TCP and UDP port (default 3883; 0 = any)"
-    )
+    parser.add_argument("--port", type=int, default=3883, help="TCP and UDP port (default 3883; 0 = any)")
+    parser.add_argument("--bind", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
+    parser.add_argument("--rate", type=float, default=100.0, help="samples per second of every device (default 100)")
     parser.add_argument("--duration", type=float, help="stop after this many seconds")
     parser.add_argument("--sensors", type=int, default=2, help="tracker sensors (default 2)")
     parser.add_argument("--buttons", type=int, default=4, help="buttons (default 4)")
     parser.add_argument("--channels", type=int, default=2, help="analog channels (default 2)")
+    parser.add_argument("--format", choices=("text", "json"), default="text", help="output of serve")
     args = parser.parse_args(argv)
-    try:
-        emulator = VrpnEmulator(
-            args.port,
-            scenario=args.scenario,
-            rate=args.rate,
-            sensors=args.sensors,
-            buttons=args.buttons,
-            channels=args.channels,
-        )
-    except ValueError as exc:
-        parser.error(str(exc))
+    if not 0 < args.rate <= 100_000:
+        parser.error("--rate must be between 0 and 100000 samples per second")
+    if min(args.sensors, args.buttons, args.channels) < 0 or args.buttons > codecs.MAX_BUTTONS \
+            or args.channels > codecs.MAX_CHANNELS:
+        parser.error(f"counts are 0 or more, at most {codecs.MAX_BUTTONS} buttons and "
+                     f"{codecs.MAX_CHANNELS} channels")
+    if not (args.sensors or args.buttons or args.channels):
+        parser.error("nothing to serve: give a sensor, button or channel count above 0")
+    from gadgetctl.cli.main import main as gadgetctl
 
-    def interrupted(signum: int, frame: object) -> None:
-        raise KeyboardInterrupt
-
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, interrupted)  # SIGTERM ends the emulator as Ctrl-C does
-    try:
-        emulator.start()
-    except OSError as exc:
-        print(f"cannot serve on 127.0.0.1:{args.port}: {exc.strerror or exc}", file=sys.stderr)
-        return 2
-    try:
-        print(
-            f"VRPN emulator ({args.scenario}, {args.rate:g} Hz) serving on {emulator.address}: "
-            f"Tracker0 ({args.sensors} sensors), Button0 ({args.buttons}), Analog0 ({args.channels})"
-        )
-        print(
-            f"Point a vrpn element at it: <tracker_server>Tracker0@{emulator.address}</tracker_server>"
-        )
-        print("Press Ctrl-C to stop.", flush=True)
-        end = None if args.duration is None else time.monotonic() + args.duration
-        while end is None or time.monotonic() < end:
-            if emulator.error is not None:
-                print(f"emulator failed: {emulator.error}", file=sys.stderr)
-                return 1
-            time.sleep(0.1 if end is None else max(0.0, min(0.1, end - time.monotonic())))
-    except KeyboardInterrupt:
-        pass
-    finally:
-        emulator.stop()
+    with tempfile.TemporaryDirectory(prefix="gadgetctl-vrpn-emulator-") as tmp:
+        config = Path(tmp) / "vrpn-emulator.jconf"
+        config.write_text(waveform_configuration(sensors=args.sensors, buttons=args.buttons,
+                                                 channels=args.channels, rate=args.rate))
+        command = ["serve", str(config), "--port", str(args.port), "--bind", args.bind,
+                   "--format", args.format]
+        if args.duration is not None:
+            command += ["--duration", str(args.duration)]
+        try:
+            gadgetctl(command)
+        except SystemExit as exit_:
+            return exit_.code if isinstance(exit_.code, int) else (0 if exit_.code is None else 1)
     return 0
 
 
