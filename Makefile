@@ -1,11 +1,12 @@
 # Two entry points for a fresh machine with Python 3.11+ and make:
 #   make demo   - install gadgetctl into .venv and run it on the bundled simulated devices
 #   make test   - install with the test extras and run the whole test suite
+#   make fuzz   - fuzz every parser and driver decoder for SECONDS (default 600) on WORKERS (2)
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test lint bench completions clean
+.PHONY: demo test lint bench fuzz completions clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -34,6 +35,11 @@ lint: $(VENV)/.installed-test
 
 bench: $(VENV)/.installed-test
 	$(BIN)/python bench/run.py
+
+SECONDS ?= 600
+WORKERS ?= 2
+fuzz: $(VENV)/.installed-test
+	$(BIN)/python tests/fuzz/campaign.py --seconds $(SECONDS) --workers $(WORKERS)
 
 completions: $(VENV)/.installed
 	$(BIN)/python -m gadgetctl.cli.completions completions

@@ -1,0 +1,464 @@
+"""The registry of fuzz targets: every parser and decoder a hostile peer or file can reach.
+
+A target takes one input (bytes) through a parser the way the program does and may raise only
+its modelled errors (a bad input is a diagnostic, a counted bad record or a modelled
+exception, never anything else). ``seeds`` gives valid inputs to mutate: corpus files,
+emulator records. A new driver adds one ``@target`` entry here, next to the others.
+
+Each target also checks what its parser promises about bounds (units that never grow past
+their limits, counters that add up), so an input that makes a decoder allocate without limit
+fails as surely as one that makes it raise.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import os
+import random
+import struct
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from fuzz.inputs import Grammar
+
+REPO = Path(__file__).resolve().parents[2]
+CORPUS = REPO.parent / "shared" / "corpus" / "vrjuggler"
+#: Inputs larger than this are cut (a pipe or datagram would not hold more, and hypothesis
+#: explores small inputs better).
+MAX_INPUT = 60_000
+
+
+@dataclass(frozen=True)
+class Target:
+    """One parser under fuzz."""
+
+    name: str
+    run: Callable[[bytes], object]
+    seeds: Callable[[], list[bytes]]
+    errors: tuple[type[BaseException], ...] = ()
+    grammar: Grammar | None = None
+    #: examples in ``make test`` (the small budget; ``make fuzz`` runs until its time is up)
+    examples: int = 60
+    #: the driver plug-in whose decoder this is, if any
+    driver: str | None = None
+
+
+TARGETS: dict[str, Target] = {}
+
+
+def target(
+    name: str,
+    *,
+    seeds: Callable[[], list[bytes]],
+    errors: tuple[type[BaseException], ...] = (),
+    grammar: Grammar | None = None,
+    examples: int = 60,
+    driver: str | None = None,
+) -> Callable[[Callable[[bytes], object]], Callable[[bytes], object]]:
+    """Register ``run`` as the target ``name``."""
+
+    def register(run: Callable[[bytes], object]) -> Callable[[bytes], object]:
+        if name in TARGETS:
+            raise ValueError(f"fuzz target {name!r} registered twice")
+        TARGETS[name] = Target(name, run, functools.cache(seeds), errors, grammar, examples, driver)
+        return run
+
+    return register
+
+
+def feed(t: Target, data: bytes) -> None:
+    """Run ``t`` on ``data``; a modelled error is a fine outcome, anything else propagates."""
+    try:
+        t.run(data[:MAX_INPUT])
+    except t.errors:
+        pass
+
+
+@functools.cache
+def _workdir() -> Path:
+    """An empty directory of this process for the targets that need files."""
+    return Path(tempfile.mkdtemp(prefix="gadgetctl-fuzz-"))
+
+
+def _as_file(data: bytes, name: str) -> Path:
+    path = _workdir() / name
+    path.write_bytes(data)
+    return path
+
+
+# -- DTrack ---------------------------------------------------------------------------------------
+
+
+@functools.cache
+def _dtrack_seeds() -> list[bytes]:
+    from DTrack_drv.emulator import FrameWriter
+
+    seeds = []
+    for scenario in ("motion", "buttons", "garbage"):
+        for fmt in ("6df2", "6df"):
+            writer = FrameWriter(scenario, 60.0, 3, 2, 12, fmt, 2, 1)
+            seeds += [writer.frame(n).encode("ascii") for n in (1, 3, 7)]
+    eye = "[1 0 0 0 1 0 0 0 1]"
+    seeds.append(
+        f"fr 9\r\nts 1.5\r\n6dcal 4\r\n6di 1 [2 2 0.5][1000 0 0]{eye}\r\n"
+        f"6dmt 1 [0 0.8 5][0 0 10]{eye}\r\n6dmt2 1 [1 0.7 3 2.5][0 0 20]{eye}[6][1 2 3 4 5 6]\r\n"
+        f"glcal 1\r\ngl 1 [0 1.0 0 1][0 0 0]{eye}[10 0 0]{eye}[5 30 20 15 10 25]\r\n".encode()
+    )
+    return seeds
+
+
+_DTRACK_TAGS = [
+    "fr",
+    "ts",
+    "6dcal",
+    "6d",
+    "6di",
+    "6df",
+    "6df2",
+    "6dmt",
+    "6dmt2",
+    "glcal",
+    "gl",
+    "3d",
+    "xx",
+]
+_DTRACK_ODD = [
+    "3000000",
+    "2000000",
+    "9" * 30,
+    "1" * 4400,
+    "-0",
+    "1e309",
+    ".5",
+    "nan",
+    "-1",
+    "127",
+    "128",
+]
+
+
+def _dtrack_number(rng: random.Random) -> str:
+    kind = rng.randrange(4)
+    if kind == 0:
+        return str(rng.randint(-5, 300))
+    if kind == 1:
+        return repr(rng.uniform(-2000, 2000))
+    if kind == 2:
+        return str(rng.randint(0, 3))
+    return rng.choice(_DTRACK_ODD)
+
+
+def _dtrack_lines(rng: random.Random) -> bytes:
+    """A datagram of DTrack-like lines: known tags, header numbers and blocks."""
+    lines = []
+    for _ in range(rng.randint(1, 6)):
+        header = [_dtrack_number(rng) for _ in range(rng.randint(0, 3))]
+        blocks = [
+            [_dtrack_number(rng) for _ in range(rng.randint(0, 14))]
+            for _ in range(rng.randint(0, 8))
+        ]
+        text = " ".join([rng.choice(_DTRACK_TAGS), *header])
+        lines.append(text + "".join("[" + " ".join(b) + "]" for b in blocks))
+    return ("\r\n".join(lines) + "\r\n").encode()
+
+
+@target(
+    "dtrack.datagram", seeds=_dtrack_seeds, grammar=_dtrack_lines, examples=120, driver="DTrack_drv"
+)
+def _dtrack(data: bytes) -> None:
+    from DTrack_drv.standalone import DEFAULT_LIMITS, DTrackUnits, parse_frame, parse_frames
+
+    # As received: alone, in a batch with good datagrams (whose numbers are converted
+    # together), and cut short as by a small receive buffer.
+    good = _dtrack_seeds()[0]
+    batch = parse_frames([good, data, good, data[: len(data) // 2]], [False, False, False, True])
+    alone = parse_frame(data)
+    general = parse_frame(data, fast=False)
+    assert (alone is None) == (general is None)
+    if alone is not None and general is not None:
+        assert alone.bad_lines == general.bad_lines
+        assert (
+            alone.frame == general.frame
+            and alone.bodies.ids.tolist() == general.bodies.ids.tolist()
+        )
+        assert len(alone.flysticks) == len(general.flysticks)
+    units = DTrackUnits(extra_units=True)
+    units.merge([f for f in batch if f is not None])
+    if alone is not None:
+        units.update(alone)
+    assert max(units.counts) <= DEFAULT_LIMITS.objects
+    assert len(units.digital()) <= 2 * DEFAULT_LIMITS.objects * DEFAULT_LIMITS.buttons
+
+
+# -- MotionStar -----------------------------------------------------------------------------------
+
+
+def _motionstar_seeds() -> list[bytes]:
+    from MotionStar_drv.standalone import (
+        DATA_PACKET_MULTI,
+        FORMAT_WORDS,
+        RSP_GET_STATUS,
+        Header,
+    )
+
+    seeds = []
+    payload = bytearray()
+    for address, (code, words) in enumerate(FORMAT_WORDS.items(), start=1):
+        payload += bytes([address | 0x80, words << 4 | int(code)])
+        payload += struct.pack(f">{words}h", *range(-words * 1000, words * 1000, 2000)[:words])
+        payload += bytes([1, 0])
+    seeds.append(Header(7, DATA_PACKET_MULTI, length=len(payload)).pack() + payload)
+    for code, words in FORMAT_WORDS.items():
+        record = bytes([1, words << 4 | int(code)]) + struct.pack(f">{words}h", *([16000] * words))
+        seeds.append(Header(8, DATA_PACKET_MULTI, length=len(record)).pack() + record)
+    status = bytes([0, 0, 3, 1, 1]) + b"086100" + bytes([1, 3, 1, 3, 0]) + bytes([0xE0, 0xE0, 0x90])
+    seeds.append(Header(2, RSP_GET_STATUS, length=len(status)).pack() + status)
+    bird = bytearray(70)
+    bird[6], bird[8], bird[9] = 0x64, 0x00, 144
+    seeds.append(Header(3, RSP_GET_STATUS, xtype=1, length=70).pack() + bytes(bird))
+    return seeds
+
+
+@target("motionstar.packet", seeds=_motionstar_seeds, examples=100, driver="MotionStar_drv")
+def _motionstar(data: bytes) -> None:
+    from MotionStar_drv.standalone import (
+        BIRD_STATUS_SIZE,
+        ERROR_FORMAT,
+        HEADER,
+        BirdStatus,
+        Header,
+        MotionStarCommandError,
+        SystemStatus,
+        decode_record,
+        parse_records,
+    )
+
+    if len(data) < HEADER.size:
+        return
+    header = Header.unpack(data)
+    header.plausible()
+    payload = data[HEADER.size : HEADER.size + header.length]
+    records = parse_records(payload)
+    for unit, record in enumerate(records or ()):
+        if record.format_code != ERROR_FORMAT:
+            sample = decode_record(record, unit, float(header.milliseconds & 0xFFF))
+            assert sample.matrix.shape == (4, 4)
+    try:
+        status = SystemStatus.parse(payload)
+    except MotionStarCommandError:
+        pass
+    else:
+        assert status.measurement_rate >= 0 and len(status.devices) == status.flock_number
+        status.with_rate(status.measurement_rate)
+    if len(payload) >= BIRD_STATUS_SIZE:
+        bird = BirdStatus(1, payload[:BIRD_STATUS_SIZE])
+        assert 0 <= bird.full_scale < 4096
+        bird.configured(4, bird.report_rate, bird.hemisphere)
+
+
+# -- PinchGlove -----------------------------------------------------------------------------------
+
+
+def _pinch_seeds() -> list[bytes]:
+    from PinchGlove_drv.emulator import encode_frame, touch_steps
+
+    seeds = []
+    for scenario in ("touches", "motion"):
+        steps = list(itertools.islice(touch_steps(scenario), 8))
+        seeds.append(b"".join(encode_frame(g, 100 + i) for i, g in enumerate(steps)))
+        seeds.append(b"".join(encode_frame(g, None) for g in steps))
+    seeds.append(b"\x82version 1\x8f\x81\x01\x02\x00\x05\x8f\x80\x8f")
+    return seeds
+
+
+@target("pinchglove.stream", seeds=_pinch_seeds, examples=100, driver="PinchGlove_drv")
+def _pinch(data: bytes) -> None:
+    import serial
+    from PinchGlove_drv.standalone import DIGITAL_UNITS, PinchGlove, _SerialLink, decode_frame
+
+    data = data[:4000]  # pyserial's loop:// holds 4096 bytes; a write beyond that waits
+    port = serial.serial_for_url("loop://", timeout=0)
+    try:
+        glove = PinchGlove(port, read_timeout=0.0, sample_timeout=0.0, poll_interval=0.0)
+        glove._link = _SerialLink(port, 0.0)  # the stream side only: no handshake with loop://
+        port.write(data)
+        frames = 0
+        while glove.sample() is not None:
+            frames += 1
+            assert frames <= len(data)
+            assert len(glove.last.digital) == DIGITAL_UNITS
+        assert glove.frames == frames
+    finally:
+        port.close()
+    for start in (0x80, 0x81):
+        frame = decode_frame(start, data[:64])
+        assert frame is None or len(frame.digital) == DIGITAL_UNITS
+
+
+# -- Linux joystick -------------------------------------------------------------------------------
+
+
+def _joystick_seeds() -> list[bytes]:
+    from LinuxJoydev_drv.standalone import JoystickEvent
+
+    burst = [JoystickEvent(0, 0, 0x81, i) for i in range(12)]
+    burst += [JoystickEvent(0, 0, 0x82, i) for i in range(6)]
+    live = [JoystickEvent(10 + i, (i * 5000) % 32767, 0x02, i % 6) for i in range(20)]
+    live += [JoystickEvent(40 + i, i % 2, 0x01, i % 12) for i in range(20)]
+    return [
+        b"".join(e.pack() for e in burst + live),
+        b"".join(e.pack() for e in live),
+        b"".join(e.pack() for e in burst)[3:],
+    ]
+
+
+@target("joystick.events", seeds=_joystick_seeds, examples=100, driver="LinuxJoydev_drv")
+def _joystick(data: bytes) -> None:
+    from LinuxJoydev_drv.standalone import (
+        EVENT_SIZE,
+        EventDecoder,
+        JoystickDisconnected,
+        LinuxJoydevStandalone,
+    )
+
+    decoder = EventDecoder(clock=lambda: 0.0)
+    events = []
+    for at in range(0, len(data), 37):  # in pieces that cut records
+        events += decoder.feed(data[at : at + 37])
+    decoder.finish()
+    assert len(events) * EVENT_SIZE + decoder.skipped_bytes <= len(data)
+    assert decoder.num_buttons <= 256 and decoder.num_axes <= 256
+    # the device side: through a pipe, until the end of the stream
+    read_end, write_end = os.pipe()
+    try:
+        os.write(write_end, data[:60000])
+        os.close(write_end)
+        write_end = -1
+        with os.fdopen(read_end, "rb", buffering=0, closefd=False) as stream:
+            device = LinuxJoydevStandalone(stream, connect_timeout=0.0)
+            device.open()
+            try:
+                for _ in range(len(data) + 2):
+                    sample = device.sample()
+                    assert len(sample.buttons) <= 256 and len(sample.axes) <= 256
+            except JoystickDisconnected:
+                pass
+            else:
+                raise AssertionError("the stream never ended")
+            finally:
+                device.close()
+    finally:
+        os.close(read_end)
+        if write_end >= 0:
+            os.close(write_end)
+
+
+# -- JCCL files -----------------------------------------------------------------------------------
+
+
+def _jccl_seeds() -> list[bytes]:
+    files = sorted(CORPUS.rglob("*.jconf")) + sorted(CORPUS.rglob("*.jdef"))
+    files += (
+        sorted((REPO / "examples").glob("*.jconf"))
+        + sorted((REPO / "definitions").glob("*.jdef"))[:20]
+    )
+    assert files, f"no corpus at {CORPUS}"
+    return [f.read_bytes() for f in files if f.stat().st_size <= MAX_INPUT]
+
+
+@functools.cache
+def _repository():
+    from gadgetctl.jccl.repository import default_repository
+
+    return default_repository()
+
+
+@target("jccl.document", seeds=_jccl_seeds, examples=40)
+def _jccl_document(data: bytes) -> None:
+    from gadgetctl.jccl.configcheck import check_documents
+    from gadgetctl.jccl.defchecks import check_cycles, check_definition
+    from gadgetctl.jccl.defparser import read_definition
+    from gadgetctl.jccl.xmlload import FileKind, parse_bytes
+    from gadgetctl.validate import ValidateOptions, check_document
+
+    for name in ("fuzz.jconf", "fuzz.jdef"):
+        path = _as_file(data, name)
+        doc = parse_bytes(data, str(path), FileKind.UNKNOWN)
+        check_document(doc, ValidateOptions())
+        if doc.root is None:
+            assert doc.diagnostics
+            continue
+        if doc.kind is FileKind.DEFINITION:
+            definition = read_definition(doc)
+            if definition is not None and definition.name:
+                repo = _repository().overlay([definition])
+                check_definition(definition, definition.order, repo)
+                check_cycles([definition], repo)
+        check_documents([doc], _repository(), environ={}, plugin_definitions=None)
+
+
+@target("jccl.upgrade", seeds=_jccl_seeds, examples=25)
+def _jccl_upgrade(data: bytes) -> None:
+    from gadgetctl.jccl.upgrade import upgrade_bytes
+
+    result = upgrade_bytes(_workdir() / "fuzz.jconf", data, _repository(), environ={})
+    assert result is not None
+
+
+# -- recordings -----------------------------------------------------------------------------------
+
+
+def _recording_seeds() -> list[bytes]:
+    from gadgetctl.monitor.recording import Recorder
+    from gadgetctl.monitor.records import FrameDevice, FrameRecord, SampleRecord, StatusRecord
+
+    path = _workdir() / "seed.gadgetrec"
+    path.unlink(missing_ok=True)
+    info = {
+        "elements": {
+            "Wave": {
+                "element": "device",
+                "type": "waveform_device",
+                "kinds": ["analog", "digital", "position"],
+                "units": {"analog": 2},
+            }
+        }
+    }
+    with Recorder(path, info) as recorder:
+        recorder.write_status(
+            StatusRecord(0.5, "Wave", "device", "waveform_device", "running", None)
+        )
+        for n in range(6):
+            t = 1.0 + n / 60
+            recorder.write_sample(SampleRecord("Wave", "analog", n % 2, t, 0.25 * n, 0.25 * n))
+            recorder.write_sample(SampleRecord("Wave", "digital", 0, t, n % 2, n % 2))
+            pose = [
+                [1.0, 0.0, 0.0, n / 10],
+                [0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, 0.0],
+                [0.0, 0.0, 0.0, 1.0],
+            ]
+            recorder.write_sample(SampleRecord("Wave", "position", 0, t, pose, pose))
+            recorder.write_frame(FrameRecord(n, t, {"Wave": FrameDevice(3, {"analog": {0: 0.5}})}))
+        recorder.write_marker("halfway", 1.05)
+        recorder.write_stats({"Wave": {"count": 18, "dropped": 0}})
+    return [path.read_bytes()]
+
+
+@target("recording.reader", seeds=_recording_seeds, examples=80)
+def _recording(data: bytes) -> None:
+    from gadgetctl.monitor.recording import RecordingError, read_recording
+    from gadgetctl.monitor.replaydevice import make_schedule, recorded_devices
+    from gadgetctl.monitor.summary import summarize_recording
+
+    path = _as_file(data, "fuzz.gadgetrec")
+    try:
+        summarize_recording(path)
+        recording = read_recording(path)
+        schedule = make_schedule(recording.records, speed=1.0, loop=False, mapping=None)
+        recorded_devices(recording.header, schedule, {})
+    except RecordingError:
+        pass
