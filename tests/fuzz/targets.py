@@ -448,9 +448,50 @@ def _recording_seeds() -> list[bytes]:
     return [path.read_bytes()]
 
 
-@target("recording.reader", seeds=_recording_seeds, examples=80)
+def _recording_lines(rng: random.Random) -> bytes:
+    """A recording whose records have the known fields with values of any JSON type."""
+    import json
+
+    def value(depth: int = 0) -> object:
+        kind = rng.randrange(9 if depth < 2 else 6)
+        return [
+            lambda: rng.randint(-(2**70), 2**70),
+            lambda: rng.choice([0, 1, -1, 2**31, 10**9]),
+            lambda: rng.uniform(-1e6, 1e6),
+            lambda: rng.choice(["x", "", "Wave", "analog", "position", "header", "1.5", "device"]),
+            lambda: rng.choice([True, False, None]),
+            lambda: rng.choice([1e308, -1e308]),
+            lambda: [value(depth + 1) for _ in range(rng.randint(0, 4))],
+            lambda: {rng.choice(_RECORD_KEYS): value(depth + 1) for _ in range(rng.randint(0, 4))},
+            lambda: {str(rng.randint(-3, 300)): value(depth + 1) for _ in range(rng.randint(0, 3))},
+        ][kind]()
+
+    header = {"v": 1, "type": "header", "format": "gadgetctl-recording"}
+    for key in rng.sample(
+        ["created", "wall_time", "monotonic", "generator", "info"], rng.randint(0, 5)
+    ):
+        header[key] = value()
+    lines = [header]
+    for _ in range(rng.randint(0, 12)):
+        record = {"v": rng.choice([1, 1, 1, 0, 2, "1"]), "type": rng.choice(_RECORD_TYPES)}
+        for key in rng.sample(_RECORD_KEYS, rng.randint(0, len(_RECORD_KEYS))):
+            record[key] = value()
+        lines.append(record)
+    return b"".join(json.dumps(line).encode() + b"\n" for line in lines)
+
+
+_RECORD_TYPES = ["sample", "frame", "marker", "stats", "status", "end", "header", "other"]
+_RECORD_KEYS = [
+    "device", "kind", "unit", "timestamp", "value", "raw", "frame", "devices", "count", "values",
+    "name", "element", "element_type", "state", "reason", "samples", "markers", "frames",
+    "info", "elements", "units", "kinds", "min", "max", "wall_time", "monotonic", "created",
+]  # fmt: skip
+
+
+@target("recording.reader", seeds=_recording_seeds, grammar=_recording_lines, examples=80)
 def _recording(data: bytes) -> None:
     from gadgetctl.monitor.recording import RecordingError, read_recording
+    from gadgetctl.monitor.records import MAX_UNITS
     from gadgetctl.monitor.replaydevice import make_schedule, recorded_devices
     from gadgetctl.monitor.summary import summarize_recording
 
@@ -459,6 +500,117 @@ def _recording(data: bytes) -> None:
         summarize_recording(path)
         recording = read_recording(path)
         schedule = make_schedule(recording.records, speed=1.0, loop=False, mapping=None)
-        recorded_devices(recording.header, schedule, {})
+        devices = recorded_devices(recording.header, schedule, {})
+        assert all(0 < n <= MAX_UNITS for d in devices.values() for n in d.units.values())
     except RecordingError:
+        pass
+
+
+# -- VRPN -----------------------------------------------------------------------------------------
+
+
+@functools.cache
+def _vrpn_seeds() -> list[bytes]:
+    from gadgetctl.vrpn import codecs, wire
+
+    stream = wire.make_cookie()
+    stream += wire.pack_description(wire.SENDER_DESCRIPTION, 0, "Tracker0")
+    for ident, name in enumerate(codecs.CLIENT_TYPES):
+        stream += wire.pack_description(wire.TYPE_DESCRIPTION, ident, name)
+    types = {name: ident for ident, name in enumerate(codecs.CLIENT_TYPES)}
+    reports = [
+        (codecs.TRACKER_POS_QUAT, codecs.encode_pose(1, (0.1, 0.2, 0.3))),
+        (codecs.TRACKER_VELOCITY, codecs.encode_velocity(0, (1.0, 0.0, 0.0))),
+        (codecs.BUTTON_CHANGE, codecs.encode_button_change(3, 1)),
+        (codecs.BUTTON_STATES, codecs.encode_button_states([1, 0, 1])),
+        (codecs.ANALOG_CHANNEL, codecs.encode_analog([0.5, -0.25])),
+        (codecs.DIAL_UPDATE, codecs.encode_dial(0, 0.125)),
+        (codecs.TEXT_MESSAGE, codecs.encode_text("hello")),
+    ]
+    messages = b"".join(wire.pack_message(types[name], 0, payload) for name, payload in reports)
+    return [
+        stream + messages + wire.pack_disconnect(),
+        messages,
+        wire.pack_udp_description("127.0.0.1", 4000) + messages[:200],
+        wire.lob_request("127.0.0.1", 4500),
+    ]
+
+
+def _vrpn_messages(messages: list, types: dict[int, str]) -> None:
+    from gadgetctl.vrpn import codecs, wire
+
+    for message in messages:
+        if message.type_id in (wire.SENDER_DESCRIPTION, wire.TYPE_DESCRIPTION):
+            name = wire.decode_description(message.payload)
+            if message.type_id == wire.TYPE_DESCRIPTION and 0 <= message.sender_id < wire.MAX_IDS:
+                types[message.sender_id] = name
+        elif message.type_id == wire.UDP_DESCRIPTION:
+            try:
+                wire.decode_udp_description(message)
+            except ValueError:
+                pass
+        else:
+            for name in {types.get(message.type_id), *codecs.CLIENT_TYPES}:
+                try:
+                    codecs.decode(name, message.payload)
+                except codecs.CodecError:
+                    pass
+
+
+@target("vrpn.stream", seeds=_vrpn_seeds, examples=80)
+def _vrpn_stream(data: bytes) -> None:
+    from gadgetctl.vrpn import wire
+
+    for probe in (wire.check_cookie, wire.parse_lob):
+        try:
+            probe(data)
+        except (wire.CookieError, wire.LobError):
+            pass
+    decoder = wire.StreamDecoder()
+    types: dict[int, str] = {}
+    body = data[wire.COOKIE_SIZE :] if data.startswith(b"vrpn:") else data
+    try:
+        for at in range(0, len(body), 61):  # in pieces that cut messages
+            _vrpn_messages(decoder.feed(body[at : at + 61]), types)
+    except wire.FramingError:
+        pass
+    assert decoder.pending <= wire.HEADER_SIZE + wire.MAX_PADDED_PAYLOAD + 61
+    try:
+        _vrpn_messages(wire.decode_datagram(body[: wire.MAX_DATAGRAM]), types)
+    except wire.FramingError:
+        pass
+
+
+@functools.cache
+def _vrpn_log_seeds() -> list[bytes]:
+    import io
+
+    from gadgetctl.vrpn import codecs
+    from gadgetctl.vrpn.logfile import LogWriter
+
+    out = io.BytesIO()
+    writer = LogWriter(out)
+    for n in range(4):
+        writer.write(
+            "Tracker0", codecs.TRACKER_POS_QUAT, codecs.encode_pose(n, (0.1 * n, 0.2, 0.3))
+        )
+        writer.write("Button0", codecs.BUTTON_CHANGE, codecs.encode_button_change(n, n % 2))
+        writer.write("Analog0", codecs.ANALOG_CHANNEL, codecs.encode_analog([0.5, -0.25 * n]))
+    writer.disconnect()
+    writer.write("Tracker0", codecs.TEXT_MESSAGE, codecs.encode_text("again"))
+    writer.close()
+    return [out.getvalue()]
+
+
+@target("vrpn.logfile", seeds=_vrpn_log_seeds, examples=60)
+def _vrpn_log(data: bytes) -> None:
+    import io
+
+    from gadgetctl.vrpn.logfile import LogFormatError, LogReader
+
+    try:
+        reader = LogReader(io.BytesIO(data))
+        for _message in reader:
+            pass
+    except LogFormatError:
         pass

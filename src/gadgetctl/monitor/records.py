@@ -19,6 +19,9 @@ from typing import Any
 
 FORMAT_NAME = "gadgetctl-recording"
 FORMAT_VERSION = 1
+#: Units of one device and kind a recording may name (0 to MAX_UNITS - 1): a sample of a unit
+#: beyond that is malformed, so no recording can make a replay allocate without limit.
+MAX_UNITS = 1 << 16
 KINDS = ("analog", "digital", "position", "glove", "gesture", "command", "string", "hat")
 
 
@@ -353,6 +356,15 @@ def _time(obj: Mapping[str, Any], name: str = "timestamp") -> float:
     return value
 
 
+def _optional(obj: Mapping[str, Any], name: str, kind: type, default: Any) -> Any:
+    """An optional field of type ``kind`` (an int for a float), ``default`` when absent."""
+    if name not in obj:
+        return default
+    if kind is float:
+        return _time(obj, name)
+    return _field(obj, name, kind)
+
+
 def _mapping(obj: Mapping[str, Any], name: str) -> Mapping[str, Any]:
     return _field(obj, name, dict) if name in obj else {}
 
@@ -388,8 +400,11 @@ def decode_record(obj: object) -> Record:
         if "value" not in obj:
             raise RecordFormatError("missing field 'value'")
         value = obj["value"]
+        unit = _field(obj, "unit", int)
+        if not 0 <= unit < MAX_UNITS:
+            raise RecordFormatError(f"unit {unit} out of range (0 to {MAX_UNITS - 1})")
         return SampleRecord(_field(obj, "device", str), _field(obj, "kind", str),
-                            _field(obj, "unit", int), _time(obj), value, obj.get("raw", value))
+                            unit, _time(obj), value, obj.get("raw", value))
     if kind == "frame":
         return FrameRecord(_field(obj, "frame", int), _time(obj), _frame_devices(obj))
     if kind == "marker":
@@ -408,14 +423,14 @@ def decode_record(obj: object) -> Record:
                             reason if isinstance(reason, str) else None)
     if kind == "end":
         return EndRecord(_time(obj), _field(obj, "reason", str), _field(obj, "samples", int),
-                         int(obj.get("markers", 0)), int(obj.get("frames", 0)))
+                         _optional(obj, "markers", int, 0), _optional(obj, "frames", int, 0))
     if kind == "header":
         if obj.get("format") != FORMAT_NAME:
             raise RecordFormatError(f"header format is not {FORMAT_NAME!r}")
         info = obj.get("info", {})
         if not isinstance(info, dict):
             raise RecordFormatError("header field 'info' is not an object")
-        return HeaderRecord(str(obj.get("created", "")), float(obj.get("wall_time", 0.0)),
+        return HeaderRecord(str(obj.get("created", "")), _optional(obj, "wall_time", float, 0.0),
                             _time(obj, "monotonic") if "monotonic" in obj else 0.0,
                             str(obj.get("generator", "")), info, version)
     raise UnknownRecordType(f"unknown record type {kind!r}")

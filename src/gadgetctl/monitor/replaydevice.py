@@ -47,7 +47,7 @@ from gadgetctl.input.samples import SampleStore
 from gadgetctl.jccl.access import ElementAccess
 from gadgetctl.jccl.configuration import ConfigElement, Configuration, PropertyValue
 from gadgetctl.jccl.definitions import Location
-from gadgetctl.monitor.records import HeaderRecord, MarkerRecord, SampleRecord
+from gadgetctl.monitor.records import MAX_UNITS, HeaderRecord, MarkerRecord, SampleRecord
 from gadgetctl.monitor.replay import ReplaySchedule
 
 REPLAY_ELEMENT_TYPE = "replay_device"
@@ -170,7 +170,7 @@ def recorded_devices(header: HeaderRecord, schedule: ReplaySchedule,
         declared = [k for k in described.get("kinds", []) if k in _REPLAYABLE_NAMES]
         units = dict(seen_units.get(original, {}))
         for kind, count in (described.get("units") or {}).items():
-            if isinstance(count, int) and count > units.get(kind, 0):
+            if isinstance(count, int) and units.get(kind, 0) < count <= MAX_UNITS:
                 units[kind] = count
         device = RecordedDevice(name, original, str(described.get("type", "")),
                                 sorted(set(declared) | (kinds & _REPLAYABLE_NAMES),
