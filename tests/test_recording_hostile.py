@@ -23,8 +23,15 @@ def recording(tmp_path: Path, *records: dict, header: dict | None = None) -> Pat
 
 
 def sample(unit: int, t: float, value: float = 0.5) -> dict:
-    return {"v": 1, "type": "sample", "device": "W", "kind": "analog", "unit": unit,
-            "timestamp": t, "value": value}
+    return {
+        "v": 1,
+        "type": "sample",
+        "device": "W",
+        "kind": "analog",
+        "unit": unit,
+        "timestamp": t,
+        "value": value,
+    }
 
 
 @pytest.mark.parametrize("wall_time", ["x", [], {}, None, "1.5"])
@@ -38,8 +45,15 @@ def test_a_header_field_of_the_wrong_type_is_not_a_recording(tmp_path, wall_time
 
 
 def test_end_counts_of_the_wrong_type_are_a_malformed_record(tmp_path) -> None:
-    end = {"v": 1, "type": "end", "timestamp": 2.0, "reason": "closed", "samples": 1,
-           "markers": "many", "frames": [1]}
+    end = {
+        "v": 1,
+        "type": "end",
+        "timestamp": 2.0,
+        "reason": "closed",
+        "samples": 1,
+        "markers": "many",
+        "frames": [1],
+    }
     source = read_recording(recording(tmp_path, sample(0, 1.0), end))
     records = list(source.records)
     assert len(records) == 1
