@@ -614,3 +614,37 @@ def _vrpn_log(data: bytes) -> None:
             pass
     except LogFormatError:
         pass
+
+
+@target("vrpn.driver", seeds=_vrpn_seeds, examples=60, driver="VRPN_drv")
+def _vrpn_driver(data: bytes) -> None:
+    """What VRPN_drv makes of a server's messages (names and reports as its client gives them)."""
+    from VRPN_drv.standalone import Batch, VrpnInput
+
+    from gadgetctl.vrpn import codecs, wire
+
+    senders: dict[int, str] = {}
+    types: dict[int, str] = {}
+    messages = []
+    body = data[wire.COOKIE_SIZE :] if data.startswith(b"vrpn:") else data
+    try:
+        for message in wire.StreamDecoder().feed(body):
+            if message.type_id in (wire.SENDER_DESCRIPTION, wire.TYPE_DESCRIPTION):
+                table = senders if message.type_id == wire.SENDER_DESCRIPTION else types
+                table[message.sender_id] = wire.decode_description(message.payload)
+            elif message.type_id >= 0:
+                name = types.get(message.type_id)
+                try:
+                    report = codecs.decode(name, message.payload)
+                except codecs.CodecError:
+                    continue
+                sender = senders.get(message.sender_id)
+                messages.append(message._replace(sender=sender, type=name, report=report))
+    except wire.FramingError:
+        pass
+    device = VrpnInput("Tracker0@localhost", 2, "Tracker0@localhost", 4, "Tracker0@localhost", 3)
+    batch = Batch()
+    device._take(messages, batch)
+    assert all(pose.shape == (2, 4, 4) for _, pose in batch.positions)
+    assert all(len(values) == 4 for _, values in batch.digital)
+    assert all(len(values) == 3 for _, values in batch.analog)
