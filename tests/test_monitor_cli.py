@@ -286,12 +286,11 @@ def test_replay_against_another_configuration_with_a_name_mapping(tmp_path, reco
     assert recs[0]["info"]["elements"]["Lab Joystick"]["type"] == "waveform_device"
 
 
-def test_replay_warns_about_mapping_names_that_are_not_recorded(recorded):
+def test_replay_refuses_mapping_names_that_are_not_recorded(recorded):
     result = gadgetctl("replay", recorded, "--map", "Ghost=Other", "--speed", "20", "--format", "table",
                        "--interval", "10")
-    assert result.returncode == 0
-    assert "'Ghost' does not occur in the recording" in result.stderr
-    assert "replay finished" in result.stdout
+    assert result.returncode == 2 and result.stdout == ""
+    assert "'Ghost' is not a device of the recording" in result.stderr
 
 
 def test_replay_usage_errors(recorded):

@@ -14,7 +14,8 @@ JCCL_SUFFIXES = (".jdef", ".jconf")
 def expand_paths(paths: Iterable[Path]) -> list[Path]:
     """Files as given, directories searched recursively for .jdef and .jconf files.
 
-    Missing or unreadable paths raise :class:`GadgetctlError`. The result is sorted per
+    Missing or unreadable paths, and directories without such files (a check that checks
+    nothing must not pass), raise :class:`GadgetctlError`. The result is sorted per
     argument and free of duplicates.
     """
     found: list[Path] = []
@@ -29,6 +30,9 @@ def expand_paths(paths: Iterable[Path]) -> list[Path]:
                 p for p in path.rglob("*")
                 if p.suffix in JCCL_SUFFIXES and p.is_file() and not _hidden(p.relative_to(path))
             )
+            if not candidates:
+                raise GadgetctlError(f"{path}: no .jconf or .jdef files in this directory or below "
+                                     "(hidden ones are skipped): nothing to check")
         else:
             if not os.access(path, os.R_OK):
                 raise GadgetctlError(f"{path}: file is not readable")
@@ -60,3 +64,35 @@ def is_dir(path: Path) -> bool:
         return path.is_dir()
     except OSError:
         return False
+
+
+def require_file(path: Path, what: str = "configuration file", suffixes: tuple[str, ...] = (".jconf",)) -> None:
+    """Raise :class:`GadgetctlError` unless ``path`` is a readable file, saying what it is
+    instead (a directory, nothing: with the closest ``suffixes`` files beside it)."""
+    from gadgetctl.boundedread import check_readable_file
+
+    if is_dir(path):
+        raise GadgetctlError(f"{path}: is a directory, not a {what}")
+    problem = check_readable_file(path)
+    if problem == "no such file":
+        raise GadgetctlError(f"{path}: no such {what}{_nearby(path, suffixes)}")
+    if problem is not None:
+        raise GadgetctlError(f"{path}: {problem}")
+    if not os.access(path, os.R_OK):
+        raise GadgetctlError(f"{path}: file is not readable")
+
+
+def _nearby(path: Path, suffixes: tuple[str, ...]) -> str:
+    """`` (did you mean 'dir/name.jconf'?)`` for files of the same directory named alike."""
+    from gadgetctl.suggest import close_names
+
+    parent = path.parent
+    try:
+        names = [p.name for p in parent.iterdir() if p.suffix in suffixes and p.is_file()] if parent.is_dir() else []
+    except OSError:
+        return ""
+    close = close_names(path.name, names)
+    if not close:
+        return ""
+    shown = [str(parent / name) if str(parent) != "." or str(path).startswith("./") else name for name in close]
+    return f" (did you mean {' or '.join(shown)}?)"

@@ -58,13 +58,19 @@ def show(
     from gadgetctl.errors import GadgetctlError
     from gadgetctl.jccl.configcheck import open_configuration
     from gadgetctl.jccl.resolve import resolve_configuration
+    from gadgetctl.suggest import with_suggestion
     from gadgetctl.validate import plugin_definition_finder
 
     opened = open_configuration(files, definition_dirs=definitions, bundled=bundled,
                                 plugin_definitions=plugin_definition_finder())
+    if element:
+        everything = opened.configuration.all_elements()
+        known = {e.name for e in everything} | {e.full_name for e in everything}
+        missing = [name for name in element if name not in known]
+        if missing:
+            raise GadgetctlError("; ".join(with_suggestion(f"no element named {name!r} in the configuration",
+                                                           name, known) for name in missing))
     elements = resolve_configuration(opened.configuration, opened.index, element or None)
-    if element and not elements:
-        raise GadgetctlError(f"no element named {', '.join(map(repr, element))} in the configuration")
     if fmt is DataFormat.json:
         emit(json.dumps([e.to_dict() for e in elements], indent=2))
         return

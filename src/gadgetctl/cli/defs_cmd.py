@@ -29,6 +29,15 @@ def _repository(definitions: list[Path], bundled: bool):
     return default_repository(definitions, bundled=bundled)
 
 
+def unknown_definition(repo, type_name: str, what: str = "definition"):
+    """The usage error for a definition name the search path does not have."""
+    from gadgetctl.errors import GadgetctlError
+    from gadgetctl.suggest import with_suggestion
+
+    return GadgetctlError(with_suggestion(f"no {what} named {type_name!r} on the search path", type_name,
+                                          repo.names(), quote=str))
+
+
 def _table(headers: list[str], rows: list[list[str]]) -> str:
     widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h) for i, h in enumerate(headers)]
     line = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths, strict=True)).rstrip()  # noqa: E731
@@ -44,9 +53,19 @@ def list_(
     fmt: DataFormat = FORMAT_OPTION,
 ) -> None:
     """List definitions: name, newest version, abstract, parents, category and source."""
+    from gadgetctl.errors import GadgetctlError
     from gadgetctl.jccl.defquery import list_definitions
+    from gadgetctl.suggest import with_suggestion
 
     repo = _repository(definitions, bundled)
+    if base is not None and base not in repo:
+        raise unknown_definition(repo, base, "base type")
+    if category is not None:
+        known = {c for d in repo.all_newest() for c in d.categories}
+        prefix = category.rstrip("/") + "/"
+        if not any(c == category or c.startswith(prefix) for c in known):
+            raise GadgetctlError(with_suggestion(f"no definition is in category {category!r}", category,
+                                                 known, quote=str))
     rows = list_definitions(repo, category=category, base=base)
     if fmt is DataFormat.json:
         emit(json.dumps(rows, indent=2))
@@ -66,8 +85,6 @@ def show(
     fmt: DataFormat = FORMAT_OPTION,
 ) -> None:
     """Show a definition's effective properties, own and inherited."""
-    from difflib import get_close_matches
-
     from gadgetctl.errors import GadgetctlError
     from gadgetctl.jccl.defquery import show_definition
 
@@ -77,9 +94,7 @@ def show(
         if type_name in repo:
             raise GadgetctlError(f"{type_name} has no version {version} (versions: "
                                  f"{', '.join(map(str, repo.versions(type_name)))})")
-        close = get_close_matches(type_name, repo.names(), n=3)
-        raise GadgetctlError(f"no definition named {type_name!r} on the search path"
-                             + (f" (did you mean {', '.join(close)}?)" if close else ""))
+        raise unknown_definition(repo, type_name)
     data = show_definition(repo, found)
     if fmt is DataFormat.json:
         emit(json.dumps(data, indent=2))
@@ -125,12 +140,11 @@ def tree(
     fmt: DataFormat = FORMAT_OPTION,
 ) -> None:
     """Show the inheritance tree (children under their parents)."""
-    from gadgetctl.errors import GadgetctlError
     from gadgetctl.jccl.defquery import inheritance_tree
 
     repo = _repository(definitions, bundled)
     if type_name is not None and type_name not in repo:
-        raise GadgetctlError(f"no definition named {type_name!r} on the search path")
+        raise unknown_definition(repo, type_name)
     roots = inheritance_tree(repo, type_name)
     if fmt is DataFormat.json:
         emit(json.dumps([r.to_dict() for r in roots], indent=2))

@@ -80,7 +80,8 @@ def load_drivers(
 ) -> None:
     """Import, check and register driver plug-ins, and report for each one: ok, or why not.
 
-    Exit status: 0 when every plug-in loaded, 1 when any failed.
+    Exit status: 0 when every plug-in loaded, 1 when any failed, 2 when a NAME names no
+    plug-in (nothing is loaded then).
     """
     from gadgetctl.input.definitions import driver_search_for
     from gadgetctl.input.plugins.discovery import plugin_at
@@ -89,12 +90,14 @@ def load_drivers(
     from gadgetctl.jccl.repository import default_repository
 
     search = driver_search_for(None, driver_paths)
+    chosen = [plugin_at(Path(name)) if ("/" in name or name.endswith(".py")) and Path(name).exists()
+              else search.find(name) for name in names]
+    unknown = [name for name, info in zip(names, chosen, strict=True) if info is None]
+    if unknown:
+        raise _unknown_plugins(unknown, search)
     repo = default_repository(list(definitions), bundled=bundled)
     loader = PluginLoader(DeviceRegistry.with_builtins(), repo)
-    results = []
-    for name in names:
-        info = plugin_at(Path(name)) if ("/" in name or name.endswith(".py")) and Path(name).exists() else None
-        results.append(loader.load(info) if info is not None else loader.load_name(name, search))
+    results = [loader.load(info) for info in chosen if info is not None]
     failed = [r for r in results if not r.ok]
     if fmt is DataFormat.json:
         emit(json.dumps({"loaded": len(results) - len(failed), "failed": len(failed),
@@ -117,6 +120,23 @@ def load_drivers(
     raise typer.Exit(1 if failed else 0)
 
 
+def _unknown_plugins(names: list[str], search):
+    """The usage error for plug-in names (or paths) that name nothing."""
+    from gadgetctl.errors import GadgetctlError
+    from gadgetctl.suggest import did_you_mean
+
+    known = [info.name for info in search.plugins()]
+    parts = []
+    for name in names:
+        if "/" in name or name.endswith(".py"):
+            parts.append(f"{name}: no such plug-in folder or module")
+            continue
+        close = did_you_mean(name, known)
+        parts.append(f"no driver plug-in named {name!r}" + (f" ({close})" if close else ""))
+    return GadgetctlError(f"{'; '.join(parts)} (looked in {search.describe_places()}; "
+                          "gadgetctl drivers list shows them)")
+
+
 def _problems(info, api_version: int) -> list[str]:
     problems = list(info.metadata.problems)
     declared = info.metadata.api_version
@@ -130,10 +150,9 @@ def _problems(info, api_version: int) -> list[str]:
 def _load_configs(paths: list[Path]):
     if not paths:
         return None
-    from gadgetctl.errors import GadgetctlError
+    from gadgetctl.files import require_file
     from gadgetctl.jccl.configload import load_configuration
 
     for path in paths:
-        if not path.is_file():
-            raise GadgetctlError(f"{path}: no such configuration file")
+        require_file(path)
     return load_configuration(paths)

@@ -18,10 +18,9 @@ def explain(
     fmt: DataFormat = typer.Option(DataFormat.text, "--format", "-f", help="Output format."),
 ) -> None:
     """Describe a diagnostic code, with an example and how to fix it."""
-    from difflib import get_close_matches
-
     from gadgetctl.diagnostics import all_codes
     from gadgetctl.errors import GadgetctlError
+    from gadgetctl.suggest import with_suggestion
 
     codes = all_codes()
     if code is None:
@@ -33,9 +32,8 @@ def explain(
         return
     entry = codes.get(code.upper())
     if entry is None:
-        close = get_close_matches(code.upper(), list(codes), n=3, cutoff=0.5)
-        suggestion = f" (did you mean {', '.join(close)}?)" if close else ""
-        raise GadgetctlError(f"unknown diagnostic code {code!r}{suggestion}")
+        raise GadgetctlError(with_suggestion(f"unknown diagnostic code {code!r}", code.upper(), codes,
+                                             cutoff=0.5, quote=str))
     if fmt is DataFormat.json:
         emit(json.dumps(_as_dict(entry), indent=2))
         return

@@ -86,23 +86,33 @@ def monitor(
 
 def split_arguments(arguments: list[str], *, require_config: bool = True) -> tuple[list[Path], list[str]]:
     """Existing ``*.jconf`` files are configurations, the rest NAME patterns."""
+    import os
+
     from gadgetctl.errors import GadgetctlError
+    from gadgetctl.files import is_dir, is_file, require_file
 
     configs: list[Path] = []
     selectors: list[str] = []
     for argument in arguments:
         path = Path(argument)
         if argument.endswith(".jconf"):
-            if path.is_file():
+            if is_file(path):
                 configs.append(path)
                 continue
-            if path.exists():
-                raise GadgetctlError(f"{argument}: not a configuration file")
-            if "*" not in argument and "?" not in argument and "[" not in argument:
-                raise GadgetctlError(f"{argument}: no such configuration file")
+            if os.path.exists(path) or not any(c in argument for c in "*?["):
+                require_file(path)
+        elif (argument.endswith("/") or not configs) and is_dir(path):
+            raise GadgetctlError(f"{argument}: is a directory; monitor takes configuration files (*.jconf) "
+                                 "before the names to show")
         selectors.append(argument)
     if not configs and require_config:
-        raise GadgetctlError("no configuration given: CONFIG arguments are existing files ending in .jconf (or vrpn:Device@host)")
+        first = Path(arguments[0])
+        if is_file(first):
+            raise GadgetctlError(f"{first}: not a configuration file (configurations end in .jconf)")
+        if os.path.exists(first) or "/" in arguments[0] or first.suffix:
+            require_file(first)  # says what is wrong with a mistyped path
+        raise GadgetctlError("no configuration given: CONFIG arguments are existing files ending in .jconf "
+                             "(or vrpn:Device@host)")
     return configs, selectors
 
 
@@ -135,8 +145,8 @@ def run_monitor(configs: list[Path], selectors: list[str], *, rate: float = 60.0
     from gadgetctl.monitor.session import MonitorSession
 
     check_options(rate, duration, interval)
-    mode = choose_format(fmt)
-    check_record_path(record, overwrite)
+    mode = choose_format(fmt, record)
+    check_record_path(record, overwrite, mode)
     options = ManagerOptions(driver_dirs=list(driver_paths or ()))
     manager, configuration = InputManager.from_files(configs, definitions=list(definitions or ()),
                                                      bundled=bundled, options=options)

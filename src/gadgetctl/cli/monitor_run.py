@@ -36,26 +36,48 @@ class RunOptions:
     notes: list[str] = field(default_factory=list)
 
 
-def interactive() -> bool:
-    return sys.stdin.isatty() and sys.stdout.isatty()
+#: ``--record -``: the recording goes to standard output, the human output to stderr.
+STDOUT_RECORD = "-"
 
 
-def choose_format(requested: OutputFormat | None) -> OutputFormat:
+def records_to_stdout(record: Path | None) -> bool:
+    return record is not None and str(record) == STDOUT_RECORD
+
+
+def human_output(record: Path | None = None):
+    """Where tables, statistics and the live view go: stdout, unless it carries the recording."""
+    return sys.stderr if records_to_stdout(record) else sys.stdout
+
+
+def interactive(record: Path | None = None) -> bool:
+    return sys.stdin.isatty() and human_output(record).isatty()
+
+
+def choose_format(requested: OutputFormat | None, record: Path | None = None) -> OutputFormat:
     if requested is None:
-        return OutputFormat.live if interactive() else OutputFormat.table
-    if requested is OutputFormat.live and not interactive():
-        raise GadgetctlError("the live view needs a terminal on stdin and stdout; "
+        return OutputFormat.live if interactive(record) else OutputFormat.table
+    if requested is OutputFormat.live and not interactive(record):
+        where = "stderr" if records_to_stdout(record) else "stdout"
+        raise GadgetctlError(f"the live view needs a terminal on stdin and {where}; "
                              "use --format table or --format ndjson")
     return requested
 
 
-def check_record_path(path: Path | None, overwrite: bool) -> None:
+def check_record_path(path: Path | None, overwrite: bool, mode: OutputFormat | None = None) -> None:
     if path is None:
         return
+    if records_to_stdout(path):
+        if mode is OutputFormat.ndjson:
+            raise GadgetctlError("--record - and --format ndjson both write records to standard output; "
+                                 "use one of them")
+        if sys.stdout.isatty():
+            raise GadgetctlError("--record -: standard output is a terminal; redirect it to a file or a "
+                                 "pipe (or use --format ndjson to watch the records)")
+        return
+    if path.is_dir():
+        raise GadgetctlError(f"--record {path}: is a directory; give the name of the file to write")
     if path.exists() and not overwrite:
         raise GadgetctlError(f"{path}: file exists (use --overwrite to replace it)")
-    if path.is_dir():
-        raise GadgetctlError(f"{path}: is a directory")
     if not path.parent.is_dir():
         raise GadgetctlError(f"{path.parent}: no such directory")
 
@@ -63,9 +85,13 @@ def check_record_path(path: Path | None, overwrite: bool) -> None:
 def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
     """Run the (started) session to its end; returns the exit status (0, or 1 when an
     element ended pending, faulted or stupefied, or a device faulted during the run)."""
-    mode = choose_format(options.format)
-    check_record_path(options.record, options.overwrite)
-    if options.record is not None:
+    mode = choose_format(options.format, options.record)
+    check_record_path(options.record, options.overwrite, mode)
+    human = human_output(options.record)
+    if records_to_stdout(options.record):
+        out = sys.stdout.buffer
+        session.add_sink(lambda info: Recorder.to_stream(out, info, clock=now))
+    elif options.record is not None:
         path, overwrite = options.record, options.overwrite
         session.add_sink(lambda info: Recorder(path, info, overwrite=overwrite, clock=now))
     if mode is OutputFormat.ndjson:
@@ -82,9 +108,9 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
                 if feeder is not None:
                     feeder.start()
                 if mode is OutputFormat.live:
-                    _live(session, options)
+                    _live(session, options, human)
                 elif mode is OutputFormat.table:
-                    _table(session, options)
+                    _table(session, options, human)
                 else:
                     notice = RateNotice(session)
                     for _ in session.frames(duration=options.duration):
@@ -95,7 +121,7 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
             except Terminated:
                 reason = "terminated"
             except RecordingError as err:
-                if mode is OutputFormat.ndjson and "Broken pipe" in str(err):
+                if (mode is OutputFormat.ndjson or records_to_stdout(options.record)) and "Broken pipe" in str(err):
                     broken_pipe = True  # the reader went away (`| head`): not an error
                 else:
                     reason = "error"
@@ -118,7 +144,7 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
         reason = "interrupted"  # a second signal while finishing: the files are complete up to here
     if broken_pipe:
         return 0
-    return _finish(session, mode, options, *outcome)
+    return _finish(session, mode, options, *outcome, human=human)
 
 
 class RateNotice:
@@ -160,23 +186,24 @@ def _evaluate(session: MonitorSession) -> tuple[dict, list[str]]:
 
 
 def _finish(session: MonitorSession, mode: OutputFormat, options: RunOptions, final: dict,
-            problems: list[str]) -> int:
+            problems: list[str], *, human=None) -> int:
     from gadgetctl.cli.monitor_text import frames_text, stats_text
 
+    human = human or sys.stdout
     if mode is not OutputFormat.ndjson and options.stats:
-        sys.stdout.write(frames_text(session) + stats_text(final))
+        human.write(frames_text(session) + stats_text(final))
     if session.finished and mode is not OutputFormat.ndjson:
-        sys.stdout.write("replay finished\n")
-    sys.stdout.flush()
+        human.write("replay finished\n")
+    human.flush()
     for line in problems:
         print(f"gadgetctl: problem: {line}", file=sys.stderr)
     return 1 if problems else 0
 
 
-def _table(session: MonitorSession, options: RunOptions) -> None:
+def _table(session: MonitorSession, options: RunOptions, human) -> None:
     from gadgetctl.cli.monitor_text import TableView
 
-    table = TableView(session, sys.stdout, interval=options.interval, length_unit=options.length_unit,
+    table = TableView(session, human, interval=options.interval, length_unit=options.length_unit,
                       quaternion=options.quaternion)
     notice = RateNotice(session)
     for frame in session.frames(duration=options.duration):
@@ -186,15 +213,16 @@ def _table(session: MonitorSession, options: RunOptions) -> None:
     notice.check()
 
 
-def _live(session: MonitorSession, options: RunOptions) -> None:
+def _live(session: MonitorSession, options: RunOptions, human) -> None:
     from rich.console import Console
 
     from gadgetctl.cli.monitor_live import LiveView
     from gadgetctl.cli.monitor_terminal import KeyDecoder, RawTerminal
 
-    console = Console()
+    console = Console(file=human)
     decoder = KeyDecoder()
-    recording = str(options.record) if options.record else None
+    recording = ("standard output" if records_to_stdout(options.record) else str(options.record)) \
+        if options.record else None
     view = LiveView(session, console, title=options.title, length_unit=options.length_unit,
                     quaternion=options.quaternion, recording=recording, heading=options.heading)
     controls = _Controls(session, view, has_recording=options.record is not None)

@@ -30,14 +30,13 @@ def pending(
     (displays, users) are not reported. Exit status: 0 when nothing is pending or
     stupefied, 1 otherwise.
     """
-    from gadgetctl.errors import GadgetctlError
+    from gadgetctl.files import require_file
     from gadgetctl.input.manager import InputManager, ManagerOptions
     from gadgetctl.input.report import pending_report
     from gadgetctl.jccl.configload import require_loadable
 
     for path in files:
-        if not path.is_file():
-            raise GadgetctlError(f"{path}: no such configuration file")
+        require_file(path)
     options = ManagerOptions(start_devices=start, driver_dirs=list(driver_paths), retry_interval=None)
     manager, configuration = InputManager.from_files(files, definitions=definitions, bundled=bundled, options=options)
     require_loadable(configuration)

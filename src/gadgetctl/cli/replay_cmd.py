@@ -123,14 +123,15 @@ def run_replay(recording: Path, names: list[str], *, speed: float = 1.0, loop: b
     if not (speed > 0 and math.isfinite(speed)):
         raise GadgetctlError(f"--speed must be a positive number, not {speed:g}")
     renames = parse_mapping(list(mapping or ()))
-    mode = choose_format(fmt)
-    check_record_path(record, overwrite)
-    if record is not None and record.exists() and record.resolve() == recording.resolve():
+    mode = choose_format(fmt, record)
+    check_record_path(record, overwrite, mode)
+    if record is not None and str(record) != "-" and record.exists() and record.resolve() == recording.resolve():
         raise GadgetctlError(f"{record}: cannot record over the recording being replayed")
     configs = list(configs or ())
+    from gadgetctl.files import require_file
+
     for path in configs:
-        if not path.is_file():
-            raise GadgetctlError(f"{path}: no such configuration file")
+        require_file(path)
     try:
         source = read_recording(recording)
         schedule = replaydevice.make_schedule(source.records, speed=speed, loop=loop, mapping=renames)
@@ -139,13 +140,20 @@ def run_replay(recording: Path, names: list[str], *, speed: float = 1.0, loop: b
     except ValueError as err:
         raise GadgetctlError(f"{recording}: {err}") from None
     notes = [f"{recording}: {problem}" for problem in source.problems if problem.severity != "info"]
-    notes += [f"--map: {warning}" for warning in schedule.mapping_warnings]
+    notes += [f"--map: {warning}" for warning in schedule.mapping_warnings if "does not occur" not in warning]
+    recorded = replaydevice.recorded_devices(source.header, schedule, {})
     options = ManagerOptions(driver_dirs=list(driver_paths or ()))
     if configs:
         manager, configuration = InputManager.from_files(configs, definitions=list(definitions or ()),
                                                          bundled=bundled, options=options)
-        fatal_load_errors(configuration)
+        try:
+            fatal_load_errors(configuration)
+            replaydevice.check_mapping(renames, recorded, configuration, recording)
+        except BaseException:
+            manager.shutdown()
+            raise
     else:
+        replaydevice.check_mapping(renames, recorded, None, recording)
         from gadgetctl.input.definitions import repository_for
 
         manager = InputManager(repository_for(None, definitions=list(definitions or ()), bundled=bundled,

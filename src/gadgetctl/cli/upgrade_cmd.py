@@ -49,6 +49,11 @@ def upgrade(
         raise GadgetctlError("--in-place and --output exclude each other")
     if output is not None and len(files) != 1:
         raise GadgetctlError("--output takes exactly one input file")
+    if output is not None and output.is_dir():
+        raise GadgetctlError(f"--output {output}: is a directory; give the name of the file to write "
+                             f"(e.g. -o {output / files[0].name})")
+    if output is not None and not output.parent.is_dir():
+        raise GadgetctlError(f"--output {output}: no such directory {output.parent}")
     if not (check or diff or in_place or output is not None) and len(files) != 1:
         raise GadgetctlError("several files: use --check, --diff or --in-place")
     for directory in definitions:

@@ -78,11 +78,11 @@ def diagnose(configs: Sequence[Path] = (), options: DoctorOptions | None = None)
 
 
 def _load(configs: Sequence[Path], options: DoctorOptions) -> Configuration:
+    from gadgetctl.files import require_file
     from gadgetctl.jccl.configload import load_configuration
 
     for path in configs:
-        if not path.is_file():
-            raise GadgetctlError(f"{path}: no such configuration file")
+        require_file(path)
     configuration = load_configuration(list(configs), environ=options.environ)
     broken = [d for d in configuration.diagnostics if d.code == "XML001"]
     if broken:

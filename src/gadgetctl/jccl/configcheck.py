@@ -219,16 +219,14 @@ def open_configuration(paths: Iterable[Path], *, definition_dirs: Iterable[Path]
                        ) -> OpenedConfiguration:
     """Load files as one configuration (includes followed) with the repository they are
     judged by. A file that is missing or not well-formed raises :class:`GadgetctlError`."""
-    from gadgetctl.boundedread import check_readable_file
     from gadgetctl.errors import GadgetctlError
+    from gadgetctl.files import require_file
     from gadgetctl.jccl.configload import require_loadable
     from gadgetctl.jccl.repository import default_repository
 
     paths = list(paths)
     for path in paths:
-        problem = check_readable_file(path)
-        if problem is not None:
-            raise GadgetctlError(f"{path}: {problem}")
+        require_file(path)
     for directory in definition_dirs:
         if not directory.is_dir():
             raise GadgetctlError(f"--definitions {directory}: no such directory")

@@ -181,6 +181,25 @@ def recorded_devices(header: HeaderRecord, schedule: ReplaySchedule,
     return devices
 
 
+def check_mapping(mapping: Mapping[str, str], recorded: Iterable[str], configuration: Configuration | None,
+                  path: Path) -> None:
+    """Raise :class:`ReplayError` when ``--map OLD=NEW`` names a device the recording does
+    not hold, or (with a configuration) an element the configuration does not have, before
+    anything is configured or opened: a mistyped NEW would leave the configuration's own
+    (perhaps real) device in place."""
+    from gadgetctl.suggest import with_suggestion
+
+    recorded = list(recorded)
+    problems = [with_suggestion(f"{old!r} is not a device of the recording {path}", old, recorded)
+                for old in mapping if old not in recorded]
+    if configuration is not None:
+        names = [e.name for e in configuration.elements]
+        problems += [with_suggestion(f"{new!r} is not an element of the configuration", new, names)
+                     for new in mapping.values() if new not in names]
+    if problems:
+        raise ReplayError(f"--map: {'; '.join(problems)}")
+
+
 def _value(text: object, where: Location) -> PropertyValue:
     return PropertyValue(str(text), where)
 

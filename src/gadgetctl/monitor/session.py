@@ -56,6 +56,7 @@ from gadgetctl.monitor.records import (
     encode_samples,
 )
 from gadgetctl.monitor.stats import DeviceSnapshot, DeviceStats
+from gadgetctl.suggest import did_you_mean
 
 DEVICE, PROXY, ALIAS = ElementKind.DEVICE.value, ElementKind.PROXY.value, ElementKind.ALIAS.value
 PENDING = "pending"
@@ -542,10 +543,16 @@ class MonitorSession:
                 unmatched.append(pattern)
             chosen.update(hits)
         if unmatched:
-            available = ", ".join(sorted(known, key=order)[:12]) or "nothing"
-            more = "" if len(known) <= 12 else f" and {len(known) - 12} more"
+            suggestions = [(p, s) for p in unmatched if (s := did_you_mean(p, known))]
+            if len(unmatched) > 1:
+                suggestions = [(p, f"{p!r}: {s}") for p, s in suggestions]
+            if suggestions:
+                hint = "; ".join(s for _, s in suggestions)
+            else:
+                more = "" if len(known) <= 12 else f" and {len(known) - 12} more"
+                hint = f"available: {', '.join(sorted(known, key=order)[:12]) or 'nothing'}{more}"
             quoted = ", ".join(repr(p) for p in unmatched)
-            raise SelectionError(f"no device, proxy or alias matches {quoted} (available: {available}{more})")
+            raise SelectionError(f"no device, proxy or alias matches {quoted} ({hint})")
         return sorted(chosen, key=order)
 
     @property

@@ -9,7 +9,6 @@ is what `gadgetctl emulate` calls.
 from __future__ import annotations
 
 import ast
-import difflib
 import hashlib
 import importlib.machinery
 import importlib.util
@@ -20,6 +19,7 @@ from pathlib import Path
 from types import ModuleType
 
 from gadgetctl.input.plugins.discovery import DriverSearch, PluginInfo
+from gadgetctl.suggest import close_names
 
 EMULATOR_FILE = "emulator.py"
 _MODULE_PREFIX = "_gadgetctl_emulator_"
@@ -86,7 +86,7 @@ def find_emulator(name: str, search: DriverSearch) -> Emulator:
     for info in plugins:
         for known in sorted(_names(info)):
             candidates.setdefault(known, info.name)
-    close = difflib.get_close_matches(wanted, list(candidates), n=3, cutoff=0.6)
+    close = close_names(wanted, candidates)
     suggestion = sorted({candidates[c] for c in close})
     hint = f"; did you mean {' or '.join(suggestion)}?" if suggestion else ""
     raise EmulatorLookupError(f"no driver plug-in named {name!r} (looked in {search.describe_places()}){hint}")

@@ -151,9 +151,13 @@ class PluginLoader:
     def load_name(self, name: str, search: DriverSearch) -> PluginLoadResult:
         info = search.find(name)
         if info is None:
+            from gadgetctl.suggest import did_you_mean
+
+            close = did_you_mean(name, [p.name for p in search.plugins()])
             return PluginLoadResult(name, None, reason="not found", diagnostics=[Diagnostic.make(
                 "DRV001", f"driver plug-in {name!r} not found (looked in {search.describe_places()})",
-                hint="write the plug-in's module or package name, without platform extension or _d suffix")])
+                hint=close[0].upper() + close[1:] if close else
+                "write the plug-in's module or package name, without platform extension or _d suffix")])
         return self.load(info)
 
     def load(self, info: PluginInfo) -> PluginLoadResult:
