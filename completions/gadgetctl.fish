@@ -73,7 +73,7 @@ complete -c gadgetctl -n '__fish_seen_subcommand_from demo' -F
 complete -c gadgetctl -n '__fish_seen_subcommand_from demo' -l duration -r -F -d 'How long to monitor'
 complete -c gadgetctl -n '__fish_seen_subcommand_from demo' -l help -s h -d 'Show help and exit'
 complete -c gadgetctl -n '__fish_seen_subcommand_from doctor' -F
-complete -c gadgetctl -n '__fish_seen_subcommand_from doctor' -l probe -d 'Connect to the TCP servers the configuration names (and nothing else)'
+complete -c gadgetctl -n '__fish_seen_subcommand_from doctor' -l probe -d 'Connect to the TCP and VRPN servers the configuration and vrpn: names name (and nothing else)'
 complete -c gadgetctl -n '__fish_seen_subcommand_from doctor' -l timeout -r -F -d 'Seconds to wait for each --probe connection'
 complete -c gadgetctl -n '__fish_seen_subcommand_from doctor' -l definitions -s d -r -F -d 'Add a directory to the definition search path (after the bundled set, VJ_BASE_DIR and JCCL_DEFINITION_PATH)'
 complete -c gadgetctl -n '__fish_seen_subcommand_from doctor' -l bundled -l no-bundled -d 'Use gadgetctl'\''s bundled standard definitions'

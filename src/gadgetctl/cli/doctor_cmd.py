@@ -16,10 +16,10 @@ def register(app: typer.Typer) -> None:
 
 
 def doctor(
-    configs: list[Path] = typer.Argument(None, metavar="[CONFIG...]", show_default=False,
-                                         help="Configuration files, loaded together as one configuration."),
+    arguments: list[str] = typer.Argument(None, metavar="[CONFIG...]", show_default=False,
+                                          help="Configuration files, loaded together as one configuration, and VRPN devices to check (vrpn:Device@host[:port], vrpn:Device@tcp://host:port)."),
     probe: bool = typer.Option(False, "--probe",
-                               help="Connect to the TCP servers the configuration names (and nothing else)."),
+                               help="Connect to the TCP and VRPN servers the configuration and vrpn: names name (and nothing else)."),
     timeout: float = typer.Option(2.0, "--timeout", metavar="SECONDS", help="Seconds to wait for each --probe connection."),
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
@@ -34,17 +34,26 @@ def doctor(
     TCP servers: answering, with --probe only). Without CONFIG: an overview of this system
     (search paths, drivers, serial ports, joystick devices).
 
-    Nothing is sent to a device, and without --probe the network is never touched.
+    For VRPN devices (vrpn elements, vrpn:Device@host arguments): the host resolves, and
+    with --probe a VRPN server answers, its version, and whether it announces the device
+    (if not, the names it does announce).
+
+    Nothing is sent to a device, and without --probe the network is never touched (a
+    VRPN host name is resolved).
     Exit status: 0 when nothing blocks data, 1 when a finding would stop data from
     arriving, 2 on usage or tool errors.
     """
     from gadgetctl.doctor import DoctorOptions, diagnose, render_text
+    from gadgetctl.monitor.vrpnwatch import PREFIX, is_vrpn_argument
     from gadgetctl.serve.address import parse_serve_port
 
+    given = list(arguments or [])
+    configs = [Path(a) for a in given if not is_vrpn_argument(a)]
+    vrpn_names = [a[len(PREFIX):] for a in given if is_vrpn_argument(a)]
     options = DoctorOptions(definitions=list(definitions), bundled=bundled, driver_dirs=list(driver_paths),
-                            probe=probe, timeout=timeout,
+                            probe=probe, timeout=timeout, vrpn_names=vrpn_names,
                             serve_port=None if serve_port is None else parse_serve_port(serve_port))
-    report = diagnose(list(configs or []), options)
+    report = diagnose(configs, options)
     if fmt is DataFormat.json:
         emit(json.dumps(report.to_dict(), indent=2))
     else:

@@ -77,6 +77,15 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
             result = _with_hint(result, f"{result.hint + '; ' if result.hint else ''}"
                                 f"to try without the hardware: gadgetctl emulate {settings.emulator}")
         return [result.with_prop(f"{transport.props['host']}, {transport.props['port']}")]
+    if kind == "vrpn":
+        name = str(_read(access, transport, "name") or "").strip()
+        count = _read(access, transport, "count", number=True) if transport.prop("count") else None
+        if not name or count == 0:
+            return []  # this device of the element is not used
+        from gadgetctl.doctor.vrpn import check_vrpn_name
+
+        return [check_vrpn_name(name, probe=settings.probe, timeout=settings.timeout)
+                .with_prop(transport.props["name"])]
     return []
 
 

@@ -9,7 +9,7 @@ _MARK = {"ok": "ok", "warning": "warn", "problem": "PROBLEM", "unchecked": "-"}
 
 
 def _check_line(check: PortCheck) -> str:
-    what = f"{check.prop} {check.target}" if check.prop and check.kind in ("file", "serial") else (
+    what = f"{check.prop} {check.target}" if check.prop and check.kind in ("file", "serial", "vrpn") else (
         check.prop or check.target)
     return f"    {_MARK[check.status.value]:<8} {what}: {check.detail}" if what else (
         f"    {_MARK[check.status.value]:<8} {check.detail}")
@@ -41,7 +41,7 @@ def _plugins(report: DoctorReport) -> list[str]:
 def _devices(report: DoctorReport) -> list[str]:
     lines = ["Configured devices:"]
     for device in report.devices:
-        where = f"{device.path}:{device.line}" if device.line else device.path
+        where = f"{device.path}:{device.line}" if device.line else device.path or "command line"
         if device.driver == "built-in" and not device.checks and not device.reason:
             lines.append(f"  {device.name} ({device.type}), built-in device (no connection to check), {where}")
             continue
@@ -85,7 +85,7 @@ def _findings(report: DoctorReport) -> list[str]:
 
 def render_text(report: DoctorReport) -> str:
     lines = _definitions(report) + _plugins(report)
-    lines += _devices(report) if report.configurations else _system(report)
+    lines += _devices(report) if report.configurations or report.devices else _system(report)
     if report.serve_port is not None:
         lines += ["gadgetctl serve port:", _check_line(report.serve_port)]
     lines += _findings(report)

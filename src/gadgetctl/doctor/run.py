@@ -41,6 +41,7 @@ class DoctorOptions:
     joystick_glob: str = JOYSTICK_GLOB
     environ: Mapping[str, str] | None = None
     serve_port: tuple[str, int] | None = None  # (bind address, port) to check for `gadgetctl serve`
+    vrpn_names: list[str] = field(default_factory=list)  # Device@host names given as vrpn:NAME
 
 
 def diagnose(configs: Sequence[Path] = (), options: DoctorOptions | None = None) -> DoctorReport:
@@ -68,6 +69,8 @@ def diagnose(configs: Sequence[Path] = (), options: DoctorOptions | None = None)
         found, used = _configured(configuration, repo, search, options, report)
         report.plugins, listed = _plugins(search, repo, used)
         found += listed
+    for text in options.vrpn_names:
+        found += _vrpn_device(text, report, options)
     if options.serve_port is not None:
         report.serve_port = check_serve_port(*options.serve_port)
         if report.serve_port.code:
@@ -195,7 +198,20 @@ def _device(element: ConfigElement, repo: DefinitionRepository, registry: Device
     return device, found, provider
 
 
+def _vrpn_device(text: str, report: DoctorReport, options: DoctorOptions) -> list[Diagnostic]:
+    """A VRPN device named on the command line (``vrpn:Device@host``), checked as a vrpn
+    element's *_server property is."""
+    from gadgetctl.doctor.vrpn import check_vrpn_name
+
+    check = check_vrpn_name(text, probe=options.probe, timeout=options.timeout)
+    device = DeviceReport(f"vrpn:{text}", "vrpn", None, None, "VRPN_drv", True, checks=[check])
+    report.devices.append(device)
+    return [_diagnostic(check, f"vrpn:{text}: {check.detail}")] if check.code else []
+
+
 def _describe(check: PortCheck) -> str:
+    if check.kind == "vrpn" and check.target:
+        return f"{check.prop} {check.target}: {check.detail}" if check.prop else check.detail
     if check.kind in ("file", "serial") and check.target:
         return f"{check.prop} {check.target} {check.detail}"
     return f"{check.prop}: {check.detail}" if check.prop else check.detail

@@ -263,7 +263,7 @@ class Endpoint:
             per_datagram = MAX_DATAGRAM // size * size
             view = memoryview(data)
             for start in range(0, count * size, per_datagram):
-                chunk = view[start:start + per_datagram]
+                chunk = view[start : start + per_datagram]
                 if len(self._udp_batch) + len(chunk) > MAX_DATAGRAM:
                     self._send_udp()
                 self._udp_batch += chunk
@@ -272,7 +272,7 @@ class Endpoint:
         room = max(0, self.out_limit - len(self.out)) // size
         taken = min(count, room)
         if taken:
-            self.out += data if taken == count else memoryview(data)[:taken * size]
+            self.out += data if taken == count else memoryview(data)[: taken * size]
         self.sent_messages += taken
         self.dropped += count - taken
         return taken

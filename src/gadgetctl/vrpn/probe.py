@@ -86,6 +86,8 @@ def probe(
             waiting = [
                 d for d in devices if d in client.announced and not result.layouts[d].reports
             ]
+            if not client.announced:  # the descriptions follow the cookie: wait for them
+                waiting = ["(descriptions)"]
             if now >= deadline or (now >= settle and not waiting):
                 break
             result.announced = client.announced or result.announced

@@ -230,7 +230,7 @@ CODES += [
          "Doctor cannot tell how this device reaches its hardware: its plug-in declares no "
          "TRANSPORTS metadata and gadgetctl knows no usual property for the element type, or the "
          "check needs a network probe that was not asked for.",
-         "a vrpn element (the VRPN library resolves its server names itself)",
+         "a motionnode element (no bundled driver declares how it connects)",
          "Add TRANSPORTS to the plug-in's __init__.py (see docs/architecture.md), or check the "
          "connection by hand."),
     Code("DRV106", C, E, "connection property empty or out of range",
@@ -243,6 +243,26 @@ CODES += [
          "does not have, so doctor cannot read where the device is connected.",
          "TRANSPORTS = {\"foo\": {\"kind\": \"serial\", \"port\": \"serial_port\"}}   (foo has port, not serial_port)",
          "Make the TRANSPORTS values the property names of the element type's .jdef."),
+    Code("DRV110", C, E, "VRPN device name unusable",
+         "A VRPN device is written Device@host, Device@host:port or Device@tcp://host:port (port "
+         "3883 when none is given). This one cannot be read, or its host name does not resolve, so "
+         "the driver has no server to connect to.",
+         "<tracker_server>Tracker0</tracker_server>   (no @host)",
+         "Write the device name the server uses, '@', and the server's host."),
+    Code("DRV111", C, E, "VRPN server does not answer",
+         "`gadgetctl doctor --probe` asked for a VRPN connection at the host and port of a VRPN "
+         "device name (as VRPN clients do: a UDP request the server answers by connecting back, or "
+         "direct TCP for tcp:// names) and no VRPN server answered in time, refused the "
+         "connection, or the peer was not VRPN 07.",
+         "<tracker_server>Tracker0@tracker-pc</tracker_server>   (vrpn_server not running)",
+         "Start the server (vrpn_server, gadgetctl serve, the tracking software's VRPN output), "
+         "check the port, and that no firewall drops UDP 3883 or the TCP connection back."),
+    Code("DRV112", C, E, "VRPN server does not serve the device",
+         "A VRPN server answered, but it does not announce the device the name asks for (the part "
+         "before '@'). VRPN clients only ever say \"No response from server\" for this; doctor "
+         "lists the names the server does announce.",
+         "<tracker_server>Tracker1@localhost</tracker_server>   (the server announces Tracker0)",
+         "Use one of the announced names, or configure the server to serve the device."),
     Code("DRV120", C, E, "VRPN serve port cannot be bound",
          "`gadgetctl serve` listens on one TCP and one UDP port with the same number (VRPN's "
          "default 3883), and one of them cannot be bound: another program holds it (a "
