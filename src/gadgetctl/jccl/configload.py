@@ -9,7 +9,7 @@ and the rest still loads. Elements keep their file, line and column.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 
 from lxml import etree
@@ -136,19 +136,57 @@ class ConfigurationLoader:
         return doc
 
     def _load(self, path: Path, resolved: Path, stack: list[Path], display: str | None) -> None:
-        if resolved in self._loaded:
-            return
-        self._loaded.add(resolved)
-        config = self.files.get(resolved)
-        if config is None:
-            doc = self._document(resolved, display or str(path))
-            config = self.files[resolved] = read_config_file(doc, resolved)
-        self.configuration.files.append(config)
-        for raw, location in config.includes:
-            self._include(raw, location, resolved, [*stack, resolved])
-        self.configuration.loaded.extend(config.elements)
+        """Load ``path`` and its includes depth first, each file's elements after those of
+        the files it includes. Iterative: an include chain of any length needs no deeper
+        Python stack (``stack`` holds the including files, for cycle reports)."""
+        frames: list[tuple[ConfigFile, Path, Iterator[tuple[str, Location]]]] = []
+        on_stack: set[Path] = set(stack)
 
-    def _include(self, raw: str, location: Location, parent: Path, stack: list[Path]) -> None:
+        def enter(target: Path, key: Path, shown: str | None) -> None:
+            if key in self._loaded:
+                return
+            self._loaded.add(key)
+            config = self.files.get(key)
+            if config is None:
+                doc = self._document(key, shown or str(target))
+                config = self.files[key] = read_config_file(doc, key)
+            self.configuration.files.append(config)
+            frames.append((config, key, iter(config.includes)))
+            on_stack.add(key)
+
+        enter(path, resolved, display)
+        while frames:
+            config, current, includes = frames[-1]
+            step = next(includes, None)
+            if step is None:
+                frames.pop()
+                on_stack.discard(current)
+                self.configuration.loaded.extend(config.elements)
+                continue
+            raw, location = step
+            found = self._include_target(raw, location, current)
+            if found is None:
+                continue
+            target, key = found
+            if key in on_stack:
+                ancestors = [*stack, *(f[1] for f in frames)]
+                chain = " -> ".join(p.name for p in [*ancestors[ancestors.index(key):], key])
+                self.configuration.diagnostics.append(Diagnostic.make(
+                    "CFG002", f"include cycle: {chain}", location.path, location.line, location.column,
+                    hint="VR Juggler would recurse until it crashes; remove one of these includes."))
+                continue
+            edges = self.configuration.includes.setdefault(current, [])
+            if key not in edges:
+                edges.append(key)
+            try:
+                enter(target, key, _display(target))
+            except OSError as err:
+                self.configuration.diagnostics.append(Diagnostic.make(
+                    "CFG001", f"included file {raw.strip()!r} cannot be read: {err.strerror}",
+                    location.path, location.line, location.column))
+
+    def _include_target(self, raw: str, location: Location, parent: Path) -> tuple[Path, Path] | None:
+        """The file an ``<include>`` names and its resolved path, or None (reported)."""
         expansion = expand(raw.strip(), self.environ)
         for name in expansion.undefined:
             self.configuration.diagnostics.append(Diagnostic.make(
@@ -159,23 +197,8 @@ class ConfigurationLoader:
             self.configuration.diagnostics.append(Diagnostic.make(
                 "CFG001", f"included file {raw.strip()!r} not found (looked in {parent.parent} and "
                 f"the working directory)", location.path, location.line, location.column))
-            return
-        resolved = target.resolve()
-        if resolved in stack:
-            chain = " -> ".join(p.name for p in [*stack[stack.index(resolved):], resolved])
-            self.configuration.diagnostics.append(Diagnostic.make(
-                "CFG002", f"include cycle: {chain}", location.path, location.line, location.column,
-                hint="VR Juggler would recurse until it crashes; remove one of these includes."))
-            return
-        edges = self.configuration.includes.setdefault(parent, [])
-        if resolved not in edges:
-            edges.append(resolved)
-        try:
-            self._load(target, resolved, stack, display=_display(target))
-        except OSError as err:
-            self.configuration.diagnostics.append(Diagnostic.make(
-                "CFG001", f"included file {raw.strip()!r} cannot be read: {err.strerror}",
-                location.path, location.line, location.column))
+            return None
+        return target, target.resolve()
 
     @staticmethod
     def resolve_include(name: str, directory: Path) -> Path | None:
