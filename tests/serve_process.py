@@ -38,8 +38,13 @@ class ServeProcess:
         )
         self.events: list[dict] = []
         self._lines: queue.Queue[dict | None] = queue.Queue()
+        self._errors: list[str] = []
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
+        self._error_reader = threading.Thread(
+            target=lambda: self._errors.extend(self.process.stderr), daemon=True
+        )
+        self._error_reader.start()
         first = self.next_event(timeout)
         if first is None or first.get("event") != "listening":
             self.process.kill()
@@ -48,7 +53,6 @@ class ServeProcess:
             )
         self.port: int = first["port"]
         self.listening = first
-        self.stderr = ""
 
     def _read(self) -> None:
         for line in self.process.stdout:
@@ -79,24 +83,33 @@ class ServeProcess:
     def alive(self) -> bool:
         return self.process.poll() is None
 
+    @property
+    def stderr(self) -> str:
+        return "".join(self._errors)
+
+    def _finish(self, timeout: float) -> None:
+        """Wait for the readers (the only ones reading the pipes) to reach the end."""
+        self.process.wait(timeout)
+        self._reader.join(timeout)
+        self._error_reader.join(timeout)
+
     def stop(self, sig: int = signal.SIGTERM, timeout: float = 20.0) -> int:
         if self.process.poll() is None:
             self.process.send_signal(sig)
         try:
-            _, self.stderr = self.process.communicate(timeout=timeout)
+            self._finish(timeout)
         except subprocess.TimeoutExpired:
             self.process.kill()
-            _, self.stderr = self.process.communicate()
+            self._finish(10)
             raise AssertionError(
                 f"serve did not stop within {timeout} s after signal {sig}"
             ) from None
-        self._reader.join(5)
         return self.process.returncode
 
     def kill(self) -> None:
         if self.process.poll() is None:
             self.process.kill()
-        self.process.communicate()
+        self._finish(10)
 
     def __enter__(self) -> ServeProcess:
         return self

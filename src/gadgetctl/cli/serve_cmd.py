@@ -294,10 +294,14 @@ def _run(service, duration: float | None, fmt: DataFormat) -> int:
     except (KeyboardInterrupt, Terminated):
         pass
     totals = service.totals()
+    counters = totals["counters"]
+    noted = {k: v for k, v in counters.items() if k not in ("accepted", "connections", "disconnects", "lobs",
+                                                           "messages")}
     _say(
         fmt,
         {"event": "stopped", "reason": reason, **totals},
         f"gadgetctl serve: stopped ({reason}): {totals['messages']} messages to {totals['clients']} "
-        f"client(s), {totals['dropped']} dropped",
+        f"client(s), {totals['dropped']} dropped"
+        + ("; " + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in noted.items()) if noted else ""),
     )
     return 0

@@ -24,6 +24,7 @@ from gadgetctl.serve.catalog import ServedElement, build_catalog
 from gadgetctl.serve.feed import ServeFeed
 
 WARMUP = 0.5  # seconds of frames before the catalog is read (so unit counts are known)
+SOCKET_BUFFER = 256 * 1024  # kernel send buffer per client: a stalled client's backlog shows as drops
 DEFAULT_RATE = 1000.0  # frames per second: a sample waits at most a millisecond to be sent
 
 
@@ -109,6 +110,7 @@ class ServeService:
             options.bind,
             options.port,
             client_buffer=options.client_buffer,
+            socket_buffer=SOCKET_BUFFER,
             allow=lambda ip: allowed(ip, networks),
         )
         server.start()
@@ -149,15 +151,18 @@ class ServeService:
         for listener in self.listeners:
             listener(event)
 
-    def totals(self) -> dict[str, int]:
+    def totals(self) -> dict[str, object]:
+        """Clients served, messages framed, messages dropped for full client buffers, and
+        the server's counters of refused and malformed traffic."""
         server = self.server
         if server is None:
-            return {"clients": 0, "connected": 0, "messages": 0, "dropped": 0}
+            return {"clients": 0, "connected": 0, "messages": 0, "dropped": 0, "counters": {}}
         return {
             "clients": server.counters["connections"],
             "connected": len(server.clients),
             "messages": self.outlet.messages,
             "dropped": server.dropped,
+            "counters": {k: v for k, v in sorted(server.counters.items()) if v},
         }
 
     def frames(self, duration: float | None = None) -> Iterator[object]:
