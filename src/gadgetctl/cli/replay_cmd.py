@@ -29,7 +29,7 @@ def register(app: typer.Typer) -> None:
 
 
 def replay(
-    recording: Path = typer.Argument(..., metavar="FILE", help="A recording made with `gadgetctl monitor --record`.", show_default=False),
+    recording: Path = typer.Argument(..., metavar="FILE", help="A recording made with `gadgetctl monitor --record`, or a VRPN log file (.vrpn).", show_default=False),
     names: list[str] = typer.Argument(None, metavar="[NAME...]", help="Names or glob patterns of the devices, proxies and aliases to show (default: all).", show_default=False),
     speed: float = typer.Option(1.0, "--speed", metavar="X", help="Replay X times as fast as recorded (0.5: half speed)."),
     loop: bool = typer.Option(False, "--loop", help="Start again at the end, until stopped (timestamps keep increasing)."),
@@ -84,16 +84,40 @@ def parse_mapping(items: list[str]) -> dict[str, str]:
     return result
 
 
+def open_recording(path: Path):
+    """A gadgetctl recording, or a VRPN log file (it starts with a VRPN cookie) read as one."""
+    from gadgetctl.monitor.recording import read_recording
+    from gadgetctl.monitor.vrpnlog import is_vrpn_log, read_vrpn_log
+
+    return read_vrpn_log(path) if is_vrpn_log(path) else read_recording(path)
+
+
+def _open_vrpn_log(path: Path, configs: list[Path], renames: dict[str, str]):
+    """A VRPN log whose senders are routed to devices: by ``--map SENDER=DEVICE`` (several
+    senders may name one device), else, with --config, to the ``vrpn`` elements whose
+    tracker/button/analog servers name them; the renames left for the replay are identities
+    of the mapped devices, so that each is checked against the configuration."""
+    from gadgetctl.jccl.configload import load_configuration
+    from gadgetctl.monitor.vrpnlog import read_vrpn_log, routes_from_configuration
+
+    routes: dict = {}
+    if configs:
+        routes.update(routes_from_configuration(load_configuration(configs)))
+    routes.update(renames)
+    source = read_vrpn_log(path, routes)
+    return source, {new: new for new in set(renames.values())}
+
+
 def _summary(recording: Path, fmt: OutputFormat | None) -> None:
     import json
 
     from gadgetctl.cli.monitor_text import summary_text
     from gadgetctl.errors import GadgetctlError
     from gadgetctl.monitor.recording import RecordingError
-    from gadgetctl.monitor.summary import summarize_recording
+    from gadgetctl.monitor.summary import summarize
 
     try:
-        result = summarize_recording(recording)
+        result = summarize(open_recording(recording))
     except RecordingError as err:
         raise GadgetctlError(str(err)) from None
     if fmt is OutputFormat.ndjson:
@@ -116,7 +140,7 @@ def run_replay(recording: Path, names: list[str], *, speed: float = 1.0, loop: b
     from gadgetctl.errors import GadgetctlError
     from gadgetctl.input.manager import InputManager, ManagerOptions
     from gadgetctl.monitor import replaydevice
-    from gadgetctl.monitor.recording import RecordingError, read_recording
+    from gadgetctl.monitor.recording import RecordingError
     from gadgetctl.monitor.session import MonitorSession
 
     check_options(rate, duration, interval)
@@ -132,8 +156,14 @@ def run_replay(recording: Path, names: list[str], *, speed: float = 1.0, loop: b
 
     for path in configs:
         require_file(path)
+    from gadgetctl.monitor.vrpnlog import is_vrpn_log
+
+    vrpn_log = is_vrpn_log(recording)
     try:
-        source = read_recording(recording)
+        if vrpn_log:  # the log's devices are routed (and merged) while it is read
+            source, renames = _open_vrpn_log(recording, configs, renames)
+        else:
+            source = open_recording(recording)
         schedule = replaydevice.make_schedule(source.records, speed=speed, loop=loop, mapping=renames)
     except RecordingError as err:
         raise GadgetctlError(str(err)) from None

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gadgetctl.monitor.recording import RecordingProblem, read_recording
+from gadgetctl.monitor.recording import Recording, RecordingProblem, read_recording
 from gadgetctl.monitor.records import EndRecord, FrameRecord, MarkerRecord, SampleRecord
 from gadgetctl.monitor.sparkline import sparkline
 
@@ -265,7 +265,11 @@ def summarize_records(records: Iterable[object], *, width: int = 40) -> tuple[
 
 def summarize_recording(path: str | Path, *, width: int = 40) -> RecordingSummary:
     """Read a recording and summarize it; raises :class:`RecordingError` for a non-recording."""
-    recording = read_recording(path)
+    return summarize(read_recording(path), width=width)
+
+
+def summarize(recording: Recording, *, width: int = 40) -> RecordingSummary:
+    """Summarize an opened recording (gadgetctl's own, or a VRPN log read as one)."""
     devices, markers, frames, end = summarize_records(recording.records, width=width)
     firsts = [d.first_timestamp for d in devices if d.first_timestamp is not None]
     lasts = [d.last_timestamp for d in devices if d.last_timestamp is not None]
