@@ -11,8 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import REPO
 from gadgetctl.vrpn import LogWriter, codecs
+
+from conftest import REPO
 
 pytestmark = pytest.mark.timeout(60)
 T0 = 1_700_000_000.0
