@@ -46,6 +46,8 @@ from typing import overload
 
 import numpy as np
 
+from gadgetctl.transport.udp import DropCountingReceiver
+
 MM_TO_M = 0.001
 DEFAULT_RECEIVE_PORT = 5000
 DEFAULT_COMMAND_PORT = 5001
@@ -1003,8 +1005,9 @@ class DTrackStandalone:
     without any datagram it raises :class:`DTrackDisconnected` (``None`` never does).
     ``receive_buffer`` asks the kernel for a larger socket buffer (bytes), so a burst at a high
     frame rate waits in it instead of being dropped. The counters (``datagrams``,
-    ``bad_datagrams``, ``bad_lines``, ``truncated_datagrams``, ``missed_frames``) survive
-    :meth:`close` and :meth:`open`.
+    ``bad_datagrams``, ``bad_lines``, ``truncated_datagrams``, ``missed_frames`` and
+    ``kernel_dropped``: datagrams the kernel dropped because the socket's receive buffer was
+    full, where the OS tells) survive :meth:`close` and :meth:`open`.
     """
 
     def __init__(
@@ -1037,6 +1040,7 @@ class DTrackStandalone:
         self.truncated_datagrams = 0  # larger than buffer_size
         self.missed_frames = 0  # gaps in the frame counter (datagrams lost on the way)
         self.last_frame: DTrackFrame | None = None
+        self._drops = DropCountingReceiver()
         self._sock: socket.socket | None = None
         self._owns_socket = False
         self._last_rx = 0.0
@@ -1077,6 +1081,7 @@ class DTrackStandalone:
                 raise
             self._sock, self._owns_socket = sock, True
         self._sock.setblocking(False)
+        self._drops.attach(self._sock)
         self._last_rx = time.monotonic()
         self._last_counter = None
         if self.remote_control:
@@ -1100,6 +1105,7 @@ class DTrackStandalone:
         except OSError:
             pass  # the server may be gone; closing must still work
         finally:
+            self._drops.detach()
             self._sock = None
             if self._owns_socket:
                 sock.close()
@@ -1138,7 +1144,7 @@ class DTrackStandalone:
         datagrams: list[bytes] = []
         truncated: list[bool] = []
         size = self.buffer_size
-        receive = self._sock.recv
+        receive = self._drops.receive
         while limit is None or len(datagrams) < limit:
             try:
                 data = receive(size + 1)  # one byte more: a longer datagram did not fit
@@ -1150,6 +1156,7 @@ class DTrackStandalone:
             datagrams.append(data[:size] if cut else data)
             truncated.append(cut)
         got_any = bool(datagrams)
+        self._drops.refresh()
         self.datagrams += len(datagrams)
         self.truncated_datagrams += sum(truncated)
         for frame in parse_frames(datagrams, truncated, limits=self.limits):
@@ -1167,6 +1174,17 @@ class DTrackStandalone:
         if frames:
             self.last_frame = frames[-1]
         return frames
+
+    @property
+    def kernel_dropped(self) -> int:
+        """Datagrams the kernel dropped for a full receive buffer (0 where the OS does not
+        say; see ``kernel_drop_source``)."""
+        return self._drops.dropped
+
+    @property
+    def kernel_drop_source(self) -> str | None:
+        """Where ``kernel_dropped`` comes from: "ancillary", "proc" or None (unknown)."""
+        return self._drops.method
 
     def _count_missed(self, counter: int | None) -> None:
         """Frame counters skipped since the previous frame (a restarted counter is not a gap)."""

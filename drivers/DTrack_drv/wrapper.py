@@ -195,4 +195,10 @@ class DTrackDevice(Position, Digital, Analog):
             "bad_lines": driver.bad_lines,
             "truncated_datagrams": driver.truncated_datagrams,
             "missed_frames": driver.missed_frames,
+            "kernel_dropped": driver.kernel_dropped,
         }
+
+    def transport_dropped(self) -> int:
+        """Datagrams the kernel dropped before the receiver read them (a full socket buffer)."""
+        driver = self._driver
+        return driver.kernel_dropped if driver is not None else 0

@@ -27,6 +27,7 @@ from __future__ import annotations
 import errno
 import fcntl
 import os
+import re
 import select
 import struct
 import time
@@ -169,6 +170,10 @@ def axis_buttons_state(
 _DecoderState = tuple[int, int, "int | None", float, "JoystickEvent | None", bool, int]
 
 
+_TYPE_OFFSET = 6  # where the type byte sits in a record
+_TYPE_BYTE = re.compile(b"[" + re.escape(bytes(sorted(_VALID_TYPES))) + b"]")
+
+
 def _unpack(buf: bytes | bytearray, pos: int) -> JoystickEvent:
     return JoystickEvent(*struct.unpack_from(EVENT_FORMAT, buf, pos))
 
@@ -253,9 +258,17 @@ class EventDecoder:
             if self._in_sync:
                 self.resyncs += 1
                 self._in_sync = False
-            self.skipped_bytes += 1
-            self._skipped_in_resync += 1
-            pos += 1
+            # Skip to the next place whose type byte is one the kernel sends: every place in
+            # between would fail the type test anyway, so junk costs one search, not a test
+            # per byte (/dev/zero, a flood of noise).
+            following = _TYPE_BYTE.search(buf, pos + 1 + _TYPE_OFFSET)
+            if following is not None:
+                skip_to = following.start() - _TYPE_OFFSET
+            else:  # keep the tail that may yet become a record
+                skip_to = max(pos + 1, len(buf) - EVENT_SIZE + 1)
+            self.skipped_bytes += skip_to - pos
+            self._skipped_in_resync += skip_to - pos
+            pos = skip_to
         del buf[:pos]
         return events
 
@@ -362,7 +375,9 @@ class LinuxJoydevStandalone:
     :meth:`sample` waits for the first byte. ``connect_timeout`` is how long an open stream may
     stay at end-of-file before anything arrived: a FIFO reads as EOF until its writer opens it,
     while a real device always sends its initial burst at once. ``time_slack_ms`` tunes the
-    resynchronisation (see :class:`EventDecoder`).
+    resynchronisation (see :class:`EventDecoder`). One :meth:`sample` reads at most ``max_read``
+    bytes (8 KiB: a second of a busy joystick), so a file that never runs dry (``/dev/zero``,
+    a flood of junk) cannot keep it, or the device's thread, from returning.
     """
 
     def __init__(
@@ -375,9 +390,11 @@ class LinuxJoydevStandalone:
         poll_timeout: float = 0.0,
         connect_timeout: float = 1.0,
         read_size: int = 64 * EVENT_SIZE,
+        max_read: int = 16 * 64 * EVENT_SIZE,
         time_slack_ms: int = 1000,
     ) -> None:
         self.port = port
+        self.max_read = max_read
         self.axis_buttons = tuple(axis_buttons)
         self.configured_buttons = num_buttons
         self.configured_axes = num_axes
@@ -517,12 +534,13 @@ class LinuxJoydevStandalone:
             select.select([self._fd], [], [], self.poll_timeout)
 
     def _read_available(self) -> tuple[list[JoystickEvent], bool, str | None]:
-        """Drain the file: (events, end of file reached, error text)."""
+        """Read what is there, up to ``max_read`` bytes: (events, end of file, error text)."""
         assert self._fd is not None
         events: list[JoystickEvent] = []
-        while True:
+        budget = self.max_read
+        while budget > 0:
             try:
-                chunk = os.read(self._fd, self.read_size)
+                chunk = os.read(self._fd, min(self.read_size, budget))
             except BlockingIOError:
                 return events, False, None
             except InterruptedError:
@@ -531,8 +549,10 @@ class LinuxJoydevStandalone:
                 return events, False, os.strerror(exc.errno) if exc.errno else str(exc)
             if not chunk:
                 return events, True, None
+            budget -= len(chunk)
             self._seen_data = True
             events.extend(self.decoder.feed(chunk))
+        return events, False, None
 
     def _apply(self, event: JoystickEvent) -> None:
         self._time_ms = event.time_ms

@@ -165,7 +165,15 @@ def test_garbage_is_counted_and_every_valid_frame_is_a_sample(tmp_path: Path, bu
     manager = build(tracker("DT", port) + proxy("position", "Flystick", "DT", 0))
     device = manager.device("DT")
     with DTrackEmulator(port, scenario="garbage", rate=RATE, max_frames=60, seed=3) as emu:
-        frames_until(manager, lambda: emu.finished.is_set() and device.counters["datagrams"] >= 120)
+        # the counters move when datagrams are read, the store when their samples are added
+        frames_until(
+            manager,
+            lambda: (
+                emu.finished.is_set()
+                and device.counters["datagrams"] >= 120
+                and device.store.total(DeviceKind.POSITION) >= 60
+            ),
+        )
         assert state(manager, "DT") == "running" and device.faults == 0
     counters = device.counters
     assert counters["bad_datagrams"] == emu.garbage_sent == 60

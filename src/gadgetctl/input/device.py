@@ -177,7 +177,13 @@ class Input:
             if self.state is DeviceState.FAULTED and self.SAMPLING is SamplingMode.FRAME:
                 self.state = DeviceState.RUNNING
 
+    def transport_dropped(self) -> int:
+        """What the transport lost before the driver could read it (a UDP socket's receive
+        buffer overflowing, counted by the kernel), added to the dropped samples. A driver that
+        can tell overrides this; the default is 0."""
+        return 0
+
     @property
     def stats(self) -> DeviceStats:
-        return DeviceStats(self.store.total(), self.store.dropped(), self.faults, self.restarts,
-                           self.error)
+        dropped = self.store.dropped() + self.transport_dropped()
+        return DeviceStats(self.store.total(), dropped, self.faults, self.restarts, self.error)

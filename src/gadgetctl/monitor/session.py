@@ -198,7 +198,7 @@ class DeviceTrack:
         self.frames: dict[DeviceKind, FrameSamples] = {}
         self.count = 0
         self.units: dict[str, int] = {}
-        self._dropped_seen = device.store.dropped()
+        self._dropped_seen = self._dropped_now()
         self._faults_seen = device.faults
         self.digital_state: np.ndarray | None = None
         self.presses: np.ndarray | None = None
@@ -213,23 +213,27 @@ class DeviceTrack:
         if self.presses is not None:
             self.presses[:] = 0
         self._snapshot = None
-        self._dropped_seen = self.device.store.dropped()
+        self._dropped_seen = self._dropped_now()
         self._faults_seen = self.device.faults
+
+    def _dropped_now(self) -> int:
+        """Samples dropped by the store (the most of any kind) plus what the transport lost
+        before the driver read it (kernel receive-buffer overflows)."""
+        store = self.device.store
+        most = max((store.dropped(kind) for kind in store.kinds), default=0)
+        return most + self.device.transport_dropped()
 
     def update(self) -> int:
         device = self.device
         store = device.store
         frames = {}
-        dropped = 0
         fresh = store.swapped_at != self._swapped_at  # a failed update_data leaves the old frame
         self._swapped_at = store.swapped_at
         for kind in store.kinds:
             samples = store.frame(kind)
             if samples.count and fresh:
                 frames[kind] = samples
-            lost = store.dropped(kind)
-            if lost > dropped:
-                dropped = lost
+        dropped = self._dropped_now()
         self.frames = frames
         stamps = frame_timestamps(frames) if frames else ()
         count = len(stamps)

@@ -1,0 +1,91 @@
+"""Datagrams the kernel drops because the receive buffer is full are counted (the kernel's own
+count, SO_RXQ_OVFL) and shown with the other drops in the monitor's statistics."""
+
+from __future__ import annotations
+
+import socket
+from pathlib import Path
+
+import pytest
+from DTrack_drv.standalone import DTrackFrame, DTrackStandalone
+from DTrack_drv.wrapper import DTrackDevice
+
+from gadgetctl.input import InputManager, ManagerOptions
+from gadgetctl.input.testing import wait_until
+from gadgetctl.monitor.session import MonitorSession
+
+pytestmark = pytest.mark.timeout(60)
+EYE = "[1 0 0 0 1 0 0 0 1]"
+
+
+def frame(n: int) -> bytes:
+    return f"fr {n}\r\n6d 1 [0 1.0][{n} 2 3]{EYE}\r\n".encode()
+
+
+def flood(port: int, first: int, count: int) -> None:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:
+        for n in range(first, first + count):
+            tx.sendto(frame(n), ("127.0.0.1", port))
+
+
+def test_the_receiver_counts_what_the_kernel_dropped() -> None:
+    rx = DTrackStandalone(
+        0, bind_address="127.0.0.1", receive_timeout=0.0, peer_timeout=None, receive_buffer=1
+    )
+    with rx:
+        flood(rx.port, 1, 300)  # the smallest buffer holds a few; the rest is dropped
+        frames: list[DTrackFrame] = []
+
+        def accounted() -> bool:
+            frames.extend(rx.sample_all())
+            return rx.datagrams + rx.kernel_dropped == 300
+
+        assert wait_until(accounted, timeout=5.0), (rx.datagrams, rx.kernel_dropped)
+    assert rx.kernel_dropped > 0 and rx.kernel_drop_source == "ancillary"
+    assert len(frames) == rx.datagrams and rx.missed_frames == rx.kernel_dropped - (
+        300 - frames[-1].frame  # type: ignore[operator]
+    )
+
+
+def test_the_monitor_shows_kernel_drops_with_the_other_drops(tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.setattr(DTrackDevice, "receive_buffer", 1)  # the kernel's smallest buffer
+    config = tmp_path / "dt.jconf"
+    config.write_text(
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">'
+        '<elements><input_manager name="IM" version="2"><driver>DTrack_drv</driver>'
+        '</input_manager><dtrack name="DT" version="1"><receive_port>0</receive_port></dtrack>'
+        "</elements></configuration>\n"
+    )
+    options = ManagerOptions(retry_interval=None, entry_points=False)
+    manager, configuration = InputManager.from_files([config], options=options)
+    session = MonitorSession(manager, configuration)
+    try:
+        session.start()
+        device = manager.device("DT")
+        sent = 0
+
+        def send_burst() -> None:
+            nonlocal sent
+            flood(device.port, sent + 1, 500)
+            sent += 500
+            session.step()
+
+        # bursts far faster than the reader, until the kernel has dropped some
+        assert wait_until(lambda: device.counters["kernel_dropped"] > 0, 20.0, send_burst)
+
+        def accounted() -> bool:
+            session.step()
+            counters = device.counters
+            return counters["datagrams"] + counters["kernel_dropped"] == sent
+
+        assert wait_until(accounted, timeout=10.0), (device.counters, sent)
+        session.step()
+        stats = session.device_stats("DT")
+        assert stats is not None and device.store.dropped() == 0
+        assert stats.dropped == device.counters["kernel_dropped"] > 0
+        assert device.stats.dropped == stats.dropped
+        assert session.final_stats()["DT"]["dropped"] == stats.dropped
+    finally:
+        manager.shutdown()

@@ -1,0 +1,120 @@
+"""UDP receiving with the kernel's count of the datagrams it dropped for the socket.
+
+When a socket's receive buffer is full, the kernel drops what arrives and counts it. Linux
+hands that count to the reader with each datagram (``SO_RXQ_OVFL`` ancillary data, the
+socket's drops since it was made); where that option is missing, the ``drops`` column of
+``/proc/net/udp`` for the socket's inode gives the same number. :class:`DropCountingReceiver`
+reads datagrams and keeps the count, so a driver can show overflows with its other drops.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import sys
+import time
+from pathlib import Path
+
+#: ``SO_RXQ_OVFL`` (Linux 2.6.33 and later); Python names it only on some builds.
+SO_RXQ_OVFL: int | None = getattr(
+    socket, "SO_RXQ_OVFL", 40 if sys.platform.startswith("linux") else None
+)
+_COUNTER_SPACE = socket.CMSG_SPACE(4) if hasattr(socket, "CMSG_SPACE") else 0
+
+
+def proc_udp_drops(sock: socket.socket, proc: Path = Path("/proc/net")) -> int | None:
+    """The kernel's drop count of ``sock`` from ``/proc/net/udp`` (or ``udp6``); None where
+    the file or the socket's line is missing (not Linux, or the socket is closed)."""
+    try:
+        inode = str(os.fstat(sock.fileno()).st_ino)
+    except (OSError, ValueError):
+        return None
+    for name in ("udp", "udp6"):
+        try:
+            lines = (proc / name).read_text(encoding="ascii", errors="replace").splitlines()
+        except OSError:
+            continue
+        for line in lines[1:]:
+            fields = line.split()
+            # sl local rem st tx:rx tr:when retrnsmt uid timeout inode ref pointer drops
+            if len(fields) >= 13 and fields[9] == inode:
+                try:
+                    return int(fields[12])
+                except ValueError:
+                    return None
+    return None
+
+
+class DropCountingReceiver:
+    """Reads datagrams from a UDP socket and keeps the kernel's count of those it dropped.
+
+    ``dropped`` is the total over every socket given to :meth:`attach` (a reconnection makes
+    a new socket, whose count starts at 0). ``method`` says where the count comes from:
+    ``"ancillary"`` (with every datagram), ``"proc"`` (read by :meth:`refresh`) or ``None``
+    (the OS offers none; ``dropped`` stays 0). A datagram carries the drops before it was
+    queued, so drops after the last one read are learnt from ``/proc`` by :meth:`refresh`,
+    at most every ``proc_interval`` seconds (reading it costs more than a datagram).
+    """
+
+    def __init__(self, proc_interval: float = 0.25) -> None:
+        self.proc_interval = proc_interval
+        self.method: str | None = None
+        self._proc_read_at = -float("inf")
+        self._sock: socket.socket | None = None
+        self._before = 0  # drops of the sockets detached earlier
+        self._current = 0  # drops of the attached socket so far
+
+    @property
+    def dropped(self) -> int:
+        return self._before + self._current
+
+    def attach(self, sock: socket.socket) -> None:
+        """Start counting for ``sock`` (asks for the per-datagram count where it can)."""
+        self.detach()
+        self._sock = sock
+        self._current = 0
+        self.method = None
+        if SO_RXQ_OVFL is not None and _COUNTER_SPACE and hasattr(sock, "recvmsg"):
+            try:
+                sock.setsockopt(socket.SOL_SOCKET, SO_RXQ_OVFL, 1)
+            except OSError:
+                pass
+            else:
+                self.method = "ancillary"
+                return
+        if proc_udp_drops(sock) is not None:
+            self.method = "proc"
+
+    def detach(self) -> None:
+        """Stop counting for the attached socket, keeping what it counted."""
+        if self._sock is not None:
+            self.refresh(force=True)
+            self._before += self._current
+            self._current = 0
+            self._sock = None
+
+    def refresh(self, *, force: bool = False) -> None:
+        """Read ``/proc`` for the count, if ``proc_interval`` has passed since the last time
+        (or with ``force``)."""
+        if self.method is None or self._sock is None:
+            return
+        moment = time.monotonic()
+        if not force and moment - self._proc_read_at < self.proc_interval:
+            return
+        self._proc_read_at = moment
+        count = proc_udp_drops(self._sock)
+        if count is not None:
+            self._current = max(self._current, count)
+
+    def receive(self, size: int) -> bytes:
+        """One datagram of at most ``size`` bytes; raises as ``socket.recv`` does."""
+        sock = self._sock
+        if sock is None:
+            raise OSError("no socket attached")
+        if self.method != "ancillary":
+            return sock.recv(size)
+        data, ancillary, _flags, _address = sock.recvmsg(size, _COUNTER_SPACE)
+        for level, kind, payload in ancillary:
+            if level == socket.SOL_SOCKET and kind == SO_RXQ_OVFL and len(payload) >= 4:
+                self._current = max(self._current, int.from_bytes(payload[:4], sys.byteorder))
+        return data
