@@ -162,10 +162,8 @@ class Patcher:
                 edits.append(Edit(span.start + match.start(5), span.start + match.end(5), value))
         missing = [name for name in wanted if name not in found]
         if missing:
-            last = max((m.end() for m in found.values()), default=None)
-            at = span.start + (
-                last if last is not None else 1 + len(re.match(rb"<[^\s/>]*", tag).group(0)) - 1
-            )
+            name_end = re.match(rb"<[^\s/>]*", tag).end()
+            at = span.start + max((m.end() for m in found.values()), default=name_end)
             text = "".join(
                 f' {name}="{_escape_attribute(wanted[name], chr(34))}"' for name in missing
             )
