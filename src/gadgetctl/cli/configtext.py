@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from gadgetctl.jccl.resolve import DEFAULT, ResolvedElement, ResolvedProperty, ResolvedValue
+from gadgetctl.safetext import printable
 
 _DIM, _BOLD, _YELLOW, _RESET = "\x1b[2m", "\x1b[1m", "\x1b[33m", "\x1b[0m"
 
@@ -16,17 +17,18 @@ class _Style:
 
 
 def _value(value: ResolvedValue) -> str:
-    shown = "''" if value.value == "" else (value.value or "")
+    shown = "''" if value.value == "" else printable(value.value or "")
     if value.label is not None and value.label != value.value:
-        shown = f"{value.label} = {shown}" if value.written is not None else f"{shown} ({value.label})"
+        label = printable(value.label)
+        shown = f"{label} = {shown}" if value.written is not None else f"{shown} ({label})"
     return shown
 
 
 def _property_lines(prop: ResolvedProperty, indent: str, width: int, style: _Style) -> list[str]:
-    name = prop.name.ljust(width)
+    name = printable(prop.name).ljust(width)
     notes = []
     if prop.defined_by:
-        notes.append(f"from {prop.defined_by}")
+        notes.append(f"from {printable(prop.defined_by)}")
     if not prop.known:
         notes.append("not in the definition: ignored")
     tail = style(_DIM, f"  [{', '.join(notes)}]") if notes else ""
@@ -45,7 +47,7 @@ def _property_lines(prop: ResolvedProperty, indent: str, width: int, style: _Sty
     embedded = [v.element for v in prop.values if v.element is not None]
     if embedded:
         if not texts:
-            lines.append(f"{indent}{prop.name}{tail}")
+            lines.append(f"{indent}{printable(prop.name)}{tail}")
         for child in embedded:
             lines += _element_lines(child, indent + "    ", style)
     return lines
@@ -59,8 +61,10 @@ def _element_lines(element: ResolvedElement, indent: str, style: _Style) -> list
         judged = f", read as version {element.definition_version}"
     else:
         judged = ""
-    where = f"{element.file}:{element.line}" if element.line else element.file
-    lines = [f"{indent}{style(_BOLD, element.type)} {element.name!r} ({version}{judged})  {style(_DIM, where)}"]
+    where = printable(f"{element.file}:{element.line}" if element.line else element.file)
+    version = printable(version)
+    lines = [f"{indent}{style(_BOLD, printable(element.type))} {printable(repr(element.name))} "
+             f"({version}{judged})  {style(_DIM, where)}"]
     width = max((len(p.name) for p in element.properties), default=0)
     for prop in element.properties:
         lines += _property_lines(prop, indent + "  ", width, style)

@@ -20,7 +20,9 @@ def main(argv: list[str] | None = None) -> None:
     try:
         app(args=argv, prog_name="gadgetctl", standalone_mode=True)
     except GadgetctlError as err:
-        print(f"gadgetctl: error: {err}", file=sys.stderr)
+        from gadgetctl.safetext import printable
+
+        print(f"gadgetctl: error: {printable(str(err))}", file=sys.stderr)
         sys.exit(err.exit_code)
     except KeyboardInterrupt:
         print("gadgetctl: interrupted", file=sys.stderr)

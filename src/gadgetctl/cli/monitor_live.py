@@ -29,6 +29,7 @@ from gadgetctl.cli.monitor_text import (
 from gadgetctl.input.clock import now
 from gadgetctl.monitor.session import ElementView, MonitorSession, UnitView
 from gadgetctl.monitor.sparkline import sparkline
+from gadgetctl.safetext import printable
 
 BAR_WIDTH = 16
 SPARK_WIDTH = 20
@@ -59,7 +60,7 @@ class Line(list):
     """A screen line: (text, style) segments."""
 
     def add(self, text: str, style: str = "") -> Line:
-        self.append((text, style))
+        self.append((printable(text), style))  # names, values and reasons come from devices and files
         return self
 
     @property

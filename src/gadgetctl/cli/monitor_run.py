@@ -17,6 +17,7 @@ from gadgetctl.errors import GadgetctlError
 from gadgetctl.input.clock import now
 from gadgetctl.monitor.recording import Recorder, RecordingError, Terminated, raise_on_stop_signals
 from gadgetctl.monitor.session import MonitorSession
+from gadgetctl.safetext import printable
 
 
 @dataclass
@@ -196,7 +197,7 @@ def _finish(session: MonitorSession, mode: OutputFormat, options: RunOptions, fi
         human.write("replay finished\n")
     human.flush()
     for line in problems:
-        print(f"gadgetctl: problem: {line}", file=sys.stderr)
+        print(f"gadgetctl: problem: {printable(line)}", file=sys.stderr)
     return 1 if problems else 0
 
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from gadgetctl.monitor.session import ElementView, MonitorSession, Snapshot, UnitView
 from gadgetctl.monitor.units import euler_xyz_degrees, from_meters, quaternion_wxyz
+from gadgetctl.safetext import printable
 
 UNIT_SYMBOLS = {"meters": "m", "feet": "ft", "inches": "in", "centimeters": "cm"}
 TOGGLES = {0: "off", 1: "on", 2: "toggle on", 3: "toggle off"}
@@ -137,6 +138,7 @@ def table_rows(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: b
 
 
 def format_table(header: Sequence[str], rows: Sequence[Sequence[str]], *, last_free: bool = True) -> str:
+    rows = [[printable(cell) for cell in row] for row in rows]  # names and values from devices
     widths = [len(h) for h in header]
     for row in rows:
         for i, cell in enumerate(row[:-1] if last_free else row):
@@ -208,22 +210,22 @@ def stats_text(stats: Mapping[str, Mapping[str, Any]]) -> str:
 
 def summary_text(summary: Any) -> str:
     """A recording summary (``gadgetctl replay --summary``)."""
-    lines = [f"{summary.path}: {summary.samples} samples from {len(summary.devices)} device(s) over "
+    lines = [f"{printable(str(summary.path))}: {summary.samples} samples from {len(summary.devices)} device(s) over "
              f"{summary.duration:.3f} s" + (f", {summary.frames} frames" if summary.frames else "")
              + f"; ended: {summary.end_reason or 'cut off (no end record)'}"]
     if summary.created:
-        lines.append(f"created {summary.created}")
+        lines.append(f"created {printable(str(summary.created))}")
     start = summary.first_timestamp
     for marker in summary.markers:
         offset = "" if start is None else f" at {marker.timestamp - start:.3f} s"
-        lines.append(f"marker {marker.name!r}{offset}")
+        lines.append(f"marker {printable(repr(marker.name))}{offset}")
     for device in summary.devices:
         median = ms_text(device.median_interval)
         largest = ms_text(device.max_interval)
         gaps = device.gaps
         gap_text = (f"{gaps.count} gap(s) > {ms_text(gaps.threshold)} ms, largest {ms_text(gaps.largest)} ms"
                     if gaps.count else "no gaps")
-        lines.append(f"{device.name}: {device.updates} updates, {device.samples} samples, "
+        lines.append(f"{printable(device.name)}: {device.updates} updates, {device.samples} samples, "
                      f"{device.mean_rate:.1f} Hz over {device.duration:.3f} s, interval median {median} ms, "
                      f"max {largest} ms, {gap_text}")
         for unit in device.units:
@@ -235,9 +237,9 @@ def summary_text(summary: Any) -> str:
             else:
                 span = "-"
             spark = f"  {unit.sparkline}" if unit.sparkline else ""
-            lines.append(f"    {unit.kind} {unit.unit}: {unit.samples} samples, range {span}{spark}")
+            lines.append(f"    {printable(str(unit.kind))} {unit.unit}: {unit.samples} samples, range {span}{spark}")
     for problem in summary.problems:
-        lines.append(f"{problem}")
+        lines.append(printable(f"{problem}"))
     return "\n".join(lines) + "\n"
 
 

@@ -17,6 +17,7 @@ from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.definitions import ValueType
 from gadgetctl.jccl.resolve import judged_view
 from gadgetctl.jccl.typeindex import TypeIndex
+from gadgetctl.safetext import printable
 
 POINTER, CONTAINS, DRIVER, HANDLED_BY = "pointer", "contains", "driver", "handled_by"
 
@@ -232,7 +233,7 @@ def render_text(graph: WiringGraph) -> str:
     for node in graph.nodes.values():  # cycles with no root
         if node.id not in shown and node.kind != "plugin":
             walk(node.id, "", None, True)
-    return "\n".join(out)
+    return "\n".join(map(printable, out))
 
 
 def _grouped(graph: WiringGraph, edges: list[Edge]) -> list[Edge | str]:
@@ -267,15 +268,16 @@ def render_dot(graph: WiringGraph) -> str:
     lines = ["digraph wiring {", "  rankdir=LR;", '  node [fontname="Helvetica", fontsize=10];',
              '  edge [fontname="Helvetica", fontsize=9];']
     for node in graph.nodes.values():
-        label = "plug-in\n" + node.name if node.kind == "plugin" else f"{node.type}\n{node.short_name}"
+        label = ("plug-in\n" + printable(node.name) if node.kind == "plugin"
+                 else f"{printable(node.type)}\n{printable(node.short_name)}")
         if node.note:
-            label += f"\n({node.note})"
+            label += f"\n({printable(node.note)})"
         attrs = [f"label={_dot_string(label)}", f"shape={_DOT_SHAPES.get(node.kind, 'box')}"]
         if node.kind == "missing":
             attrs += ["color=red", "fontcolor=red", "style=dashed"]
         lines.append(f"  {node.id} [{', '.join(attrs)}];")
     for edge in graph.edges:
-        attrs = [f"label={_dot_string(edge.label)}"]
+        attrs = [f"label={_dot_string(printable(edge.label))}"]
         if edge.kind == CONTAINS:
             attrs += ["style=dashed", "arrowhead=diamond"]
         elif edge.kind == HANDLED_BY:
@@ -286,7 +288,7 @@ def render_dot(graph: WiringGraph) -> str:
 
 
 def _mermaid_text(text: str) -> str:
-    return text.replace('"', "#quot;").replace("|", "#124;").replace("<", "#lt;").replace(">", "#gt;")
+    return printable(text).replace('"', "#quot;").replace("|", "#124;").replace("<", "#lt;").replace(">", "#gt;")
 
 
 def render_mermaid(graph: WiringGraph) -> str:

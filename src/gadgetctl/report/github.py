@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from gadgetctl.diagnostics import Diagnostic
+from gadgetctl.safetext import printable
 
 _LEVEL = {"error": "error", "warning": "warning", "info": "notice"}
 
@@ -20,13 +21,14 @@ def _escape_property(text: str) -> str:
 def format_annotation(d: Diagnostic) -> str:
     props = []
     if d.path:
-        props.append(f"file={_escape_property(d.path)}")
+        props.append(f"file={_escape_property(printable(d.path))}")
     if d.line is not None:
         props.append(f"line={d.line}")
     if d.column is not None:
         props.append(f"col={d.column}")
     props.append(f"title={_escape_property(d.code)}")
-    message = d.message if not d.hint else f"{d.message}\n{d.hint}"
+    # the one newline GitHub shows is ours, between message and hint; the texts' own are escaped
+    message = printable(d.message) if not d.hint else f"{printable(d.message)}\n{printable(d.hint)}"
     return f"::{_LEVEL[d.severity.value]} {','.join(props)}::{_escape_data(message)}"
 
 

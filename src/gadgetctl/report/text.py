@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from gadgetctl.diagnostics import Diagnostic
+from gadgetctl.safetext import printable
 
 _COLORS = {"error": "\x1b[1;31m", "warning": "\x1b[1;33m", "info": "\x1b[1;36m"}
 _DIM, _BOLD, _RESET = "\x1b[2m", "\x1b[1m", "\x1b[0m"
@@ -12,10 +13,11 @@ _DIM, _BOLD, _RESET = "\x1b[2m", "\x1b[1m", "\x1b[0m"
 
 def format_line(d: Diagnostic, *, color: bool = False) -> str:
     severity = d.severity.value
+    location, message = printable(str(d.location)), printable(d.message)
     if color:
-        return (f"{_BOLD}{d.location}{_RESET}: {_COLORS[severity]}{severity}{_RESET} "
-                f"{_DIM}{d.code}{_RESET} {d.message}")
-    return f"{d.location}: {severity} {d.code} {d.message}"
+        return (f"{_BOLD}{location}{_RESET}: {_COLORS[severity]}{severity}{_RESET} "
+                f"{_DIM}{d.code}{_RESET} {message}")
+    return f"{location}: {severity} {d.code} {message}"
 
 
 def summary_line(diagnostics: Sequence[Diagnostic], files_checked: int) -> str:
@@ -39,6 +41,6 @@ def render_text(diagnostics: Sequence[Diagnostic], *, files_checked: int = 0,
     for d in diagnostics:
         lines.append(format_line(d, color=color))
         if hints and d.hint:
-            lines.append(f"    hint: {d.hint}")
+            lines.append(f"    hint: {printable(d.hint)}")
     lines.append(summary_line(diagnostics, files_checked))
     return "\n".join(lines)
