@@ -54,6 +54,10 @@ def test_watch_tracker_and_buttons_without_a_configuration(cli, tmp_path: Path) 
     assert [r for r in samples if r["device"] == buttons and r["kind"] == "digital"]
     statuses = {r["name"]: r["state"] for r in recs if r["type"] == "status"}
     assert statuses[tracker] == statuses[buttons] == "running"
+    # The server's timestamps are kept: arrival minus source time, least and mean above it.
+    (stats,) = [r for r in recs if r["type"] == "stats"]
+    clock = stats["devices"][tracker]["source_clock"]
+    assert clock["samples"] > 10 and abs(clock["offset"]) < 1.0 and clock["latency"] >= 0.0
     # The recording replays like any other.
     summary = cli("replay", record, "--summary")
     assert summary.exit_code == 0, summary.stderr

@@ -82,6 +82,14 @@ class Batch:
         return bool(self.positions or self.digital or self.analog)
 
 
+def _why(location: Location, client: VrpnClient) -> str:
+    """Why no connection is up, naming the server once."""
+    error = client.last_error
+    if error and str(location) in error:
+        return error
+    return f"no VRPN server at {location}: {error or 'no answer'}"
+
+
 class VrpnInput:
     """The VRPN devices of one element. ``open()``, then ``read()`` repeatedly, ``close()``."""
 
@@ -145,9 +153,9 @@ class VrpnInput:
             return
         for location, client in self._clients.items():
             if not client.wait_connected(max(0.0, self._deadline - time.monotonic())):
-                reason = client.last_error or "no answer"
+                reason = _why(location, client)
                 self.close()
-                raise VrpnUnavailable(f"no VRPN server at {location}: {reason}")
+                raise VrpnUnavailable(reason)
             self._connected_at[location] = time.monotonic()
 
     def close(self) -> None:
@@ -174,9 +182,7 @@ class VrpnInput:
                         f"lost the VRPN server at {location}: {client.last_error}"
                     )
                 if time.monotonic() >= self._deadline:
-                    raise VrpnUnavailable(
-                        f"no VRPN server at {location}: {client.last_error or 'no answer'}"
-                    )
+                    raise VrpnUnavailable(_why(location, client))
                 continue
             if client.connects == 1 and location not in self._checked:
                 self._connected_at.setdefault(location, time.monotonic())

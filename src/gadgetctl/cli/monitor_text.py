@@ -205,7 +205,16 @@ def stats_text(stats: Mapping[str, Mapping[str, Any]]) -> str:
                      rate_text(s.get("mean_rate")), ms_text(s.get("p50_interval")),
                      ms_text(s.get("p99_interval")), ms_text(s.get("max_gap")), ms_text(s.get("jitter")),
                      str(s.get("dropped", 0)), str(s.get("faults", 0))])
-    return "statistics:\n" + format_table(STATS_COLUMNS, rows, last_free=False) + "\n"
+    lines = []
+    for name, s in stats.items():
+        clock = s.get("source_clock")
+        if isinstance(clock, Mapping) and clock.get("offset") is not None:
+            lines.append(f"{name}: arrival minus the source's timestamp: least {clock['offset'] * 1000:+.3f} ms "
+                         f"(clock offset plus the least transport latency), on average "
+                         f"{ms_text(clock.get('latency'))} ms more (transport and queueing), "
+                         f"over {clock.get('samples')} timestamps")
+    extra = "".join(line + "\n" for line in lines)
+    return "statistics:\n" + format_table(STATS_COLUMNS, rows, last_free=False) + "\n" + extra
 
 
 def summary_text(summary: Any) -> str:

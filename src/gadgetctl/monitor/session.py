@@ -932,7 +932,10 @@ class MonitorSession:
 
     def final_stats(self) -> dict[str, dict[str, object]]:
         """Per selected device: the fields of :class:`DeviceSnapshot` plus ``samples``
-        (sampling instants), ``state``, ``type``, ``kinds`` and ``units``."""
+        (sampling instants), ``state``, ``type``, ``kinds`` and ``units``; for a device that
+        keeps its source's own timestamps (a ``remote_clock``, e.g. VRPN), ``source_clock``:
+        ``offset`` (the least local receive time minus source time: clock offset plus the
+        least transport latency), ``latency`` (the mean above that least) and ``samples``."""
         moment = now()
         result: dict[str, dict[str, object]] = {}
         for name in self._selected:
@@ -949,6 +952,9 @@ class MonitorSession:
             entry["type"] = device.element_type
             entry["kinds"] = [k.value for k in device.kinds()]
             entry["units"] = dict(track.units)
+            clock = getattr(device, "remote_clock", None)  # devices that keep their source's times
+            if clock is not None and getattr(clock, "count", 0):
+                entry["source_clock"] = clock.to_dict()
             result[name] = entry
         return result
 
