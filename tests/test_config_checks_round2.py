@@ -398,3 +398,16 @@ def test_upgrade_diff_changes_only_the_outdated_elements_lines_in_the_files_spel
         "-      <input_manager version='1' name='IM'>",
         "+      <input_manager version='2' name='IM'>",
     ]
+
+
+def test_a_broken_definition_given_and_on_the_search_path_is_reported_once(tmp_path, cli):
+    folder = write(tmp_path / "defs" / "bad.jdef", '<?xml version="1.0"?>\n<definition name="x"><oops></definition>\n').parent
+    result = cli("validate", folder, "-d", folder, "--format", "json")
+    import json
+
+    found = [d["code"] for d in json.loads(result.stdout)]
+    assert found == ["XML001"]
+    # on the search path only, it is still reported
+    other = write(tmp_path / "t.jconf", configuration(""))
+    result = cli("validate", other, "-d", folder, "--format", "json")
+    assert [d["code"] for d in json.loads(result.stdout)] == ["DEF020"]

@@ -60,9 +60,13 @@ def load_and_check(path: Path, options: ValidateOptions) -> XmlDocument:
     return doc
 
 
-def search_path_diagnostics(repo) -> list[Diagnostic]:
-    """Problems of user-given search-path entries (the bundled one is trusted)."""
+def search_path_diagnostics(repo, given: Iterable[str] = ()) -> list[Diagnostic]:
+    """Problems of user-given search-path entries (the bundled one is trusted). A file that
+    is also ``given`` is reported with the file itself, not a second time here."""
     found = list(repo.diagnostics)
+    if found:
+        mine = {_resolved(path) for path in given}
+        found = [d for d in found if d.path is None or _resolved(d.path) not in mine]
     for entry in repo.entries:
         if entry.origin == "bundled":
             continue
@@ -79,6 +83,13 @@ def search_path_diagnostics(repo) -> list[Diagnostic]:
                 f"{shadow.winner} comes first on the search path",
                 shadow.loser.path, shadow.loser.line, shadow.loser.column))
     return found
+
+
+def _resolved(path: str) -> str:
+    try:
+        return str(Path(path).resolve())
+    except OSError:
+        return path
 
 
 def _where(location) -> tuple:
@@ -115,7 +126,7 @@ def _validate_paths(paths: Sequence[Path], options: ValidateOptions | None = Non
                                if doc.root is not None and doc.kind is FileKind.DEFINITION) if d and d.name]
     base = default_repository(options.definition_dirs, bundled=options.bundled)
     repo = base.overlay(definitions)
-    result.diagnostics.extend(search_path_diagnostics(base))
+    result.diagnostics.extend(search_path_diagnostics(base, result.files))
     for definition in definitions:
         result.diagnostics.extend(check_definition(definition, definition.order, repo))
     result.diagnostics.extend(check_cycles(definitions, repo))
