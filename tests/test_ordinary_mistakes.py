@@ -17,11 +17,19 @@ from conftest import REPO, write
 WAVEFORM = REPO / "examples" / "waveform.jconf"
 
 
-def gadgetctl(*args: str | Path, cwd: Path = REPO, timeout: float = 60) -> subprocess.CompletedProcess:
+def gadgetctl(
+    *args: str | Path, cwd: Path = REPO, timeout: float = 60
+) -> subprocess.CompletedProcess:
     env = {**os.environ, "NO_COLOR": "1"}
     env.pop("GADGETCTL_DEBUG", None)
-    return subprocess.run([sys.executable, "-m", "gadgetctl", *map(str, args)], cwd=cwd, capture_output=True,
-                          timeout=timeout, env=env, stdin=subprocess.DEVNULL)
+    return subprocess.run(
+        [sys.executable, "-m", "gadgetctl", *map(str, args)],
+        cwd=cwd,
+        capture_output=True,
+        timeout=timeout,
+        env=env,
+        stdin=subprocess.DEVNULL,
+    )
 
 
 def one_line_error(stderr: str | bytes) -> str:
@@ -42,7 +50,10 @@ def test_suggestions_ignore_case_and_keep_the_spelling():
     names = ["Waveform Sticks", "Waveform Tracker", "Head Proxy"]
     assert close_names("waveform stick", names)[0] == "Waveform Sticks"
     assert did_you_mean("head proxi", names) == "did you mean 'Head Proxy'?"
-    assert did_you_mean("dtrak", ["dtrack", "fastrak", "dtk"], quote=str) == "did you mean dtrack, dtk or fastrak?"
+    assert (
+        did_you_mean("dtrak", ["dtrack", "fastrak", "dtk"], quote=str)
+        == "did you mean dtrack, dtk or fastrak?"
+    )
     assert did_you_mean("zzzz", names) is None
     assert with_suggestion("no such thing 'zzzz'", "zzzz", names) == "no such thing 'zzzz'"
 
@@ -55,7 +66,9 @@ def test_upgrade_output_into_a_directory_is_a_usage_error(cli, tmp_path):
     result = cli("upgrade", WAVEFORM, "-o", tmp_path)
     assert result.exit_code == 2
     line = one_line_error(result.stderr)
-    assert f"--output {tmp_path}: is a directory" in line and f"{tmp_path / 'waveform.jconf'}" in line
+    assert (
+        f"--output {tmp_path}: is a directory" in line and f"{tmp_path / 'waveform.jconf'}" in line
+    )
     assert list(tmp_path.iterdir()) == []
     result = cli("upgrade", WAVEFORM, "-o", tmp_path / "missing" / "out.jconf")
     assert result.exit_code == 2 and "no such directory" in one_line_error(result.stderr)
@@ -63,7 +76,9 @@ def test_upgrade_output_into_a_directory_is_a_usage_error(cli, tmp_path):
 
 @pytest.mark.timeout(60)
 def test_record_into_a_directory_says_so_once(tmp_path):
-    result = gadgetctl("monitor", WAVEFORM, "--duration", "0.2", "--format", "table", "--record", tmp_path)
+    result = gadgetctl(
+        "monitor", WAVEFORM, "--duration", "0.2", "--format", "table", "--record", tmp_path
+    )
     assert result.returncode == 2
     line = one_line_error(result.stderr)
     assert "is a directory" in line and "exists" not in line
@@ -76,7 +91,9 @@ def test_config_show_of_a_directory_says_it_is_a_directory(cli):
     assert "is a directory" in one_line_error(result.stderr)
 
 
-@pytest.mark.parametrize("command", [("config", "pending"), ("doctor",), ("drivers", "list", "--config")])
+@pytest.mark.parametrize(
+    "command", [("config", "pending"), ("doctor",), ("drivers", "list", "--config")]
+)
 def test_other_commands_taking_a_configuration_say_it_is_a_directory(cli, command):
     result = cli(*command, REPO / "examples")
     assert result.exit_code == 2
@@ -110,22 +127,48 @@ def test_monitor_on_a_directory_says_it_is_a_directory(cli):
 
 @pytest.mark.timeout(90)
 def test_record_dash_writes_the_recording_to_stdout_and_the_table_to_stderr(tmp_path):
-    result = gadgetctl("monitor", WAVEFORM, "--duration", "1", "--format", "table", "--stats",
-                       "--record", "-", cwd=tmp_path)
+    result = gadgetctl(
+        "monitor",
+        WAVEFORM,
+        "--duration",
+        "1",
+        "--format",
+        "table",
+        "--stats",
+        "--record",
+        "-",
+        cwd=tmp_path,
+    )
     assert result.returncode == 0, result.stderr
     assert not (tmp_path / "-").exists()
     lines = result.stdout.decode().splitlines()
     records = [json.loads(line) for line in lines]  # nothing but records on stdout
     assert records[0]["type"] == "header" and records[-1]["type"] == "end"
     samples = [r for r in records if r["type"] == "sample"]
-    assert {r["device"] for r in samples} >= {"Waveform Sticks", "Waveform Tracker", "Waveform Noise"}
+    assert {r["device"] for r in samples} >= {
+        "Waveform Sticks",
+        "Waveform Tracker",
+        "Waveform Noise",
+    }
     assert records[-1]["samples"] == len(samples)
-    assert "Waveform Sticks" in result.stderr.decode() and "NAME" in result.stderr.decode()  # the table
+    assert (
+        "Waveform Sticks" in result.stderr.decode() and "NAME" in result.stderr.decode()
+    )  # the table
 
 
 @pytest.mark.timeout(60)
 def test_record_dash_and_ndjson_would_both_write_stdout(tmp_path):
-    result = gadgetctl("monitor", WAVEFORM, "--duration", "0.2", "--format", "ndjson", "--record", "-", cwd=tmp_path)
+    result = gadgetctl(
+        "monitor",
+        WAVEFORM,
+        "--duration",
+        "0.2",
+        "--format",
+        "ndjson",
+        "--record",
+        "-",
+        cwd=tmp_path,
+    )
     assert result.returncode == 2 and result.stdout == b""
     assert "standard output" in one_line_error(result.stderr)
 
@@ -136,7 +179,9 @@ def test_record_dash_and_ndjson_would_both_write_stdout(tmp_path):
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory) -> Path:
     path = tmp_path_factory.mktemp("rec") / "waveform.ndjson"
-    result = gadgetctl("monitor", WAVEFORM, "--duration", "0.5", "--format", "table", "--record", path)
+    result = gadgetctl(
+        "monitor", WAVEFORM, "--duration", "0.5", "--format", "table", "--record", path
+    )
     assert result.returncode == 0, result.stderr
     return path
 
@@ -151,12 +196,16 @@ def test_replay_map_of_a_device_not_recorded_is_a_usage_error_with_a_suggestion(
 
 
 @pytest.mark.timeout(60)
-def test_replay_map_to_a_name_the_configuration_lacks_stops_before_its_devices_open(recorded, tmp_path):
+def test_replay_map_to_a_name_the_configuration_lacks_stops_before_its_devices_open(
+    recorded, tmp_path
+):
     # The configuration's own device is a FIFO-fed joystick: had the replay gone on, the
     # input manager would have configured and started it in place of the replayed one.
     fifo = tmp_path / "js0"
     os.mkfifo(fifo)
-    config = write(tmp_path / "lab.jconf", f"""<?xml version="1.0" encoding="UTF-8"?>
+    config = write(
+        tmp_path / "lab.jconf",
+        f"""<?xml version="1.0" encoding="UTF-8"?>
 <?org-vrjuggler-jccl-settings configuration.version="3.0"?>
 <configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="lab">
   <elements>
@@ -164,9 +213,18 @@ def test_replay_map_to_a_name_the_configuration_lacks_stops_before_its_devices_o
     <linux_joydev name="Lab Stick" version="1"><port_name>{fifo}</port_name></linux_joydev>
   </elements>
 </configuration>
-""")
-    result = gadgetctl("replay", recorded, "--config", config, "--map", "Waveform Sticks=Lab Stik",
-                       "--format", "table")
+""",
+    )
+    result = gadgetctl(
+        "replay",
+        recorded,
+        "--config",
+        config,
+        "--map",
+        "Waveform Sticks=Lab Stik",
+        "--format",
+        "table",
+    )
     assert result.returncode == 2 and result.stdout == b""
     line = one_line_error(result.stderr)
     assert "'Lab Stik' is not an element of the configuration (did you mean 'Lab Stick'?)" in line
@@ -179,28 +237,40 @@ def test_replay_map_to_a_name_the_configuration_lacks_stops_before_its_devices_o
 def test_monitor_suggests_the_name_meant(cli):
     result = cli("monitor", WAVEFORM, "Waveform_Stick", "--duration", "0.2", "--format", "table")
     assert result.exit_code == 2
-    assert "no device, proxy or alias matches 'Waveform_Stick' (did you mean 'Waveform Sticks'" in \
-        one_line_error(result.stderr)
+    assert (
+        "no device, proxy or alias matches 'Waveform_Stick' (did you mean 'Waveform Sticks'"
+        in one_line_error(result.stderr)
+    )
 
 
 def test_drivers_load_of_an_unknown_name_is_a_usage_error_with_a_suggestion(cli):
     result = cli("drivers", "load", "DTrack", "DTrack_drv")
     assert result.exit_code == 2 and result.stdout == ""  # nothing was loaded
-    assert "no driver plug-in named 'DTrack' (did you mean 'DTrack_drv'?)" in one_line_error(result.stderr)
+    assert "no driver plug-in named 'DTrack' (did you mean 'DTrack_drv'?)" in one_line_error(
+        result.stderr
+    )
 
 
 def test_config_show_element_suggests_the_name_meant(cli):
     result = cli("config", "show", WAVEFORM, "--element", "Waveform Stick")
     assert result.exit_code == 2
-    assert "no element named 'Waveform Stick' in the configuration (did you mean 'Waveform Sticks'" in \
-        one_line_error(result.stderr)
+    assert (
+        "no element named 'Waveform Stick' in the configuration (did you mean 'Waveform Sticks'"
+        in one_line_error(result.stderr)
+    )
 
 
 def test_defs_show_tree_and_list_base_suggest_the_definition_meant(cli):
-    for args in (("defs", "show", "dtrak"), ("defs", "tree", "dtrak"), ("defs", "list", "--base", "dtrak")):
+    for args in (
+        ("defs", "show", "dtrak"),
+        ("defs", "tree", "dtrak"),
+        ("defs", "list", "--base", "dtrak"),
+    ):
         result = cli(*args)
         assert result.exit_code == 2, args
-        assert "'dtrak'" in (line := one_line_error(result.stderr)) and "did you mean dtrack" in line
+        assert (
+            "'dtrak'" in (line := one_line_error(result.stderr)) and "did you mean dtrack" in line
+        )
 
 
 def test_defs_list_of_an_unknown_base_or_category_is_a_usage_error(cli):
@@ -223,15 +293,20 @@ def test_emulate_suggests_the_driver_meant(cli):
 def test_a_configuration_naming_a_mistyped_driver_gets_a_suggestion(tmp_path):
     from gadgetctl.input.manager import InputManager, ManagerOptions
 
-    config = write(tmp_path / "typo.jconf", """<?xml version="1.0" encoding="UTF-8"?>
+    config = write(
+        tmp_path / "typo.jconf",
+        """<?xml version="1.0" encoding="UTF-8"?>
 <?org-vrjuggler-jccl-settings configuration.version="3.0"?>
 <configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">
   <elements>
     <input_manager name="Input Manager" version="2"><driver>DTrak_drv</driver></input_manager>
   </elements>
 </configuration>
-""")
-    manager, configuration = InputManager.from_files([config], options=ManagerOptions(start_devices=False))
+""",
+    )
+    manager, configuration = InputManager.from_files(
+        [config], options=ManagerOptions(start_devices=False)
+    )
     with manager:
         manager.configure(configuration)
         (found,) = [d for d in manager.diagnostics if d.code == "DRV001"]
@@ -248,7 +323,9 @@ def test_validate_on_a_directory_without_jccl_files_is_a_usage_error(cli, tmp_pa
     result = cli("validate", tmp_path, "--format", fmt)
     assert result.exit_code == 2 and result.stdout == ""
     line = one_line_error(result.stderr)
-    assert str(tmp_path) in line and "no .jconf or .jdef files" in line and "nothing to check" in line
+    assert (
+        str(tmp_path) in line and "no .jconf or .jdef files" in line and "nothing to check" in line
+    )
 
 
 def test_upgrade_on_a_directory_without_jccl_files_is_a_usage_error(cli, tmp_path):

@@ -1,4 +1,4 @@
-""""Did you mean ...?": the names closest to a mistyped one, for every command and check
+"""Suggestions ("did you mean ...?"): the names closest to a mistyped one, for every command and check
 that takes element, driver, definition, property or diagnostic code names.
 
 Matching ignores case (``waveform stick`` finds ``Waveform Sticks``) and gives the
@@ -13,7 +13,9 @@ from difflib import get_close_matches
 CUTOFF = 0.6
 
 
-def close_names(word: str, candidates: Iterable[str], *, n: int = 3, cutoff: float = CUTOFF) -> list[str]:
+def close_names(
+    word: str, candidates: Iterable[str], *, n: int = 3, cutoff: float = CUTOFF
+) -> list[str]:
     """Up to ``n`` candidates that look like ``word``, the closest first."""
     spelled: dict[str, str] = {}
     for candidate in candidates:
@@ -21,8 +23,14 @@ def close_names(word: str, candidates: Iterable[str], *, n: int = 3, cutoff: flo
     return [spelled[m] for m in get_close_matches(word.lower(), list(spelled), n=n, cutoff=cutoff)]
 
 
-def did_you_mean(word: str, candidates: Iterable[str], *, n: int = 3, cutoff: float = CUTOFF,
-                 quote: Callable[[str], str] = repr) -> str | None:
+def did_you_mean(
+    word: str,
+    candidates: Iterable[str],
+    *,
+    n: int = 3,
+    cutoff: float = CUTOFF,
+    quote: Callable[[str], str] = repr,
+) -> str | None:
     """``"did you mean 'a' or 'b'?"``, or None when nothing is close."""
     close = close_names(word, candidates, n=n, cutoff=cutoff)
     if not close:

@@ -240,6 +240,8 @@ class LiveView:
         line.add(f"{view.state:<12}", STATE_STYLES.get(view.state, ""))
         if view.reason:
             line.add(f" {view.reason}", STATE_STYLES.get(view.state, ""))
+        if view.note:
+            line.add(" (VR Juggler would leave it pending)", "dim")
         for unit in view.values:
             line.add(" ")
             self._unit(line, unit, view.element)

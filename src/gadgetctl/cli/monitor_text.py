@@ -104,7 +104,15 @@ def values_text(element: ElementView, *, length_unit: str = "meters", quaternion
 
 
 def status_text(element: ElementView) -> str:
-    return element.state if not element.reason else f"{element.state}: {element.reason}"
+    text = element.state if not element.reason else f"{element.state}: {element.reason}"
+    if element.note:
+        text += f" (VR Juggler would leave it pending: {element.note})"
+    return text
+
+
+def difference_lines(snapshot: Snapshot) -> list[str]:
+    """One line per element gadgetctl runs but VR Juggler would leave pending."""
+    return [f"note: {e.name}: {status_text(e)}" for e in snapshot.elements if e.note]
 
 
 # --------------------------------------------------------------------------- the table
@@ -154,7 +162,8 @@ def snapshot_table(snapshot: Snapshot, *, length_unit: str = "meters", quaternio
     head = (f"[{snapshot.elapsed:7.2f} s] frame {snapshot.frame}, {snapshot.frame_rate:.1f} frames/s"
             + (f", {snapshot.samples_written} samples written" if snapshot.samples_written else ""))
     body = format_table(COLUMNS, table_rows(snapshot, length_unit=length_unit, quaternion=quaternion))
-    return head + "\n" + body + "\n"
+    notes = "".join(f"{line}\n" for line in difference_lines(snapshot))
+    return head + "\n" + body + "\n" + notes
 
 
 class TableView:

@@ -25,7 +25,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
 
@@ -57,12 +57,20 @@ from gadgetctl.input.sampling import (
 )
 from gadgetctl.input.status import ACTIVE, PENDING, UNKNOWN_TYPE, ElementKind, ElementStatus
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.jccl.activation import (
+    DIFFERENCES,
+    Node,
+    RunTime,
+    never_handled,
+    settle,
+    too_old,
+    waits_for_pointers,
+)
 from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.definitions import Location
 from gadgetctl.jccl.repository import DefinitionRepository
 from gadgetctl.jccl.units import proxy_unit_problem
 
-MIN_INPUT_MANAGER_VERSION = 2
 NOT_PROCESSED = "not processed yet"
 INPUT_WINDOW = "input_window"
 
@@ -144,6 +152,8 @@ class InputManager:
         self._static_diagnostics: list[Diagnostic] = []
         self._last_retry = now()
         self._shut_down = False
+        self._generation = 0  # counts configuration changes, for _vrjuggler_fate()
+        self._fate: tuple[int, dict[str, str | None]] = (-1, {})
 
     @classmethod
     def from_files(cls, paths: Iterable[Path], *, definitions: Iterable[Path] = (), bundled: bool = True,
@@ -222,6 +232,7 @@ class InputManager:
             self._ignored[name] = element
             return removed
         self._known[name] = element
+        self._generation += 1
         self._pending[name] = PendingEntry(element, PendingKind.WAITING, NOT_PROCESSED)
         return removed
 
@@ -296,6 +307,13 @@ class InputManager:
                                 "add the directory of its .jdef with --definitions or a definition_path")
         if token in UNSUPPORTED_TYPES:
             return PendingEntry(element, PendingKind.UNSUPPORTED, UNSUPPORTED_TYPES[token])
+        # the rules validate's predictions follow too (gadgetctl.jccl.activation)
+        unhandled = never_handled(token, RunTime.GADGETCTL)
+        if unhandled is not None:
+            return PendingEntry(element, PendingKind.UNSUPPORTED, unhandled)
+        old = too_old(token, element.version, self.repo.versions(token))
+        if old is not None:
+            return PendingEntry(element, PendingKind.TOO_OLD, old)
         access = ElementAccess(element, self.repo)
         if kind is ElementKind.INPUT_MANAGER:
             return self._configure_input_manager(element, access)
@@ -314,6 +332,8 @@ class InputManager:
                 or name in self._input_managers)
 
     def _unmet_dependency(self, element: ConfigElement) -> PendingEntry | None:
+        if not waits_for_pointers(element.type, RunTime.GADGETCTL):
+            return None  # bound now, stupefied until its device is active
         for prop, target in pointer_targets(element, self.repo):
             if self._active(target):
                 continue
@@ -332,12 +352,6 @@ class InputManager:
         return None
 
     def _configure_input_manager(self, element: ConfigElement, access: ElementAccess) -> PendingEntry | None:
-        version = element.version
-        if version is None or version < MIN_INPUT_MANAGER_VERSION:
-            return PendingEntry(element, PendingKind.TOO_OLD,
-                                f"input_manager version {element.version_text} names driver files by full path; "
-                                f"version {MIN_INPUT_MANAGER_VERSION} (driver names plus driver_path) is required",
-                                "upgrade the element with `gadgetctl upgrade`")
         base = Path(element.file).parent
         env = self.options.environ
         directories: dict[PluginSource, list[DriverDirectory]] = {}
@@ -383,7 +397,7 @@ class InputManager:
         name = element.full_name
         target = access.string("proxy")
         if not target:
-            return PendingEntry(element, PendingKind.MISSING_TARGET, "its proxy property is empty")
+            return PendingEntry(element, PendingKind.BAD_ALIAS, "its proxy property is empty: it points at no proxy")
         if target == name:
             return PendingEntry(element, PendingKind.BAD_ALIAS, "points at itself")
         if target in self._proxies:
@@ -408,6 +422,9 @@ class InputManager:
         proxy_class = PROXY_CLASSES.get(element.type)
         if proxy_class is None:
             return PendingEntry(element, PendingKind.NO_DRIVER, f"gadgetctl has no proxy of type {element.type}")
+        unmet = self._unmet_dependency(element)
+        if unmet is not None:
+            return unmet
         proxy = proxy_class()
         try:
             proxy.config(access)
@@ -514,6 +531,7 @@ class InputManager:
             return 0
         if self._known.pop(name, None) is None:
             return 0
+        self._generation += 1
         if self._pending.pop(name, None) is not None:
             return 1
         self._teardown(name)
@@ -665,6 +683,43 @@ class InputManager:
         """Any name: a proxy, an alias (its proxy) or a device."""
         return self.proxy(name) or self._device_objects.get(name)
 
+    def vrjuggler_difference(self, name: str) -> str | None:
+        """Why VR Juggler would leave the element ``name`` pending although gadgetctl runs
+        it (a documented difference, :data:`gadgetctl.jccl.activation.DIFFERENCES`, or an
+        element waiting for one), or None."""
+        if not self._active(name):
+            return None
+        fate = self._vrjuggler_fate()
+        reason = fate.get(name)
+        element = self._known.get(name)
+        if reason is None or element is None:
+            return None
+        if element.type in DIFFERENCES:
+            return DIFFERENCES[element.type].vrjuggler
+        for _, target in pointer_targets(element, self.repo):
+            if fate.get(target) is not None and target in self._known:
+                return f"it waits for {self._known[target].type} {target!r}, which VR Juggler leaves pending"
+        return reason
+
+    def _vrjuggler_fate(self) -> dict[str, str | None]:
+        """What VR Juggler's run time would do with the configuration (the rules of
+        gadgetctl.jccl.activation), kept until the configuration changes."""
+        generation, fate = self._fate
+        if generation != self._generation:
+            fate = {}
+            if any(e.type in DIFFERENCES for e in self._known.values()):
+                elements = {**self._ignored, **self._known}
+                repo = self.repo
+                nodes = []
+                for name, e in elements.items():
+                    definition = repo.get(e.type)
+                    handled = definition is not None and not definition.abstract
+                    nodes.append(Node(name, e.type, e.version, tuple(t for _, t in pointer_targets(e, repo)),
+                                      None if handled else "no handler"))
+                fate = settle(nodes, RunTime.VRJUGGLER, repo.versions)
+            self._fate = (self._generation, fate)
+        return fate
+
     def pending(self) -> list[PendingEntry]:
         return list(self._pending.values())
 
@@ -719,6 +774,8 @@ class InputManager:
             result.append(ElementStatus(name, element.type, ElementKind.INPUT_MANAGER, ACTIVE))
         for pending in self._pending.values():
             result.append(self._pending_status(pending))
+        if self._vrjuggler_fate():
+            result = [replace(s, note=note) if (note := self.vrjuggler_difference(s.name)) else s for s in result]
         return result
 
     @staticmethod

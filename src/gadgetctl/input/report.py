@@ -36,6 +36,9 @@ class PendingReport:
     unknown: list[PendingEntry] = field(default_factory=list)
     stupefied: list[StupefiedProxy] = field(default_factory=list)
     diagnostics: list[Diagnostic] = field(default_factory=list)  # drivers, devices, filters
+    #: Elements gadgetctl runs that VR Juggler would leave pending (documented differences,
+    #: DRV044, information only).
+    differences: list[Diagnostic] = field(default_factory=list)
     configured: Counter[str] = field(default_factory=Counter)  # kind -> count
 
     @property
@@ -45,14 +48,17 @@ class PendingReport:
 
     def all_diagnostics(self) -> list[Diagnostic]:
         found = ([e.diagnostic() for e in self.pending] + [_unknown_diagnostic(e) for e in self.unknown]
-                 + [s.diagnostic for s in self.stupefied] + self.diagnostics)
+                 + [s.diagnostic for s in self.stupefied] + self.diagnostics + self.differences)
         return sorted(found, key=sort_key)
 
     def summary(self) -> str:
         configured = ", ".join(f"{n} {_PLURALS[kind] if n != 1 else kind}" for kind, n in sorted(self.configured.items()))
         unknown = f", {len(self.unknown)} of unknown type" if self.unknown else ""
+        differing = (f"; {len(self.differences)} active that VR Juggler would leave pending"
+                     if self.differences else "")
         return (f"configured: {configured or 'nothing'}; {len(self.pending)} pending, "
-                f"{len(self.stupefied)} stupefied prox{'y' if len(self.stupefied) == 1 else 'ies'}{unknown}")
+                f"{len(self.stupefied)} stupefied prox{'y' if len(self.stupefied) == 1 else 'ies'}{unknown}"
+                f"{differing}")
 
     def text(self) -> str:
         lines = []
@@ -69,6 +75,7 @@ class PendingReport:
             "unknown_type": [e.to_dict() for e in self.unknown],
             "stupefied": [s.to_dict() for s in self.stupefied],
             "diagnostics": [d.to_dict() for d in sorted(self.diagnostics, key=sort_key)],
+            "vrjuggler_pending": [d.to_dict() for d in sorted(self.differences, key=sort_key)],
             "configured": dict(self.configured),
         }
 
@@ -89,6 +96,13 @@ def pending_report(manager: InputManager) -> PendingReport:
         if status.state == "pending" or status.kind is None:
             continue
         report.configured[status.kind.value] += 1
+        if status.note:
+            element = manager.element(status.name)
+            loc = element.location if element is not None else None
+            report.differences.append(Diagnostic.make(
+                "DRV044", f"{status.name} ({status.type}) is {status.state} (VR Juggler would leave it pending: "
+                f"{status.note})", loc.path if loc else None, loc.line if loc else None,
+                loc.column if loc else None))
         if status.kind is ElementKind.PROXY and status.reason:
             proxy = manager.proxies[status.name]
             element = manager.proxy_element(status.name)

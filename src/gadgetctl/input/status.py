@@ -36,11 +36,15 @@ class ElementStatus:
     code: str | None = None
     stats: DeviceStats | None = None
     target: str | None = None  # a proxy's device, an alias's proxy
+    #: For an element gadgetctl runs but VR Juggler would leave pending (a documented
+    #: difference): why VR Juggler would.
+    note: str | None = None
 
     def to_dict(self) -> dict[str, object]:
         return {
             "name": self.name, "type": self.type, "kind": None if self.kind is None else self.kind.value,
             "state": self.state, "reason": self.reason, "code": self.code, "target": self.target,
+            "vrjuggler_pending": self.note,
             "stats": None if self.stats is None else {
                 "samples": self.stats.samples, "dropped": self.stats.dropped, "faults": self.stats.faults,
                 "restarts": self.stats.restarts, "last_error": self.stats.last_error},

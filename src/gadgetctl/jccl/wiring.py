@@ -1,15 +1,16 @@
 """Checks across the elements of one configuration: pointers, duplicate names, and which
 elements VR Juggler would leave pending.
 
-The pending simulation follows the ConfigManager (reference section 4): an element becomes
+The pending simulation follows the ConfigManager (reference section 4) with the rules
+gadgetctl's input manager uses too (:mod:`gadgetctl.jccl.activation`): an element becomes
 active once every non-empty pointer of it and of its embedded elements names an active
 top-level element; stupefiable proxies and cluster nodes skip that test; some handlers
-refuse old versions, and gesture proxies are never handled.
+refuse old versions, and gesture proxies are never handled. Where gadgetctl deliberately
+runs what VR Juggler leaves pending, the message says so.
 """
 
 from __future__ import annotations
 
-from collections import defaultdict
 from dataclasses import dataclass
 from difflib import get_close_matches
 from pathlib import Path
@@ -17,17 +18,15 @@ from pathlib import Path
 from lxml import etree
 
 from gadgetctl.diagnostics import Diagnostic, Severity
+from gadgetctl.jccl.activation import DIFFERENCES, Node, RunTime, never_handled, settle, too_old
 from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.elementcheck import ElementReport, PointerValue, at, describe
-from gadgetctl.jccl.runtime import (
-    NEVER_HANDLED,
-    NO_DEPENDENCY_CHECK,
-    minimum_version,
-    missing_target_effect,
-)
+from gadgetctl.jccl.runtime import missing_target_effect
 from gadgetctl.jccl.typeindex import TypeIndex
 
 UNHANDLED = "unhandled"
+#: Said of an element VR Juggler leaves pending where gadgetctl deliberately runs it.
+GADGETCTL_RUNS_IT = "gadgetctl runs it"
 
 
 @dataclass(frozen=True, slots=True)
@@ -118,6 +117,8 @@ class Wiring:
             candidates = self.embedded if "/" in pointer.target else self.by_name
             close = get_close_matches(pointer.target, list(candidates), n=3, cutoff=0.7)
             effect = missing_target_effect(root.type, root.name, pointer.element is not root)
+            if root.type in DIFFERENCES and pointer.element is root:
+                effect += f" ({GADGETCTL_RUNS_IT})"
             return [at("CFG031", f"{who}: {self.scope.nowhere()}; {effect}",
                        pointer.value.location,
                        severity=Severity.ERROR if self.scope.complete else None,
@@ -138,53 +139,41 @@ class Wiring:
         view = self.reports[id(element)].views.get(id(element))
         if view is None or view.definition.abstract:
             return UNHANDLED, Severity.ERROR  # reported as CFG010 / CFG011
-        minimum = minimum_version(element.type, self.index.versions(element.type))
-        if minimum is not None and (element.version or 0) < minimum:
-            return (f"VR Juggler refuses {element.type} elements older than version {minimum} "
-                    f"(this one is version {element.version or 0})"), Severity.ERROR
-        reason = NEVER_HANDLED.get(element.type)
+        old = too_old(element.type, element.version, self.index.versions(element.type))
+        if old is not None:
+            return old.replace("the run time", "VR Juggler", 1), Severity.ERROR
+        reason = never_handled(element.type, RunTime.VRJUGGLER)
         return (reason, Severity.WARNING) if reason else None
 
+    def _nodes(self) -> list[Node]:
+        return [Node(e.name, e.type, e.version, tuple(p.target for p in self.reports[id(e)].pointers),
+                     UNHANDLED if self.blocked.get(id(e), ("",))[0] == UNHANDLED else None)
+                for e in self.effective]
+
     def pending(self) -> list[Diagnostic]:
-        waiting: dict[str, list[ConfigElement]] = defaultdict(list)
-        unmet: dict[int, int] = {}
-        ready: list[ConfigElement] = []
         self.blocked: dict[int, tuple[str, Severity]] = {}
         for element in self.effective:
             blocker = self._blocked(element)
             if blocker is not None:
                 self.blocked[id(element)] = blocker
-                continue
-            deps = set() if element.type in NO_DEPENDENCY_CHECK else \
-                {p.target for p in self.reports[id(element)].pointers}
-            unmet[id(element)] = len(deps)
-            for dep in deps:
-                waiting[dep].append(element)
-            if not deps:
-                ready.append(element)
-        active: set[str] = set()
-        while ready:
-            element = ready.pop()
-            if element.name in active:
-                continue
-            active.add(element.name)
-            for dependent in waiting.get(element.name, ()):
-                unmet[id(dependent)] -= 1
-                if unmet[id(dependent)] == 0:
-                    ready.append(dependent)
+        nodes = self._nodes()
+        fate = settle(nodes, RunTime.VRJUGGLER, self.index.versions)
+        active = {name for name, why in fate.items() if why is None}
+        ours = settle(nodes, RunTime.GADGETCTL, self.index.versions)
         found = []
         for element in self.effective:
             if element.name in active:
                 continue
+            where = f" in VR Juggler ({GADGETCTL_RUNS_IT})" if ours.get(element.name, "") is None else ""
             blocker = self.blocked.get(id(element))
             if blocker is None:
-                found.extend(self._waiting(element, active))
+                found.extend(self._waiting(element, active, where))
             elif blocker[0] != UNHANDLED:
-                found.append(at("CFG041", f"{describe(element)} would stay pending: {blocker[0]}",
+                found.append(at("CFG041", f"{describe(element)} would stay pending{where}: {blocker[0]}",
                                 element.location, severity=blocker[1]))
         return found
 
-    def _waiting(self, element: ConfigElement, active: set[str]) -> list[Diagnostic]:
+    def _waiting(self, element: ConfigElement, active: set[str], where: str = "") -> list[Diagnostic]:
         reasons: list[tuple[PointerValue, str]] = []
         for pointer in self.reports[id(element)].pointers:
             name = pointer.target
@@ -204,7 +193,7 @@ class Wiring:
             return []  # only missing targets: reported as CFG031
         pointer, text = reasons[0]
         more = f" (and {len(reasons) - 1} more)" if len(reasons) > 1 else ""
-        return [at("CFG041", f"{describe(element)} would stay pending: {text}{more}",
+        return [at("CFG041", f"{describe(element)} would stay pending{where}: {text}{more}",
                    pointer.value.location, severity=self._root_severity(element, active))]
 
     def _root_severity(self, element: ConfigElement, active: set[str]) -> Severity:

@@ -117,6 +117,8 @@ class ElementView:
     state: str
     reason: str | None = None
     target: str | None = None  # a proxy's device, an alias's proxy
+    #: Why VR Juggler would leave this element pending although gadgetctl runs it.
+    note: str | None = None
     unit: int | None = None  # a proxy's unit
     device: str | None = None  # the device whose statistics are shown
     stats: DeviceSnapshot | None = None
@@ -980,7 +982,8 @@ class MonitorSession:
         moment = now() if moment is None else moment
         manager = self.manager
         element, element_type, state, reason = self._status_of(name)
-        view = ElementView(name, element or PENDING, element_type, state, reason)
+        view = ElementView(name, element or PENDING, element_type, state, reason,
+                           note=manager.vrjuggler_difference(name))
         device = manager.device(name)
         if device is not None:
             track = self._tracks.get(name)

@@ -186,6 +186,17 @@ CODES += [
          "instead, as in VR Juggler, and revives when its device appears.",
          "digital_proxy VJButton0Proxy: device 'SimWandButtons' is not configured",
          "Point the proxy at a configured device of the right type and an existing unit."),
+    Code("DRV044", C, I, "active in gadgetctl, pending in VR Juggler",
+         "gadgetctl's input manager runs the element, but VR Juggler would leave it pending: a "
+         "documented difference (docs/configurations.md, \"Pending elements\"). Gesture proxies, "
+         "which Gadgeteer never constructs, and command and string proxies, which VR Juggler "
+         "keeps pending until their device is active, are bound at once and stupefied until "
+         "their device is active; elements waiting for them follow. `gadgetctl validate` "
+         "reports the same elements as CFG041 or CFG031, saying \"in VR Juggler (gadgetctl runs "
+         "it)\".",
+         "<gesture_proxy name=\"Gesture Proxy\"><device>Glove Gestures</device></gesture_proxy>",
+         "Nothing to fix for gadgetctl. For VR Juggler, read the element from the device "
+         "directly (gesture) or make sure the device configures (command, string)."),
 ]
 
 # -- connections (`gadgetctl doctor`) ---------------------------------------------------------

@@ -1,0 +1,144 @@
+"""Which elements a run time activates and which it leaves pending: one set of rules for
+`gadgetctl validate` (its predictions for VR Juggler, CFG041/CFG031) and for gadgetctl's
+own input manager (`config pending`, `monitor`).
+
+An element becomes active once every non-empty pointer of it and of its embedded elements
+names an active top-level element, unless its type skips that test; a type no handler
+takes, or an element older than its handler accepts, never becomes active. The two run
+times differ on purpose only where :data:`DIFFERENCES` says so; both outputs then say which
+behaviour they describe.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Callable, Collection, Iterable, Sequence
+from dataclasses import dataclass
+from enum import StrEnum
+
+from gadgetctl.jccl.runtime import NEVER_HANDLED, NO_DEPENDENCY_CHECK, minimum_version
+
+#: The fate :func:`settle` gives an element that waits for pointers that never become active.
+WAITING = "waiting"
+
+
+class RunTime(StrEnum):
+    VRJUGGLER = "VR Juggler"
+    GADGETCTL = "gadgetctl"
+
+
+@dataclass(frozen=True, slots=True)
+class Difference:
+    """Where gadgetctl's input manager activates what VR Juggler leaves pending."""
+
+    vrjuggler: str  # why VR Juggler leaves it pending
+    gadgetctl: str  # what gadgetctl does instead
+
+
+_WAITS = (
+    "unlike most proxies, VR Juggler's {type} waits for its device, so it stays pending while "
+    "the device is not active"
+)
+_BINDS = (
+    "gadgetctl binds it at once and stupefies it until its device is active, like the other proxies"
+)
+
+#: The documented differences, by element type (docs/configurations.md, "Pending elements").
+DIFFERENCES: dict[str, Difference] = {
+    "gesture_proxy": Difference(
+        NEVER_HANDLED["gesture_proxy"], "gadgetctl runs it like the other proxies"
+    ),
+    "command_proxy": Difference(_WAITS.format(type="command_proxy"), _BINDS),
+    "string_proxy": Difference(_WAITS.format(type="string_proxy"), _BINDS),
+}
+
+#: Proxies gadgetctl binds without waiting for their device (it stupefies them instead).
+GADGETCTL_UNWAITING = frozenset(DIFFERENCES) | NO_DEPENDENCY_CHECK
+
+
+def waits_for_pointers(type_name: str, runtime: RunTime) -> bool:
+    """Whether an element of this type stays pending until every element it points at is
+    active (JCCL's default dependency check), or is configured regardless."""
+    skip = GADGETCTL_UNWAITING if runtime is RunTime.GADGETCTL else NO_DEPENDENCY_CHECK
+    return type_name not in skip
+
+
+def never_handled(type_name: str, runtime: RunTime) -> str | None:
+    """Why no handler of ``runtime`` ever takes an element of this type, or None."""
+    if runtime is RunTime.GADGETCTL and type_name in DIFFERENCES:
+        return None
+    return NEVER_HANDLED.get(type_name)
+
+
+def too_old(type_name: str, version: int | None, versions: Sequence[int]) -> str | None:
+    """Why the handler refuses an element of this version (both run times), or None."""
+    minimum = minimum_version(type_name, versions)
+    if minimum is None or (version or 0) >= minimum:
+        return None
+    return (
+        f"the run time refuses {type_name} elements older than version {minimum} "
+        f"(this one is version {version or 0}; `gadgetctl upgrade` brings it up to date)"
+    )
+
+
+def refusal(
+    type_name: str, version: int | None, versions: Sequence[int], runtime: RunTime
+) -> str | None:
+    """Why ``runtime`` never activates this element whatever the others do, or None."""
+    return never_handled(type_name, runtime) or too_old(type_name, version, versions)
+
+
+@dataclass(frozen=True, slots=True)
+class Node:
+    """One top-level element as the rules see it: ``targets`` are the names its pointers
+    (and its embedded elements' pointers) give; ``refused`` says why it can never become
+    active for a reason outside the rules (no definition, abstract type, no driver...)."""
+
+    name: str
+    type: str
+    version: int | None
+    targets: tuple[str, ...]
+    refused: str | None = None
+
+
+def settle(
+    nodes: Iterable[Node],
+    runtime: RunTime,
+    versions: Callable[[str], Sequence[int]],
+    *,
+    refused: Collection[str] = (),
+) -> dict[str, str | None]:
+    """Every node's fate once nothing more can change: None when active, else why it stays
+    pending (its refusal, or ``"waiting"`` for elements that wait on pointers that never
+    become active). ``refused`` names more elements that never become active."""
+    nodes = list(nodes)
+    fate: dict[str, str | None] = {}
+    waiting: dict[str, list[Node]] = defaultdict(list)
+    unmet: dict[str, int] = {}
+    ready: list[Node] = []
+    for node in nodes:
+        reason = (
+            node.refused
+            or ("refused" if node.name in refused else None)
+            or refusal(node.type, node.version, versions(node.type), runtime)
+        )
+        if reason is not None:
+            fate[node.name] = reason
+            continue
+        deps = set(node.targets) if waits_for_pointers(node.type, runtime) else set()
+        unmet[node.name] = len(deps)
+        fate[node.name] = WAITING
+        for dep in deps:
+            waiting[dep].append(node)
+        if not deps:
+            ready.append(node)
+    while ready:
+        node = ready.pop()
+        if fate.get(node.name) is None:
+            continue
+        fate[node.name] = None
+        for dependent in waiting.get(node.name, ()):
+            unmet[dependent.name] -= 1
+            if unmet[dependent.name] == 0:
+                ready.append(dependent)
+    return fate
