@@ -191,7 +191,8 @@ class ElementUpgrader:
             if not definition.upgrade_transform:
                 raise UpgradeFailure(f"version {number} of {type_name} has no upgrade transform")
             try:
-                result = apply_transform(definition.upgrade_transform, current)
+                source = definition.location.path if definition.location is not None else None
+                result = apply_transform(definition.upgrade_transform, current, source)
             except TransformError as err:
                 raise UpgradeFailure(f"{type_name} version {number - 1} -> {number}: {err}") from None
             first = result[0]

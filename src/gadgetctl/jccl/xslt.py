@@ -9,6 +9,7 @@ entities or network.
 from __future__ import annotations
 
 import copy
+from pathlib import Path
 
 from lxml import etree
 
@@ -26,9 +27,8 @@ _compiled: dict[bytes, etree.XSLT] = {}
 def compile_transform(stylesheet: bytes) -> etree.XSLT:
     found = _compiled.get(stylesheet)
     if found is None:
-        parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False)
         try:
-            found = etree.XSLT(etree.fromstring(stylesheet, parser), access_control=_DENY_ALL)
+            found = etree.XSLT(etree.fromstring(stylesheet, _safe_parser()), access_control=_DENY_ALL)
         except (etree.XMLSyntaxError, etree.XSLTParseError) as err:
             raise TransformError(f"the upgrade stylesheet does not compile: {err}") from None
         _compiled[stylesheet] = found
@@ -59,16 +59,66 @@ def in_namespace(node: etree._Element, namespace: str = CONFIG_NS) -> etree._Ele
     return rebuild(node)
 
 
-def apply_transform(stylesheet: bytes, element: etree._Element) -> list[etree._Element]:
+def apply_transform(stylesheet: bytes, element: etree._Element, source: str | None = None) -> list[etree._Element]:
     """The elements a stylesheet makes of one element: the upgraded element first, then any
-    new elements it creates. ``element`` itself is not changed."""
-    transform = compile_transform(stylesheet)
-    document = etree.ElementTree(copy.deepcopy(element))
+    new elements it creates. ``element`` itself is not changed.
+
+    ``source`` is the definition file the stylesheet comes from: one of the bundled
+    definitions runs in-process; any other (or an unknown source) runs in a child process
+    with bounded time and memory (:mod:`gadgetctl.jccl.xsltsandbox`).
+    """
+    if source is not None and is_bundled(source):
+        transform = compile_transform(stylesheet)
+        document = etree.ElementTree(copy.deepcopy(element))
+        try:
+            result = transform(document)
+        except etree.XSLTApplyError as err:
+            raise TransformError(f"the upgrade stylesheet failed: {err}") from None
+        root = result.getroot()
+        if root is None:
+            raise TransformError("the upgrade stylesheet produced no element")
+        return [root, *(n for n in root.itersiblings() if isinstance(n.tag, str))]
+    from gadgetctl.jccl.xsltsandbox import SandboxError, run_sandboxed
+
     try:
-        result = transform(document)
+        answer = run_sandboxed(stylesheet, etree.tostring(element))
+    except SandboxError as err:
+        raise TransformError(f"the upgrade stylesheet of {source or 'a definition'} was {err}") from None
+    except ValueError as err:
+        raise TransformError(str(err)) from None
+    wrapper = etree.fromstring(answer, _safe_parser())
+    return [child for child in wrapper if isinstance(child.tag, str)]
+
+
+def transform_in_process(stylesheet: bytes, element: bytes) -> bytes:
+    """What the sandbox's child runs: ``apply_transform`` on a serialised element, the
+    resulting elements serialised inside ``<r>``."""
+    node = etree.fromstring(element, _safe_parser())
+    transform = compile_transform(stylesheet)
+    try:
+        result = transform(etree.ElementTree(node))
     except etree.XSLTApplyError as err:
         raise TransformError(f"the upgrade stylesheet failed: {err}") from None
     root = result.getroot()
     if root is None:
         raise TransformError("the upgrade stylesheet produced no element")
-    return [root, *(n for n in root.itersiblings() if isinstance(n.tag, str))]
+    wrapper = etree.Element("r")
+    for made in [root, *(n for n in root.itersiblings() if isinstance(n.tag, str))]:
+        wrapper.append(copy.deepcopy(made))
+    return etree.tostring(wrapper)
+
+
+def _safe_parser() -> etree.XMLParser:
+    return etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False, huge_tree=False)
+
+
+def is_bundled(source: str) -> bool:
+    """Whether ``source`` is a definition file of gadgetctl's own (bundled definitions or
+    bundled drivers), whose stylesheets run in-process."""
+    from gadgetctl.resources import definitions_dir, drivers_dir
+
+    try:
+        path = Path(source).resolve()
+    except (OSError, RuntimeError):
+        return False
+    return any(path.is_relative_to(root.resolve()) for root in (definitions_dir(), drivers_dir()))
