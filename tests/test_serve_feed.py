@@ -25,8 +25,12 @@ class Collected:
         self.analogs: dict[str, list[np.ndarray]] = {}
         self.texts: dict[str, list[tuple[int, str]]] = {}
 
-    def tracker(self, sender, times, positions, quaternions):
-        self.poses.setdefault(sender, []).append((times, positions, quaternions))
+    def tracker(self, sender, times, matrices):
+        from gadgetctl.input.transforms import quaternions_xyzw
+
+        self.poses.setdefault(sender, []).append(
+            (times, matrices[..., :3, 3], quaternions_xyzw(matrices))
+        )
 
     def buttons(self, sender, changes, states):
         self.changes.setdefault(sender, []).extend(changes)

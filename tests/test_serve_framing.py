@@ -33,7 +33,14 @@ def test_poses_match_one_message_per_sensor():
         for i in range(5)
         for s in range(3)
     )
-    data = pack_poses(2, 7, t, positions, quats)
+    data = pack_poses(
+        2,
+        7,
+        np.repeat(t, 3),
+        np.tile(np.arange(3), 5),
+        positions.reshape(-1, 3),
+        quats.reshape(-1, 4),
+    )
     assert data == expected and len(data) == 15 * POSE_SIZE
 
 
@@ -56,7 +63,7 @@ def test_a_full_buffer_drops_whole_messages_and_udp_datagrams_hold_whole_message
     a, b = socket.socketpair()
     try:
         endpoint = Endpoint(a, out_limit=24 + 10 * POSE_SIZE)  # the cookie is queued first
-        data = pack_poses(1, 4, times(16), np.zeros((16, 1, 3)), np.zeros((16, 1, 4)))
+        data = pack_poses(1, 4, times(16), np.zeros(16), np.zeros((16, 3)), np.zeros((16, 4)))
         assert endpoint.queue_batch(data, POSE_SIZE, reliable=True) == 10
         assert endpoint.dropped == 6 and len(endpoint.out) == 24 + 10 * POSE_SIZE
         assert endpoint.queue_batch(data, POSE_SIZE, reliable=True) == 0 and endpoint.dropped == 22

@@ -72,31 +72,52 @@ def as_matrices(data: object) -> np.ndarray:
 
 def quaternions_xyzw(matrices: object) -> np.ndarray:
     """The unit quaternions (x, y, z, w), w >= 0, of the rotations of 4x4 (or 3x3) matrices,
-    shape (..., 4). Vectorised: each matrix takes the branch of its largest diagonal term."""
+    shape (..., 4). Vectorised: rotations of less than 120 degrees (trace > 0) take the
+    well-conditioned w branch; the others, per matrix, the branch of the largest diagonal
+    term."""
     r = np.asarray(matrices, dtype=np.float64)[..., :3, :3]
-    m00, m11, m22 = r[..., 0, 0], r[..., 1, 1], r[..., 2, 2]
-    trace = m00 + m11 + m22
-    q = np.empty((*r.shape[:-2], 4))
-    # four candidate solutions; pick per matrix the numerically best one
-    branch = np.argmax(np.stack([trace, m00, m11, m22], axis=-1), axis=-1)
+    shape = r.shape[:-2]
+    r = r.reshape(-1, 3, 3)
+    q = np.empty((len(r), 4))
+    trace = r[:, 0, 0] + r[:, 1, 1] + r[:, 2, 2]
+    easy = trace > 0
+    whole = bool(easy.all())
+    sub = r if whole else r[easy]
+    s = np.sqrt(1.0 + (trace if whole else trace[easy])) * 2.0
+    rows = q if whole else np.empty((len(sub), 4))
+    rows[:, 0] = (sub[:, 2, 1] - sub[:, 1, 2]) / s
+    rows[:, 1] = (sub[:, 0, 2] - sub[:, 2, 0]) / s
+    rows[:, 2] = (sub[:, 1, 0] - sub[:, 0, 1]) / s
+    rows[:, 3] = 0.25 * s
+    if not whole:
+        q[easy] = rows
+        q[~easy] = _quaternions_by_largest_term(r[~easy])
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    q[q[:, 3] < 0] *= -1.0
+    return q.reshape((*shape, 4))
+
+
+def _quaternions_by_largest_term(r: np.ndarray) -> np.ndarray:
+    """(x, y, z, w) of rotations (n, 3, 3), each from the branch of its largest diagonal term."""
+    m00, m11, m22 = r[:, 0, 0], r[:, 1, 1], r[:, 2, 2]
+    q = np.empty((len(r), 4))
+    branch = np.argmax(np.stack([m00 + m11 + m22, m00, m11, m22], axis=-1), axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.sqrt(np.maximum(1e-300, 1.0 + trace)) * 2.0
-        w_branch = np.stack([(r[..., 2, 1] - r[..., 1, 2]) / s, (r[..., 0, 2] - r[..., 2, 0]) / s,
-                             (r[..., 1, 0] - r[..., 0, 1]) / s, 0.25 * s], axis=-1)
+        s = np.sqrt(np.maximum(1e-300, 1.0 + m00 + m11 + m22)) * 2.0
+        w_branch = np.stack([(r[:, 2, 1] - r[:, 1, 2]) / s, (r[:, 0, 2] - r[:, 2, 0]) / s,
+                             (r[:, 1, 0] - r[:, 0, 1]) / s, 0.25 * s], axis=-1)
         s = np.sqrt(np.maximum(1e-300, 1.0 + m00 - m11 - m22)) * 2.0
-        x_branch = np.stack([0.25 * s, (r[..., 0, 1] + r[..., 1, 0]) / s, (r[..., 0, 2] + r[..., 2, 0]) / s,
-                             (r[..., 2, 1] - r[..., 1, 2]) / s], axis=-1)
+        x_branch = np.stack([0.25 * s, (r[:, 0, 1] + r[:, 1, 0]) / s, (r[:, 0, 2] + r[:, 2, 0]) / s,
+                             (r[:, 2, 1] - r[:, 1, 2]) / s], axis=-1)
         s = np.sqrt(np.maximum(1e-300, 1.0 + m11 - m00 - m22)) * 2.0
-        y_branch = np.stack([(r[..., 0, 1] + r[..., 1, 0]) / s, 0.25 * s, (r[..., 1, 2] + r[..., 2, 1]) / s,
-                             (r[..., 0, 2] - r[..., 2, 0]) / s], axis=-1)
+        y_branch = np.stack([(r[:, 0, 1] + r[:, 1, 0]) / s, 0.25 * s, (r[:, 1, 2] + r[:, 2, 1]) / s,
+                             (r[:, 0, 2] - r[:, 2, 0]) / s], axis=-1)
         s = np.sqrt(np.maximum(1e-300, 1.0 + m22 - m00 - m11)) * 2.0
-        z_branch = np.stack([(r[..., 0, 2] + r[..., 2, 0]) / s, (r[..., 1, 2] + r[..., 2, 1]) / s, 0.25 * s,
-                             (r[..., 1, 0] - r[..., 0, 1]) / s], axis=-1)
+        z_branch = np.stack([(r[:, 0, 2] + r[:, 2, 0]) / s, (r[:, 1, 2] + r[:, 2, 1]) / s, 0.25 * s,
+                             (r[:, 1, 0] - r[:, 0, 1]) / s], axis=-1)
     for index, candidate in enumerate((w_branch, x_branch, y_branch, z_branch)):
         chosen = branch == index
         q[chosen] = candidate[chosen]
-    q /= np.linalg.norm(q, axis=-1, keepdims=True)
-    q[q[..., 3] < 0] *= -1.0
     return q
 
 

@@ -19,7 +19,6 @@ from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.proxies import Proxy
 from gadgetctl.input.samples import FrameSamples, Sample
-from gadgetctl.input.transforms import quaternions_xyzw
 from gadgetctl.serve.catalog import Role, ServedElement, proxy_role
 
 _PRESSED = (DigitalState.ON, DigitalState.TOGGLE_ON)
@@ -127,9 +126,7 @@ class ServeFeed:
                     matrices = np.asarray(values, dtype=np.float64)
                     if matrices.ndim != 4 or not matrices.shape[1]:
                         continue
-                    outlet.tracker(
-                        sender, stamps + offset, matrices[..., :3, 3], quaternions_xyzw(matrices)
-                    )
+                    outlet.tracker(sender, stamps + offset, matrices)
                     self.reports += matrices.shape[0] * matrices.shape[1]
             elif kind is DeviceKind.DIGITAL:
                 state = self._buttons.setdefault(sender, _ButtonState())
@@ -165,8 +162,9 @@ class ServeFeed:
         role = proxy_role(proxy)
         outlet = self.outlet
         if role is Role.TRACKER:
-            matrix = np.asarray(proxy.data, dtype=np.float64)[None, None]
-            outlet.tracker(sender, np.array([moment]), matrix[..., :3, 3], quaternions_xyzw(matrix))
+            outlet.tracker(
+                sender, np.array([moment]), np.asarray(proxy.data, dtype=np.float64)[None, None]
+            )
         elif role is Role.BUTTON:
             state = self._buttons.setdefault(sender, _ButtonState())
             pressed = 1 if proxy.data in _PRESSED else 0

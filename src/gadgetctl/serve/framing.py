@@ -64,20 +64,29 @@ def _header(
 
 
 def pack_poses(
-    sender: int, type_id: int, times: np.ndarray, positions: np.ndarray, quats: np.ndarray
+    senders: np.ndarray | int,
+    type_id: int,
+    times: np.ndarray,
+    sensors: np.ndarray,
+    positions: np.ndarray,
+    quats: np.ndarray,
 ) -> bytes:
-    """``vrpn_Tracker Pos_Quat`` messages, time-major: for each of the n times, one message
-    per sensor 0..s-1. ``positions`` (n, s, 3), ``quats`` (n, s, 4) as x, y, z, w."""
+    """``vrpn_Tracker Pos_Quat`` messages, one per row: ``senders`` (m,) or one id, ``times``
+    (m,), ``sensors`` (m,), ``positions`` (m, 3), ``quats`` (m, 4) as x, y, z, w."""
     positions = np.asarray(positions, dtype=np.float64)
-    n, sensors = positions.shape[:2]
-    records = np.empty(n * sensors, dtype=_POSE)
+    count = len(positions)
+    records = np.empty(count, dtype=_POSE)
     sec, usec = split_times(times)
-    _header(records, 64, np.repeat(sec, sensors), np.repeat(usec, sensors), sender, type_id)
-    numbers = np.tile(np.arange(sensors, dtype=np.int32), n)
-    records["sensor"] = numbers
-    records["filler"] = numbers
-    records["position"] = positions.reshape(-1, 3)
-    records["quat"] = np.asarray(quats, dtype=np.float64).reshape(-1, 4)
+    records["length"] = HEADER_SIZE + 64
+    records["sec"] = sec
+    records["usec"] = usec
+    records["sender"] = senders
+    records["type"] = type_id
+    records["sequence"] = 0
+    records["sensor"] = sensors
+    records["filler"] = sensors
+    records["position"] = positions
+    records["quat"] = quats
     return records.tobytes()
 
 

@@ -9,6 +9,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
+from gadgetctl.input.transforms import quaternions_xyzw
 from gadgetctl.serve.catalog import Role, ServedElement
 from gadgetctl.serve.framing import (
     CHANGE_SIZE,
@@ -50,15 +51,13 @@ class VrpnOutlet:
         self._text = self.types[codecs.TEXT_MESSAGE]
         self.button_states: dict[str, np.ndarray] = {}
         self.messages = 0
+        self._poses: list[tuple[int, np.ndarray, np.ndarray]] = []
 
     # -- Outlet -------------------------------------------------------------------------
 
-    def tracker(
-        self, sender: str, times: np.ndarray, positions: np.ndarray, quaternions: np.ndarray
-    ) -> None:
-        data = pack_poses(self.senders[sender], self._pose, times, positions, quaternions)
-        self.messages += positions.shape[0] * positions.shape[1]
-        self.server.broadcast(data, POSE_SIZE, reliable=False)
+    def tracker(self, sender: str, times: np.ndarray, matrices: np.ndarray) -> None:
+        # kept until the end of the frame: every tracker of a frame is framed in one go
+        self._poses.append((self.senders[sender], times, matrices))
 
     def buttons(
         self, sender: str, changes: Sequence[tuple[float, int, int]], states: np.ndarray
@@ -91,6 +90,33 @@ class VrpnOutlet:
             reliable=True,
             flush=False,
         )
+
+    def end_frame(self) -> None:
+        """Frame and queue the frame's tracker reports: one conversion to quaternions and
+        one framing for all of them, however many devices and sensors."""
+        if not self._poses:
+            return
+        pending, self._poses = self._poses, []
+        senders, times, matrices = [], [], []
+        for sender, stamps, values in pending:
+            n, sensors = values.shape[:2]
+            senders.append(np.full(n * sensors, sender, dtype=np.int32))
+            times.append(np.repeat(stamps, sensors))
+            matrices.append(values.reshape(n * sensors, 4, 4))
+        sensor_numbers = np.concatenate(
+            [np.tile(np.arange(v.shape[1], dtype=np.int32), v.shape[0]) for _, _, v in pending]
+        )
+        flat = np.concatenate(matrices) if len(matrices) > 1 else matrices[0]
+        data = pack_poses(
+            np.concatenate(senders),
+            self._pose,
+            np.concatenate(times),
+            sensor_numbers,
+            flat[:, :3, 3],
+            quaternions_xyzw(flat),
+        )
+        self.messages += len(flat)
+        self.server.broadcast(data, POSE_SIZE, reliable=False)
 
     # -- for new clients ----------------------------------------------------------------
 

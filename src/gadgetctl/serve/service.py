@@ -24,7 +24,9 @@ from gadgetctl.serve.catalog import ServedElement, build_catalog
 from gadgetctl.serve.feed import ServeFeed
 
 WARMUP = 0.5  # seconds of frames before the catalog is read (so unit counts are known)
-SOCKET_BUFFER = 256 * 1024  # kernel send buffer per client: a stalled client's backlog shows as drops
+SOCKET_BUFFER = (
+    256 * 1024
+)  # kernel send buffer per client: a stalled client's backlog shows as drops
 DEFAULT_RATE = 1000.0  # frames per second: a sample waits at most a millisecond to be sent
 
 
@@ -125,7 +127,10 @@ class ServeService:
         return server.port
 
     def _flush(self, session: MonitorSession, moment: float) -> None:
-        self.server.flush()
+        # a full pass (accept, read, write), not only a flush: when frames fall behind, the
+        # frame loop has no waits left, and clients must still be accepted and heard
+        self.outlet.end_frame()
+        self.server.poll(0.0)
 
     def _wait(self, delay: float) -> None:
         """The frame loop's sleep: the server's I/O until the next frame is due."""

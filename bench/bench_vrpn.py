@@ -1,0 +1,399 @@
+"""Benchmarks of VRPN (issue 11): `VRPN_drv` ingesting from gadgetctl's server, and `serve`
+fanning out to many clients. Both run `gadgetctl serve` as a separate process on loopback.
+
+1. Ingest: a 32-sensor tracker at 1 kHz (32,000 pose reports/s) plus 16 buttons, read over
+   direct TCP by VRPN_drv inside the input manager; targets: 0 reports lost. Printed: the
+   driver thread's share of a core and its CPU per report, against a raw-socket reader of
+   the same stream (framing only, no decoding) as baseline, measured in the same run.
+2. Fan-out: 100 waveform devices at 1 kHz (100,000 pose reports/s) served to 8 raw TCP
+   clients (each in its own process); targets: 0 lost on TCP, sample-to-client latency p99
+   <= 2 ms. Printed: latency p50/p99 (sample time in the message header to the client's
+   receipt), the CPU of serve, messages per second per client.
+
+Run: python bench/bench_vrpn.py [--seconds 5] [--part ingest|fanout] [--devices 100] [--clients 8]
+Exit status 1 when a target is missed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import os
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+from common import REPO, Report
+
+from gadgetctl.vrpn import codecs
+from gadgetctl.vrpn.wire import COOKIE_SIZE, HEADER_SIZE, make_cookie, padded
+
+HEAD = """<?xml version="1.0" encoding="UTF-8"?>
+<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
+<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="bench">
+   <elements>
+{body}   </elements>
+</configuration>
+"""
+_HEADER = struct.Struct(">IiiiiI")
+TICK = os.sysconf("SC_CLK_TCK")
+
+
+def cpu_seconds(pid: int, tid: int | None = None) -> float:
+    """CPU (user + system) of a process, or of one of its threads, from /proc."""
+    path = f"/proc/{pid}/task/{tid}/stat" if tid else f"/proc/{pid}/stat"
+    fields = Path(path).read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / TICK
+
+
+class Served:
+    def __init__(self, config: Path, *extra: str) -> None:
+        env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+        self.process = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "gadgetctl",
+                "serve",
+                str(config),
+                "--port",
+                "0",
+                "--format",
+                "json",
+                *extra,
+            ],
+            cwd=REPO,
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        first = json.loads(self.process.stdout.readline())
+        self.port = first["port"]
+        self.names = first["names"]
+        self.events: list[dict] = []
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        for line in self.process.stdout:
+            self.events.append(json.loads(line))
+
+    def cpu(self) -> float:
+        return cpu_seconds(self.process.pid)
+
+    def wait_disconnects(self, count: int, timeout: float = 30.0) -> list[dict]:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            gone = [e for e in self.events if e["event"] == "disconnected"]
+            if len(gone) >= count:
+                return gone
+            time.sleep(0.05)
+        raise RuntimeError("clients did not disconnect")
+
+    def stop(self) -> None:
+        self.process.send_signal(signal.SIGINT)
+        self.process.wait(30)
+        self._reader.join(5)
+
+
+# -------------------------------------------------------------------- raw-socket reader
+
+
+class RawReader:
+    """Reads a server's stream over direct TCP and walks the framing (no payload decoding):
+    the cheapest correct reader, the baseline. Counts messages; keeps pose header times
+    per sender for gap and latency analysis when ``poses`` is set."""
+
+    def __init__(self, port: int, *, poses: bool = False) -> None:
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=10)
+        self.sock.sendall(make_cookie())
+        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+        self.messages = 0
+        self.system = 0
+        self.keep = poses
+        self.pose_type: int | None = None
+        self.type_names: dict[int, str] = {}
+        self.times: list[np.ndarray] = []  # header times of pose messages (per chunk)
+        self.senders: list[np.ndarray] = []
+        self.latency: list[np.ndarray] = []
+
+    def run(self, seconds: float) -> None:
+        buf = bytearray()
+        need_cookie = True
+        end = time.monotonic() + seconds
+        sock = self.sock
+        sock.settimeout(0.5)
+        while time.monotonic() < end:
+            try:
+                data = sock.recv(1 << 20)
+            except TimeoutError:
+                continue
+            if not data:
+                break
+            received = time.time()
+            buf += data
+            if need_cookie:
+                if len(buf) < COOKIE_SIZE:
+                    continue
+                del buf[:COOKIE_SIZE]
+                need_cookie = False
+            buf = self._walk(buf, received)
+        sock.close()
+
+    def _walk(self, buf: bytearray, received: float) -> bytearray:
+        pos, end = 0, len(buf)
+        unpack = _HEADER.unpack_from
+        pose_size = HEADER_SIZE + 64
+        while end - pos >= HEADER_SIZE:
+            if self.pose_type is not None and self.keep:
+                # a run of pose messages: read their headers at once
+                count = 0
+                view = np.frombuffer(buf, dtype=">u4", count=(end - pos) // 4, offset=pos)
+                while (
+                    count < (end - pos) // pose_size
+                    and view[count * 22] == pose_size
+                    and view[count * 22 + 4] == self.pose_type
+                ):
+                    count += 1
+                    if count >= 4096:
+                        break
+                if count:
+                    words = np.frombuffer(buf, dtype=">i4", count=count * 22, offset=pos).reshape(
+                        count, 22
+                    )
+                    stamps = words[:, 1] + words[:, 2] * 1e-6
+                    self.times.append(stamps)
+                    self.senders.append(words[:, 3].copy())
+                    self.latency.append(received - stamps)
+                    self.messages += count
+                    pos += count * pose_size
+                    continue
+            length, _sec, _usec, sender, type_id, _ = unpack(buf, pos)
+            body = padded(length - HEADER_SIZE)
+            if end - pos - HEADER_SIZE < body:
+                break
+            if type_id < 0:
+                self.system += 1
+                if type_id == -2:
+                    (n,) = struct.unpack_from(">I", buf, pos + HEADER_SIZE)
+                    name = bytes(buf[pos + HEADER_SIZE + 4 : pos + HEADER_SIZE + 3 + n]).decode()
+                    self.type_names[sender] = name
+                    if name == codecs.TRACKER_POS_QUAT:
+                        self.pose_type = sender
+            self.messages += 1
+            pos += HEADER_SIZE + body
+        return buf[pos:]
+
+    def lost_poses(self, rate: float) -> int:
+        """Pose reports missing between each sender's first and last one (the waveform
+        samples are exactly 1/rate apart)."""
+        if not self.times:
+            return 0
+        times, senders = np.concatenate(self.times), np.concatenate(self.senders)
+        lost = 0
+        for sender in np.unique(senders):
+            t = times[senders == sender]
+            lost += max(0, round((t.max() - t.min()) * rate) + 1 - len(t))
+        return lost
+
+
+# -------------------------------------------------------------------- 1. ingest
+
+
+def ingest_config(rate: float) -> str:
+    paths = "".join(
+        f"<position_path>{('circle', 'spin', 'figure_eight')[i % 3]}</position_path>"
+        for i in range(32)
+    )
+    periods = "".join(f"<button_period>{0.05 + 0.01 * i:g}</button_period>" for i in range(16))
+    body = (
+        f'      <waveform_device name="Tracker32" version="1"><rate>{rate:g}</rate>'
+        f"<event_period>0.0</event_period>{paths}</waveform_device>\n"
+        f'      <waveform_device name="Buttons16" version="1"><rate>{rate:g}</rate>'
+        f"<event_period>0.0</event_period>{periods}</waveform_device>\n"
+    )
+    return HEAD.format(body=body)
+
+
+def receiver_config(port: int) -> str:
+    body = (
+        f'      <input_manager name="Input Manager" version="2"><driver>VRPN_drv</driver></input_manager>\n'
+        f'      <vrpn name="Ingest" version="3"><tracker_server>Tracker32@tcp://127.0.0.1:{port}</tracker_server>'
+        f"<button_server>Buttons16@tcp://127.0.0.1:{port}</button_server><analog_server></analog_server>"
+        f"<tracker_count>32</tracker_count><button_count>16</button_count><analog_count>0</analog_count></vrpn>\n"
+    )
+    return HEAD.format(body=body)
+
+
+def ingest(report: Report, seconds: float, tmp: Path) -> None:
+    from gadgetctl.input.manager import InputManager
+
+    rate = 1000.0
+    config = tmp / "ingest.jconf"
+    config.write_text(ingest_config(rate))
+    served = Served(config)
+    try:
+        # baseline: the raw reader in a thread of its own, its CPU from /proc
+        reader = RawReader(served.port, poses=True)
+        tids: list[int] = []
+
+        def run() -> None:
+            tids.append(threading.get_native_id())
+            reader.run(seconds)
+
+        thread = threading.Thread(target=run)
+        thread.start()
+        time.sleep(0.2)
+        cpu0, wall0 = cpu_seconds(os.getpid(), tids[0]), time.perf_counter()
+        thread.join()
+        raw_cpu, raw_wall = cpu_seconds(os.getpid(), tids[0]) - cpu0, time.perf_counter() - wall0
+        raw_rate = reader.messages / seconds
+        gone = served.wait_disconnects(1)[-1]
+        # lost: what serve could not queue for this client (it did not read fast enough), and
+        # gaps in the header times of what arrived
+        raw_lost = gone["dropped"] + reader.lost_poses(rate)
+
+        # VRPN_drv in the input manager, frames at 60 Hz in this thread
+        receiver = tmp / "receiver.jconf"
+        receiver.write_text(receiver_config(served.port))
+        manager, configuration = InputManager.from_files([receiver])
+        manager.configure(configuration)
+        device = manager.device("Ingest")
+        deadline = time.monotonic() + 10
+        while device.counters.get("messages", 0) == 0 and time.monotonic() < deadline:
+            manager.update()
+            time.sleep(0.01)
+        sampler = next(t for t in threading.enumerate() if t.name == "gadgetctl-sample-Ingest")
+        start_messages = device.counters.get("messages", 0)
+        cpu0, wall0 = cpu_seconds(os.getpid(), sampler.native_id), time.perf_counter()
+        manager.run(60.0, duration=seconds)
+        drv_cpu = cpu_seconds(os.getpid(), sampler.native_id) - cpu0
+        drv_wall = time.perf_counter() - wall0
+        received = device.counters.get("messages", 0)
+        manager.shutdown()
+        gone = served.wait_disconnects(2)[-1]
+        drv_lost = gone["dropped"]  # by TCP the rest arrives: what serve had to drop is lost
+        drv_reports = received - start_messages
+    finally:
+        served.stop()
+    print(f"  32 sensors + 16 buttons at {rate:g} Hz over direct TCP, {seconds:g} s per reader")
+    report.figure("raw reader: messages per second", raw_rate, "msg/s")
+    report.figure("raw reader: reports lost", raw_lost, "reports", target=0)
+    report.figure("raw reader: share of a core", raw_cpu / raw_wall * 100, "%")
+    report.figure("raw reader: CPU per report", raw_cpu / max(1, reader.messages) * 1e6, "us")
+    report.figure("VRPN_drv: reports per second", drv_reports / drv_wall, "msg/s")
+    report.figure("VRPN_drv: reports lost", drv_lost, "reports", target=0)
+    report.figure("VRPN_drv: share of a core (its sampling thread)", drv_cpu / drv_wall * 100, "%")
+    report.figure("VRPN_drv: CPU per report", drv_cpu / max(1, drv_reports) * 1e6, "us")
+    report.ratio(
+        "VRPN_drv CPU per report / raw reader",
+        drv_cpu / max(1, drv_reports),
+        raw_cpu / max(1, reader.messages),
+    )
+
+
+# -------------------------------------------------------------------- 2. fan-out
+
+
+def fanout_config(devices: int, rate: float) -> str:
+    body = "".join(
+        f'      <waveform_device name="Wave {i}" version="1"><rate>{rate:g}</rate>'
+        f"<seed>{i}</seed><event_period>0.0</event_period>"
+        f"<position_path>circle</position_path></waveform_device>\n"
+        for i in range(devices)
+    )
+    return HEAD.format(body=body)
+
+
+def _client(port: int, seconds: float, rate: float, results) -> None:
+    reader = RawReader(port, poses=True)
+    reader.run(seconds)
+    latency = np.concatenate(reader.latency) if reader.latency else np.empty(0)
+    results.put(
+        {
+            "messages": reader.messages,
+            "lost": reader.lost_poses(rate),
+            "latency": latency[len(latency) // 10 :],
+        }
+    )  # the first tenth: the connection's start
+
+
+def fanout(report: Report, seconds: float, tmp: Path, devices: int = 100, clients: int = 8) -> None:
+    rate = 1000.0
+    config = tmp / "fanout.jconf"
+    config.write_text(fanout_config(devices, rate))
+    served = Served(config)
+    context = multiprocessing.get_context("fork")
+    results = context.Queue()
+    try:
+        procs = [
+            context.Process(target=_client, args=(served.port, seconds, rate, results))
+            for _ in range(clients)
+        ]
+        for p in procs:
+            p.start()
+        time.sleep(0.5)
+        cpu0, wall0 = served.cpu(), time.perf_counter()
+        time.sleep(max(0.1, seconds - 1.0))
+        serve_cpu, wall = served.cpu() - cpu0, time.perf_counter() - wall0
+        outcomes = [results.get(timeout=seconds + 60) for _ in procs]
+        for p in procs:
+            p.join(30)
+        gone = served.wait_disconnects(clients)
+    finally:
+        served.stop()
+    latency = np.concatenate([o["latency"] for o in outcomes]) * 1000
+    dropped = sum(e["dropped"] for e in gone)
+    lost = sum(o["lost"] for o in outcomes) + dropped
+    per_client = np.mean([o["messages"] for o in outcomes]) / seconds
+    print(
+        f"  {devices} waveform devices at {rate:g} Hz ({devices * rate:,.0f} pose reports/s) to {clients} "
+        f"TCP clients, {seconds:g} s"
+    )
+    report.figure("reports lost over TCP (all clients)", lost, "reports", target=0)
+    report.figure("messages per second per client", per_client, "msg/s")
+    report.figure("sample-to-client latency p50", float(np.percentile(latency, 50)), "ms")
+    report.figure(
+        "sample-to-client latency p99", float(np.percentile(latency, 99)), "ms", target=2.0
+    )
+    report.figure("CPU of serve", serve_cpu / wall * 100, "% of a core")
+    report.figure(
+        "serve CPU per report per client", serve_cpu / (per_client * clients * wall) * 1e6, "us"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--seconds", type=float, default=5.0)
+    parser.add_argument("--part", choices=("ingest", "fanout", "all"), default="all")
+    parser.add_argument(
+        "--devices", type=int, default=100, help="fan-out: waveform devices at 1 kHz"
+    )
+    parser.add_argument("--clients", type=int, default=8, help="fan-out: TCP clients")
+    args = parser.parse_args()
+    print(
+        f"load average before the run: {' '.join(f'{x:.2f}' for x in os.getloadavg())} "
+        f"on {os.cpu_count()} cores (figures are shares of what this machine had left)"
+    )
+    report = Report()
+    with tempfile.TemporaryDirectory() as tmp:
+        if args.part in ("ingest", "all"):
+            print("VRPN_drv ingest from gadgetctl serve")
+            ingest(report, args.seconds, Path(tmp))
+        if args.part in ("fanout", "all"):
+            print("serve fan-out")
+            fanout(report, args.seconds, Path(tmp), args.devices, args.clients)
+    report.exit()
+
+
+if __name__ == "__main__":
+    main()
