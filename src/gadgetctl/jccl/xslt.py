@@ -122,3 +122,9 @@ def is_bundled(source: str) -> bool:
     except (OSError, RuntimeError):
         return False
     return any(path.is_relative_to(root.resolve()) for root in (definitions_dir(), drivers_dir()))
+
+
+if __name__ == "__main__":  # the sandbox's child process
+    from gadgetctl.jccl.xsltsandbox import serve
+
+    serve(transform_in_process, (TransformError,))

@@ -3,7 +3,8 @@
 An upgrade stylesheet is a program: a ``.jdef`` reached through a configuration's own
 ``<definition_path>`` may hold one that recurses exponentially and takes all the memory
 of the machine. Stylesheets of the bundled definitions run in-process (they are ours);
-every other one runs in a child process (``python -m gadgetctl.jccl.xsltsandbox``) whose
+every other one runs in a child process (``python -m gadgetctl.jccl.xslt``, which calls
+:func:`serve`) whose
 address space and CPU time are limited with ``setrlimit``, and which the parent stops when
 a transform takes longer than :data:`TIME_LIMIT`. The child is kept for the next transform
 and replaced after a failure.
@@ -24,6 +25,7 @@ import struct
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 
 TIME_LIMIT = 5.0  # seconds of wall-clock time per element transform
 MEMORY_LIMIT = 384 * 1024 * 1024  # bytes of address space of the child
@@ -46,7 +48,7 @@ def _limit_child() -> None:  # runs in the child before exec
 class _Child:
     def __init__(self) -> None:
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "gadgetctl.jccl.xsltsandbox"],
+            [sys.executable, "-m", "gadgetctl.jccl.xslt"],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             stderr=subprocess.DEVNULL,
@@ -134,9 +136,9 @@ def run_sandboxed(stylesheet: bytes, element: bytes, *, time_limit: float = TIME
 # --------------------------------------------------------------------------- the child
 
 
-def _serve() -> None:  # pragma: no cover - runs in the child process
-    from gadgetctl.jccl.xslt import TransformError, transform_in_process
-
+def serve(handler: Callable[[bytes, bytes], bytes], errors: tuple[type[Exception], ...]) -> None:
+    """The child's loop: answer each request with ``handler(stylesheet, element)``, or with
+    the message of one of ``errors``; a MemoryError ends the child (the parent reports it)."""
     stdin, stdout = sys.stdin.buffer, sys.stdout.buffer
 
     def read_exactly(count: int) -> bytes:
@@ -152,14 +154,10 @@ def _serve() -> None:  # pragma: no cover - runs in the child process
         except EOFError:
             return
         try:
-            status, payload = b"R", transform_in_process(stylesheet, element)
-        except TransformError as err:
+            status, payload = b"R", handler(stylesheet, element)
+        except errors as err:
             status, payload = b"E", str(err).encode("utf-8")
         except MemoryError:
-            return  # the parent reports the memory limit
+            return
         stdout.write(status + _HEADER.pack(len(payload)) + payload)
         stdout.flush()
-
-
-if __name__ == "__main__":  # pragma: no cover
-    _serve()
