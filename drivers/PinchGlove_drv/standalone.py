@@ -47,6 +47,14 @@ JOINTS_PER_FINGER = 4
 DIGITAL_UNITS = len(HANDS) * len(FINGERS)
 FINGER_MASK = (1 << len(FINGERS)) - 1
 TOUCHING_ANGLE = math.pi / 2
+#: Bytes between a data start byte and 0x8F at most: ten contact groups (a frame has at most
+#: five, each pairing two of the ten fingers) and the two timestamp bytes. A longer body is
+#: a bad frame, so a line that never sends 0x8F cannot grow a frame without limit.
+MAX_FRAME_BODY = 2 * 10 + 2
+#: Bytes of an info reply's text at most (the glove's version strings are short).
+MAX_REPLY = 256
+#: Bytes read while waiting for a reply to start, at most (touch frames may come first).
+MAX_REPLY_SCAN = 4096
 
 
 class PinchGloveError(Exception):
@@ -379,6 +387,10 @@ class PinchGlove:
                 self.bad_frames += 1  # truncated by the next frame: resynchronise there
                 link.unread(value)
                 return None
+            if len(body) == MAX_FRAME_BODY:
+                self.bad_frames += 1  # longer than any frame: skip the rest as junk
+                link.unread(value)
+                return None
             body.append(value)
         frame = decode_frame(start, bytes(body))
         if frame is None:
@@ -451,16 +463,20 @@ class PinchGlove:
     def _read_reply(self) -> bytes:
         """Skip to ``0x82`` and collect bytes until ``0x8F``; a bare ``?`` counts too."""
         link = self._require_link()
+        scanned = 0
         while True:
             value = self._reply_byte(link)
+            scanned += 1
             if value == START_INFO:
                 break
             if value in DATA_STARTS:
                 # A touch frame in between: skip it whole, its timestamp may be 0x3F.
-                while self._reply_byte(link) != END:
-                    pass
+                while self._reply_byte(link) != END and scanned < MAX_REPLY_SCAN:
+                    scanned += 1
             elif value == CONFUSED[0]:
                 return CONFUSED
+            if scanned >= MAX_REPLY_SCAN:
+                raise PinchGloveProtocolError(f"no reply among {scanned} bytes from the glove")
         body = bytearray()
         while True:
             value = self._reply_byte(link)
@@ -469,6 +485,8 @@ class PinchGlove:
             if value == START_INFO:
                 body.clear()  # the previous reply was cut short
                 continue
+            if len(body) == MAX_REPLY:
+                raise PinchGloveProtocolError(f"a reply longer than {MAX_REPLY} bytes")
             body.append(value)
 
     def _reply_byte(self, link: _SerialLink) -> int:
