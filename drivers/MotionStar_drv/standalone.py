@@ -227,11 +227,12 @@ class SystemStatus:
 
     @property
     def measurement_rate(self) -> float:
-        """Chassis rate in Hz, from six ASCII digits of rate x 1000."""
-        try:
-            return int(self.raw[5:11].decode("ascii")) / 1000.0
-        except ValueError:
+        """Chassis rate in Hz, from six ASCII digits of rate x 1000 (0.0 when they are not
+        six digits: a sign, blanks or other characters are no rate)."""
+        digits = bytes(self.raw[5:11])
+        if len(digits) != 6 or not digits.isdigit():  # bytes.isdigit: ASCII digits only
             return 0.0
+        return int(digits) / 1000.0
 
     @property
     def chassis_number(self) -> int:
