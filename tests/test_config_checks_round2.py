@@ -161,12 +161,12 @@ def test_an_identical_copy_is_info_and_unrelated_files_are_warned(check):
     assert found.code == "CFG042" and "identical copy" in found.message
 
 
-def test_a_duplicate_within_one_file_stays_an_error(check):
+def test_a_duplicate_within_one_file_is_a_warning(check):
     elements = tracker() + tracker("/dev/ttyUSB0")
     (found,) = check(elements)
     assert (
         found.code == "CFG040"
-        and found.severity is Severity.ERROR
+        and found.severity is Severity.WARNING
         and "in this file" in found.message
     )
     assert check(tracker()) == []

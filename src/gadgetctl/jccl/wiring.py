@@ -68,9 +68,8 @@ class Wiring:
         """Elements whose name an earlier element already has. VR Juggler keeps the later
         one, which is JCCL's documented way to override: a file supersedes the files it
         includes and a later file given supersedes earlier ones (info, CFG042), as does a
-        byte-identical copy. Within one file it is a mistake (CFG040, error); between files
-        that neither include each other nor are ordered as given files it may be an
-        accident (CFG040, warning)."""
+        byte-identical copy. Within one file, or between files that neither include each
+        other nor are ordered as given files, it may be an accident (CFG040, warning)."""
         found = []
         first: dict[str, ConfigElement] = {}
         relation = _FileRelation(self.config)
@@ -85,7 +84,7 @@ class Wiring:
                 found.append(at(
                     "CFG040", f"element name {element.name!r} ({element.type}) is used before in this "
                     f"file, by the {earlier.type} at {earlier.location}; VR Juggler keeps only the later "
-                    "one, at the earlier one's place", element.location, severity=Severity.ERROR,
+                    "one, at the earlier one's place", element.location,
                     hint="Rename or remove one of them."))
                 continue
             why = relation.override(earlier, element)

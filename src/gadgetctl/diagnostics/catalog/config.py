@@ -180,10 +180,10 @@ CODES += [
     Code("CFG040", C, W, "duplicate element name",
          "Two elements of the configuration have the same name. VR Juggler silently keeps the "
          "one loaded last, at the first one's position, and every pointer to the name reaches "
-         "that one. Within one file this is an error. Between two files neither of which "
-         "includes the other (two mixins included side by side, say) it is a warning: it may "
-         "be an accident. An including file or a later given file overriding an element is "
-         "reported as CFG042 (info) instead.",
+         "that one. Within one file, or between two files neither of which includes the other "
+         "(two mixins included side by side, say), it may be an accident. An including file "
+         "or a later given file overriding an element, or a byte-identical copy in another "
+         "file, is reported as CFG042 (info) instead.",
          "C4.base.jconf: <alias name=\"VJHead\">  and  C4.mstar.jconf: <alias name=\"VJHead\">",
          "Rename or remove one of them, or, when one file is meant to override the other, "
          "include the other file from it."),
