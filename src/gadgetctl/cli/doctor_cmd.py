@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION
+from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION, TRUST_OPTION
 from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION, DataFormat, emit
 
 
@@ -24,6 +24,7 @@ def doctor(
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
+    trust_driver_path: bool = TRUST_OPTION,
     fmt: DataFormat = typer.Option(DataFormat.text, "--format", "-f", help="Output format."),
     serve_port: str | None = typer.Option(None, "--serve-port", metavar="[ADDR:]PORT",
                                           help="Check that `gadgetctl serve` could bind this TCP and UDP port (on ADDR, default 127.0.0.1); a taken port names the process holding it."),

@@ -12,6 +12,17 @@ from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION, DataFormat
 DRIVER_PATH_OPTION = typer.Option(
     [], "--driver-path", metavar="DIR",
     help="Also look for driver plug-ins in DIR (after the bundled drivers and GADGETCTL_DRIVER_PATH). Repeatable.")
+def _trust(value: bool) -> bool:
+    if value:
+        from gadgetctl.input.plugins.trust import accept_writable_places
+
+        accept_writable_places()
+    return value
+
+
+TRUST_OPTION = typer.Option(
+    False, "--trust-driver-path", callback=_trust,
+    help="Import plug-ins also from directories other users can write to (refused by default: DRV011).")
 FORMAT_OPTION = typer.Option(DataFormat.text, "--format", "-f", help="Output format.")
 
 drivers_app = typer.Typer(help="Driver plug-ins: list what can be found, load and check them.",
@@ -74,6 +85,7 @@ def list_drivers(
 def load_drivers(
     names: list[str] = typer.Argument(..., metavar="NAME...", help="Plug-in names (as a driver value writes them) or paths of plug-in folders or modules.", show_default=False),
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
+    trust_driver_path: bool = TRUST_OPTION,
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
     fmt: DataFormat = FORMAT_OPTION,

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION
+from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION, TRUST_OPTION
 from gadgetctl.cli.monitor_format import OutputFormat
 from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION
 
@@ -50,6 +50,7 @@ def monitor(
     interval: float = INTERVAL_OPTION,
     mouse: bool = MOUSE_OPTION,
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
+    trust_driver_path: bool = TRUST_OPTION,
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
 ) -> None:

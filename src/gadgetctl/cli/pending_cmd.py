@@ -10,7 +10,7 @@ from pathlib import Path
 
 import typer
 
-from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION
+from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION, TRUST_OPTION
 from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION, DataFormat, emit
 
 
@@ -20,6 +20,7 @@ def pending(
     bundled: bool = BUNDLED_OPTION,
     fmt: DataFormat = typer.Option(DataFormat.text, "--format", "-f", help="Output format."),
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
+    trust_driver_path: bool = TRUST_OPTION,
     start: bool = typer.Option(False, "--start/--no-start", help="Also start the devices (opening their ports and connections) to find those that fail to start; everything is stopped again before the report."),
 ) -> None:
     """Configure the input manager from FILES and report the elements that stay pending,

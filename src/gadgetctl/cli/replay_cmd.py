@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION
+from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION, TRUST_OPTION
 from gadgetctl.cli.monitor_cmd import (
     DURATION_OPTION,
     FORMAT_OPTION,
@@ -48,6 +48,7 @@ def replay(
     interval: float = INTERVAL_OPTION,
     mouse: bool = MOUSE_OPTION,
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
+    trust_driver_path: bool = TRUST_OPTION,
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
 ) -> None:

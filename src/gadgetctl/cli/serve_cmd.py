@@ -8,7 +8,7 @@ from pathlib import Path
 
 import typer
 
-from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION
+from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION, TRUST_OPTION
 from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION, DataFormat, emit
 
 
@@ -84,6 +84,7 @@ def serve(
         help="text, or json: --list as one JSON object, events as one JSON object per line.",
     ),
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
+    trust_driver_path: bool = TRUST_OPTION,
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
 ) -> None:

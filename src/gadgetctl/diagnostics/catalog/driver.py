@@ -74,6 +74,14 @@ CODES += [
          "environment variables) is not a directory, so no plug-in can be found there.",
          "<driver_path>${HOME}/gadget-drivers</driver_path>   (no such directory)",
          "Fix the path; relative paths are taken from the configuration file's directory."),
+    Code("DRV011", C, E, "plug-in in a place other users can write to",
+         "The plug-in's directory, folder or one of its files can be written by other users "
+         "(world-writable, or owned by another user than root and you). Anyone of them could "
+         "put code there that gadgetctl would run as you, so the plug-in is not imported. "
+         "Installed and bundled plug-ins are not concerned.",
+         "<driver_path>/tmp/drivers</driver_path>   (/tmp/drivers is mode 777)",
+         "Make the directory writable only by you (chmod o-w DIR), or accept it for one run "
+         "with --trust-driver-path."),
 ]
 
 # -- device and proxy configuration ---------------------------------------------------------

@@ -33,6 +33,7 @@ from gadgetctl.input.errors import PluginError, RegistrationError, describe
 from gadgetctl.input.plugins import PLUGIN_API_VERSION
 from gadgetctl.input.plugins.discovery import DriverSearch, PluginInfo
 from gadgetctl.input.plugins.metadata import API_VERSION, REGISTER
+from gadgetctl.input.plugins.trust import writable_by_others, writable_places_accepted
 from gadgetctl.input.registry import (
     DeviceRegistry,
     Registration,
@@ -181,6 +182,10 @@ class PluginLoader:
         if meta.api_version is not None:
             self._check_version(meta.api_version)
         self._add_definitions(info)
+        open_place = writable_by_others(info)
+        if open_place is not None and not writable_places_accepted():
+            raise PluginError("DRV011", f"not imported: {open_place} can be written by other users "
+                                        "(give --trust-driver-path to accept it)")
         try:
             module = import_plugin(info)
         except (Exception, SystemExit) as err:
