@@ -151,3 +151,19 @@ def test_only_the_cli_imports_typer_and_rich():
         roots = {n.split(".")[0] for n in imported_names(path, name)}
         wrong.extend(f"{name} imports {lib}" for lib in ("typer", "rich") if lib in roots)
     assert wrong == []
+
+
+def test_one_suggestion_helper():
+    """ "Did you mean" comes from gadgetctl.suggest everywhere (validate, the commands)."""
+
+    def suggests(path: Path) -> bool:
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        return any(
+            (isinstance(node, ast.Name) and node.id == "get_close_matches")
+            or (isinstance(node, ast.Attribute) and node.attr == "get_close_matches")
+            or (isinstance(node, ast.alias) and node.name == "get_close_matches")
+            for node in ast.walk(tree)
+        )
+
+    users = sorted(module_name(path) for path in PACKAGE.rglob("*.py") if suggests(path))
+    assert users == ["gadgetctl.suggest"]

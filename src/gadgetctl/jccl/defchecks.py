@@ -13,6 +13,7 @@ from gadgetctl.jccl.definitions import (
     parse_value,
 )
 from gadgetctl.jccl.repository import DefinitionRepository
+from gadgetctl.suggest import close_names
 
 _TYPED = (ValueType.INTEGER, ValueType.FLOAT, ValueType.BOOLEAN)
 
@@ -138,7 +139,6 @@ def _cycle_path(start: str, members: set[str], repo: DefinitionRepository) -> li
 
 
 def _suggest(name: str, candidates: list[str]) -> str | None:
-    from difflib import get_close_matches
 
-    close = get_close_matches(name, candidates, n=3, cutoff=0.6)
+    close = close_names(name, candidates, cutoff=0.6)
     return f"Did you mean {', '.join(close)}?" if close else None

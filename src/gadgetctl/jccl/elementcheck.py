@@ -8,7 +8,6 @@ on the way for :mod:`gadgetctl.jccl.wiring`.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from difflib import get_close_matches
 
 from gadgetctl.diagnostics import Diagnostic
 from gadgetctl.jccl.configuration import ConfigElement, PropertyValue, SourceLocation
@@ -16,6 +15,7 @@ from gadgetctl.jccl.definitions import Location, PropertyDefinition, ValueType
 from gadgetctl.jccl.runtime import REQUIRED_POINTERS
 from gadgetctl.jccl.typeindex import TypeIndex, TypeView
 from gadgetctl.jccl.valuecheck import ValueProblem, check_text
+from gadgetctl.suggest import close_names
 
 
 @dataclass(frozen=True, slots=True)
@@ -89,7 +89,7 @@ class ElementChecker:
         if not element.name.strip():
             found.append(at("CFG015", f"{element.type} element has no name", element.location))
         if not versions:
-            close = get_close_matches(element.type, self.index.repo.names(), n=3, cutoff=0.6)
+            close = close_names(element.type, self.index.repo.names(), cutoff=0.6)
             hint = f"Did you mean {', '.join(close)}? " if close else ""
             searched = f"Searched: {self.search_path}. " if self.search_path else ""
             found.append(at("CFG010", f"no definition of element type {element.type!r} on the search "
@@ -160,7 +160,7 @@ class ElementChecker:
             return at("CFG021", f"{describe(element)}: {name!r} is no property of {judged}; it was "
                       f"dropped after{owner} version {last.version}, and VR Juggler ignores it",
                       first.location, hint="Remove it (`gadgetctl upgrade --drop-removed FILE` does).")
-        close = get_close_matches(name, list(view.properties), n=3, cutoff=0.6)
+        close = close_names(name, list(view.properties), cutoff=0.6)
         hint = f"Did you mean {', '.join(close)}?" if close else (
             f"{element.type} has: {', '.join(view.properties) or 'no properties'}.")
         return at("CFG020", f"{describe(element)}: {judged} has no property {name!r}; VR Juggler "

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 from gadgetctl.jccl.access import read_float, read_int
 from gadgetctl.jccl.definitions import Enumeration, PropertyDefinition, ValueType
+from gadgetctl.suggest import close_names
 
 _INTEGER = re.compile(r"[+-]?\d+\Z")
 _FLOAT = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\Z")
@@ -63,9 +64,8 @@ def _label_problem(prop: PropertyDefinition, raw: str) -> ValueProblem | None:
             f"Write {near.label!r}. Choices: {describe_choices(enumeration)}.")
     if enumeration.editable:
         return None
-    from difflib import get_close_matches
 
-    close = get_close_matches(raw, [c.label for c in enumeration.choices], n=3, cutoff=0.6)
+    close = close_names(raw, [c.label for c in enumeration.choices], cutoff=0.6)
     hint = f"Did you mean {', '.join(repr(c) for c in close)}? " if close else ""
     return ValueProblem(
         "CFG028", f"{prop.name} {raw!r} is none of its enumeration's labels or values",

@@ -12,7 +12,6 @@ runs what VR Juggler leaves pending, the message says so.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from difflib import get_close_matches
 from pathlib import Path
 
 from lxml import etree
@@ -23,6 +22,7 @@ from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.elementcheck import ElementReport, PointerValue, at, describe
 from gadgetctl.jccl.runtime import missing_target_effect
 from gadgetctl.jccl.typeindex import TypeIndex
+from gadgetctl.suggest import close_names
 
 UNHANDLED = "unhandled"
 #: Said of an element VR Juggler leaves pending where gadgetctl deliberately runs it.
@@ -114,7 +114,7 @@ class Wiring:
             if pointer.target in self.embedded:
                 return []  # found, but never satisfies a dependency: see pending()
             candidates = self.embedded if "/" in pointer.target else self.by_name
-            close = get_close_matches(pointer.target, list(candidates), n=3, cutoff=0.7)
+            close = close_names(pointer.target, list(candidates), cutoff=0.7)
             effect = missing_target_effect(root.type, root.name, pointer.element is not root)
             if root.type in DIFFERENCES and pointer.element is root:
                 effect += f" ({GADGETCTL_RUNS_IT})"

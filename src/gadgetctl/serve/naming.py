@@ -17,11 +17,11 @@ characters. So every served element gets a name by this rule:
 
 from __future__ import annotations
 
-import difflib
 import re
 from collections.abc import Iterable, Mapping
 
 from gadgetctl.errors import GadgetctlError
+from gadgetctl.suggest import close_names
 
 MAX_NAME = 95
 _VALID = re.compile(r"[A-Za-z0-9_.-]+")
@@ -70,7 +70,7 @@ def assign_names(
     renames = dict(renames or {})
     unknown = [old for old in renames if old not in names]
     if unknown:
-        close = difflib.get_close_matches(unknown[0], names, n=3, cutoff=0.6)
+        close = close_names(unknown[0], names, cutoff=0.6)
         hint = f" (did you mean {' or '.join(repr(c) for c in close)}?)" if close else ""
         raise NamingError(f"--name: no served element is called {unknown[0]!r}{hint}")
     taken: dict[str, str] = {}  # VRPN name -> element name
