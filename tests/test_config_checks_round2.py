@@ -401,7 +401,10 @@ def test_upgrade_diff_changes_only_the_outdated_elements_lines_in_the_files_spel
 
 
 def test_a_broken_definition_given_and_on_the_search_path_is_reported_once(tmp_path, cli):
-    folder = write(tmp_path / "defs" / "bad.jdef", '<?xml version="1.0"?>\n<definition name="x"><oops></definition>\n').parent
+    folder = write(
+        tmp_path / "defs" / "bad.jdef",
+        '<?xml version="1.0"?>\n<definition name="x"><oops></definition>\n',
+    ).parent
     result = cli("validate", folder, "-d", folder, "--format", "json")
     import json
 
@@ -411,3 +414,25 @@ def test_a_broken_definition_given_and_on_the_search_path_is_reported_once(tmp_p
     other = write(tmp_path / "t.jconf", configuration(""))
     result = cli("validate", other, "-d", folder, "--format", "json")
     assert [d["code"] for d in json.loads(result.stdout)] == ["DEF020"]
+
+
+def test_a_renamed_property_is_rewritten_in_its_place_and_comments_stay(tmp_path, cli, defs):
+    elements = (
+        '      <gizmo name="G" version="2">\r\n'
+        "         <!-- the size in centimetres -->\r\n"
+        "         <size>4</size>\r\n"
+        "         <color>blue</color>\r\n"
+        "      </gizmo>\r\n"
+    )
+    path = tmp_path / "crlf.jconf"
+    path.write_bytes(configuration(elements).replace("\n", "\r\n").replace("\r\r", "\r").encode())
+    result = upgrade(cli, defs, "--diff", path)
+    assert diff_lines(result.stdout.replace("\r", "")) == [
+        '-      <gizmo name="G" version="2">',
+        '+      <gizmo name="G" version="3">',
+        "-         <size>4</size>",
+        "+         <extent>4</extent>",
+        '+      <gizmo_label name="G label" version="1"/>',
+    ]
+    upgraded = upgrade(cli, defs, path).stdout
+    assert "<!-- the size in centimetres -->\r\n         <extent>4</extent>\r\n" in upgraded

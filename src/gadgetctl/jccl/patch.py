@@ -117,10 +117,13 @@ class Patcher:
                 for a, b in pairs:
                     edits += self.patch(a, b, inner, unit)
                 continue
-            for child in old_children[i1:i2]:
-                edits.append(self.removal(old, child))
-            if j2 > j1:
-                at = self.spans[old_children[i1 - 1]].end if i1 > 0 else span.start_end
+            removals = [self.removal(old, child) for child in old_children[i1:i2]]
+            edits += removals
+            if j2 > j1:  # where the removed ones were, or after the previous child
+                if removals:
+                    at = removals[0].start
+                else:
+                    at = self.spans[old_children[i1 - 1]].end if i1 > 0 else span.start_end
                 text = b"".join(
                     self.encode(self.newline + inner) + self.serialise(c, inner, unit)
                     for c in new_children[j1:j2]
@@ -129,18 +132,13 @@ class Patcher:
         return edits
 
     def removal(self, parent: etree._Element, child: etree._Element) -> Edit:
-        """Remove ``child`` with the line break and indentation before it."""
+        """Remove ``child`` with the line break and indentation before it (when nothing
+        else stands on its line before it)."""
         span = self.spans[child]
-        siblings = _children(parent)
-        index = siblings.index(child)
-        floor = self.spans[siblings[index - 1]].end if index > 0 else self.spans[parent].start_end
         start = span.start
-        before = self.data[floor:start]
-        if not before.strip():
-            newline = before.rfind(b"\n")
-            start = floor + newline if newline >= 0 else floor
-            if newline >= 0 and before[:newline].endswith(b"\r"):
-                start -= 1
+        newline = self.data.rfind(b"\n", self.spans[parent].start_end, start)
+        if newline >= 0 and not self.data[newline + 1 : start].strip():
+            start = newline - 1 if self.data[newline - 1 : newline] == b"\r" else newline
         return Edit(start, span.end, b"")
 
     def attributes(self, old: etree._Element, new: etree._Element, span: Span) -> list[Edit]:
