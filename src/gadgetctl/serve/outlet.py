@@ -97,23 +97,19 @@ class VrpnOutlet:
         if not self._poses:
             return
         pending, self._poses = self._poses, []
-        senders, times, matrices = [], [], []
-        for sender, stamps, values in pending:
-            n, sensors = values.shape[:2]
-            senders.append(np.full(n * sensors, sender, dtype=np.int32))
-            times.append(np.repeat(stamps, sensors))
-            matrices.append(values.reshape(n * sensors, 4, 4))
-        sensor_numbers = np.concatenate(
-            [np.tile(np.arange(v.shape[1], dtype=np.int32), v.shape[0]) for _, _, v in pending]
+        shapes = np.array([v.shape[:2] for _, _, v in pending])  # (samples, sensors) per batch
+        sizes = shapes[:, 0] * shapes[:, 1]
+        senders = np.repeat(np.array([sender for sender, _, _ in pending], dtype=np.int32), sizes)
+        times = np.repeat(
+            np.concatenate([stamps for _, stamps, _ in pending]),
+            np.repeat(shapes[:, 1], shapes[:, 0]),
         )
-        flat = np.concatenate(matrices) if len(matrices) > 1 else matrices[0]
+        # sensor number of each row: its place in its batch, modulo the batch's sensor count
+        starts = np.repeat(np.cumsum(sizes) - sizes, sizes)
+        sensor_numbers = (np.arange(len(senders)) - starts) % np.repeat(shapes[:, 1], sizes)
+        flat = np.concatenate([v.reshape(-1, 4, 4) for _, _, v in pending])
         data = pack_poses(
-            np.concatenate(senders),
-            self._pose,
-            np.concatenate(times),
-            sensor_numbers,
-            flat[:, :3, 3],
-            quaternions_xyzw(flat),
+            senders, self._pose, times, sensor_numbers, flat[:, :3, 3], quaternions_xyzw(flat)
         )
         self.messages += len(flat)
         self.server.broadcast(data, POSE_SIZE, reliable=False)
