@@ -331,3 +331,10 @@ def test_validate_on_a_directory_without_jccl_files_is_a_usage_error(cli, tmp_pa
 def test_upgrade_on_a_directory_without_jccl_files_is_a_usage_error(cli, tmp_path):
     result = cli("upgrade", "--check", tmp_path)
     assert result.exit_code == 2 and "nothing to check" in one_line_error(result.stderr)
+
+
+@pytest.mark.timeout(60)
+def test_serve_record_dash_is_refused_rather_than_writing_a_file_named_dash(cli, tmp_path):
+    result = cli("serve", WAVEFORM, "--record", "-", "--duration", "0.2", cwd=tmp_path)
+    assert result.exit_code == 2 and "--record -" in one_line_error(result.stderr)
+    assert not (tmp_path / "-").exists()

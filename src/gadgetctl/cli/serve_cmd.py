@@ -127,8 +127,13 @@ def serve(
     )
     fatal_load_errors(configuration)
     if record is not None and not list_:
-        from gadgetctl.cli.monitor_run import check_record_path
+        from gadgetctl.cli.monitor_run import check_record_path, records_to_stdout
+        from gadgetctl.errors import GadgetctlError
 
+        if records_to_stdout(record):
+            manager.shutdown()
+            raise GadgetctlError("--record -: serve reports its clients on standard output; "
+                                 "give a file name")
         check_record_path(record, overwrite)
     service = ServeService(
         manager, configuration, options, info={"config": [str(p) for p in configs]}
