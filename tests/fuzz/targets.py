@@ -376,7 +376,83 @@ def _repository():
     return default_repository()
 
 
-@target("jccl.document", seeds=_jccl_seeds, examples=40)
+@functools.cache
+def _element_types() -> list[tuple[str, int, list]]:
+    """(type, newest version, effective property definitions) of every bundled definition."""
+    repo = _repository()
+    types = []
+    for definition in repo.all_newest():
+        props = [p.definition for p in repo.effective_properties(definition.name)]
+        types.append((definition.name, definition.version, props))
+    return sorted(types, key=lambda t: t[0])
+
+
+_XML_ODD = ["1e999", "-1e999", "NaN", "inf", "9" * 5000, "-0", "0x1F", " 1 ", "", "tRuE", "2",
+            "&#0;", "&lt;", "\u202e", "${UNDEFINED}", "$(HOME)/x", "..", "/", "a" * 300]  # fmt: skip
+
+
+def _jccl_value(rng: random.Random, prop, names: list[str]) -> str:
+    from gadgetctl.jccl.definitions import ValueType
+
+    kind = rng.randrange(6)
+    if kind == 0:
+        return rng.choice(_XML_ODD)
+    if prop.enumeration is not None and prop.enumeration.choices and kind == 1:
+        choice = rng.choice(prop.enumeration.choices)
+        return str(rng.choice([choice.label, choice.value, choice.label.upper()]))
+    if prop.valuetype is ValueType.BOOLEAN:
+        return rng.choice(["true", "false", "1", "0", "yes", "TRUE"])
+    if prop.valuetype is ValueType.INTEGER:
+        return str(rng.choice([rng.randint(-5, 300), 2**31, -(2**63), 10**30]))
+    if prop.valuetype is ValueType.FLOAT:
+        return repr(rng.choice([rng.uniform(-1e3, 1e3), 1e308, -0.0, 5e-324]))
+    if prop.valuetype is ValueType.POINTER and names:
+        return rng.choice([*names, "missing", ""])
+    return rng.choice(["x", "Wand", "/dev/ttyS0", "localhost", "\t", "a b", "é"])
+
+
+def _jccl_configuration(rng: random.Random) -> bytes:
+    """A configuration of bundled element types with values of every kind, good and bad:
+    pointers to each other, embedded elements, unknown properties, odd counts."""
+    from xml.sax.saxutils import escape, quoteattr
+
+    types = _element_types()
+    names = [f"E{i}" for i in range(rng.randint(1, 8))]
+    out = ['<?xml version="1.0" encoding="UTF-8"?>',
+           f'<?org-vrjuggler-jccl-settings configuration.version="{rng.choice(["3.0", "3.0", "2.0", "x"])}"?>',
+           '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="fuzz">']  # fmt: skip
+    if rng.random() < 0.2:
+        out.append(
+            f"<include>{escape(rng.choice(['other.jconf', 'E0.jconf', '', '../x.jconf']))}</include>"
+        )
+    out.append("<elements>")
+
+    def element(name: str, depth: int) -> str:
+        type_name, version, props = rng.choice(types)
+        version = rng.choice([version, version, 1, 0, 99])
+        body = []
+        for prop in rng.sample(props, min(len(props), rng.randint(0, 6))):
+            for _ in range(rng.choice([1, 1, 1, 0, 2, 5])):
+                if prop.valuetype.value == "configelement" and depth < 2:
+                    body.append(
+                        f"<{prop.name}>{element(f'{name}.{prop.name}', depth + 1)}</{prop.name}>"
+                    )
+                else:
+                    body.append(
+                        f"<{prop.name}>{escape(_jccl_value(rng, prop, names))}</{prop.name}>"
+                    )
+        if rng.random() < 0.1:
+            body.append("<no_such_property>1</no_such_property>")
+        return (
+            f'<{type_name} name={quoteattr(name)} version="{version}">{"".join(body)}</{type_name}>'
+        )
+
+    out += [element(name, 0) for name in names]
+    out += ["</elements>", "</configuration>"]
+    return "\n".join(out).encode("utf-8")
+
+
+@target("jccl.document", seeds=_jccl_seeds, grammar=_jccl_configuration, examples=40)
 def _jccl_document(data: bytes) -> None:
     from gadgetctl.jccl.configcheck import check_documents
     from gadgetctl.jccl.defchecks import check_cycles, check_definition
@@ -400,7 +476,7 @@ def _jccl_document(data: bytes) -> None:
         check_documents([doc], _repository(), environ={}, plugin_definitions=None)
 
 
-@target("jccl.upgrade", seeds=_jccl_seeds, examples=25)
+@target("jccl.upgrade", seeds=_jccl_seeds, grammar=_jccl_configuration, examples=25)
 def _jccl_upgrade(data: bytes) -> None:
     from gadgetctl.jccl.upgrade import upgrade_bytes
 

@@ -18,7 +18,7 @@ from gadgetctl.jccl.definitions import PropertyDefinition
 from gadgetctl.jccl.repository import DefinitionRepository
 
 _LEADING_INT = re.compile(r"^[+-]?\d+")
-_LEADING_FLOAT = re.compile(r"^[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_LEADING_FLOAT = re.compile(r"^[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
 
 
 class UnknownProperty(KeyError):

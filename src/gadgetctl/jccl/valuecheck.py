@@ -14,7 +14,9 @@ from gadgetctl.jccl.definitions import Enumeration, PropertyDefinition, ValueTyp
 from gadgetctl.suggest import close_names
 
 _INTEGER = re.compile(r"[+-]?\d+\Z")
-_FLOAT = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?\Z")
+# One way only to split the digits (``\d+\.?\d*`` has n of them, and a long number that
+# fails at its end then backtracks quadratically: minutes for a few 5,000-digit values).
+_FLOAT = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?\Z")
 _BOOLEANS = ("true", "false", "1", "0")
 MAX_CHOICES_SHOWN = 10
 
