@@ -236,6 +236,8 @@ class VrpnClient:
                     ep.flush()
         except ConnectionDropped as exc:
             self._drop(exc.reason)
+        except OSError as exc:  # anything else the sockets refuse ends this connection only
+            self._drop(f"socket error: {exc.strerror or exc}")
         if out:
             self._last_rx = time.monotonic()
         return out
