@@ -250,7 +250,10 @@ class VrpnClient:
         if self.state == HANDSHAKE:
             return self._state_since + self.handshake_timeout
         if self.state == CONNECTED:
-            return min(self._last_ping, self._last_rx) + self.ping_interval
+            due = max(self._last_ping, self._last_rx) + self.ping_interval  # both must be stale
+            if self.silence_timeout is not None:
+                due = min(due, self._last_rx + self.silence_timeout)
+            return due
         return now + 1.0
 
     def _timers(self, now: float) -> None:
