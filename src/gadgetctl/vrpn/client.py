@@ -24,7 +24,7 @@ import time
 from collections import Counter
 from collections.abc import Iterable
 
-from .codecs import CLIENT_TYPES, PING, CodecError, StrictLengthError, decode
+from .codecs import CLIENT_TYPES, PING, PONG, decode
 from .endpoint import ConnectionDropped, Endpoint, NameTable
 from .names import Location, parse_location
 from .wire import (
@@ -337,7 +337,7 @@ class VrpnClient:
             sock.close()
             self._fail(f"cannot connect to {self.location}: {os.strerror(err)}")
             return
-        self._endpoint = Endpoint(sock, out_limit=self.out_limit, tcp_only=True)
+        self._endpoint = self._new_endpoint(sock, tcp_only=True)
         self._set_state(HANDSHAKE)
 
     def _accept(self) -> None:
@@ -353,8 +353,13 @@ class VrpnClient:
             if s is not None:
                 s.close()
         self._listener = self._lob = None
-        self._endpoint = Endpoint(sock, out_limit=self.out_limit, tcp_only=False)
+        self._endpoint = self._new_endpoint(sock, tcp_only=False)
         self._set_state(HANDSHAKE)
+
+    def _new_endpoint(self, sock: socket.socket, *, tcp_only: bool) -> Endpoint:
+        ep = Endpoint(sock, out_limit=self.out_limit, tcp_only=tcp_only)
+        ep.decode = decode if self.decode_reports else None
+        return ep
 
     def _opened(self, ep: Endpoint) -> None:
         """The server's cookie is accepted: announce our channel, names and types; ping."""
@@ -402,23 +407,11 @@ class VrpnClient:
         return out
 
     def _handle(self, messages: list[Message]) -> list[Message]:
-        if not self.decode_reports:
-            return messages
-        out: list[Message] = []
+        """Count the pongs (the reports were decoded by the endpoint)."""
         for m in messages:
-            try:
-                report = decode(m.type, m.payload)
-            except StrictLengthError as exc:
-                self.counters["bad_reports"] += 1
-                out_err = f"bad {m.type} from {m.sender}: {exc}"
-                raise ConnectionDropped(out_err) from None
-            except CodecError:
-                self.counters["bad_reports"] += 1
-                continue
-            if report is not None and m.type == "vrpn_Base pong_message" and m.sender:
+            if m.type == PONG and m.sender:
                 self.pongs[m.sender] += 1
-            out.append(m._replace(report=report))
-        return out
+        return messages
 
     def _fail(self, reason: str) -> None:
         self.last_error = reason

@@ -15,8 +15,9 @@ from __future__ import annotations
 
 import socket
 from collections import Counter
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
+from .codecs import CodecError, StrictLengthError
 from .wire import (
     COOKIE_SIZE,
     DISCONNECT_MESSAGE,
@@ -117,6 +118,8 @@ class Endpoint:
         self.dropped = 0  # messages not queued because the output buffer was full
         self.sent_messages = 0
         self.counters: Counter[str] = Counter()
+        #: ``codecs.decode`` to attach reports to user messages, or None.
+        self.decode: Callable[[str, bytes], object] | None = None
 
     # -- reading ------------------------------------------------------------------------------
 
@@ -164,21 +167,40 @@ class Endpoint:
         return self.translate(messages, udp=True)
 
     def translate(self, messages: list[Message], udp: bool = False) -> list[Message]:
+        """User messages with their sender and type names (and, with :attr:`decode`, their
+        reports); system messages are handled here."""
         out: list[Message] = []
-        senders, types = self.remote_senders, self.remote_types
+        senders, types, decode = self.remote_senders, self.remote_types, self.decode
+        counters = self.counters
+        new = tuple.__new__
         for m in messages:
-            if m.type_id < 0:
+            type_id = m[0]
+            if type_id < 0:
                 if udp:
-                    self.counters["udp_system_ignored"] += 1  # system messages go by TCP only
+                    counters["udp_system_ignored"] += 1  # system messages go by TCP only
                 else:
                     self._system(m)
                 continue
-            self.counters["messages"] += 1
-            type_name = types.get(m.type_id)
+            counters["messages"] += 1
+            type_name = types.get(type_id)
             if type_name is None:
-                self.counters["undescribed"] += 1  # as the C++ side: silently dropped
+                counters["undescribed"] += 1  # as the C++ side: silently dropped
                 continue
-            out.append(m._replace(sender=senders.get(m.sender_id), type=type_name))
+            sender = senders.get(m[1])
+            report = None
+            if decode is not None:
+                try:
+                    report = decode(type_name, m[4])
+                except StrictLengthError as exc:
+                    # The C++ remote's handler fails on these, and that drops the connection.
+                    counters["bad_reports"] += 1
+                    raise ConnectionDropped(f"bad {type_name} from {sender}: {exc}") from None
+                except CodecError:
+                    counters["bad_reports"] += 1
+                    continue
+            out.append(
+                new(Message, (type_id, m[1], m[2], m[3], m[4], sender, type_name, m[7], report))
+            )
         return out
 
     def _system(self, m: Message) -> None:

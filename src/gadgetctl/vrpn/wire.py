@@ -139,25 +139,22 @@ class StreamDecoder:
         out: list[Message] = []
         pos, end = 0, len(buf)
         unpack = _HEADER.unpack_from
-        while end - pos >= HEADER_SIZE:
-            length, sec, usec, sender, type_id, _seq = unpack(buf, pos)
-            body = check_header(length)
-            if end - pos - HEADER_SIZE < body:
-                break
-            start = pos + HEADER_SIZE
-            out.append(
-                Message(
-                    type_id,
-                    sender,
-                    sec,
-                    usec,
-                    bytes(buf[start : start + length - HEADER_SIZE]),
-                    None,
-                    None,
-                    received,
+        new = tuple.__new__
+        view = memoryview(buf)
+        try:
+            while end - pos >= HEADER_SIZE:
+                length, sec, usec, sender, type_id, _seq = unpack(buf, pos)
+                body = check_header(length)
+                if end - pos - HEADER_SIZE < body:
+                    break
+                start = pos + HEADER_SIZE
+                payload = bytes(view[start : start + length - HEADER_SIZE])
+                out.append(
+                    new(Message, (type_id, sender, sec, usec, payload, None, None, received, None))
                 )
-            )
-            pos = start + body
+                pos = start + body
+        finally:
+            view.release()
         if pos:
             del buf[:pos]
         return out
