@@ -12,10 +12,12 @@ fails as surely as one that makes it raise.
 
 from __future__ import annotations
 
+import atexit
 import functools
 import itertools
 import os
 import random
+import shutil
 import struct
 import tempfile
 from collections.abc import Callable
@@ -79,8 +81,10 @@ def feed(t: Target, data: bytes) -> None:
 
 @functools.cache
 def _workdir() -> Path:
-    """An empty directory of this process for the targets that need files."""
-    return Path(tempfile.mkdtemp(prefix="gadgetctl-fuzz-"))
+    """An empty directory of this process for the targets that need files (removed at exit)."""
+    path = Path(tempfile.mkdtemp(prefix="gadgetctl-fuzz-"))
+    atexit.register(shutil.rmtree, path, ignore_errors=True)
+    return path
 
 
 def _as_file(data: bytes, name: str) -> Path:
