@@ -73,3 +73,18 @@ def test_a_unit_beyond_any_device_is_a_malformed_record(tmp_path, unit, cli) -> 
     values = [json.loads(line) for line in result.stdout.splitlines()]
     units = {r["unit"] for r in values if r.get("type") == "sample" and r.get("device") == "W"}
     assert units == {0, 1}
+
+
+def test_a_sample_value_beyond_any_float_is_summarised(tmp_path, cli) -> None:
+    path = tmp_path / "big.ndjson"
+    path.write_text(
+        json.dumps(HEADER)
+        + "\n"
+        + json.dumps(sample(0, 1.0)).replace('"value": 0.5', '"value": ' + "9" * 400)
+        + "\n"
+        + json.dumps(sample(0, 1.1))
+        + "\n"
+    )
+    result = cli("replay", path, "--summary", "--format", "ndjson")
+    assert result.exit_code == 0, result.stderr
+    assert json.loads(result.stdout)["samples"] == 2

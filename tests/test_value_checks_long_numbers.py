@@ -37,3 +37,16 @@ def test_float_syntax(text: str, number: bool) -> None:
     from gadgetctl.jccl.definitions import ValueType
 
     assert is_number(ValueType.FLOAT, text) is number
+
+
+def test_an_integer_of_thousands_of_digits_reads_saturated(tmp_path, cli) -> None:
+    from gadgetctl.jccl.access import read_int
+
+    assert read_int("9" * 5000 + "x") == 2**63 - 1 and read_int("-" + "9" * 5000) == -(2**63)
+    assert read_int(" 0000000000000000000000042z") == 42 and read_int("x1") == 0
+    path = tmp_path / "huge.jconf"
+    element = f'<dtrack name="T" version="1"><receive_port>{"9" * 5000}x</receive_port></dtrack>'
+    path.write_text(HEAD + element + "\n</elements>\n</configuration>\n")
+    result = cli("validate", path)
+    assert result.exit_code == 1 and "Traceback" not in result.stderr
+    assert "9223372036854775807" in result.stdout  # what it is read as, said in the finding

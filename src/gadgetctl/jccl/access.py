@@ -25,9 +25,21 @@ class UnknownProperty(KeyError):
     """A property the element's definition does not have was asked for."""
 
 
+#: strtol's range on the platforms VR Juggler runs on (64-bit long): it saturates beyond.
+_LONG_MAX = 2**63 - 1
+
+
 def read_int(text: str) -> int:
+    """The leading integer of ``text`` as C's ``strtol`` reads it (0 without one), saturated
+    to the range of a 64-bit long, so thousands of digits never reach ``int()``'s limit."""
     match = _LEADING_INT.match(text.strip())
-    return int(match.group(0)) if match else 0
+    if not match:
+        return 0
+    digits = match.group(0)
+    negative = digits.startswith("-")
+    if len(digits.lstrip("+-").lstrip("0")) > 19:  # beyond any 64-bit value
+        return -_LONG_MAX - 1 if negative else _LONG_MAX
+    return max(-_LONG_MAX - 1, min(_LONG_MAX, int(digits)))
 
 
 def read_float(text: str) -> float:

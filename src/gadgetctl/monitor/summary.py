@@ -120,6 +120,8 @@ class RecordingSummary:
 def _number(value: object) -> float:
     try:
         return float(value)  # type: ignore[arg-type]
+    except OverflowError:  # an integer beyond any float
+        return math.inf if value > 0 else -math.inf  # type: ignore[operator]
     except (TypeError, ValueError):
         return math.nan
 
