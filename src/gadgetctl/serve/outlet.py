@@ -20,6 +20,7 @@ from gadgetctl.serve.framing import (
     pack_poses,
 )
 from gadgetctl.vrpn import codecs
+from gadgetctl.vrpn.server import OPEN
 
 #: The message types each VRPN device class registers (the C++ classes register the same).
 ROLE_TYPES: dict[Role, tuple[str, ...]] = {
@@ -52,16 +53,23 @@ class VrpnOutlet:
         self.button_states: dict[str, np.ndarray] = {}
         self.messages = 0
         self._poses: list[tuple[int, np.ndarray, np.ndarray]] = []
+        # whether a client is connected (refreshed every frame and on connection): with
+        # nobody to send to, reports are not framed at all
+        self.audience = False
 
     # -- Outlet -------------------------------------------------------------------------
 
     def tracker(self, sender: str, times: np.ndarray, matrices: np.ndarray) -> None:
         # kept until the end of the frame: every tracker of a frame is framed in one go
-        self._poses.append((self.senders[sender], times, matrices))
+        if self.audience:
+            self._poses.append((self.senders[sender], times, matrices))
 
     def buttons(
         self, sender: str, changes: Sequence[tuple[float, int, int]], states: np.ndarray
     ) -> None:
+        self.button_states[sender] = np.array(states, copy=True)  # for clients to come, too
+        if not self.audience:
+            return
         times, buttons, values = zip(*changes, strict=True)
         data = pack_button_changes(
             self.senders[sender],
@@ -70,17 +78,20 @@ class VrpnOutlet:
             np.asarray(buttons),
             np.asarray(values),
         )
-        self.button_states[sender] = np.array(states, copy=True)
         self.messages += len(changes)
         self.server.broadcast(data, CHANGE_SIZE, reliable=True)
 
     def analog(self, sender: str, times: np.ndarray, values: np.ndarray) -> None:
+        if not self.audience:
+            return
         values = values[:, : codecs.MAX_CHANNELS]
         data = pack_analogs(self.senders[sender], self._analog, times, values)
         self.messages += values.shape[0]
         self.server.broadcast(data, analog_size(values.shape[1]), reliable=False)
 
     def text(self, sender: str, moment: float, level: int, text: str) -> None:
+        if not self.audience:
+            return
         self.messages += 1
         self.server.send(
             self.senders[sender],
@@ -94,8 +105,11 @@ class VrpnOutlet:
     def end_frame(self) -> None:
         """Frame and queue the frame's tracker reports: one conversion to quaternions and
         one framing for all of them, however many devices and sensors."""
-        if not self._poses:
-            return
+        if self._poses:
+            self._frame_poses()
+        self.audience = any(client.state == OPEN for client in self.server.clients)
+
+    def _frame_poses(self) -> None:
         pending, self._poses = self._poses, []
         shapes = np.array([v.shape[:2] for _, _, v in pending])  # (samples, sensors) per batch
         sizes = shapes[:, 0] * shapes[:, 1]

@@ -141,6 +141,7 @@ class ServeService:
                 return
 
     def _connected(self, client) -> None:
+        self.outlet.audience = True
         self.outlet.send_states(client)  # as a C++ button server does
         self._tell(ServeEvent("connected", _address(client), client.mode))
 
