@@ -99,3 +99,34 @@ def test_vrpn_names_on_the_command_line(cli) -> None:
     assert f"DRV111 vrpn:Tracker0@tcp://127.0.0.1:{free}: no VRPN server answers" in text
     assert "DRV110 vrpn:NoHost: 'NoHost' is not written as Device@host" in text
     assert "Traceback" not in result.stderr
+
+
+def test_a_listed_but_silent_name_is_not_taken_for_a_device(cli) -> None:
+    # A C++ vrpn_server announces, for good, every name any client once described to it;
+    # such a name answers no ping. This raw server does the same for 'Ghost'.
+    import time
+
+    from vrpn_peers import COOKIE, RawServer, describe
+
+    def script(conn: socket.socket, n: int) -> None:
+        conn.sendall(COOKIE)
+        conn.recv(24)
+        conn.sendall(
+            describe(-1, 0, "VRPN Control")
+            + describe(-1, 1, "Ghost")
+            + describe(-2, 0, "vrpn_Base ping_message")
+        )
+        end = time.monotonic() + 3
+        while time.monotonic() < end:  # read and never answer
+            try:
+                if not conn.recv(4096):
+                    return
+            except TimeoutError:
+                pass
+
+    with RawServer(script) as raw:
+        result = cli(
+            "doctor", f"vrpn:Ghost@tcp://127.0.0.1:{raw.port}", "--probe", "--timeout", "1"
+        )
+    assert result.exit_code == 1
+    assert "lists 'Ghost' but nothing answers for it" in result.stdout

@@ -29,13 +29,18 @@ from gadgetctl.vrpn.codecs import (
     ANALOG_CHANNEL,
     BUTTON_CHANGE,
     BUTTON_STATES,
+    TRACKER_ACCELERATION,
     TRACKER_POS_QUAT,
+    TRACKER_VELOCITY,
     AnalogChannels,
     ButtonChange,
     ButtonStates,
     TrackerPose,
 )
 from gadgetctl.vrpn.names import DeviceName, Location
+from gadgetctl.vrpn.probe import SYSTEM_SENDERS
+
+TRACKER_MOTION = frozenset({TRACKER_VELOCITY, TRACKER_ACCELERATION})
 
 
 class VrpnUnavailable(ConnectionError):
@@ -124,6 +129,7 @@ class VrpnInput:
         self._clients: dict[Location, VrpnClient] = {}
         self._connected_at: dict[Location, float] = {}
         self._checked: set[Location] = set()
+        self._heard: set[tuple[Location, str]] = set()  # senders heard on the current connections
         self._deadline = 0.0
 
     @property
@@ -165,6 +171,7 @@ class VrpnInput:
         self._clients.clear()
         self._connected_at.clear()
         self._checked.clear()
+        self._heard.clear()
 
     def read(self, timeout: float = 0.1) -> Batch:
         """What arrived within ``timeout``; raises when a connection is lost or a device is
@@ -186,20 +193,28 @@ class VrpnInput:
                 continue
             if client.connects == 1 and location not in self._checked:
                 self._connected_at.setdefault(location, time.monotonic())
+            for m in messages:
+                if m.sender is not None:
+                    self._heard.add((location, m.sender))
             self._check_announced(location, client)
             self._take(messages, batch)
         return batch
 
     def _check_announced(self, location: Location, client: VrpnClient) -> None:
+        """Once per connection, ``missing_after`` seconds in: every device of this location
+        must have answered its ping or sent a report. (Being announced is not enough: a C++
+        vrpn_server announces, for good, every name any client ever asked it for.)"""
         since = self._connected_at.get(location)
         if since is None or time.monotonic() - since < self.missing_after:
             return
         announced = set(client.announced)
         for dev in self.devices:
-            if dev.location == location and dev.device not in announced:
-                names = ", ".join(sorted(announced - {"VRPN Control"})) or "none"
+            if dev.location == location and (location, dev.device) not in self._heard:
+                names = ", ".join(sorted(announced - SYSTEM_SENDERS - {dev.device})) or "none"
+                listed = " (it lists the name but nothing answers for it)" if dev.device in announced else ""
                 raise VrpnDeviceMissing(
-                    f"the VRPN server at {location} has no device {dev.device!r} (it announces: {names})"
+                    f"the VRPN server at {location} has no device {dev.device!r}{listed}; "
+                    f"it announces: {names}"
                 )
         self._connected_at.pop(location)
         self._checked.add(location)  # checked once per connection
@@ -231,6 +246,8 @@ class VrpnInput:
                 if not batch.remote_times or batch.remote_times[-1][1] != m.timestamp:
                     batch.remote_times.append((m.received, m.timestamp))
                 continue
+            if m.sender == tracker and m.type in TRACKER_MOTION:
+                continue  # velocity and acceleration of the same tick do not end it
             if tick is not None:
                 end_tick()
                 tick = None

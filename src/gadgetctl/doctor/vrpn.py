@@ -46,7 +46,7 @@ def check_vrpn_name(text: str, *, probe: bool, timeout: float) -> PortCheck:
             Status.UNCHECKED,
             f"not contacted{resolved} (run with --probe to ask the VRPN server at {name.location})",
         )
-    result = probe_server(name.location, [name.device], timeout=timeout, observe=0.2)
+    result = probe_server(name.location, [name.device], timeout=timeout, observe=0.3)
     if not result.answered:
         return PortCheck(
             "vrpn",
@@ -57,6 +57,18 @@ def check_vrpn_name(text: str, *, probe: bool, timeout: float) -> PortCheck:
             "start the VRPN server (vrpn_server, gadgetctl serve...) or fix the host and port",
         )
     version = f"VRPN {result.version} server at {name.location}"
+    if result.listed_only(name.device):
+        offered = ", ".join(d for d in result.devices if d != name.device) or "no devices"
+        return PortCheck(
+            "vrpn",
+            target,
+            Status.PROBLEM,
+            f"the {version} lists {name.device!r} but nothing answers for it within "
+            f"{timeout:g} s (no pong, no report); a vrpn_server lists any name a client "
+            f"once asked for; it announces: {offered}",
+            "DRV112",
+            "use a device the server really serves (its configuration file names them)",
+        )
     if not result.has(name.device):
         offered = ", ".join(result.devices) or "no devices"
         return PortCheck(

@@ -58,6 +58,12 @@ def resolve(arguments: list[str], *, timeout: float = 2.0) -> list[WatchedDevice
         result = results[name.location]
         if not result.answered:
             raise GadgetctlError(f"vrpn:{text}: {result.error}")
+        if result.listed_only(name.device):
+            raise GadgetctlError(
+                f"vrpn:{text}: the VRPN server at {name.location} lists {name.device!r} but "
+                f"nothing answered for it within {timeout:g} s (a vrpn_server lists any "
+                f"name a client once asked for); it announces: {', '.join(result.devices)}"
+            )
         if not result.has(name.device):
             offered = ", ".join(result.devices) or "no devices"
             raise GadgetctlError(

@@ -43,6 +43,9 @@ CONNECTING = "connecting"  # TCP connect or lob under way
 HANDSHAKE = "handshake"  # cookies being exchanged
 CONNECTED = "connected"
 CLOSED = "closed"
+#: Seconds a new connection waits for the server's descriptions before describing its own
+#: senders anyway.
+SETUP_WAIT = 0.5
 
 
 class VrpnClient:
@@ -98,6 +101,7 @@ class VrpnClient:
         self._last_rx = 0.0
         self._last_ping = 0.0
         self._held: list[Message] = []
+        self._senders_described = False
 
     # -- public -------------------------------------------------------------------------------
 
@@ -111,9 +115,14 @@ class VrpnClient:
 
     @property
     def announced(self) -> list[str]:
-        """The sender names the server has described on this connection."""
+        """The sender (device) names the server serves: those it described in its setup,
+        and those it described later that this client did not describe itself (a C++ server
+        describes back, as its own, every unknown name a client describes)."""
         ep = self._endpoint
-        return sorted(set(ep.remote_senders.values())) if ep is not None else []
+        if ep is None:
+            return []
+        ours = set(self.senders.names)
+        return sorted(ep.setup_senders | (ep.later_senders - ours))
 
     @property
     def announced_types(self) -> list[str]:
@@ -131,7 +140,12 @@ class VrpnClient:
     def add_device(self, name: str) -> None:
         """Describe one more device (sender) and ping it; effective at once when connected."""
         ident, new = self.senders.register(name)
-        if new and self.state == CONNECTED and self._endpoint is not None:
+        if (
+            new
+            and self.state == CONNECTED
+            and self._endpoint is not None
+            and self._senders_described
+        ):
             self._endpoint.queue(pack_description(SENDER_DESCRIPTION, ident, name))
             self._ping(name)
 
@@ -232,6 +246,8 @@ class VrpnClient:
                     out.extend(self._handle(ep.read(wall)))
                     if ep.opened and self.state == HANDSHAKE:
                         self._opened(ep)
+                if self.state == CONNECTED and not self._senders_described:
+                    self._describe_senders(ep)
                 if self._endpoint is ep and (ep.wants_write or ep in w):
                     ep.flush()
         except ConnectionDropped as exc:
@@ -251,6 +267,8 @@ class VrpnClient:
             return self._state_since + self.handshake_timeout
         if self.state == CONNECTED:
             due = max(self._last_ping, self._last_rx) + self.ping_interval  # both must be stale
+            if not self._senders_described:
+                due = min(due, self._state_since + SETUP_WAIT)
             if self.silence_timeout is not None:
                 due = min(due, self._last_rx + self.silence_timeout)
             return due
@@ -373,15 +391,28 @@ class VrpnClient:
             udp.setblocking(False)
             self._udp_in = udp
             ep.queue(pack_udp_description(self._local_ip, udp.getsockname()[1]))
-        for ident, name in self.senders:
-            ep.queue(pack_description(SENDER_DESCRIPTION, ident, name))
         for ident, name in self.types:
             ep.queue(pack_description(TYPE_DESCRIPTION, ident, name))
         self._set_state(CONNECTED)
+        self._senders_described = False
         self.connects += 1
         self.last_error = None
         self._delay = self.first_retry
         self._last_rx = time.monotonic()
+        self._describe_senders(ep)
+
+    def _describe_senders(self, ep: Endpoint) -> None:
+        """Describe our devices (senders) and ping them, once the server's own descriptions
+        are in (its first type description ends its senders), or after ``SETUP_WAIT``: a C++
+        server describes back every unknown name a client describes, so describing first
+        would make any name look served."""
+        if self._senders_described:
+            return
+        if not ep.remote_types and time.monotonic() - self._state_since < SETUP_WAIT:
+            return
+        self._senders_described = True
+        for ident, name in self.senders:
+            ep.queue(pack_description(SENDER_DESCRIPTION, ident, name))
         for name in self.senders.names:
             self._ping(name)
 

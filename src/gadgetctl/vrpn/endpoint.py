@@ -111,6 +111,11 @@ class Endpoint:
         self.peer_version: str | None = None
         self.remote_senders: dict[int, str] = {}
         self.remote_types: dict[int, str] = {}
+        #: Sender names the peer described in its setup (before its first type description),
+        #: and those it described later: a C++ peer describes back every name *we* describe
+        #: that it did not have, so a later name is not necessarily one it really serves.
+        self.setup_senders: set[str] = set()
+        self.later_senders: set[str] = set()
         self.udp: socket.socket | None = None  # outgoing unreliable channel, once announced
         self._udp_batch = bytearray()
         self._cookie = bytearray()
@@ -218,6 +223,8 @@ class Endpoint:
                 raise ConnectionDropped(f"bad description: {exc}") from None
             table = self.remote_senders if kind == SENDER_DESCRIPTION else self.remote_types
             table[m.sender_id] = name
+            if kind == SENDER_DESCRIPTION:
+                (self.later_senders if self.remote_types else self.setup_senders).add(name)
         elif kind == UDP_DESCRIPTION:
             self._open_udp(m)
         elif kind == DISCONNECT_MESSAGE:

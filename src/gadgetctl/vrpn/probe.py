@@ -54,6 +54,7 @@ class ProbeResult:
     error: str | None = None
     announced: list[str] = field(default_factory=list)
     layouts: dict[str, Layout] = field(default_factory=dict)
+    heard: set[str] = field(default_factory=set)  # named devices that sent something (a pong...)
 
     @property
     def devices(self) -> list[str]:
@@ -61,7 +62,14 @@ class ProbeResult:
         return [n for n in self.announced if n not in SYSTEM_SENDERS]
 
     def has(self, device: str) -> bool:
-        return device in self.announced
+        """Whether the server serves ``device``: it announces it and the device answered the
+        client's ping or sent a report. (A C++ ``vrpn_server`` also announces, for good, any
+        name a client ever described to it, with no device behind it.)"""
+        return device in self.announced and device in self.heard
+
+    def listed_only(self, device: str) -> bool:
+        """Announced, but silent: most likely a name some client once asked a vrpn_server for."""
+        return device in self.announced and device not in self.heard
 
 
 def probe(
@@ -69,7 +77,7 @@ def probe(
 ) -> ProbeResult:
     """Connect (as ``location`` says: lob or direct TCP) within ``timeout``; then watch the
     named devices' reports for ``observe`` seconds (longer, up to ``timeout``, while a named
-    and announced device has sent nothing)."""
+    and announced device has not answered its ping or sent no report)."""
     client = VrpnClient(location, list(devices), retry_interval=0.25)
     result = ProbeResult(client.location)
     result.layouts = {d: Layout() for d in devices}
@@ -84,7 +92,10 @@ def probe(
         while True:
             now = time.monotonic()
             waiting = [
-                d for d in devices if d in client.announced and not result.layouts[d].reports
+                d
+                for d in devices
+                if d in client.announced
+                and (d not in result.heard or not result.layouts[d].reports)
             ]
             if not client.announced:  # the descriptions follow the cookie: wait for them
                 waiting = ["(descriptions)"]
@@ -92,8 +103,10 @@ def probe(
                 break
             result.announced = client.announced or result.announced
             for m in client.poll(min(0.05, max(0.0, deadline - now))):
-                if m.sender in result.layouts and m.report is not None:
-                    result.layouts[m.sender].note(m.report)
+                if m.sender in result.layouts:
+                    result.heard.add(m.sender)
+                    if m.report is not None:
+                        result.layouts[m.sender].note(m.report)
             if client.state != "connected":
                 result.error = client.last_error
                 break
