@@ -39,9 +39,12 @@ def test_client_and_server_exchange_every_device_family(scheme):
             assert client.server_version == "07.38"
             assert server.clients[0].mode == ("tcp" if scheme else "lob")
             # Lob clients announce a UDP channel and get unreliable reports there.
-            assert server.clients[0].udp == (not scheme)
+            # (the description may still be on its way: wait for it, never assume it)
+            if not scheme:
+                assert wait_until(lambda: server.clients[0].udp)
             pongs = collect(client, lambda g: sum(m.type == codecs.PONG for m in g) == 2)
             assert {m.sender for m in pongs if m.type == codecs.PONG} == {"Tracker0", "Button0"}
+            assert server.clients[0].udp == (not scheme)  # all the client sent has arrived
             server.send(
                 tracker,
                 pose,
