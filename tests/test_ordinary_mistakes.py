@@ -338,3 +338,19 @@ def test_serve_record_dash_is_refused_rather_than_writing_a_file_named_dash(cli,
     result = cli("serve", WAVEFORM, "--record", "-", "--duration", "0.2", cwd=tmp_path)
     assert result.exit_code == 2 and "--record -" in one_line_error(result.stderr)
     assert not (tmp_path / "-").exists()
+
+
+@pytest.mark.timeout(60)
+def test_record_into_a_missing_directory_names_the_option_and_the_directory(tmp_path):
+    target = tmp_path / "missing" / "run.ndjson"
+    result = gadgetctl(
+        "monitor", WAVEFORM, "--duration", "0.2", "--format", "table", "--record", target
+    )
+    assert result.returncode == 2
+    assert f"--record {target}: no such directory {target.parent}" in one_line_error(result.stderr)
+
+
+def test_validate_on_a_mistyped_path_suggests_the_file_meant(cli):
+    result = cli("validate", "examples/wavefrom.jconf", cwd=REPO)
+    assert result.exit_code == 2
+    assert "did you mean examples/waveform.jconf?" in one_line_error(result.stderr)

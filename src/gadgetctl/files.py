@@ -22,7 +22,7 @@ def expand_paths(paths: Iterable[Path]) -> list[Path]:
     seen: set[Path] = set()
     for path in paths:
         if not path.exists():
-            raise GadgetctlError(f"{path}: no such file or directory")
+            raise GadgetctlError(f"{path}: no such file or directory{_nearby(path, JCCL_SUFFIXES)}")
         if path.is_dir():
             if not os.access(path, os.R_OK | os.X_OK):
                 raise GadgetctlError(f"{path}: directory is not readable")

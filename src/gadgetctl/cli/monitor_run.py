@@ -80,7 +80,7 @@ def check_record_path(path: Path | None, overwrite: bool, mode: OutputFormat | N
     if path.exists() and not overwrite:
         raise GadgetctlError(f"{path}: file exists (use --overwrite to replace it)")
     if not path.parent.is_dir():
-        raise GadgetctlError(f"{path.parent}: no such directory")
+        raise GadgetctlError(f"--record {path}: no such directory {path.parent}")
 
 
 def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
