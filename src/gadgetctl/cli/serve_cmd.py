@@ -114,6 +114,7 @@ def serve(
         allow=parse_allow(allow),
         rate=_check_rate(rate),
         client_buffer=_check_buffer(client_buffer),
+        statistics=record is not None,  # the recording ends with per-device statistics
     )
     if duration is not None and not duration >= 0:
         from gadgetctl.errors import GadgetctlError

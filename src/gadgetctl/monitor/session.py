@@ -192,9 +192,10 @@ def _rows(values: Any) -> np.ndarray:
 class DeviceTrack:
     """What a session keeps about one device between frames."""
 
-    def __init__(self, name: str, device: Input, history: int) -> None:
+    def __init__(self, name: str, device: Input, history: int, statistics: bool = True) -> None:
         self.name = name
         self.device = device
+        self.statistics = statistics
         self.stats = DeviceStats(name)
         self.history_length = history
         self.frames: dict[DeviceKind, FrameSamples] = {}
@@ -235,8 +236,11 @@ class DeviceTrack:
             samples = store.frame(kind)
             if samples.count and fresh:
                 frames[kind] = samples
-        dropped = self._dropped_now()
         self.frames = frames
+        if not self.statistics:  # gathering only (serve): no rates, presses or histories
+            self.count = max((f.count for f in frames.values()), default=0)
+            return self.count
+        dropped = self._dropped_now()
         stamps = frame_timestamps(frames) if frames else ()
         count = len(stamps)
         if count:
@@ -462,7 +466,7 @@ class MonitorSession:
     def __init__(self, manager: InputManager, configuration: Configuration | None = None, *,
                  selectors: Sequence[str] = (), rate: float = 60.0,
                  history: float = DEFAULT_HISTORY_SECONDS, source: ReplaySource | None = None,
-                 info: Mapping[str, object] | None = None) -> None:
+                 info: Mapping[str, object] | None = None, statistics: bool = True) -> None:
         if not rate > 0:
             raise ValueError("the frame rate must be positive")
         self.manager = manager
@@ -472,6 +476,7 @@ class MonitorSession:
         self.history = max(2, round(history * rate))
         self.source = source
         self.info = dict(info or {})
+        self.statistics = statistics  # False: gather samples only (no statistics, presses, histories)
         self.frame = 0
         self.started_at: float | None = None
         self.frame_timestamp = 0.0
@@ -728,7 +733,7 @@ class MonitorSession:
                 continue
             track = tracks.get(name)
             if track is None or track.device is not device:
-                track = tracks[name] = DeviceTrack(name, device, self.history)
+                track = tracks[name] = DeviceTrack(name, device, self.history, self.statistics)
             samples += track.update()
         if self.source is not None:
             for marker in self.source.drain_markers():

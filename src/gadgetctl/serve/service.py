@@ -39,6 +39,7 @@ class ServeOptions:
     allow: list = field(default_factory=list)  # ipaddress networks; empty: everyone
     rate: float = DEFAULT_RATE
     client_buffer: int = 1 << 20  # bytes queued per client before messages are dropped
+    statistics: bool = False  # the session's per-device statistics (needed for --record's stats)
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,6 +77,7 @@ class ServeService:
             selectors=self.options.selectors,
             rate=self.options.rate,
             info=info,
+            statistics=self.options.statistics,
         )
         self.catalog: list[ServedElement] = []
         self.server = None
