@@ -51,26 +51,30 @@ class VrpnDeviceMissing(ConnectionError):
     """The server answers but does not announce the named device."""
 
 
+def pose_rows(
+    position: tuple[float, float, float], quat: tuple[float, float, float, float]
+) -> list[list[float]]:
+    """The rows of the 4x4 matrix of a position and an (x, y, z, w) quaternion (normalised
+    first; a zero quaternion is no rotation)."""
+    x, y, z, w = quat
+    n = x * x + y * y + z * z + w * w
+    px, py, pz = position
+    if n <= 0.0:
+        return [[1.0, 0.0, 0.0, px], [0.0, 1.0, 0.0, py], [0.0, 0.0, 1.0, pz], [0.0, 0.0, 0.0, 1.0]]
+    s = 2.0 / n
+    return [
+        [1.0 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w), px],
+        [s * (x * y + z * w), 1.0 - s * (x * x + z * z), s * (y * z - x * w), py],
+        [s * (x * z - y * w), s * (y * z + x * w), 1.0 - s * (x * x + y * y), pz],
+        [0.0, 0.0, 0.0, 1.0],
+    ]
+
+
 def pose_matrix(
     position: tuple[float, float, float], quat: tuple[float, float, float, float]
 ) -> np.ndarray:
     """A 4x4 matrix from a position and an (x, y, z, w) quaternion (normalised first)."""
-    x, y, z, w = quat
-    n = x * x + y * y + z * z + w * w
-    m = np.eye(4)
-    if n > 0.0:
-        s = 2.0 / n
-        m[0, 0] = 1.0 - s * (y * y + z * z)
-        m[0, 1] = s * (x * y - z * w)
-        m[0, 2] = s * (x * z + y * w)
-        m[1, 0] = s * (x * y + z * w)
-        m[1, 1] = 1.0 - s * (x * x + z * z)
-        m[1, 2] = s * (y * z - x * w)
-        m[2, 0] = s * (x * z - y * w)
-        m[2, 1] = s * (y * z + x * w)
-        m[2, 2] = 1.0 - s * (x * x + y * y)
-    m[:3, 3] = position
-    return m
+    return np.array(pose_rows(position, quat))
 
 
 @dataclass
@@ -242,7 +246,7 @@ class VrpnInput:
                 if tick is not None and (m.sec, m.usec) != tick:
                     end_tick()
                 tick, tick_received = (m.sec, m.usec), m.received
-                self.poses[report.sensor] = pose_matrix(report.position, report.quat)
+                self.poses[report.sensor] = pose_rows(report.position, report.quat)
                 if not batch.remote_times or batch.remote_times[-1][1] != m.timestamp:
                     batch.remote_times.append((m.received, m.timestamp))
                 continue
