@@ -139,6 +139,9 @@ def test_quaternion_and_device_filters() -> None:
     m = pose_matrix((1.0, 2.0, 3.0), (0.0, 0.0, s, s))
     np.testing.assert_allclose(m[:3, :3] @ [1, 0, 0], [0, 1, 0], atol=1e-12)
     np.testing.assert_allclose(m[:3, 3], [1, 2, 3])
+    # A quaternion that is not of unit length is normalised; a zero one is no rotation.
+    np.testing.assert_allclose(pose_matrix((1.0, 2.0, 3.0), (0.0, 0.0, 2.0, 2.0)), m, atol=1e-12)
+    np.testing.assert_allclose(pose_matrix((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0)), np.eye(4))
 
 
 def test_buttons_toggle_and_positions_move(build) -> None:
