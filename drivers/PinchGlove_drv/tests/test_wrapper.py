@@ -300,14 +300,19 @@ def test_stop_and_start_again(tmp_path, emulator, managers) -> None:
     emu = emulator("idle")
     manager = managers(write(tmp_path, glove_element("Glove", emu.address)))
     device = manager.device("Glove")
-    device.stop_sampling()
-    device.stop_sampling()  # twice is fine
+    # The manager's sampling thread must end first: it calls sample() on its own, and
+    # stopping the device under it made it fault and close the glove the test reopened.
+    manager.shutdown()
     assert device.glove is None
+    device.stop_sampling()  # twice is fine
     device.start_sampling()  # the port can be opened again
-    assert emu.commands[-1] == b"T1" and emu.commands.count(b"CL") == 1  # info asked once
-    emu.send_raw(encode_frame(((L_INDEX, R_INDEX),), 9))
-    assert wait_until(lambda: device.frames == 1, step=device.sample)
-    assert device.store.total(DeviceKind.DIGITAL) == 3  # open hands twice, then the touch
+    try:
+        assert emu.commands[-1] == b"T1" and emu.commands.count(b"CL") == 1  # info asked once
+        emu.send_raw(encode_frame(((L_INDEX, R_INDEX),), 9))
+        assert wait_until(lambda: device.frames == 1, step=device.sample)
+        assert device.store.total(DeviceKind.DIGITAL) == 3  # open hands twice, then the touch
+    finally:
+        device.stop_sampling()
 
 
 # -- configuration ----------------------------------------------------------------------------
