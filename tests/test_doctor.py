@@ -6,7 +6,6 @@ from __future__ import annotations
 import grp
 import json
 import os
-import pty
 import re
 import socket
 import stat
@@ -39,6 +38,16 @@ def config(tmp_path: Path, *elements: str, drivers: tuple[str, ...] = ()) -> Pat
         names = "".join(f"<driver>{d}</driver>" for d in drivers)
         manager = f'<input_manager name="IM" version="2">{names}</input_manager>\n'
     return write(tmp_path / "doctor.jconf", HEAD + manager + "\n".join(elements) + "\n" + TAIL)
+
+
+def fed_fifo(path: Path, mode: int = 0o666) -> int:
+    """A FIFO that a program holds open for writing (a FIFO nobody writes is stale, DRV108);
+    returns the descriptor to close."""
+    os.mkfifo(path, mode)
+    os.chmod(path, 0o600)
+    fd = os.open(path, os.O_RDWR)
+    os.chmod(path, mode)
+    return fd
 
 
 def joydev(path: Path | str) -> str:
@@ -170,8 +179,12 @@ def test_fifo_made_by_the_emulator_is_fine_and_a_symlink_is_followed(cli, tmp_pa
 
 def test_nothing_blocking_exits_0(cli, tmp_path, fifo_plugin):
     fifo = tmp_path / "pad"
-    os.mkfifo(fifo)
-    result = cli("doctor", "--driver-path", fifo_plugin, config(tmp_path, fifo_device(fifo), drivers=("Fifo_drv",)))
+    writer = fed_fifo(fifo)
+    try:
+        result = cli("doctor", "--driver-path", fifo_plugin,
+                     config(tmp_path, fifo_device(fifo), drivers=("Fifo_drv",)))
+    finally:
+        os.close(writer)
     assert result.exit_code == 0, result.stdout
     assert "ok       Fifo_drv" in result.stdout
     assert re.search(r"ok +port_name .*pad: a FIFO", result.stdout)
@@ -240,8 +253,11 @@ def test_unreadable_device_for_another_user(tmp_path):
 def test_permission_of_the_current_user(cli, tmp_path):
     """os.access decides for the user running doctor: root reads anything, others are refused."""
     fifo = tmp_path / "js0"
-    os.mkfifo(fifo, 0o000)
-    code, report = doctor_json(cli, config(tmp_path, joydev(fifo), drivers=("LinuxJoydev_drv",)))
+    writer = fed_fifo(fifo, 0o000)
+    try:
+        code, report = doctor_json(cli, config(tmp_path, joydev(fifo), drivers=("LinuxJoydev_drv",)))
+    finally:
+        os.close(writer)
     [check] = checks_of(report, "Joystick")
     if os.geteuid() == 0:
         assert check["status"] == "ok" and port_codes(report) == set()
@@ -253,16 +269,16 @@ def test_permission_of_the_current_user(cli, tmp_path):
 # -- serial ports ---------------------------------------------------------------------------
 
 def test_pty_behind_a_symlink_is_a_usable_serial_port(tmp_path):
-    master, slave = pty.openpty()
+    from gadgetctl.emulation import PseudoTerminal
+
+    link = tmp_path / "glove"
+    emulated = PseudoTerminal(link).open()  # an emulator's pty (a bare one is DRV108)
     try:
-        link = tmp_path / "glove"
-        link.symlink_to(os.ttyname(slave))
         checked = check_path(str(link), "serial")
         assert checked.status is Status.OK
-        assert f"a symlink to {os.ttyname(slave)}" in checked.detail and "writable" in checked.detail
+        assert f"a symlink to {emulated.address}" in checked.detail and "writable" in checked.detail
     finally:
-        os.close(master)
-        os.close(slave)
+        emulated.close()
 
 
 def test_missing_serial_port_of_an_upstream_driver_lists_the_ports(tmp_path):
@@ -385,10 +401,13 @@ def test_plugin_that_fails_to_import(tmp_path, fifo_plugin):
     broken = next(d for d in overview.diagnostics if d.code == "DRV003")
     assert broken.severity.value == "error" and overview.exit_code == 1
     fifo = tmp_path / "pad"
-    os.mkfifo(fifo)
+    writer = fed_fifo(fifo)
     # a configuration that does not use the broken plug-in is not blocked by it
-    used = diagnose([config(tmp_path, fifo_device(fifo), drivers=("Fifo_drv",))],
-                    DoctorOptions(driver_dirs=[fifo_plugin]))
+    try:
+        used = diagnose([config(tmp_path, fifo_device(fifo), drivers=("Fifo_drv",))],
+                        DoctorOptions(driver_dirs=[fifo_plugin]))
+    finally:
+        os.close(writer)
     assert next(d for d in used.diagnostics if d.code == "DRV003").severity.value == "warning"
     assert used.exit_code == 0
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import re
+import socket
 import subprocess
 import sys
 import time
@@ -90,3 +91,29 @@ def test_input_manager_run_duration_is_seconds() -> None:
         count = manager.run(rate=1_000_000, duration=0.5)
         elapsed = time.monotonic() - started
     assert 0.5 <= elapsed < 2.5 and count < 500_000
+@pytest.fixture
+def udp_port():
+    """A loopback UDP port that takes (and ignores) what the DTrack emulator sends."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind(("127.0.0.1", 0))
+        yield str(sock.getsockname()[1])
+
+
+@pytest.mark.parametrize("value", ["-1", "-0.5", "nan"])
+@pytest.mark.parametrize("driver", ["DTrack_drv", "MotionStar_drv"])
+def test_emulate_refuses_a_negative_duration(udp_port, driver: str, value: str) -> None:
+    port = udp_port if driver == "DTrack_drv" else "0"
+    result = gadgetctl("emulate", driver, "--port", port, "--duration", value, timeout=30)
+    assert result.returncode == 2, (result.stdout, result.stderr)
+    assert "--duration" in result.stderr and "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize("driver", ["DTrack_drv", "LinuxJoydev_drv", "PinchGlove_drv", "MotionStar_drv"])
+def test_emulate_duration_is_seconds(tmp_path, udp_port, driver: str) -> None:
+    where = {"DTrack_drv": ["--port", udp_port], "LinuxJoydev_drv": ["--path", str(tmp_path / "js0")],
+             "PinchGlove_drv": ["--port", str(tmp_path / "pinch")], "MotionStar_drv": ["--port", "0"]}[driver]
+    started = time.monotonic()
+    result = gadgetctl("emulate", driver, *where, "--duration", "0.5", timeout=30)
+    elapsed = time.monotonic() - started
+    assert result.returncode == 0, result.stderr
+    assert elapsed >= 0.5

@@ -116,31 +116,40 @@ def test_ndjson_sample_records_carry_values_and_raw_values():
 
 
 def test_ndjson_per_frame_and_selected_proxies():
-    result = gadgetctl("monitor", WAVEFORM, "VJ*", "Waveform Noise", "--duration", "1", "--format", "ndjson",
-                       "--per-frame")
+    # 10 frames a second for a second of wall clock (a loaded machine may run fewer)
+    result = gadgetctl("monitor", WAVEFORM, "VJ*", "Waveform Noise", "--rate", "10", "--duration", "1",
+                       "--format", "ndjson", "--per-frame")
     assert result.returncode == 0, result.stderr
     recs = records(result.stdout)
     frames = [r for r in recs if r["type"] == "frame"]
-    assert 50 <= len(frames) <= 70
+    assert 5 <= len(frames) <= 12
     assert not [r for r in recs if r["type"] == "sample"]
     numbers = [f["frame"] for f in frames]
     assert numbers == sorted(numbers)
     last = frames[-1]["devices"]
     assert set(last) == {"Waveform Noise", "VJAnalog0", "VJAnalog1", "VJButton0", "VJButton1", "VJWand",
                          "VJHead", "VJNoise"}
-    assert 10 <= last["Waveform Noise"]["count"] <= 25  # 1 kHz at 60 frames/s
+    # each frame counts the samples since the previous one (1 kHz: about 100 at 10 frames/s,
+    # more in a frame after a stall); together they are the device's samples of the run
+    counts = [f["devices"]["Waveform Noise"]["count"] for f in frames]
+    assert all(isinstance(c, int) and c >= 0 for c in counts) and sum(counts) >= 100
     assert 0.0 <= last["VJAnalog0"]["values"]["analog"]["0"] <= 1.0
     assert last["VJButton0"]["values"]["digital"]["0"] in (0, 1, 2, 3)
     assert len(last["VJWand"]["values"]["position"]["0"]) == 4
 
 
 def test_selected_aliases_stream_one_sample_per_frame_with_new_data():
-    result = gadgetctl("monitor", WAVEFORM, "VJWand", "--duration", "1", "--format", "ndjson")
+    # 10 frames in the second (--duration is wall-clock: a loaded machine may run fewer), each
+    # with new data from the 120 Hz tracker: one alias sample per frame, never the tracker's
+    # 120 samples a second
+    result = gadgetctl("monitor", WAVEFORM, "VJWand", "--rate", "10", "--duration", "1", "--format", "ndjson")
     recs = records(result.stdout)
     samples = [r for r in recs if r["type"] == "sample"]
     assert samples and {r["device"] for r in samples} == {"VJWand"}
     assert {r["kind"] for r in samples} == {"position"}
-    assert 50 <= len(samples) <= 62
+    assert 5 <= len(samples) <= 12
+    stamps = [r["timestamp"] for r in samples]
+    assert stamps == sorted(set(stamps))
 
 
 # --------------------------------------------------------------------------- table, stats, demo

@@ -1,6 +1,7 @@
 """A DTrack tracker emulated on loopback: the sender's side of the DTrack ASCII protocol.
 
-Knows nothing of gadgetctl. Frames go as UDP datagrams to ``127.0.0.1:port`` only (never to
+Knows nothing of gadgetctl's input manager (the command line comes from the shared emulator
+scaffolding, :mod:`gadgetctl.emulation`). Frames go as UDP datagrams to ``127.0.0.1:port`` only (never to
 another host, never broadcast). Each frame holds ``fr``, ``ts``, ``6dcal``, the Flysticks
 (``6df2``, or the old ``6df``), the standard bodies (``6d``), single markers (``3d``) and
 gloves (``glcal``/``gl``), with locations in millimetres and rotations sent column by column.
@@ -22,7 +23,6 @@ Run ``python emulator.py --help`` (or ``gadgetctl emulate DTrack_drv``) for the 
 
 from __future__ import annotations
 
-import argparse
 import math
 import random
 import select
@@ -33,6 +33,8 @@ import time
 from collections.abc import Sequence
 
 import numpy as np
+
+from gadgetctl.emulation import emulator_parser, run
 
 LOOPBACK = "127.0.0.1"
 SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
@@ -450,16 +452,18 @@ class DTrackEmulator:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Command line: send frames until Ctrl-C or ``--duration`` seconds."""
-    parser = argparse.ArgumentParser(
-        prog="DTrack_drv.emulator", description="Emulate an A.R.T. DTrack tracker on loopback UDP."
+    """Command line: send frames until Ctrl-C, SIGTERM, SIGHUP or ``--duration`` seconds."""
+    parser = emulator_parser(
+        "DTrack_drv.emulator",
+        "Emulate an A.R.T. DTrack tracker on loopback UDP.",
+        scenarios=SCENARIOS,
+        default_scenario="motion",
+        rate=60.0,
+        rate_help="frames per second (default 60)",
     )
-    parser.add_argument("--scenario", choices=SCENARIOS, default="motion")
-    parser.add_argument("--rate", type=float, default=60.0, help="frames per second (default 60)")
     parser.add_argument(
         "--port", type=int, default=5000, help="UDP port on 127.0.0.1 to send to (default 5000)"
     )
-    parser.add_argument("--duration", type=float, help="stop after this many seconds")
     parser.add_argument("--bodies", type=int, default=2, help="standard bodies (default 2)")
     parser.add_argument("--flysticks", type=int, default=1, help="Flysticks (default 1)")
     parser.add_argument(
@@ -493,29 +497,24 @@ def main(argv: list[str] | None = None) -> int:
         )
     except ValueError as exc:
         parser.error(str(exc))
-    try:
-        with emulator:
+
+    def announce() -> None:
+        print(f"DTrack emulator ({args.scenario}, {args.rate:g} Hz) sending to {emulator.address}")
+        print(f"Point the dtrack element at it: <receive_port>{args.port}</receive_port>")
+        if emulator.command_address is not None:
+            host, cport = emulator.command_address.rsplit(":", 1)
             print(
-                f"DTrack emulator ({args.scenario}, {args.rate:g} Hz) sending to {emulator.address}"
+                f"Remote commands: <server_name>{host}</server_name> <command_port>{cport}</command_port>"
             )
-            print(f"Point the dtrack element at it: <receive_port>{args.port}</receive_port>")
-            if emulator.command_address is not None:
-                host, cport = emulator.command_address.rsplit(":", 1)
-                print(
-                    f"Remote commands: <server_name>{host}</server_name> <command_port>{cport}</command_port>"
-                )
-            print("Press Ctrl-C to stop.", flush=True)
-            end = None if args.duration is None else time.monotonic() + args.duration
-            while end is None or time.monotonic() < end:
-                if emulator.error is not None:
-                    print(f"emulator failed: {emulator.error}", file=sys.stderr)
-                    return 1
-                if emulator.finished.is_set():
-                    break
-                time.sleep(0.1 if end is None else max(0.0, min(0.1, end - time.monotonic())))
-    except KeyboardInterrupt:
-        pass
-    return 0
+        print("Press Ctrl-C to stop.", flush=True)
+
+    def check() -> int | None:
+        if emulator.error is not None:
+            print(f"emulator failed: {emulator.error}", file=sys.stderr)
+            return 1
+        return 0 if emulator.finished.is_set() else None
+
+    return run(emulator, duration=args.duration, announce=announce, check=check)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 """A joystick device file emulated with a FIFO: the device's side of the joydev protocol.
 
-Knows nothing of gadgetctl. The emulator creates a FIFO and waits for a reader to open it.
+Knows nothing of gadgetctl's input manager; the FIFO's life cycle and the command line come
+from the shared emulator scaffolding, :mod:`gadgetctl.emulation`. The emulator creates a FIFO and waits for a reader to open it.
 For every reader it writes the burst of initial states a real joydev sends on open (one
 ``JS_EVENT_BUTTON | JS_EVENT_INIT`` record per button, then one ``JS_EVENT_AXIS | JS_EVENT_INIT``
 per axis) and then the live records of the chosen scenario at the chosen rate. When the reader
@@ -18,8 +19,6 @@ Run ``python emulator.py --help`` (or ``gadgetctl emulate LinuxJoydev_drv``) for
 
 from __future__ import annotations
 
-import argparse
-import errno
 import math
 import os
 import random
@@ -31,6 +30,8 @@ import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
+
+from gadgetctl.emulation import Fifo, emulator_parser, run
 
 EVENT_FORMAT = "=IhBB"  # native byte order, standard sizes, no padding
 JS_EVENT_BUTTON = 0x01
@@ -94,6 +95,7 @@ class JoydevEmulator:
         if rate <= 0:
             raise ValueError("rate must be positive")
         self._path = Path(path) if path is not None else None
+        self._fifo: Fifo | None = None
         self._directory = Path(directory) if directory is not None else None
         self._tempdir: Path | None = None
         self.scenario = scenario
@@ -133,10 +135,7 @@ class JoydevEmulator:
                 self._tempdir = Path(tempfile.mkdtemp(prefix="joydev-emu-"))
                 self._directory = self._tempdir
             self._path = self._directory / "js0"
-        if self._path.exists() and not self._path.is_fifo():
-            raise FileExistsError(errno.EEXIST, "exists and is not a FIFO", str(self._path))
-        if not self._path.exists():
-            os.mkfifo(self._path)
+        self._fifo = Fifo(self._path).create()  # an existing FIFO is taken over, a file refused
         self._stop.clear()
         self._thread = threading.Thread(target=self._serve, name="joydev-emulator", daemon=True)
         self._thread.start()
@@ -148,8 +147,9 @@ class JoydevEmulator:
         if self._thread is not None:
             self._thread.join(timeout)
             self._thread = None
-        if self._path is not None and self._path.is_fifo():
-            self._path.unlink()
+        if self._fifo is not None:
+            self._fifo.remove()
+            self._fifo = None
         if self._tempdir is not None:
             shutil.rmtree(self._tempdir, ignore_errors=True)
             self._tempdir = None
@@ -186,16 +186,9 @@ class JoydevEmulator:
             self.error = exc
 
     def _wait_for_reader(self) -> int | None:
-        """Open the FIFO for writing once a reader has it open (ENXIO until then)."""
-        assert self._path is not None
-        while not self._stop.is_set():
-            try:
-                return os.open(self._path, os.O_WRONLY | os.O_NONBLOCK)
-            except OSError as exc:
-                if exc.errno != errno.ENXIO:
-                    raise
-            self._stop.wait(self.poll_interval)
-        return None
+        """Open the FIFO for writing once a reader has it open."""
+        assert self._fifo is not None
+        return self._fifo.open_writer(self._stop, self.poll_interval)
 
     def _serve_reader(self, fd: int, ticks: Iterator[list[Item]]) -> None:
         self.connections += 1
@@ -252,9 +245,8 @@ class JoydevEmulator:
 
     def _unplug(self) -> None:
         """Replace the FIFO by a new one, so the old reader gets EOF and a reopen finds the new one."""
-        assert self._path is not None
-        self._path.unlink()
-        os.mkfifo(self._path)
+        assert self._fifo is not None
+        self._fifo.replace()
 
     def _time_ms(self) -> int:
         return self.time_base_ms + round(self._tick * 1000.0 / self.rate)
@@ -300,18 +292,20 @@ class JoydevEmulator:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Command line: serve a FIFO until Ctrl-C or ``--duration`` seconds."""
-    parser = argparse.ArgumentParser(
-        prog="LinuxJoydev_drv.emulator", description="Emulate a Linux joystick with a FIFO."
+    """Command line: serve a FIFO until Ctrl-C, SIGTERM, SIGHUP or ``--duration`` seconds."""
+    parser = emulator_parser(
+        "LinuxJoydev_drv.emulator",
+        "Emulate a Linux joystick with a FIFO.",
+        scenarios=SCENARIOS,
+        default_scenario="motion",
+        rate=100.0,
+        rate_help="ticks per second (default 100)",
     )
-    parser.add_argument("--scenario", choices=SCENARIOS, default="motion")
-    parser.add_argument("--rate", type=float, default=100.0, help="ticks per second (default 100)")
     parser.add_argument(
         "--path",
         default=DEFAULT_PATH,
         help=f"FIFO to create (default {DEFAULT_PATH}, where example.jconf points)",
     )
-    parser.add_argument("--duration", type=float, help="stop after this many seconds")
     parser.add_argument("--buttons", type=int, default=12)
     parser.add_argument("--axes", type=int, default=6)
     parser.add_argument(
@@ -334,25 +328,22 @@ def main(argv: list[str] | None = None) -> int:
         disconnect_after=args.disconnect_after,
         seed=args.seed,
     )
-    try:
-        with emulator:
-            print(
-                f"Linux joystick emulator ({args.scenario}, {args.rate:g} Hz, "
-                f"{args.buttons} buttons, {args.axes} axes)"
-            )
-            print(
-                f"Point the linux_joydev element at it: <port_name>{emulator.address}</port_name>"
-            )
-            print("Press Ctrl-C to stop.", flush=True)
-            end = None if args.duration is None else time.monotonic() + args.duration
-            while end is None or time.monotonic() < end:
-                if emulator.error is not None:
-                    print(f"emulator failed: {emulator.error}", file=sys.stderr)
-                    return 1
-                time.sleep(0.1 if end is None else max(0.0, min(0.1, end - time.monotonic())))
-    except KeyboardInterrupt:
-        pass
-    return 0
+
+    def announce() -> None:
+        print(
+            f"Linux joystick emulator ({args.scenario}, {args.rate:g} Hz, "
+            f"{args.buttons} buttons, {args.axes} axes)"
+        )
+        print(f"Point the linux_joydev element at it: <port_name>{emulator.address}</port_name>")
+        print("Press Ctrl-C to stop.", flush=True)
+
+    def check() -> int | None:
+        if emulator.error is not None:
+            print(f"emulator failed: {emulator.error}", file=sys.stderr)
+            return 1
+        return None
+
+    return run(emulator, duration=args.duration, announce=announce, check=check)
 
 
 if __name__ == "__main__":

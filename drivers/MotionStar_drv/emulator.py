@@ -1,4 +1,5 @@
-"""An Ascension MotionStar chassis on a loopback TCP server, independent of gadgetctl.
+"""An Ascension MotionStar chassis on a loopback TCP server, independent of gadgetctl's input
+manager (the command line comes from the shared emulator scaffolding, :mod:`gadgetctl.emulation`).
 
 The server answers wake-up, status, setup, single-shot, run-continuous, stop,
 shut-down and sequence-sync messages, and streams data packets while running.
@@ -15,7 +16,6 @@ Scenarios (poses are deterministic functions of the packet count):
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import math
 import queue
@@ -29,6 +29,8 @@ import time
 from collections import deque
 from dataclasses import dataclass, field
 from types import TracebackType
+
+from gadgetctl.emulation import emulator_parser, run
 
 # The emulator keeps its own copy of the wire constants so that a mistake in the
 # driver cannot be mirrored here and go unnoticed by the tests.
@@ -515,13 +517,15 @@ class _Session:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the emulator until Ctrl-C or ``--duration`` seconds."""
-    parser = argparse.ArgumentParser(
-        prog="MotionStar_drv.emulator",
-        description="Emulate an Ascension MotionStar chassis on a loopback TCP port.",
+    """Run the emulator until Ctrl-C, SIGTERM, SIGHUP or ``--duration`` seconds."""
+    parser = emulator_parser(
+        "MotionStar_drv.emulator",
+        "Emulate an Ascension MotionStar chassis on a loopback TCP port.",
+        scenarios=SCENARIOS,
+        default_scenario="motion",
+        rate=100.0,
+        rate_help="data packets per second",
     )
-    parser.add_argument("--scenario", choices=SCENARIOS, default="motion")
-    parser.add_argument("--rate", type=float, default=100.0, help="data packets per second")
     parser.add_argument(
         "--port",
         type=int,
@@ -533,7 +537,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--erc", action="store_true", help="put an extended range controller at address 1"
     )
-    parser.add_argument("--duration", type=float, default=None, help="seconds to run")
     parser.add_argument(
         "--disconnect-after", type=int, default=5, help="data packets before closing"
     )
@@ -546,7 +549,8 @@ def main(argv: list[str] | None = None) -> int:
         port=args.port,
         disconnect_after=args.disconnect_after,
     )
-    with emulator:
+
+    def announce() -> None:
         print(
             f"MotionStar emulator ({args.scenario}, {args.birds} sensors) on {emulator.address}",
             flush=True,
@@ -560,13 +564,8 @@ def main(argv: list[str] | None = None) -> int:
             print(
                 "note: Gadgeteer treats server_port 5000 as UDP; this emulator is TCP", flush=True
             )
-        deadline = None if args.duration is None else time.monotonic() + args.duration
-        try:
-            while deadline is None or time.monotonic() < deadline:
-                time.sleep(0.1)
-        except KeyboardInterrupt:
-            pass
-    return 0
+
+    return run(emulator, duration=args.duration, announce=announce)
 
 
 if __name__ == "__main__":

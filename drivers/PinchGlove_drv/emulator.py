@@ -1,4 +1,5 @@
-"""A Fakespace PinchGlove box on a pseudo-terminal, independent of gadgetctl.
+"""A Fakespace PinchGlove box on a pseudo-terminal, independent of gadgetctl's input manager
+(it uses only the shared emulator scaffolding, :mod:`gadgetctl.emulation`).
 
 The emulator owns the master side of an ``os.openpty()`` pair; a driver opens
 the slave's path (``address``) as a serial port. It answers the two-byte
@@ -15,8 +16,6 @@ it plays a scripted scenario of touch frames:
 
 from __future__ import annotations
 
-import argparse
-import contextlib
 import fcntl
 import os
 import random
@@ -26,10 +25,11 @@ import sys
 import termios
 import threading
 import time
-import tty
 from collections.abc import Iterator
 from pathlib import Path
 from types import TracebackType
+
+from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
 
 # The emulator keeps its own copy of the wire constants so that a mistake in the
 # driver cannot be mirrored here and go unnoticed by the tests.
@@ -159,8 +159,7 @@ class PinchGloveEmulator:
         self.streaming = threading.Event()
         self.disconnected = threading.Event()
         self._rng = random.Random(seed)
-        self._master = -1
-        self._slave = -1
+        self._pty = PseudoTerminal(self.link)
         self._pending: int | None = None
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -175,28 +174,19 @@ class PinchGloveEmulator:
         """Create the pty pair and start answering in a background thread."""
         if self._thread is not None:
             return self
-        self._master, self._slave = os.openpty()
-        tty.setraw(self._slave)  # no echo, no line editing, bytes pass untouched
-        os.set_blocking(self._master, False)
-        self.address = os.ttyname(self._slave)
-        if self.link is not None:
-            with contextlib.suppress(FileNotFoundError):
-                self.link.unlink()
-            self.link.symlink_to(self.address)
+        self.address = self._pty.open().address  # with the link, if one was asked for
         self._stop.clear()
         self._thread = threading.Thread(target=self._run, name="pinchglove-emulator", daemon=True)
         self._thread.start()
         return self
 
     def stop(self) -> None:
-        """Stop the thread and close the pty."""
+        """Stop the thread, close the pty and remove the link."""
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout=5)
             self._thread = None
-        self._close_fds()
-        if self.link is not None and self.link.is_symlink():
-            self.link.unlink()
+        self._pty.close()
 
     def __enter__(self) -> PinchGloveEmulator:
         return self.start()
@@ -212,14 +202,14 @@ class PinchGloveEmulator:
     # -- device behaviour ---------------------------------------------------------------
 
     def _run(self) -> None:
-        while not self._stop.is_set() and self._master >= 0:
+        while not self._stop.is_set() and self._pty.master >= 0:
             wait = 0.05
             if self.streaming.is_set():
                 wait = min(wait, max(0.0, self._next_due - time.monotonic()))
             try:
-                ready, _, _ = select.select([self._master], [], [], wait)
+                ready, _, _ = select.select([self._pty.master], [], [], wait)
                 if ready:
-                    data = os.read(self._master, 1024)
+                    data = os.read(self._pty.master, 1024)
                     self.bytes_received += len(data)
                     for value in data:
                         self._on_byte(value)
@@ -265,7 +255,7 @@ class PinchGloveEmulator:
             if self._unread() and time.monotonic() < self._hangup_due:
                 return
             self.disconnected.set()
-            self._close_fds()
+            self._pty.hang_up()
             return
         groups = next(self._steps, None)
         if groups is None:
@@ -284,10 +274,10 @@ class PinchGloveEmulator:
     def _unread(self) -> int:
         """Bytes waiting in the slave's input queue (not yet read by the driver)."""
         with self._lock:
-            if self._slave < 0:
+            if self._pty.slave < 0:
                 return 0
             try:
-                raw = fcntl.ioctl(self._slave, termios.FIONREAD, b"\0\0\0\0")
+                raw = fcntl.ioctl(self._pty.slave, termios.FIONREAD, b"\0\0\0\0")
             except OSError:
                 return 0
         return struct.unpack("i", raw)[0]
@@ -299,55 +289,44 @@ class PinchGloveEmulator:
     def _write(self, data: bytes) -> None:
         """Write to the driver; what does not fit (nobody reading) is dropped."""
         with self._lock:
-            if self._master >= 0:
-                try:
-                    written = os.write(self._master, data)
-                except BlockingIOError:
-                    written = 0
-                self.dropped_bytes += len(data) - written
-
-    def _close_fds(self) -> None:
-        with self._lock:
-            for fd in (self._master, self._slave):
-                if fd >= 0:
-                    with contextlib.suppress(OSError):
-                        os.close(fd)
-            self._master = self._slave = -1
+            if self._pty.master >= 0:
+                self.dropped_bytes += len(data) - self._pty.write(data)
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the emulator until Ctrl-C or ``--duration`` seconds."""
-    parser = argparse.ArgumentParser(
-        prog="PinchGlove_drv.emulator",
-        description="Emulate a Fakespace PinchGlove box on a pseudo-terminal.",
+    """Run the emulator until Ctrl-C, SIGTERM, SIGHUP or ``--duration`` seconds."""
+    parser = emulator_parser(
+        "PinchGlove_drv.emulator",
+        "Emulate a Fakespace PinchGlove box on a pseudo-terminal.",
+        scenarios=SCENARIOS,
+        default_scenario="touches",
+        rate=2.0,
+        rate_help="touch frames per second",
     )
-    parser.add_argument("--scenario", choices=SCENARIOS, default="touches")
-    parser.add_argument("--rate", type=float, default=2.0, help="touch frames per second")
     parser.add_argument(
         "--port",
         default=DEFAULT_LINK,
         help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
         "drivers/PinchGlove_drv/example.jconf looks; '' for none)",
     )
-    parser.add_argument("--duration", type=float, default=None, help="seconds to run")
     parser.add_argument("--disconnect-after", type=int, default=5, help="frames before hang-up")
     args = parser.parse_args(argv)
     emulator = PinchGloveEmulator(
         args.scenario, args.rate, disconnect_after=args.disconnect_after, link=args.port or None
     )
-    with emulator:
+
+    def announce() -> None:
         where = str(emulator.link) if emulator.link is not None else emulator.address
         print(f"PinchGlove emulator ({args.scenario}) on {emulator.address}", flush=True)
         print(f"point the pinch_glove element at it: <port>{where}</port>", flush=True)
-        deadline = None if args.duration is None else time.monotonic() + args.duration
-        try:
-            while deadline is None or time.monotonic() < deadline:
-                if emulator.disconnected.wait(0.1):
-                    print("scenario finished: the line was hung up", flush=True)
-                    break
-        except KeyboardInterrupt:
-            pass
-    return 0
+
+    def check() -> int | None:
+        if emulator.disconnected.is_set():
+            print("scenario finished: the line was hung up", flush=True)
+            return 0
+        return None
+
+    return run(emulator, duration=args.duration, announce=announce, check=check)
 
 
 if __name__ == "__main__":

@@ -16,6 +16,8 @@ import stat
 
 from gadgetctl.doctor.model import PortCheck, SerialPort, Status
 from gadgetctl.doctor.permissions import Identity, access_hint, may_access, verb
+from gadgetctl.doctor.stale import PTS_DIR, staleness
+from gadgetctl.emulation.beacon import is_held
 
 LOOPBACK = "127.0.0.1"
 JOYSTICK_GLOB = "/dev/input/js*"
@@ -51,7 +53,10 @@ def check_path(path: str, kind: str, *, identity: Identity | None = None) -> Por
         st = os.stat(path)
     except FileNotFoundError:
         if link:
-            return _problem(kind, path, "DRV100", f"is a symlink to {os.readlink(path)}, which does not exist")
+            target = os.readlink(path)
+            hint = ("a stale link left by an emulator that was killed: remove it and start the "
+                    "emulator again" if target.startswith(PTS_DIR) else None)
+            return _problem(kind, path, "DRV100", f"is a symlink to {target}, which does not exist", hint)
         return _problem(kind, path, "DRV100", "does not exist")
     except PermissionError:
         return _problem(kind, path, "DRV101", "cannot be looked at: a directory on the way is not searchable")
@@ -75,8 +80,14 @@ def check_path(path: str, kind: str, *, identity: Identity | None = None) -> Por
     if stat.S_ISREG(mode):
         return _problem(kind, path, "DRV102", f"is a regular file{link}, not a device: it is read once to its end",
                         "name the device node, or a FIFO an emulator writes", Status.WARNING)
+    stale = staleness(path)
+    if stale is not None:
+        return _problem(kind, path, "DRV108", stale.detail, stale.hint,
+                        Status.PROBLEM if stale.severe else Status.WARNING)
     able = "readable and writable" if need & os.W_OK else "readable"
-    return PortCheck(kind, path, Status.OK, f"{what}{link}, {able}")
+    held = ", held by a live emulator" if (stat.S_ISFIFO(mode) or os.path.realpath(path).startswith(PTS_DIR)) \
+        and is_held(path) else ""
+    return PortCheck(kind, path, Status.OK, f"{what}{link}, {able}{held}")
 
 
 def _port_problem(kind: str, port: int) -> PortCheck | None:

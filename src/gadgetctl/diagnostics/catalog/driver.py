@@ -282,6 +282,15 @@ CODES += [
          "lists the names the server does announce.",
          "<tracker_server>Tracker1@localhost</tracker_server>   (the server announces Tracker0)",
          "Use one of the announced names, or configure the server to serve the device."),
+    Code("DRV108", C, E, "stale emulator link or FIFO",
+         "The port is a symlink to a pseudo-terminal, or a FIFO, that no live emulator holds: "
+         "an emulator stopped without clean-up (killed) left it behind. A FIFO nobody writes "
+         "gives a driver no data; a pts number is soon reused by somebody's terminal, and a "
+         "driver would write its handshake into that terminal. Held by another program than a "
+         "gadgetctl emulator (socat, a test tool), it is only a warning naming the program.",
+         "/tmp/gadgetctl-pinch -> /dev/pts/3, now the terminal of bash (pid 4242)",
+         "Remove the link or FIFO and start the emulator again (`gadgetctl emulate DRIVER`); "
+         "emulators remove what they made on Ctrl-C, SIGTERM and SIGHUP."),
     Code("DRV120", C, E, "VRPN serve port cannot be bound",
          "`gadgetctl serve` listens on one TCP and one UDP port with the same number (VRPN's "
          "default 3883), and one of them cannot be bound: another program holds it (a "

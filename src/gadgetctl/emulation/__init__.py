@@ -1,0 +1,35 @@
+"""Scaffolding shared by the device emulators (``drivers/*/emulator.py``).
+
+It imports nothing else from gadgetctl, so an emulator stays independent of the input
+manager, as Gadgeteer drivers depend on VPR only:
+
+* :mod:`~gadgetctl.emulation.endpoints`: the OS endpoints an emulator creates and removes:
+  :class:`PseudoTerminal` (a pty pair with an optional symlink), :class:`Fifo`,
+  :class:`UnixSocket`;
+* :mod:`~gadgetctl.emulation.beacon`: a live emulator vouches for each path it made, so
+  `gadgetctl doctor` can tell a stale link or FIFO (:func:`is_held`);
+* :mod:`~gadgetctl.emulation.signals`: SIGTERM and SIGHUP stop an emulator cleanly, as
+  Ctrl-C does (:func:`stop_on_signals`, :class:`StopRequested`);
+* :mod:`~gadgetctl.emulation.command`: the shared command line (``--scenario``, ``--rate``,
+  ``--duration`` in wall-clock seconds) and the run loop (:func:`run`).
+"""
+
+from __future__ import annotations
+
+from gadgetctl.emulation.beacon import Beacon, is_held
+from gadgetctl.emulation.command import duration_seconds, emulator_parser, run
+from gadgetctl.emulation.endpoints import Fifo, PseudoTerminal, UnixSocket
+from gadgetctl.emulation.signals import StopRequested, stop_on_signals
+
+__all__ = [
+    "Beacon",
+    "Fifo",
+    "PseudoTerminal",
+    "StopRequested",
+    "UnixSocket",
+    "duration_seconds",
+    "emulator_parser",
+    "is_held",
+    "run",
+    "stop_on_signals",
+]

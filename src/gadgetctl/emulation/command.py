@@ -1,0 +1,95 @@
+"""What every emulator's command line shares: the common options and the run loop.
+
+:func:`emulator_parser` gives an :class:`argparse.ArgumentParser` with ``--scenario``,
+``--rate`` and ``--duration`` (seconds of wall clock; a negative or non-finite value is a
+usage error, exit status 2). :func:`run` starts the emulator, announces it, and runs until
+``--duration`` seconds have passed, the emulator reports an end, or a stop request comes:
+Ctrl-C, SIGTERM or SIGHUP. However it ends, the emulator is stopped, so every pty link,
+FIFO and socket it made is removed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from collections.abc import Callable, Sequence
+from typing import Protocol
+
+from gadgetctl.emulation.signals import StopRequested, stop_on_signals
+
+
+class Emulator(Protocol):
+    def start(self) -> object: ...
+
+    def stop(self) -> None: ...
+
+
+def duration_seconds(text: str) -> float:
+    """An argparse type: a finite number of seconds, 0 or more."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"must be 0 or more seconds, not {text!r}")
+    return value
+
+
+def emulator_parser(
+    prog: str,
+    description: str,
+    *,
+    scenarios: Sequence[str],
+    default_scenario: str,
+    rate: float,
+    rate_help: str,
+) -> argparse.ArgumentParser:
+    """A parser with the options every emulator has; add the emulator's own to it."""
+    parser = argparse.ArgumentParser(prog=prog, description=description)
+    parser.add_argument("--scenario", choices=list(scenarios), default=default_scenario)
+    parser.add_argument("--rate", type=float, default=rate, help=rate_help)
+    parser.add_argument(
+        "--duration",
+        type=duration_seconds,
+        default=None,
+        metavar="SECONDS",
+        help="stop after this many seconds of wall clock (default: until Ctrl-C, SIGTERM or SIGHUP)",
+    )
+    return parser
+
+
+def run(
+    emulator: Emulator,
+    *,
+    duration: float | None = None,
+    announce: Callable[[], None] | None = None,
+    check: Callable[[], int | None] | None = None,
+    interval: float = 0.1,
+) -> int:
+    """Run ``emulator`` until ``duration`` seconds, Ctrl-C, SIGTERM or SIGHUP (exit status
+    0), or until ``check`` (called every ``interval`` seconds) returns an exit status.
+    ``announce`` runs once the emulator has started (to print where it is)."""
+    with stop_on_signals():
+        try:
+            try:
+                emulator.start()
+                if announce is not None:
+                    announce()
+                end = None if duration is None else time.monotonic() + duration
+                while True:
+                    if check is not None:
+                        code = check()
+                        if code is not None:
+                            return code
+                    if end is None:
+                        time.sleep(interval)
+                        continue
+                    remaining = end - time.monotonic()
+                    if remaining <= 0:
+                        return 0
+                    time.sleep(min(interval, remaining))
+            finally:
+                emulator.stop()
+        except (KeyboardInterrupt, StopRequested):
+            return 0
