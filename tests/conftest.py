@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ipaddress
+import signal
 import socket
 import sys
 from dataclasses import dataclass
@@ -16,6 +17,14 @@ if str(Path(__file__).parent) not in sys.path:
 CORPUS = REPO.parent / "shared" / "corpus" / "vrjuggler"
 CORPUS_DEFINITIONS = CORPUS / "modules" / "vrjuggler" / "data" / "definitions"
 CORPUS_CONFIGS = CORPUS / "modules" / "vrjuggler" / "data" / "configFiles"
+
+
+def pytest_configure(config) -> None:
+    """A run started as a background job (`make test &`, `nohup`) inherits SIGINT ignored, and so
+    would every process the tests start (an ignored signal stays ignored across exec): the
+    Ctrl-C tests then waited for ever. The tests need Python's own Ctrl-C, in here and in children."""
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture(scope="session")
