@@ -4,25 +4,61 @@ another; samples of every kind the driver provides arrive through the example's 
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import json
 import os
+import re
+import selectors
 import signal
 import subprocess
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 import pytest
 
 from conftest import REPO
 
-# plug-in, the kinds its example configuration must deliver
+# plug-in, the kinds its example configuration must deliver, what the emulator prints once
+# it is where the example configuration looks
 DRIVERS = [
-    ("LinuxJoydev_drv", {"digital", "analog"}),
-    ("DTrack_drv", {"position", "digital", "analog"}),
-    ("PinchGlove_drv", {"glove", "digital"}),
-    ("MotionStar_drv", {"position"}),
-    ("VRPN_drv", {"position", "digital", "analog"}),
+    ("LinuxJoydev_drv", {"digital", "analog"}, r"<port_name>"),
+    ("DTrack_drv", {"position", "digital", "analog"}, r"<receive_port>"),
+    ("PinchGlove_drv", {"glove", "digital"}, r"<port>"),
+    ("MotionStar_drv", {"position"}, r"<server_port>"),
+    ("VRPN_drv", {"position", "digital", "analog"}, r"VRPN device\(s\) on"),
 ]
+# The examples use fixed addresses (/tmp/gadgetctl-pinch, TCP 6000, ...): two test runs on
+# one machine would take them from each other, so runs take turns here.
+LOCK = Path(tempfile.gettempdir()) / "gadgetctl-quickstart-tests.lock"
+
+
+@contextlib.contextmanager
+def default_addresses():
+    with open(LOCK, "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+
+
+def wait_for_output(proc: subprocess.Popen, pattern: str, timeout: float = 30.0) -> str:
+    """Read the emulator's stdout until ``pattern`` appears (it then is where it says)."""
+    regex, text = re.compile(pattern), ""
+    deadline = time.monotonic() + timeout
+    with selectors.DefaultSelector() as selector:
+        selector.register(proc.stdout, selectors.EVENT_READ)
+        while not regex.search(text):
+            left = deadline - time.monotonic()
+            assert left > 0, f"no {pattern!r} within {timeout} s: {text!r}"
+            if selector.select(left):
+                chunk = os.read(proc.stdout.fileno(), 4096)
+                assert chunk, f"the emulator ended: {text!r}"
+                text += chunk.decode()
+    return text
 
 
 def gadgetctl(*args: str, **kwargs) -> subprocess.Popen:
@@ -31,22 +67,22 @@ def gadgetctl(*args: str, **kwargs) -> subprocess.Popen:
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kwargs)
 
 
-@pytest.mark.timeout(60)
-@pytest.mark.parametrize(("driver", "kinds"), DRIVERS, ids=[d for d, _ in DRIVERS])
-def test_emulate_then_monitor_the_example(driver, kinds):
-    emulator = gadgetctl("emulate", driver)
-    try:
-        time.sleep(1.0)  # the emulator prints where it listens; give it a moment to be there
-        assert emulator.poll() is None, emulator.communicate()[1]
-        monitor = subprocess.run(
-            [sys.executable, "-m", "gadgetctl", "monitor", f"drivers/{driver}/example.jconf",
-             "--duration", "3", "--format", "ndjson"],
-            cwd=REPO, capture_output=True, text=True, timeout=40)
-    finally:
-        emulator.send_signal(signal.SIGINT)
-        out, err = emulator.communicate(timeout=15)
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize(("driver", "kinds", "ready"), DRIVERS, ids=[d for d, _, _ in DRIVERS])
+def test_emulate_then_monitor_the_example(driver, kinds, ready):
+    with default_addresses():
+        emulator = gadgetctl("emulate", driver)
+        try:
+            said = wait_for_output(emulator, ready)
+            monitor = subprocess.run(
+                [sys.executable, "-m", "gadgetctl", "monitor", f"drivers/{driver}/example.jconf",
+                 "--duration", "3", "--format", "ndjson"],
+                cwd=REPO, capture_output=True, text=True, timeout=40)
+        finally:
+            emulator.send_signal(signal.SIGINT)
+            out, err = emulator.communicate(timeout=15)
     assert emulator.returncode == 0 and "Traceback" not in err, err
     assert monitor.returncode == 0, monitor.stderr[-2000:]
     records = [json.loads(line) for line in monitor.stdout.splitlines() if line.strip()]
     seen = {r["kind"] for r in records if r.get("type") == "sample"}
-    assert kinds <= seen, f"{driver}: got {sorted(seen)}; emulator said {out!r}"
+    assert kinds <= seen, f"{driver}: got {sorted(seen)}; emulator said {said + out!r}"
