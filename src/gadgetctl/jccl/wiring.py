@@ -22,7 +22,7 @@ from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.elementcheck import ElementReport, PointerValue, at, describe
 from gadgetctl.jccl.runtime import missing_target_effect
 from gadgetctl.jccl.typeindex import TypeIndex
-from gadgetctl.suggest import close_names
+from gadgetctl.suggest import CloseNames
 
 UNHANDLED = "unhandled"
 #: Said of an element VR Juggler leaves pending where gadgetctl deliberately runs it.
@@ -54,6 +54,7 @@ class Wiring:
         self.by_name = {e.name: e for e in self.effective}
         self.embedded = {c.full_name: c for e in self.effective for c in e.embedded()}
         self._severities: dict[int, Severity] | None = None
+        self._suggesters: dict[bool, CloseNames] = {}
 
     def check(self) -> list[Diagnostic]:
         found = self.duplicates()
@@ -114,8 +115,7 @@ class Wiring:
         if target is None:
             if pointer.target in self.embedded:
                 return []  # found, but never satisfies a dependency: see pending()
-            candidates = self.embedded if "/" in pointer.target else self.by_name
-            close = close_names(pointer.target, list(candidates), cutoff=0.7)
+            close = self._close_names("/" in pointer.target)(pointer.target, n=3, cutoff=0.7)
             effect = missing_target_effect(root.type, root.name, pointer.element is not root)
             if root.type in DIFFERENCES and pointer.element is root:
                 effect += f" ({GADGETCTL_RUNS_IT})"
@@ -130,6 +130,15 @@ class Wiring:
             return [at("CFG032", f"{who} is a {target.type} (at {target.location}); {prop.name} "
                        f"takes {' or '.join(allowed)}", pointer.value.location)]
         return []
+
+    def _close_names(self, embedded: bool) -> CloseNames:
+        """The indexed "did you mean" search over top-level (or embedded) element names,
+        made once per configuration rather than a scan of every name per pointer."""
+        found = self._suggesters.get(embedded)
+        if found is None:
+            names = self.embedded if embedded else self.by_name
+            found = self._suggesters[embedded] = CloseNames(names)  # case ignored, as close_names does
+        return found
 
     # -- pending ---------------------------------------------------------------------
 
