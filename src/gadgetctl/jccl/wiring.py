@@ -11,6 +11,7 @@ runs what VR Juggler leaves pending, the message says so.
 
 from __future__ import annotations
 
+from collections import defaultdict
 from dataclasses import dataclass
 from pathlib import Path
 
