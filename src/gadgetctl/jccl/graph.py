@@ -20,6 +20,7 @@ from gadgetctl.jccl.typeindex import TypeIndex
 from gadgetctl.safetext import printable
 
 POINTER, CONTAINS, DRIVER, HANDLED_BY = "pointer", "contains", "driver", "handled_by"
+MAX_TEXT_DEPTH = 64  # levels of a text tree before a chain goes on as a tree of its own
 
 
 @dataclass
@@ -61,9 +62,19 @@ class Edge:
 class WiringGraph:
     nodes: dict[str, Node] = field(default_factory=dict)
     edges: list[Edge] = field(default_factory=list)
+    _outgoing: dict[str, list[Edge]] | None = field(default=None, repr=False, compare=False)
+    _indexed: int = field(default=0, repr=False, compare=False)
 
     def outgoing(self, node_id: str) -> list[Edge]:
-        return [e for e in self.edges if e.source == node_id]
+        """The edges leaving ``node_id``, in order (from an index made once per set of edges,
+        not a scan of every edge per node)."""
+        index = self._outgoing
+        if index is None or self._indexed != len(self.edges):
+            index = self._outgoing = {}
+            for edge in self.edges:
+                index.setdefault(edge.source, []).append(edge)
+            self._indexed = len(self.edges)
+        return list(index.get(node_id, ()))
 
     def to_dict(self) -> dict[str, object]:
         return {"nodes": [n.to_dict() for n in self.nodes.values()], "edges": [e.to_dict() for e in self.edges]}
@@ -207,32 +218,49 @@ def render_text(graph: WiringGraph) -> str:
     shown: set[str] = set()
     verbs = {POINTER: "→", CONTAINS: "contains", DRIVER: "→", HANDLED_BY: "→"}
 
-    def walk(node_id: str, prefix: str, edge: Edge | None, last: bool) -> None:
-        node = graph.nodes[node_id]
-        text = _title(node) + (f"  [{node.note}]" if node.note else "")
-        if edge is not None:
-            text = f"{edge.label} {verbs[edge.kind]} {text}"
-        children = graph.outgoing(node_id)
-        repeat = node_id in shown and bool(children)
-        branch = "" if edge is None else ("└── " if last else "├── ")
-        out.append(f"{prefix}{branch}{text}{' (see above)' if repeat else ''}")
-        if repeat:
-            return
-        shown.add(node_id)
-        inner = prefix if edge is None else prefix + ("    " if last else "│   ")
-        items = _grouped(graph, children)
-        for i, item in enumerate(items):
-            end = i == len(items) - 1
-            if isinstance(item, str):
-                out.append(f"{inner}{'└── ' if end else '├── '}{item}")
-            else:
-                walk(item.target, inner, item, end)
+    def walk(root_id: str) -> None:
+        """Depth first with an explicit stack: a chain of any length, no recursion limit."""
+        stack: list[tuple[str, str, Edge | None, bool, int] | str] = [(root_id, "", None, True, 0)]
+        while stack:
+            entry = stack.pop()
+            if isinstance(entry, str):  # a grouped line, already drawn
+                out.append(entry)
+                continue
+            node_id, prefix, edge, last, depth = entry
+            node = graph.nodes[node_id]
+            text = _title(node) + (f"  [{node.note}]" if node.note else "")
+            if edge is not None:
+                text = f"{edge.label} {verbs[edge.kind]} {text}"
+            children = graph.outgoing(node_id)
+            repeat = node_id in shown and bool(children)
+            branch = "" if edge is None else ("└── " if last else "├── ")
+            out.append(f"{prefix}{branch}{text}{' (see above)' if repeat else ''}")
+            if repeat:
+                continue
+            if depth >= MAX_TEXT_DEPTH and children:  # long chains go on as a tree of their own
+                out[-1] += " (continued below)"
+                continued.append(node_id)
+                continue
+            shown.add(node_id)
+            inner = prefix if edge is None else prefix + ("    " if last else "│   ")
+            items = _grouped(graph, children)
+            for i in range(len(items) - 1, -1, -1):
+                item, end = items[i], i == len(items) - 1
+                if isinstance(item, str):
+                    stack.append(f"{inner}{'└── ' if end else '├── '}{item}")
+                else:
+                    stack.append((item.target, inner, item, end, depth + 1))
 
+    continued: list[str] = []
     for root in roots:
-        walk(root.id, "", None, True)
+        walk(root.id)
+        while continued:
+            walk(continued.pop(0))
     for node in graph.nodes.values():  # cycles with no root
         if node.id not in shown and node.kind != "plugin":
-            walk(node.id, "", None, True)
+            walk(node.id)
+            while continued:
+                walk(continued.pop(0))
     return "\n".join(map(printable, out))
 
 
