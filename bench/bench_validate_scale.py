@@ -1,0 +1,105 @@
+"""Issue 13 item 7 benchmark: validation and `config graph` stay linear in the input.
+
+In-process times, each against a baseline of the same shape with 1,000 elements measured in
+the same run (ratio of the time per element; linear means about 1x):
+
+- a chain of aliases, each pointing at the previous one, the first at a missing name
+  (every alias pending): 8,000 and 50,000 aliases (target: 50,000 in under 2 s);
+- proxies pointing at devices with one letter dropped ("did you mean" for each): 8,000;
+- the same file written on one line (columns): 8,000;
+- `config graph` of devices with 70 values each: 700,000 values, against 70,000.
+
+    python bench/bench_validate_scale.py
+"""
+
+from __future__ import annotations
+
+import random
+import tempfile
+import time
+from pathlib import Path
+
+from common import Report
+
+from gadgetctl.jccl.configcheck import open_configuration
+from gadgetctl.jccl.graph import build_graph, render_text
+from gadgetctl.validate import ValidateOptions, validate_paths
+
+HEAD = ('<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="scale">\n<elements>\n')
+TAIL = "</elements>\n</configuration>\n"
+TARGET_RATIO = 1.5
+
+
+def chain(count: int) -> str:
+    return "".join(f'<alias name="A{i}" version="1"><proxy>{"Nowhere" if i == 0 else f"A{i - 1}"}</proxy></alias>\n'
+                   for i in range(count))
+
+
+def dangling(count: int) -> str:
+    """count / 2 devices and count / 2 proxies naming them with one letter dropped."""
+    rng = random.Random(1)
+    parts = []
+    for i in range(count // 2):
+        name = f"Tracker {i:05d}"
+        cut = rng.randrange(len(name))
+        parts.append(f'<waveform_device name="{name}" version="1"><rate>60.0</rate></waveform_device>\n'
+                     f'<analog_proxy name="P{i}" version="1"><device>{name[:cut] + name[cut + 1:]}</device>'
+                     "<unit>0</unit></analog_proxy>\n")
+    return "".join(parts)
+
+
+def valued(count: int, per: int = 70) -> str:
+    """count / 2 devices with ``per`` values each and a proxy each."""
+    return "".join(f'<waveform_device name="W{i}" version="1"><rate>60.0</rate>{"<min>0</min>" * per}'
+                   f'</waveform_device>\n<analog_proxy name="P{i}" version="1"><device>W{i}</device>'
+                   "<unit>0</unit></analog_proxy>\n" for i in range(count // 2))
+
+
+def timed(fn) -> float:
+    start = time.perf_counter()
+    fn()
+    return time.perf_counter() - start
+
+
+def validate_time(path: Path) -> float:
+    return timed(lambda: validate_paths([path], ValidateOptions()))
+
+
+def graph_time(path: Path) -> float:
+    def run() -> None:
+        opened = open_configuration([path])
+        render_text(build_graph(opened.configuration, opened.index))
+    return timed(run)
+
+
+def main() -> None:
+    report = Report()
+    cases = [
+        ("alias chain", chain, (8_000, 50_000), validate_time, False),
+        ("dangling pointers with suggestions", dangling, (8_000,), validate_time, False),
+        ("dangling pointers, one line", dangling, (8_000,), validate_time, True),
+        ("config graph, 70 values per device", valued, (20_000,), graph_time, False),
+    ]
+    with tempfile.TemporaryDirectory(prefix="gadgetctl-bench-") as tmp:
+        def write(name: str, body: str, one_line: bool) -> Path:
+            path = Path(tmp) / f"{name}.jconf"
+            text = HEAD + body + TAIL
+            path.write_text(text.replace("\n", " ") if one_line else text)
+            return path
+
+        validate_paths([write("warm", chain(10), False)], ValidateOptions())  # warm caches
+        for label, make, sizes, measure, one_line in cases:
+            base_size = 1_000
+            base = measure(write(f"{label}-base", make(base_size), one_line)) / base_size
+            print(f"{label}: baseline {base_size} elements, {base * 1e6:.1f} us per element")
+            for size in sizes:
+                took = measure(write(f"{label}-{size}", make(size), one_line))
+                report.figure(f"{label}, {size} elements", took, "s",
+                              target=2.0 if (label == "alias chain" and size == 50_000) else None)
+                report.figure(f"  per element vs {base_size} elements", took / size / base, "x", target=TARGET_RATIO)
+    report.exit()
+
+
+if __name__ == "__main__":
+    main()
