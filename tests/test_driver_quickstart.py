@@ -29,6 +29,7 @@ DRIVERS = [
     ("PinchGlove_drv", {"glove", "digital"}, r"<port>"),
     ("MotionStar_drv", {"position"}, r"<server_port>"),
     ("VRPN_drv", {"position", "digital", "analog"}, r"VRPN device\(s\) on"),
+    ("IS900_drv", {"position", "digital", "analog"}, r"<port>"),
 ]
 # The examples use fixed addresses (/tmp/gadgetctl-pinch, TCP 6000, ...): two test runs on
 # one machine would take them from each other, so runs take turns here.

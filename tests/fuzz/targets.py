@@ -302,6 +302,42 @@ def _pinch(data: bytes) -> None:
         assert frame is None or len(frame.digital) == DIGITAL_UNITS
 
 
+# -- IS-900 ---------------------------------------------------------------------------------------
+
+
+def _is900_seeds() -> list[bytes]:
+    from IS900_drv.emulator import GARBAGE_CHUNKS, controls, encode_record, pose
+
+    def records(scenario: str) -> bytes:
+        out = b""
+        for step in range(8):
+            for station in (0, 1):
+                buttons, analog = controls(scenario, station, step)
+                out += encode_record(station, *pose(scenario, station, step), buttons, analog)
+        return out
+
+    return [records("motion"), records("buttons"), b"".join(GARBAGE_CHUNKS) + records("motion")]
+
+
+@target("is900.records", seeds=_is900_seeds, examples=100, driver="IS900_drv")
+def _is900(data: bytes) -> None:
+    from IS900_drv.standalone import RECORD_SIZE, RecordScanner
+
+    scanner = RecordScanner(stations=frozenset({0, 1, 2}))
+    got = []
+    for start in range(0, len(data), 97):  # arbitrary chunks, as reads split the line
+        got += scanner.feed(data[start : start + 97])
+        assert len(scanner.buffer) < RECORD_SIZE
+    assert scanner.records == len(got) <= len(data) // RECORD_SIZE
+    assert scanner.skipped_bytes + RECORD_SIZE * len(got) + len(scanner.buffer) == len(data)
+    assert scanner.bad_records <= scanner.skipped_bytes
+    for record in got:
+        assert record.station in (0, 1, 2) and set(record.digital) <= {0, 1}
+        assert all(abs(v) <= 1e5 for v in record.position) and all(
+            0 <= a < 256 for a in record.analog
+        )
+
+
 # -- Linux joystick -------------------------------------------------------------------------------
 
 

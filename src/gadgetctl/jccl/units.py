@@ -74,6 +74,30 @@ def _fixed(
     return count
 
 
+def _station_spans(kind: str) -> Callable[[ElementAccess, str], UnitRange | None]:
+    """An intersense element's units: one position unit per station child; digital (analog)
+    units up to the largest ``<kind>_first + <kind>_count`` of its stations."""
+
+    def count(access: ElementAccess, _kind: str) -> UnitRange | None:
+        stations = [ElementAccess(c, access.repo) for c in access.children("stations")]
+        if kind == "position":
+            return UnitRange(
+                kind,
+                len(stations),
+                f"{len(stations)} station{'s' * (len(stations) != 1)}",
+                "Add an intersense_station for each position unit the proxies read.",
+            )
+        ends = [s.integer(f"{kind}_first") + s.integer(f"{kind}_count") for s in stations]
+        return UnitRange(
+            kind,
+            max(ends, default=0),
+            f"stations' {kind}_first + {kind}_count",
+            f"Raise a station's {kind}_count to cover the unit.",
+        )
+
+    return count
+
+
 _PINCH = (
     "A pinch_glove numbers the left hand's contacts 0-4 (thumb to pinky) and the right "
     "hand's 5-9; VR Juggler's pinch.mixin.jconf numbers the right hand 6-10, which shifts "
@@ -92,6 +116,7 @@ UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]
         "digital": _fixed(10, _PINCH),
         "glove": _fixed(2, "Glove 0 is the left hand, glove 1 the right."),
     },
+    "intersense": {k: _station_spans(k) for k in ("position", "digital", "analog")},
     "simulated_digital_device": {"digital": _listed("key_pair", "bindings")},
     "simulated_analog_device": {"analog": _listed("increment_keypress", "bindings")},
     "simulated_digital_glove": {"digital": _fixed(10), "glove": _fixed(2)},

@@ -1,0 +1,264 @@
+"""The IS-900 device in an input manager, against the emulator over a real pty pair."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+from IS900_drv.emulator import IS900Emulator
+from IS900_drv.standalone import pose_matrix
+
+from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
+from gadgetctl.input.devicetypes import DigitalState
+from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.testing import wait_until
+
+pytestmark = pytest.mark.timeout(30)
+
+HERE = Path(__file__).resolve()
+DRIVER = HERE.parents[1]
+REPO = HERE.parents[3]
+CONFIG_FILES = (
+    REPO.parent
+    / "shared"
+    / "corpus"
+    / "vrjuggler"
+    / "modules"
+    / "vrjuggler"
+    / "data"
+    / "configFiles"
+)
+EXAMPLE = DRIVER / "example.jconf"
+FAST = {"settle": 0.0, "read_timeout": 1.0, "poll_timeout": 0.05, "poll_interval": 0.005}
+INCH = 0.0254
+HEAD = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
+    '<elements>\n<input_manager name="IM" version="2"><driver>IS900_drv</driver></input_manager>\n'
+)
+TAIL = "</elements>\n</configuration>\n"
+
+
+def tracker_element(name: str, port: str) -> str:
+    return (
+        f'<intersense name="{name}" version="1"><port>{port}</port><min>0</min><max>255</max>'
+        '<stations><intersense_station name="Wand" version="1"><enabled>true</enabled>'
+        "<station_index>0</station_index><digital_first>2</digital_first><digital_count>4</digital_count>"
+        "<analog_first>1</analog_first><analog_count>2</analog_count></intersense_station></stations>"
+        '<stations><intersense_station name="Head" version="1"><enabled>true</enabled>'
+        "<station_index>1</station_index><use_digital>false</use_digital><use_analog>false</use_analog>"
+        "</intersense_station></stations></intersense>\n"
+    )
+
+
+def write(tmp_path: Path, body: str) -> Path:
+    path = tmp_path / "test.jconf"
+    path.write_text(HEAD + body + TAIL)
+    return path
+
+
+def rewritten(source: Path, tmp_path: Path, old: str, new: str) -> Path:
+    text = source.read_text(encoding="utf-8")
+    assert text.count(old) == 1, f"{old!r} not found once in {source}"
+    path = tmp_path / source.name
+    path.write_text(text.replace(old, new), encoding="utf-8")
+    return path
+
+
+@pytest.fixture
+def emulator() -> Iterator[Callable[..., IS900Emulator]]:
+    made: list[IS900Emulator] = []
+
+    def make(scenario: str = "motion", **kwargs: object) -> IS900Emulator:
+        emu = IS900Emulator(scenario, **{"rate": 200.0, **kwargs})  # type: ignore[arg-type]
+        made.append(emu.start())
+        return emu
+
+    yield make
+    for emu in made:
+        emu.stop()
+
+
+@pytest.fixture
+def managers(monkeypatch) -> Iterator[Callable[..., InputManager]]:
+    made: list[InputManager] = []
+
+    def build(path: Path) -> InputManager:
+        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
+        manager, configuration = InputManager.from_files([path], options=options)
+        made.append(manager)
+        loaded = manager.loader.load_name("IS900_drv", manager.search)
+        assert loaded.ok, [d.message for d in loaded.diagnostics]
+        device_class = manager.registry.get("intersense").device_class
+        for name, value in FAST.items():
+            monkeypatch.setattr(device_class, name, value)
+        manager.configure(configuration)
+        return manager
+
+    yield build
+    for manager in made:
+        manager.shutdown()
+
+
+def test_station_units_buttons_and_joystick_reach_proxies(tmp_path, emulator, managers) -> None:
+    emu = emulator("buttons")
+    manager = managers(
+        write(
+            tmp_path,
+            tracker_element("IS", emu.address)
+            + "".join(
+                f'<digital_proxy name="B{u}" version="1"><device>IS</device>'
+                f"<unit>{u}</unit></digital_proxy>"
+                for u in range(6)
+            )
+            + '<analog_proxy name="A1" version="1"><device>IS</device><unit>1</unit></analog_proxy>',
+        )
+    )
+    assert not manager.pending()
+    device = manager.device("IS")
+    seen: list[tuple] = []
+
+    def frame() -> None:
+        manager.update()
+        seen.extend(s.values for s in device.store.frame(DeviceKind.DIGITAL))
+
+    assert wait_until(lambda: device.records >= 60, timeout=5, step=frame)
+    # digital units 2..5 are the wand's buttons 0..3 (0/1), units 0 and 1 stay 0
+    assert any(values[2:6] != (0, 0, 0, 0) for values in seen)
+    for values in seen:
+        assert len(values) == 6 and values[:2] == (0, 0) and sum(values[2:]) <= 1
+    newest_sent = {s[0]: s for s in emu.sent[: device.records]}
+    wand, head = newest_sent[0], newest_sent[1]
+    positions = device.store.latest(DeviceKind.POSITION).values
+    np.testing.assert_allclose(
+        positions[0], pose_matrix(tuple(v * INCH for v in wand[1]), wand[2]), atol=1e-6
+    )
+    np.testing.assert_allclose(
+        positions[1], pose_matrix(tuple(v * INCH for v in head[1]), head[2]), atol=1e-6
+    )
+    analog = device.store.latest(DeviceKind.ANALOG).values
+    assert analog == (0.0, *map(float, wand[4]))  # raw bytes at analog units 1 and 2
+    assert manager.proxy("A1").data == pytest.approx(wand[4][0] / 255.0)
+    buttons = [manager.proxy(f"B{u}").data for u in range(2, 6)]
+    expected = [bool(wand[3] >> k & 1) for k in range(4)]
+    assert [b in (DigitalState.ON, DigitalState.TOGGLE_ON) for b in buttons] == expected
+
+
+def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> None:
+    emu = emulator("garbage")
+    manager = managers(write(tmp_path, tracker_element("IS", emu.address)))
+    device = manager.device("IS")
+    assert wait_until(lambda: device.records >= 40, timeout=5, step=manager.update)
+    assert device.bad_records >= 20 and device.skipped_bytes > 0
+    assert device.counters["records"] == device.records
+    assert device.faults == 0 and manager.status("IS").state == "running"
+
+
+def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, managers) -> None:
+    link = tmp_path / "is900"
+    emu = emulator("disconnect", disconnect_after=10, link=link)
+    manager = managers(write(tmp_path, tracker_element("IS", str(link))))
+    device = manager.device("IS")
+    assert emu.disconnected.wait(5)
+    assert wait_until(
+        lambda: manager.status("IS").state in ("faulted", "reconnecting"),
+        timeout=5,
+        step=manager.update,
+    )
+    status = manager.status("IS")
+    assert status.reason and "serial line lost" in status.reason
+    assert device.records == 20  # 10 polls answered by 2 stations, none lost
+    emu.stop()
+    before = device.records
+    emulator("motion", link=link)  # the tracker is back, on a new pty behind the same link
+    back = time.monotonic()
+    assert wait_until(lambda: device.records > before, timeout=2.0, step=manager.update)
+    assert time.monotonic() - back < 2.0
+    assert manager.status("IS").state == "running" and device.restarts >= 1
+
+
+def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> None:
+    body = (
+        '<intersense name="No Stations" version="1"><port>/dev/null</port></intersense>\n'
+        '<intersense name="Bad Station" version="1"><port>/dev/null</port><stations>'
+        '<intersense_station name="S" version="1"><station_index>99</station_index>'
+        "</intersense_station></stations></intersense>\n"
+    )
+    pending = {p.name: p.message for p in managers(write(tmp_path, body)).pending()}
+    assert "no stations" in pending["No Stations"]
+    assert "station_index 99" in pending["Bad Station"]
+
+
+def corpus_example(tmp_path: Path, port: str) -> Path:
+    source = CONFIG_FILES / "example.intersense.jconf"
+    assert source.is_file(), f"the VR Juggler corpus is missing: {source}"
+    return rewritten(source, tmp_path, "<port>/dev/ttyd11</port>", f"<port>{port}</port>")
+
+
+def test_corpus_example_delivers_through_its_proxies_and_aliases(
+    tmp_path, emulator, managers
+) -> None:
+    emu = emulator("motion")
+    manager = managers(corpus_example(tmp_path, emu.address))
+    assert not manager.pending()
+    assert not [d for d in manager.diagnostics if d.code == "CFG034"]
+    device = manager.device("Isense1")
+    assert wait_until(lambda: device.records >= 20, timeout=5, step=manager.update)
+    manager.update()
+    newest = {s[0]: s for s in emu.sent[: device.records]}
+    for alias, station in (("VJWand", 0), ("VJHead", 1)):
+        proxy = manager.proxy(alias)
+        assert not proxy.stupefied
+        # the filters rotate; the distance from the tracker's origin stays
+        distance = np.linalg.norm(np.asarray(newest[station][1]) * INCH)
+        assert np.linalg.norm(proxy.matrix[:3, 3]) == pytest.approx(distance, rel=1e-5)
+    # the example reads neither buttons nor joystick (use_digital/use_analog false): units exist, 0
+    for alias in ("VJButton0", "VJButton1", "VJButton2", "VJButton3"):
+        assert manager.proxy(alias).data == DigitalState.OFF
+    assert not manager.proxy("Analog 0 Proxy").stupefied
+
+
+def test_gadgetctl_monitor_reads_the_corpus_example(tmp_path, emulator) -> None:
+    emu = emulator("motion")
+    config = corpus_example(tmp_path, emu.address)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "gadgetctl",
+            "monitor",
+            str(config),
+            "--duration",
+            "1",
+            "--format",
+            "ndjson",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=30,
+        cwd=REPO,
+    )
+    records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+    samples = [r for r in records if r.get("type") == "sample" and r.get("device") == "Isense1"]
+    assert {r["kind"] for r in samples} == {"position", "digital", "analog"}, done.stderr[-2000:]
+    assert {r["unit"] for r in samples if r["kind"] == "position"} == {0, 1}
+    assert {r["unit"] for r in samples if r["kind"] == "digital"} == set(range(4))
+    for command in (["validate"], ["doctor"], ["config", "pending"]):
+        out = subprocess.run(
+            [sys.executable, "-m", "gadgetctl", *command, str(config)],
+            capture_output=True,
+            text=True,
+            timeout=30,
+            cwd=REPO,
+        )
+        text = out.stdout + out.stderr
+        assert "DRV001" not in text and "PENDING" not in text and "stays pending" not in text, text
+        if command == ["config", "pending"]:
+            assert "0 pending" in text
