@@ -1,0 +1,212 @@
+"""Serial-line drivers at their devices' fastest documented rates, through the input manager.
+
+Each row runs the driver's emulator in a child process (its pty behind a link in a temporary
+folder) at the device's fastest documented rate, and a configured input manager here running
+frames at 60 Hz. Targets: the device's rate is sustained (at least 95 %) and no record is
+lost (records the emulator sent against records the driver decoded). Each row prints the
+rate, the share of one core this process used (the emulator runs in its own) and the
+decoder against a bare ``struct`` unpack of the same records, measured in the same run.
+
+A new serial driver adds one :class:`Row` to :data:`ROWS`.
+
+Run from the repository root: python bench/bench_serial.py [--seconds 3] [--only NAME]
+Exit status 1 when a target is missed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from common import REPO, Report
+
+sys.path.insert(0, str(REPO / "drivers"))
+
+from gadgetctl.input import InputManager, ManagerOptions
+
+FRAME_RATE = 60.0
+HEAD = """<?xml version="1.0" encoding="UTF-8"?>
+<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
+<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="bench">
+<elements>
+<input_manager name="IM" version="2"><driver>{driver}</driver></input_manager>
+{device}
+</elements>
+</configuration>
+"""
+
+
+@dataclass(frozen=True)
+class Row:
+    """One driver: its device's rate, how to make its emulator and count what it sent, the
+    element that reads it, what the driver decoded, and a decoder benchmark."""
+
+    driver: str
+    rate: float  # the device's fastest documented rate, emulator units per second
+    rate_note: str
+    emulator: Callable[[str, float], object]  # (link, rate) -> a started emulator, in the child
+    sent: Callable[[object], int]  # records the emulator sent
+    element: Callable[[str], str]  # link -> the device element, named "Bench"
+    received: Callable[[object], int]  # records the device decoded
+    per_rate: int = 1  # records per emulator unit (stations per poll)
+    decoder: Callable[[], tuple[Callable[[], object], Callable[[], object], int]] | None = None
+
+
+# -- IS-900 -------------------------------------------------------------------------------------
+
+
+def _is900_emulator(link: str, rate: float) -> object:
+    from IS900_drv.emulator import IS900Emulator
+
+    return IS900Emulator("motion", rate, link=link).start()
+
+
+def _is900_element(link: str) -> str:
+    stations = "".join(
+        f'<stations><intersense_station name="S{i}" version="1"><enabled>true</enabled>'
+        f"<station_index>{i}</station_index><digital_count>4</digital_count>"
+        f"<analog_first>{2 * i}</analog_first><analog_count>2</analog_count>"
+        "</intersense_station></stations>"
+        for i in range(2)
+    )
+    return f'<intersense name="Bench" version="1"><port>{link}</port>{stations}</intersense>'
+
+
+def _is900_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
+    from IS900_drv.emulator import encode_record, pose
+    from IS900_drv.standalone import RECORD_SIZE, RecordScanner
+
+    data = b"".join(encode_record(i % 2, *pose("motion", i % 2, i)) for i in range(2000))
+    body = struct.Struct("<2x1x6fBBBB2x")
+
+    def ours() -> object:
+        return RecordScanner(stations=frozenset({0, 1})).feed(data)
+
+    def baseline() -> object:
+        return [body.unpack_from(data, i) for i in range(0, len(data), RECORD_SIZE)]
+
+    return ours, baseline, 2000
+
+
+ROWS: list[Row] = [
+    Row(
+        "IS900_drv",
+        180.0,
+        "IS-900: 180 Hz updates (InterSense's data sheet), 2 stations per poll",
+        _is900_emulator,
+        lambda emu: len(emu.sent),  # type: ignore[attr-defined]
+        _is900_element,
+        lambda device: device.records,  # type: ignore[attr-defined]
+        per_rate=2,
+        decoder=_is900_decoder,
+    ),
+]
+
+
+# -- the child: one emulator until stdin closes -------------------------------------------------
+
+
+def child(driver: str, link: str, rate: float) -> None:
+    row = next(r for r in ROWS if r.driver == driver)
+    emu = row.emulator(link, rate)
+    print("ready", flush=True)
+    sys.stdin.readline()  # "count": the measured window is over
+    emu.stop()  # type: ignore[attr-defined]
+    print(row.sent(emu), flush=True)
+
+
+# -- measuring -------------------------------------------------------------------------------
+
+
+def bench_row(report: Report, row: Row, seconds: float) -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        link = str(Path(tmp) / "tty")
+        proc = subprocess.Popen(
+            [sys.executable, __file__, "--child", row.driver, link, str(row.rate)],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        try:
+            assert proc.stdout is not None and proc.stdin is not None
+            assert proc.stdout.readline().strip() == "ready"
+            path = Path(tmp) / "bench.jconf"
+            path.write_text(HEAD.format(driver=row.driver, device=row.element(link)))
+            options = ManagerOptions(retry_interval=None, entry_points=False)
+            manager, configuration = InputManager.from_files([path], options=options)
+            try:
+                manager.configure(configuration)
+                assert not manager.pending(), [p.message for p in manager.pending()]
+                device = manager.device("Bench")
+                manager.run(FRAME_RATE, frames=1)
+                start_records = row.received(device)
+                cpu0, wall0 = time.process_time(), time.perf_counter()
+                manager.run(FRAME_RATE, frames=int(seconds * FRAME_RATE))
+                cpu, wall = time.process_time() - cpu0, time.perf_counter() - wall0
+                window = row.received(device) - start_records
+                proc.stdin.write("count\n")
+                proc.stdin.flush()
+                sent = int(proc.stdout.readline())
+                settle = time.perf_counter() + 1.0
+                while row.received(device) < sent and time.perf_counter() < settle:
+                    manager.update()
+                    time.sleep(0.01)
+                received = row.received(device)
+            finally:
+                manager.shutdown()
+        finally:
+            if proc.stdin is not None:
+                proc.stdin.close()
+            proc.wait(10)
+    print(f"{row.driver}: {row.rate_note}")
+    rate = window / wall / row.per_rate
+    report.figure(f"{row.driver} rate", rate, "Hz", target=0.95 * row.rate, higher_is_better=True)
+    report.figure(f"{row.driver} records lost (sent {sent})", sent - received, "records", target=0)
+    report.figure(f"{row.driver} share of one core", 100.0 * cpu / wall, "%")
+    if row.decoder is not None:
+        ours, baseline, items = row.decoder()
+        report.ratio(
+            f"{row.driver} decoder time vs bare struct unpack",
+            _time(ours),
+            _time(baseline),
+            f"({items} records)",
+        )
+
+
+def _time(fn: Callable[[], object], repeat: int = 5) -> float:
+    best = float("inf")
+    for _ in range(repeat):
+        start = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=3.0)
+    parser.add_argument("--only", action="append", default=[], help="a driver plug-in name")
+    parser.add_argument(
+        "--child", nargs=3, metavar=("DRIVER", "LINK", "RATE"), help=argparse.SUPPRESS
+    )
+    args = parser.parse_args(argv)
+    if args.child:
+        child(args.child[0], args.child[1], float(args.child[2]))
+        return 0
+    report = Report()
+    for row in ROWS:
+        if not args.only or row.driver in args.only:
+            bench_row(report, row, args.seconds)
+    report.exit()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
