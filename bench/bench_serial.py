@@ -95,6 +95,39 @@ def _is900_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
     return ours, baseline, 2000
 
 
+# -- SpaceBall 4000 FLX ------------------------------------------------------------------------
+
+
+def _spaceball_emulator(link: str, rate: float) -> object:
+    from SpaceBall_drv.emulator import SpaceBallEmulator
+
+    return SpaceBallEmulator("motion", rate, model="SpaceBall 4000 FLX", link=link).start()
+
+
+def _spaceball_element(link: str) -> str:
+    return (
+        '<puck_device name="Bench" version="1"><device>SpaceBall 4000 FLX</device>'
+        f"<port>{link}</port><baud>9600</baud></puck_device>"
+    )
+
+
+def _spaceball_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
+    from SpaceBall_drv.emulator import encode_axes, motion_axes
+    from SpaceBall_drv.standalone import RecordSplitter
+
+    model = "SpaceBall 4000 FLX"
+    data = b"".join(encode_axes(model, motion_axes(model, i), timer=i) for i in range(1, 2001))
+    words = struct.Struct(">H6h")
+
+    def ours() -> object:
+        return RecordSplitter(model).feed(data)
+
+    def baseline() -> object:
+        return [words.unpack_from(r, 1) for r in data.split(b"\r") if len(r) == 15]
+
+    return ours, baseline, 2000
+
+
 ROWS: list[Row] = [
     Row(
         "IS900_drv",
@@ -106,6 +139,16 @@ ROWS: list[Row] = [
         lambda device: device.records,  # type: ignore[attr-defined]
         per_rate=2,
         decoder=_is900_decoder,
+    ),
+    Row(
+        "SpaceBall_drv",
+        54.0,
+        "SpaceBall 4000 FLX: 16-byte records fill 9600 baud 8N2 at 54/s (SpaceMouse: 26 bytes, 33/s)",
+        _spaceball_emulator,
+        lambda emu: len(emu.sent),  # type: ignore[attr-defined]
+        _spaceball_element,
+        lambda device: device.records,  # type: ignore[attr-defined]
+        decoder=_spaceball_decoder,
     ),
 ]
 

@@ -338,6 +338,42 @@ def _is900(data: bytes) -> None:
         )
 
 
+# -- SpaceBall / SpaceMouse -----------------------------------------------------------------------
+
+
+def _spaceball_seeds() -> list[bytes]:
+    from SpaceBall_drv.emulator import (
+        MODELS,
+        button_pattern,
+        encode_axes,
+        encode_buttons,
+        motion_axes,
+    )
+
+    seeds = []
+    for model in MODELS:
+        records = [encode_axes(model, motion_axes(model, i), timer=i) for i in range(6)]
+        records += [encode_buttons(model, button_pattern(i)) for i in range(6)]
+        seeds.append(b"".join(records))
+    return seeds
+
+
+@target("spaceball.records", seeds=_spaceball_seeds, examples=100, driver="SpaceBall_drv")
+def _spaceball(data: bytes) -> None:
+    from SpaceBall_drv.standalone import AXES, BUTTONS, MAX_RECORD, MODELS, RecordSplitter
+
+    for model in MODELS:
+        splitter = RecordSplitter(model)
+        samples = splitter.feed(data[: len(data) // 2]) + splitter.feed(data[len(data) // 2 :])
+        assert len(splitter._partial) <= MAX_RECORD
+        assert splitter.records == len(samples) <= data.count(b"\r")
+        for sample in samples:
+            if sample.axes is not None:
+                assert len(sample.axes) == AXES and all(-32768 <= a <= 32768 for a in sample.axes)
+            else:
+                assert len(sample.buttons) == BUTTONS and set(sample.buttons) <= {0, 1}
+
+
 # -- Linux joystick -------------------------------------------------------------------------------
 
 

@@ -1,0 +1,336 @@
+"""A SpaceMouse or SpaceBall puck on a pseudo-terminal, independent of gadgetctl's input manager
+(it uses only the shared emulator scaffolding, :mod:`gadgetctl.emulation`).
+
+The emulator answers the start-up commands (version, mode, sensitivity, null radius, zero;
+``@`` reset and the SpaceBall settings) and, once the mode is set, plays a scenario:
+
+``idle``        nothing moves, nothing is sent
+``motion``      the six axes follow slow sine waves (analog records); every eighth record
+                a button press or release
+``buttons``     buttons 1..12 are pressed and released in turn (button records)
+``garbage``     motion and buttons with junk lines, overlong runs and broken records between
+``disconnect``  ``disconnect_after`` records of motion, then the line is hung up
+"""
+
+from __future__ import annotations
+
+import fcntl
+import math
+import os
+import select
+import struct
+import sys
+import termios
+import threading
+import time
+from pathlib import Path
+
+from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
+
+# The emulator keeps its own copy of the wire format so that a mistake in the driver cannot be
+# mirrored here and go unnoticed by the tests.
+MODELS = ("SpaceMouse", "SpaceMouse Plus XT", "SpaceBall 2003B", "SpaceBall 4000 FLX")
+SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+DEFAULT_LINK = "/tmp/gadgetctl-spaceball"
+VERSION_MOUSE = b"v  MAGELLAN  Version 6.70  3Dconnexion GmbH 05/11/04"
+VERSION_BALL = (
+    b"@1 Spaceball alive and well after a reset.",
+    b"@2 Firmware version 4.10 created on 10-Oct-2002",
+)
+#: Axis values of the first motion record: bytes that a SpaceBall 4000 must escape.
+ESCAPE_AXES = (0x000D, 0x0011, 0x0013, 0x005E, 0x0D0D, -0x0D0D)
+AMPLITUDE = {
+    "SpaceMouse": 450,
+    "SpaceMouse Plus XT": 450,
+    "SpaceBall 2003B": 1800,
+    "SpaceBall 4000 FLX": 1800,
+}
+
+
+def is_mouse(model: str) -> bool:
+    return model.startswith("SpaceMouse")
+
+
+def nibble(value: int) -> int:
+    ones = bin(value).count("1")
+    return (0x30 if ones % 2 == 0 else 0x40) | value
+
+
+def encode_axes(model: str, axes: tuple[int, ...], timer: int = 0) -> bytes:
+    """An analog record, CR included."""
+    if is_mouse(model):
+        body = b"".join(bytes(nibble((a + 32768) >> s & 0xF) for s in (12, 8, 4, 0)) for a in axes)
+        return b"d" + body + b"\r"
+    wire = list(axes)
+    wire[2], wire[5] = -wire[2], -wire[5]  # the ball's z and roll point the other way
+    body = struct.pack(">H6h", timer & 0xFFFF, *(max(-32768, min(32767, a)) for a in wire))
+    return b"D" + escape(model, body) + b"\r"
+
+
+def encode_buttons(model: str, buttons: tuple[int, ...], left_handed: bool = False) -> bytes:
+    """A button record (buttons 1..12 as 0/1), CR included."""
+    bits = sum(1 << k for k, b in enumerate(buttons) if b)
+    if is_mouse(model):
+        return b"k" + bytes(nibble(bits >> s & 0xF) for s in (0, 4, 8)) + b"\r"
+    if model == "SpaceBall 2003B":
+        return b"K" + bytes([0x40 | (bits >> 4 & 0x1F), 0x40 | (bits & 0x0F)]) + b"\r"
+    first = 0x40 | (bits >> 7 & 0x1F) | (0x20 if left_handed else 0)
+    second = 0x40 | (bits & 0x3F) | (bits >> 6 & 1) << 7
+    return b"." + escape(model, bytes([first, second])) + b"\r"
+
+
+def escape(model: str, body: bytes) -> bytes:
+    if model != "SpaceBall 4000 FLX":
+        return body
+    out = bytearray()
+    for c in body:
+        if c == 0x5E:
+            out += b"^^"
+        elif c in (0x0D, 0x11, 0x13):
+            out += bytes([0x5E, c | 0x40])
+        else:
+            out.append(c)
+    return bytes(out)
+
+
+def _has_cr(value: int) -> bool:
+    return 0x0D in value.to_bytes(2, "big", signed=True)
+
+
+def cr_free(value: int) -> int:
+    """The nearest value at or above ``value`` whose bytes (either sign) hold no CR: the 2003B
+    has no escapes, so a real one cannot send such a value either."""
+    while _has_cr(value) or _has_cr(-value):
+        value += 1
+    return value
+
+
+def motion_axes(model: str, step: int) -> tuple[int, ...]:
+    if step == 0 and model == "SpaceBall 4000 FLX":
+        return ESCAPE_AXES
+    amp = AMPLITUDE[model]
+    axes = tuple(round(amp * math.sin(step / 10 + axis)) for axis in range(6))
+    return tuple(cr_free(a) for a in axes) if model == "SpaceBall 2003B" else axes
+
+
+def button_pattern(step: int) -> tuple[int, ...]:
+    """Button (step // 2) % 12 + 1 pressed on even steps, everything released on odd ones."""
+    held = (step // 2) % 12 if step % 2 == 0 else -1
+    return tuple(int(k == held) for k in range(12))
+
+
+def garbage(model: str, step: int) -> bytes:
+    """Junk between the good records: every kind of bad record in turn."""
+    kind = step % 5
+    if kind == 0:
+        return b"hello?\r"  # a line no dialect has
+    if kind == 1:
+        return (b"d" if is_mouse(model) else b"D") * 200 + b"\r"  # an overlong run, then a CR
+    if kind == 2:
+        return b"d0000\r" if is_mouse(model) else b"D\x01\x02\r"  # a record cut short
+    if kind == 3:
+        return b"k\x01\x02\x03\r" if is_mouse(model) else b".\x00\x00\r"  # impossible bytes
+    return b"\xff\xfe\x00\x0d"
+
+
+class SpaceBallEmulator:
+    """The puck's side of the line on a pty pair.
+
+    ``rate`` is records per second; ``sent`` lists every good record sent as
+    ``("axes", values)`` or ``("buttons", values)``; ``commands`` every command line received.
+    """
+
+    def __init__(
+        self,
+        scenario: str = "motion",
+        rate: float = 30.0,
+        *,
+        model: str = "SpaceMouse",
+        disconnect_after: int = 5,
+        linger: float = 1.0,
+        link: str | os.PathLike[str] | None = None,
+    ) -> None:
+        if scenario not in SCENARIOS:
+            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
+        if model not in MODELS:
+            raise ValueError(f"unknown model {model!r}; choose from {', '.join(MODELS)}")
+        if rate <= 0:
+            raise ValueError("rate must be positive")
+        self.scenario, self.rate, self.model = scenario, rate, model
+        self.disconnect_after, self.linger = disconnect_after, linger
+        self.link = Path(link) if link is not None else None
+        self.address = ""
+        self.commands: list[bytes] = []
+        self.sent: list[tuple[str, tuple[int, ...]]] = []
+        self.dropped_bytes = 0
+        self.streaming = threading.Event()
+        self.disconnected = threading.Event()
+        self._pty = PseudoTerminal(self.link)
+        self._line = bytearray()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._next_due = 0.0
+        self._step = 0
+        self._hangup_due: float | None = None
+        self._lock = threading.Lock()
+
+    def start(self) -> SpaceBallEmulator:
+        if self._thread is None:
+            self.address = self._pty.open().address
+            self._stop.clear()
+            self._thread = threading.Thread(
+                target=self._run, name="spaceball-emulator", daemon=True
+            )
+            self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5)
+            self._thread = None
+        self._pty.close()
+
+    def __enter__(self) -> SpaceBallEmulator:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def _run(self) -> None:
+        while not self._stop.is_set() and self._pty.master >= 0:
+            wait = 0.05
+            if self.streaming.is_set():
+                wait = min(wait, max(0.0, self._next_due - time.monotonic()))
+            try:
+                ready, _, _ = select.select([self._pty.master], [], [], wait)
+                if ready:
+                    self._on_bytes(os.read(self._pty.master, 1024))
+                now = time.monotonic()
+                if self.streaming.is_set() and now >= self._next_due:
+                    # catch up at most a few records, never a burst after a stall
+                    self._next_due = max(self._next_due + 1.0 / self.rate, now - 0.05)
+                    self._emit()
+            except OSError:
+                break
+
+    def _on_bytes(self, data: bytes) -> None:
+        self._line += data
+        while b"\r" in self._line:
+            line, _, rest = bytes(self._line).partition(b"\r")
+            self._line = bytearray(rest)
+            if line:
+                self.commands.append(line)
+                self._answer(line)
+
+    def _answer(self, line: bytes) -> None:
+        code = line[:1]
+        if is_mouse(self.model):
+            if line == b"vQ":
+                self._write(VERSION_MOUSE + b"\r")
+            elif code in (b"m", b"c", b"q", b"n", b"z", b"b"):
+                self._write(line + b"\r")  # the puck echoes its settings
+                if code in (b"m", b"c"):
+                    self._begin()
+            else:
+                self._write(b"eA" + bytes([nibble(line[0] >> 4), nibble(line[0] & 0xF)]) + b"\r")
+            return
+        if code == b"@":
+            self._write(VERSION_BALL[0] + b"\r" + VERSION_BALL[1] + b"\r")
+        elif code == b"M":
+            self._begin()
+
+    def _begin(self) -> None:
+        if not self.streaming.is_set():
+            self._next_due = time.monotonic()
+            self.streaming.set()
+
+    def _emit(self) -> None:
+        step = self._step
+        if self.scenario == "idle":
+            return
+        if self.scenario == "disconnect" and step >= self.disconnect_after:
+            if self._hangup_due is None:
+                self._hangup_due = time.monotonic() + self.linger
+            if self._unread() and time.monotonic() < self._hangup_due:
+                return  # a pty drops unread input on hang-up: let the driver read first
+            self.disconnected.set()
+            self._pty.hang_up()
+            return
+        self._step += 1
+        tapping = self.scenario in ("motion", "garbage") and step % 8 == 7
+        if self.scenario == "buttons" or tapping or (self.scenario == "garbage" and step % 3 == 2):
+            buttons = button_pattern(step)
+            if self.model == "SpaceBall 2003B":
+                buttons = (*buttons[:9], 0, 0, 0)  # eight buttons and the pick button
+            record = encode_buttons(self.model, buttons)
+            self.sent.append(("buttons", buttons))
+        else:
+            axes = motion_axes(self.model, step)
+            timer = cr_free(step & 0x3FFF) if self.model == "SpaceBall 2003B" else step
+            record = encode_axes(self.model, axes, timer=timer)
+            self.sent.append(("axes", axes))
+        junk = garbage(self.model, step) if self.scenario == "garbage" else b""
+        self._write(junk + record)
+
+    def _unread(self) -> int:
+        with self._lock:
+            if self._pty.slave < 0:
+                return 0
+            try:
+                raw = fcntl.ioctl(self._pty.slave, termios.FIONREAD, b"\0\0\0\0")
+            except OSError:
+                return 0
+        return struct.unpack("i", raw)[0]
+
+    def send_raw(self, data: bytes) -> None:
+        """Write bytes to the driver as they are (for tests)."""
+        self._write(data)
+
+    def _write(self, data: bytes) -> None:
+        with self._lock:
+            self.dropped_bytes += len(data) - self._pty.write(data)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = emulator_parser(
+        "SpaceBall_drv.emulator",
+        "Emulate a 3Dconnexion SpaceMouse or SpaceBall on a pseudo-terminal.",
+        scenarios=SCENARIOS,
+        default_scenario="motion",
+        rate=30.0,
+        rate_help="records per second (9600 baud carries about 33 SpaceMouse motion records/s)",
+    )
+    parser.add_argument("--model", choices=MODELS, default="SpaceMouse", help="puck dialect")
+    parser.add_argument(
+        "--port",
+        default=DEFAULT_LINK,
+        help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
+        "drivers/SpaceBall_drv/example.jconf looks; '' for none)",
+    )
+    parser.add_argument("--disconnect-after", type=int, default=5, help="records before hang-up")
+    args = parser.parse_args(argv)
+    emulator = SpaceBallEmulator(
+        args.scenario,
+        args.rate,
+        model=args.model,
+        disconnect_after=args.disconnect_after,
+        link=args.port or None,
+    )
+
+    def announce() -> None:
+        where = str(emulator.link) if emulator.link is not None else emulator.address
+        print(f"{args.model} emulator ({args.scenario}) on {emulator.address}", flush=True)
+        print(f"point the puck_device element at it: <port>{where}</port>", flush=True)
+
+    def check() -> int | None:
+        if emulator.disconnected.is_set():
+            print("scenario finished: the line was hung up", flush=True)
+            return 0
+        return None
+
+    return run(emulator, duration=args.duration, announce=announce, check=check)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

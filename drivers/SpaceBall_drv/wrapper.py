@@ -1,0 +1,113 @@
+"""The input-manager side of the SpaceMouse / SpaceBall (element type ``puck_device``).
+
+Units: analog 0..5 are the axes tx, ty, tz, rx, ry, rz in raw counts; digital 0..11 are
+buttons 1..12. Differences from the C++ ``PuckDevice``, on purpose:
+
+* buttons are stored as 0/1 (the C++ stored the masked bit, 2048 for button 12);
+* analog values are stored raw and normalised by the proxies once (the C++ normalised
+  before adding, so proxies normalised twice); min/max written in the element are used,
+  otherwise the dialect's range the C++ set in code (±500 SpaceMouse, ±2000 SpaceBall)
+  rather than the definition's 0..255, which no puck reports;
+* every record read is added (the C++ added one per sample() call), and a lost line raises
+  so the input manager restarts the device.
+"""
+
+from __future__ import annotations
+
+from gadgetctl.input import Analog, DeviceConfigError, Digital
+from gadgetctl.jccl.access import ElementAccess
+
+from .standalone import AXES, AXIS_RANGE, BAUD, BUTTONS, MODELS, SpaceBall, SpaceBallError
+
+
+class PuckDevice(Analog, Digital):
+    """Six axes and twelve buttons from a SpaceMouse or SpaceBall on a serial port."""
+
+    ELEMENT_TYPE = "puck_device"
+    sample_interval = 0.0  # sample() waits for records (at most sample_timeout)
+
+    reset_wait = 2.0  # for the SpaceBall's reset banner / the SpaceMouse's version reply
+    sample_timeout = 0.1
+    poll_interval = 0.01
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.port = ""
+        self.model = MODELS[0]
+        self.puck: SpaceBall | None = None
+        self.version = ""
+        self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
+        self._axes = (0,) * AXES
+        self._buttons = (0,) * BUTTONS
+
+    def config(self, access: ElementAccess) -> None:
+        super().config(access)
+        self.port = access.string("port")
+        self.model = access.string("device")
+        baud = access.integer("baud")
+        if not self.port:
+            raise DeviceConfigError("port is empty: name the serial device the puck is on")
+        if self.model not in MODELS:
+            raise DeviceConfigError(
+                f"device {self.model!r} is not a serial puck; one of {', '.join(MODELS)}"
+            )
+        if baud != BAUD:
+            raise DeviceConfigError(f"baud {baud}: the pucks talk {BAUD} bit/s only")
+        span = AXIS_RANGE[self.model]
+        if not access.count("min"):
+            self.analog_min = -span
+        if not access.count("max"):
+            self.analog_max = span
+
+    def start_sampling(self) -> None:
+        puck = SpaceBall(
+            self.port,
+            self.model,
+            reset_wait=self.reset_wait,
+            sample_timeout=self.sample_timeout,
+            poll_interval=self.poll_interval,
+        )
+        puck.open()
+        self.version = puck.version or self.version
+        self.puck = puck
+        stamp = self.now()  # centred axes and released buttons until the puck reports
+        self._axes, self._buttons = (0,) * AXES, (0,) * BUTTONS
+        self.add_analog_sample(self._axes, stamp)
+        self.add_digital_sample(self._buttons, stamp)
+
+    def sample(self) -> None:
+        puck = self.puck
+        if puck is None:
+            raise SpaceBallError("the puck is not open")
+        stamp = self.now()
+        for record in puck.poll():  # raises SpaceBallDisconnected when the line is lost
+            if record.axes is not None:
+                self.add_analog_sample(record.axes, stamp)
+            if record.buttons is not None:
+                self.add_digital_sample(record.buttons, stamp)
+
+    def stop_sampling(self) -> None:
+        puck, self.puck = self.puck, None
+        if puck is not None:
+            for key in self._counts:
+                self._counts[key] += getattr(puck.decoder, key)
+            puck.close()
+
+    def _count(self, key: str) -> int:
+        puck = self.puck
+        return self._counts[key] + (getattr(puck.decoder, key) if puck is not None else 0)
+
+    @property
+    def records(self) -> int:
+        """Analog and button records decoded."""
+        return self._count("records")
+
+    @property
+    def bad_records(self) -> int:
+        """Malformed, impossible or overlong records skipped."""
+        return self._count("bad_records")
+
+    @property
+    def skipped_bytes(self) -> int:
+        """Bytes of the records skipped."""
+        return self._count("skipped_bytes")

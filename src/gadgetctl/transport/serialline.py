@@ -1,0 +1,165 @@
+"""A serial line for the standalone drivers: one buffered reader over pyserial.
+
+All port settings go into the one open call (a Linux pseudo-terminal ignores a later change of
+data bits or parity, and refuses a change of parity alone). A line that cannot do what was
+asked (a pty has no parity, RTS or CTS) is still used: :attr:`SerialLine.degraded` lists what
+was left out, so a driver can say so instead of failing. Reads wait until a deadline; end of
+file, a hang-up or an unplugged adapter raise :class:`SerialLineLost` (reopen to recover).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import serial
+
+PARITIES = {"none": serial.PARITY_NONE, "even": serial.PARITY_EVEN, "odd": serial.PARITY_ODD}
+
+
+class SerialLineLost(ConnectionError):
+    """The serial line is gone (cannot open, EOF, hang-up, unplugged adapter)."""
+
+
+@dataclass(frozen=True)
+class LineSettings:
+    """Line speed and character format (8N1 unless a protocol says otherwise)."""
+
+    baud: int = 9600
+    bytesize: int = 8
+    parity: str = "none"
+    stopbits: int = 1
+
+    def describe(self) -> str:
+        return f"{self.baud} {self.bytesize}{self.parity[0].upper()}{self.stopbits}"
+
+
+class SerialLine:
+    """A byte stream over a serial port with deadline-based reads.
+
+    ``port`` is a device path, a pyserial URL (``loop://``) or an open ``serial.Serial``-like
+    object (used, never closed). ``poll_interval`` bounds how long one read call blocks.
+    """
+
+    def __init__(
+        self,
+        port: str | serial.SerialBase,
+        settings: LineSettings | None = None,
+        *,
+        poll_interval: float = 0.01,
+    ) -> None:
+        self.spec = port
+        self.settings = settings or LineSettings()
+        self.poll_interval = poll_interval
+        self.degraded: list[str] = []
+        self.bytes_read = 0
+        self._port: serial.SerialBase | None = None
+        self._owns = False
+
+    # -- life cycle -----------------------------------------------------------------------
+
+    def open(self) -> SerialLine:
+        if self._port is not None:
+            return self
+        if not isinstance(self.spec, str):
+            self._port, self._owns = self.spec, False
+            self._port.timeout = self.poll_interval
+            return self
+        s = self.settings
+        try:
+            try:
+                port = serial.serial_for_url(
+                    self.spec,
+                    baudrate=s.baud,
+                    bytesize=s.bytesize,
+                    parity=PARITIES[s.parity],
+                    stopbits=s.stopbits,
+                    timeout=self.poll_interval,
+                )
+            except (ValueError, serial.SerialException):
+                if (s.bytesize, s.parity, s.stopbits) == (8, "none", 1):
+                    raise
+                # A pty (and some adapters) refuse the character format: 8N1 still carries
+                # every protocol here.
+                port = serial.serial_for_url(self.spec, baudrate=s.baud, timeout=self.poll_interval)
+                self.degraded.append(f"character format {s.describe()} (line stays 8N1)")
+        except (serial.SerialException, OSError, ValueError) as exc:
+            raise SerialLineLost(f"cannot open {self.spec}: {exc}") from exc
+        self._port, self._owns = port, True
+        return self
+
+    def close(self) -> None:
+        port, self._port = self._port, None
+        if port is not None and self._owns:
+            try:
+                port.close()
+            except (serial.SerialException, OSError):
+                pass
+
+    @property
+    def is_open(self) -> bool:
+        return self._port is not None
+
+    def __enter__(self) -> SerialLine:
+        return self.open()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- control lines ----------------------------------------------------------------------
+
+    def set_lines(self, *, rts: bool | None = None, dtr: bool | None = None) -> bool:
+        """Drive RTS/DTR; False (and noted in ``degraded``) when the line cannot."""
+        port = self._require()
+        try:
+            if dtr is not None:
+                port.dtr = dtr
+            if rts is not None:
+                port.rts = rts
+        except (serial.SerialException, OSError, ValueError):
+            note = "control lines (RTS/DTR)"
+            if note not in self.degraded:
+                self.degraded.append(note)
+            return False
+        return True
+
+    # -- data ---------------------------------------------------------------------------------
+
+    def read(self, timeout: float) -> bytes:
+        """What has arrived, waiting up to ``timeout`` seconds for the first byte; b'' if none."""
+        port = self._require()
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                waiting = port.in_waiting
+                if waiting:
+                    chunk = port.read(waiting)
+                elif time.monotonic() >= deadline:
+                    return b""
+                else:
+                    port.timeout = max(0.0, min(self.poll_interval, deadline - time.monotonic()))
+                    chunk = port.read(1)
+            except (serial.SerialException, OSError, TypeError) as exc:
+                raise SerialLineLost(f"serial line lost: {exc}") from exc
+            if chunk:
+                self.bytes_read += len(chunk)
+                return bytes(chunk)
+
+    def write(self, data: bytes) -> None:
+        port = self._require()
+        try:
+            port.write(data)
+            port.flush()
+        except (serial.SerialException, OSError) as exc:
+            raise SerialLineLost(f"serial line lost: {exc}") from exc
+
+    def discard_input(self) -> None:
+        try:
+            self._require().reset_input_buffer()
+        except (serial.SerialException, OSError) as exc:
+            raise SerialLineLost(f"serial line lost: {exc}") from exc
+
+    def _require(self) -> serial.SerialBase:
+        if self._port is None:
+            raise SerialLineLost("the serial line is not open")
+        return self._port
