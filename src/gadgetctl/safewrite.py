@@ -48,7 +48,8 @@ class Replaced:
 
     @property
     def via_link(self) -> bool:
-        return self.target != Path(os.path.abspath(self.path))
+        """Whether ``path`` itself is a symbolic link (links among its directories do not count)."""
+        return os.path.islink(self.path)
 
 
 def current_umask() -> int:
@@ -131,7 +132,7 @@ def replace_file(
     """
     path = Path(path)
     target = Path(os.path.realpath(path))
-    shown = str(path) if target == Path(os.path.abspath(path)) else f"{path} (-> {target})"
+    shown = f"{path} (-> {target})" if os.path.islink(path) else str(path)
     temporaries: list[Path] = []
     try:
         try:
