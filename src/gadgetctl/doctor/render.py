@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from gadgetctl.diagnostics.model import sort_key
 from gadgetctl.doctor.model import DoctorReport, PortCheck
+from gadgetctl.safetext import printable
 
 _MARK = {"ok": "ok", "warning": "warn", "problem": "PROBLEM", "unchecked": "-"}
 
@@ -92,4 +93,4 @@ def render_text(report: DoctorReport) -> str:
     blocking = len(report.blocking)
     lines.append(f"{blocking} finding{'s' if blocking != 1 else ''} would stop data from arriving" if blocking
                  else "nothing found that would stop data from arriving")
-    return "\n".join(lines)
+    return "\n".join(map(printable, lines))  # names, paths, reasons: one line each

@@ -10,6 +10,7 @@ from gadgetctl.diagnostics import Diagnostic, Severity, sort_key
 from gadgetctl.input.manager import InputManager
 from gadgetctl.input.pending import PendingEntry, PendingKind
 from gadgetctl.input.status import ElementKind
+from gadgetctl.safetext import printable
 
 _PLURALS = {"device": "devices", "proxy": "proxies", "alias": "aliases", "input_manager": "input_managers"}
 
@@ -67,7 +68,7 @@ class PendingReport:
             if d.hint:
                 lines.append(f"    hint: {d.hint}")
         lines.append(self.summary())
-        return "\n".join(lines)
+        return "\n".join(map(printable, lines))  # names, paths, reasons: one line each
 
     def to_dict(self) -> dict[str, object]:
         return {
