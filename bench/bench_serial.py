@@ -128,6 +128,31 @@ def _spaceball_decoder() -> tuple[Callable[[], object], Callable[[], object], in
     return ours, baseline, 2000
 
 
+# -- Fastrak ------------------------------------------------------------------------------------
+
+
+def _fastrak_emulator(link: str, rate: float) -> object:
+    from Fastrak_drv.emulator import FastrakEmulator
+
+    return FastrakEmulator("motion", rate, link=link).start()
+
+
+def _fastrak_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
+    from Fastrak_drv.emulator import encode_record, pose
+    from Fastrak_drv.standalone import RECORD_SIZE, RecordScanner
+
+    data = b"".join(encode_record(1 + i % 2, *pose("motion", 1 + i % 2, i)) for i in range(2000))
+    body = struct.Struct("<3x7f2x2x")
+
+    def ours() -> object:
+        return RecordScanner().feed(data)
+
+    def baseline() -> object:
+        return [body.unpack_from(data, i) for i in range(0, len(data), RECORD_SIZE)]
+
+    return ours, baseline, 2000
+
+
 ROWS: list[Row] = [
     Row(
         "IS900_drv",
@@ -150,6 +175,16 @@ ROWS: list[Row] = [
         lambda device: device.records,  # type: ignore[attr-defined]
         decoder=_spaceball_decoder,
     ),
+    Row(
+        "Fastrak_drv",
+        120.0,
+        "Fastrak: 120 records/s in all (Polhemus: 120 Hz for one station, shared by the active ones)",
+        _fastrak_emulator,
+        lambda emu: len(emu.sent),  # type: ignore[attr-defined]
+        lambda link: f'<fastrak name="Bench" version="2"><port>{link}</port></fastrak>',
+        lambda device: device.records,  # type: ignore[attr-defined]
+        decoder=_fastrak_decoder,
+    ),
 ]
 
 
@@ -161,8 +196,15 @@ def child(driver: str, link: str, rate: float) -> None:
     emu = row.emulator(link, rate)
     print("ready", flush=True)
     sys.stdin.readline()  # "count": the measured window is over
-    emu.stop()  # type: ignore[attr-defined]
+    if hasattr(emu, "paused") and hasattr(emu, "unread"):  # emulators that can hold still
+        emu.paused = True
+        time.sleep(0.05)  # a record being written when the pause came
+        deadline = time.monotonic() + 2.0
+        while emu.unread() and time.monotonic() < deadline:
+            time.sleep(0.01)  # the driver reads what was sent (a hang-up would drop it)
     print(row.sent(emu), flush=True)
+    sys.stdin.read()  # until the benchmark has counted
+    emu.stop()  # type: ignore[attr-defined]
 
 
 # -- measuring -------------------------------------------------------------------------------

@@ -131,6 +131,8 @@ class IS900Emulator:
         self.polls_answered = 0
         self.dropped_bytes = 0
         self.disconnected = threading.Event()
+        #: while True nothing is sent (a benchmark counts what was sent)
+        self.paused = False
         self.address = ""
         self._pty = PseudoTerminal(self.link)
         self._rng = random.Random(seed)
@@ -185,7 +187,7 @@ class IS900Emulator:
                 if ready:
                     for value in os.read(self._pty.master, 4096):
                         self._on_byte(value)
-                if self._polls and time.monotonic() >= self._next_due:
+                if self._polls and not self.paused and time.monotonic() >= self._next_due:
                     self._answer_poll()
             except OSError:
                 break
@@ -259,6 +261,10 @@ class IS900Emulator:
             out += encode_record(station, position, euler, buttons, analog)
             self.sent.append((station, position, euler, buttons, analog))
         self._write(bytes(out))
+
+    def unread(self) -> int:
+        """Bytes sent that the driver has not read yet."""
+        return self._unread()
 
     def _unread(self) -> int:
         slave = self._pty.slave

@@ -374,6 +374,36 @@ def _spaceball(data: bytes) -> None:
                 assert len(sample.buttons) == BUTTONS and set(sample.buttons) <= {0, 1}
 
 
+# -- Fastrak --------------------------------------------------------------------------------------
+
+
+def _fastrak_seeds() -> list[bytes]:
+    from Fastrak_drv.emulator import GARBAGE_CHUNKS, encode_record, pose, stylus
+
+    def records(scenario: str) -> bytes:
+        return b"".join(
+            encode_record(s, *pose(scenario, s, i), stylus(scenario, s, i)) for i in range(8) for s in (1, 2)
+        )
+
+    return [records("motion"), records("buttons"), b"".join(GARBAGE_CHUNKS) + records("motion")]
+
+
+@target("fastrak.records", seeds=_fastrak_seeds, examples=100, driver="Fastrak_drv")
+def _fastrak(data: bytes) -> None:
+    from Fastrak_drv.standalone import RECORD_SIZE, STATIONS, RecordScanner
+
+    scanner = RecordScanner()
+    got = []
+    for start in range(0, len(data), 101):
+        got += scanner.feed(data[start : start + 101])
+        assert len(scanner.buffer) < RECORD_SIZE
+    assert scanner.records == len(got)
+    assert scanner.skipped_bytes + RECORD_SIZE * len(got) + len(scanner.buffer) == len(data)
+    for record in got:
+        assert 1 <= record.station <= STATIONS and record.stylus in (0, 1)
+        assert record.matrix().shape == (4, 4)
+
+
 # -- Linux joystick -------------------------------------------------------------------------------
 
 

@@ -121,6 +121,10 @@ UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]
         "digital": _fixed(12, "Digital units 0-11 are the puck's buttons 1-12."),
         "analog": _fixed(6, "Analog units 0-5 are the axes tx, ty, tz, rx, ry, rz."),
     },
+    "fastrak": {
+        "position": _fixed(4, "Units 0-3 are stations 1-4."),
+        "digital": _fixed(1, "Digital unit 0 is the stylus switch on station 1."),
+    },
     "simulated_digital_device": {"digital": _listed("key_pair", "bindings")},
     "simulated_analog_device": {"analog": _listed("increment_keypress", "bindings")},
     "simulated_digital_glove": {"digital": _fixed(10), "glove": _fixed(2)},
