@@ -18,6 +18,8 @@ Differences from the C++, on purpose:
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from gadgetctl.input import DeviceConfigError, Digital, Position
@@ -43,6 +45,7 @@ class FastrakDevice(Position, Digital):
         self.hemisphere = 3
         self.tracker: Fastrak | None = None
         self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
+        self._counts_lock = threading.Lock()
         self._matrices = np.tile(np.eye(4), (STATIONS, 1, 1))
         self._stylus = 0
 
@@ -79,15 +82,19 @@ class FastrakDevice(Position, Digital):
             self._add(records)
 
     def stop_sampling(self) -> None:
-        tracker, self.tracker = self.tracker, None
+        # Under the lock, so a reader never sees the tracker gone and its counts not yet kept.
+        with self._counts_lock:
+            tracker, self.tracker = self.tracker, None
+            if tracker is not None:
+                for key in self._counts:
+                    self._counts[key] += getattr(tracker, key)
         if tracker is not None:
-            for key in self._counts:
-                self._counts[key] += getattr(tracker, key)
             tracker.close()
 
     def _count(self, key: str) -> int:
-        tracker = self.tracker
-        return self._counts[key] + (getattr(tracker, key) if tracker is not None else 0)
+        with self._counts_lock:
+            tracker = self.tracker
+            return self._counts[key] + (getattr(tracker, key) if tracker is not None else 0)
 
     @property
     def records(self) -> int:

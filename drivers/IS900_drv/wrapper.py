@@ -24,6 +24,7 @@ Differences from the C++, on purpose:
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -107,6 +108,7 @@ class IntersenseDevice(Position, Digital, Analog):
         self.stations: list[StationConfig] = []
         self.tracker: IS900 | None = None
         self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
+        self._counts_lock = threading.Lock()
         self._matrices = np.zeros((0, 4, 4))
         self._digital = np.zeros(0, dtype=np.int8)
         self._analog = np.zeros(0)
@@ -160,17 +162,21 @@ class IntersenseDevice(Position, Digital, Analog):
             self._add(records)
 
     def stop_sampling(self) -> None:
-        tracker, self.tracker = self.tracker, None
+        # Under the lock, so a reader never sees the tracker gone and its counts not yet kept.
+        with self._counts_lock:
+            tracker, self.tracker = self.tracker, None
+            if tracker is not None:
+                for key in self._counts:
+                    self._counts[key] += getattr(tracker, key)
         if tracker is not None:
-            for key in self._counts:
-                self._counts[key] += getattr(tracker, key)
             tracker.close()
 
     # -- counters over every start, for monitors and tests ------------------------------
 
     def _count(self, key: str) -> int:
-        tracker = self.tracker
-        return self._counts[key] + (getattr(tracker, key) if tracker is not None else 0)
+        with self._counts_lock:
+            tracker = self.tracker
+            return self._counts[key] + (getattr(tracker, key) if tracker is not None else 0)
 
     @property
     def records(self) -> int:
