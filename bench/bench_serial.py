@@ -150,6 +150,29 @@ def _fastrak_decoder() -> tuple[Callable[[], object], Callable[[], object], int]
     def baseline() -> object:
         return [body.unpack_from(data, i) for i in range(0, len(data), RECORD_SIZE)]
 
+
+# -- 5DT DataGlove ------------------------------------------------------------------------------
+
+
+def _dataglove_emulator(link: str, rate: float) -> object:
+    from DataGlove_drv.emulator import DataGloveEmulator
+
+    return DataGloveEmulator("motion", rate, link=link).start()
+
+
+def _dataglove_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
+    from DataGlove_drv.emulator import encode_packet, pose
+    from DataGlove_drv.standalone import PacketScanner
+
+    data = b"".join(encode_packet(pose("motion", i)) for i in range(2000))
+    packet = struct.Struct("<x7BBB")
+
+    def ours() -> object:
+        return PacketScanner().feed(data)
+
+    def baseline() -> object:
+        return [packet.unpack_from(data, i) for i in range(0, len(data), 10)]
+
     return ours, baseline, 2000
 
 
@@ -184,6 +207,16 @@ ROWS: list[Row] = [
         lambda link: f'<fastrak name="Bench" version="2"><port>{link}</port></fastrak>',
         lambda device: device.records,  # type: ignore[attr-defined]
         decoder=_fastrak_decoder,
+    ),
+    Row(
+        "DataGlove_drv",
+        384.0,
+        "5DT DataGlove: 10-byte packets fill its default 38400 baud 8N1 at 384/s",
+        _dataglove_emulator,
+        lambda emu: len(emu.sent),  # type: ignore[attr-defined]
+        lambda link: f'<data_glove name="Bench" version="1"><port>{link}</port></data_glove>',
+        lambda device: device.records,  # type: ignore[attr-defined]
+        decoder=_dataglove_decoder,
     ),
 ]
 

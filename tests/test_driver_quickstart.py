@@ -32,6 +32,7 @@ DRIVERS = [
     ("IS900_drv", {"position", "digital", "analog"}, r"<port>"),
     ("SpaceBall_drv", {"digital", "analog"}, r"<port>"),
     ("Fastrak_drv", {"position", "digital"}, r"<port>"),
+    ("DataGlove_drv", {"analog", "glove"}, r"<port>"),
 ]
 # The examples use fixed addresses (/tmp/gadgetctl-pinch, TCP 6000, ...): two test runs on
 # one machine would take them from each other, so runs take turns here.

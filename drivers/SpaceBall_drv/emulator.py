@@ -168,6 +168,8 @@ class SpaceBallEmulator:
         self._pty = PseudoTerminal(self.link)
         self._line = bytearray()
         self._stop = threading.Event()
+        self._quiet = threading.Event()
+        self.drain = 0.5
         self._thread: threading.Thread | None = None
         self._next_due = 0.0
         self._step = 0
@@ -185,6 +187,12 @@ class SpaceBallEmulator:
         return self
 
     def stop(self) -> None:
+        """Stop sending, give a reading driver up to ``drain`` seconds to read what was sent
+        (a pty drops unread input when it closes), then close the pty and remove the link."""
+        self._quiet.set()
+        deadline = time.monotonic() + self.drain
+        while self.streaming.is_set() and self._unread() and time.monotonic() < deadline:
+            time.sleep(0.005)
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout=5)
@@ -247,6 +255,8 @@ class SpaceBallEmulator:
 
     def _emit(self) -> None:
         step = self._step
+        if self._quiet.is_set():
+            return
         if self.scenario == "idle":
             return
         if self.scenario == "disconnect" and step >= self.disconnect_after:

@@ -404,6 +404,33 @@ def _fastrak(data: bytes) -> None:
         assert record.matrix().shape == (4, 4)
 
 
+# -- 5DT DataGlove --------------------------------------------------------------------------------
+
+
+def _dataglove_seeds() -> list[bytes]:
+    from DataGlove_drv.emulator import GARBAGE, encode_packet, pose
+
+    motion = b"".join(encode_packet(pose("motion", i)) for i in range(12))
+    return [motion, b"".join(g + encode_packet(pose("buttons", i)) for i, g in enumerate(GARBAGE))]
+
+
+@target("dataglove.packets", seeds=_dataglove_seeds, examples=100, driver="DataGlove_drv")
+def _dataglove(data: bytes) -> None:
+    from DataGlove_drv.standalone import NO_GESTURE, PACKET_SIZE, PacketScanner
+
+    scanner = PacketScanner()
+    got = []
+    for start in range(0, len(data), 13):  # arbitrary chunks, as reads split the line
+        got += scanner.feed(data[start : start + 13])
+        assert len(scanner.buffer) < PACKET_SIZE
+    assert scanner.records == len(got) <= len(data) // PACKET_SIZE
+    assert scanner.skipped_bytes + PACKET_SIZE * len(got) + len(scanner.buffer) == len(data)
+    assert scanner.bad_records <= scanner.skipped_bytes
+    for sample in got:
+        assert all(0.0 <= f <= 1.0 for f in sample.flexure) and 0 <= sample.pitch <= 180
+        assert 0 <= sample.gesture <= NO_GESTURE and sample.capability in (0, 6)
+
+
 # -- Linux joystick -------------------------------------------------------------------------------
 
 

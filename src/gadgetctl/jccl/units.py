@@ -117,6 +117,10 @@ UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]
         "glove": _fixed(2, "Glove 0 is the left hand, glove 1 the right."),
     },
     "intersense": {k: _station_spans(k) for k in ("position", "digital", "analog")},
+    "data_glove": {
+        "analog": _fixed(9, "Analog units 0-8: five flexures, pitch, roll, gesture, hand."),
+        "glove": _fixed(1, "A data_glove is one hand: glove unit 0."),
+    },
     "puck_device": {
         "digital": _fixed(12, "Digital units 0-11 are the puck's buttons 1-12."),
         "analog": _fixed(6, "Analog units 0-5 are the axes tx, ty, tz, rx, ry, rz."),

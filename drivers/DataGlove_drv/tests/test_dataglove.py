@@ -1,0 +1,227 @@
+"""The 5DT DataGlove driver against its emulator over a real pty pair, standalone and in an
+input manager."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Iterator
+
+import numpy as np
+import pytest
+from DataGlove_drv.emulator import LEFT, DataGloveEmulator, encode_packet
+from DataGlove_drv.standalone import (
+    NO_GESTURE,
+    PACKET_SIZE,
+    DataGlove,
+    PacketScanner,
+    decode_packet,
+    gesture,
+)
+
+from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
+from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.testing import wait_until
+
+pytestmark = pytest.mark.timeout(30)
+
+FAST = {"sample_timeout": 0.02, "poll_interval": 0.005}
+HEAD = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
+    '<elements>\n<input_manager name="IM" version="2"><driver>DataGlove_drv</driver></input_manager>\n'
+)
+TAIL = "</elements>\n</configuration>\n"
+
+
+def glove(name: str, port: str) -> str:
+    proxies = "".join(
+        f'<analog_proxy name="{name} A{u}" version="1"><device>{name}</device><unit>{u}</unit></analog_proxy>\n'
+        for u in range(9)
+    )
+    return (
+        f'<data_glove name="{name}" version="1"><port>{port}</port><baud>38400</baud></data_glove>\n'
+        f'<glove_proxy name="{name} Hand" version="1"><device>{name}</device><unit>0</unit></glove_proxy>\n'
+        + proxies
+    )
+
+
+def expected(data: tuple[int, ...], capability: int = 0) -> tuple[float, ...]:
+    """Analog units 0..8 from the protocol description, written out independently."""
+    flex = [b / 255 for b in data[:5]]
+    index_open, middle_open, ring_open, pinky_open = (
+        flex[1] < 0.5,
+        flex[2] < 0.5,
+        flex[3] < 0.5,
+        flex[4] < 0.35,
+    )
+    table = {  # (index, middle, ring, pinky) open -> the C++ driver's gesture number
+        (False, False, False, False): 0,
+        (True, False, False, False): 1,
+        (False, True, False, False): 2,
+        (True, True, False, False): 3,
+        (False, True, True, False): 4,
+        (True, False, True, False): 5,
+        (True, True, True, False): 7,
+        (False, False, False, True): 8,
+        (True, True, False, True): 9,
+        (False, True, False, True): 10,
+        (False, False, True, True): 12,
+        (True, False, True, True): 13,
+        (False, True, True, True): 14,
+        (True, True, True, True): 15,
+    }
+    number = table.get((index_open, middle_open, ring_open, pinky_open), 16)
+    return (*flex, data[5] * 180 / 255, data[6] * 180 / 255, float(number), float(capability))
+
+
+@pytest.fixture
+def emulator() -> Iterator[Callable[..., DataGloveEmulator]]:
+    made: list[DataGloveEmulator] = []
+
+    def make(scenario: str = "motion", **kwargs: object) -> DataGloveEmulator:
+        emu = DataGloveEmulator(scenario, **{"rate": 200.0, **kwargs})  # type: ignore[arg-type]
+        made.append(emu.start())
+        return emu
+
+    yield make
+    for emu in made:
+        emu.stop()
+
+
+@pytest.fixture
+def managers(monkeypatch, tmp_path) -> Iterator[Callable[..., InputManager]]:
+    made: list[InputManager] = []
+
+    def build(body: str) -> InputManager:
+        path = tmp_path / "test.jconf"
+        path.write_text(HEAD + body + TAIL)
+        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
+        manager, configuration = InputManager.from_files([path], options=options)
+        made.append(manager)
+        loaded = manager.loader.load_name("DataGlove_drv", manager.search)
+        assert loaded.ok, [d.message for d in loaded.diagnostics]
+        device_class = manager.registry.get("data_glove").device_class
+        for name, value in FAST.items():
+            monkeypatch.setattr(device_class, name, value)
+        manager.configure(configuration)
+        return manager
+
+    yield build
+    for manager in made:
+        manager.shutdown()
+
+
+def collect(manager: InputManager, name: str) -> tuple[Callable[[], None], list]:
+    device = manager.device(name)
+    analog: list[tuple[float, ...]] = []
+
+    def frame() -> None:
+        manager.update()
+        analog.extend(s.values for s in device.store.frame(DeviceKind.ANALOG))
+
+    return frame, analog
+
+
+def aligned(
+    decoded: list[tuple[float, ...]], sent: list[tuple[int, ...]], capability: int = 0
+) -> None:
+    """``decoded`` is what was sent, value for value, from the first packet on (the one waiting
+    before the driver opened the line is discarded by the open, and is not in ``sent``)."""
+    want = [expected(d, capability) for d in sent[: len(decoded)]]
+    assert decoded == [pytest.approx(w) for w in want]
+
+
+# -- the wire format, from the protocol description -------------------------------------------
+
+
+def test_packets_decode_as_the_protocol_says() -> None:
+    data = bytes([255, 0, 128, 51, 200, 0, 255])
+    check = 255 ^ 0 ^ 128 ^ 51 ^ 200 ^ 0 ^ 255
+    got = decode_packet(bytes([0x80]) + data + bytes([check, 6]))
+    assert got.flexure == pytest.approx((1.0, 0.0, 128 / 255, 0.2, 200 / 255))
+    assert (got.pitch, got.roll, got.hand) == (0.0, 180.0, "left")
+    # index and ring open, middle and pinky bent: gesture 5
+    assert got.gesture == 5
+    # the checksum must match (the C++ kept only packets where it did not)
+    assert decode_packet(bytes([0x80]) + data + bytes([check ^ 1, 6])) is None
+    assert decode_packet(bytes([0x80]) + data + bytes([check, 3])) is None  # no such hand
+    assert gesture(0.9, 0.9, 0.9, 0.9) == 0 and gesture(0.1, 0.1, 0.1, 0.1) == 15
+    assert gesture(0.9, 0.9, 0.1, 0.9) == NO_GESTURE  # ring open alone is no gesture
+
+
+def test_junk_runs_are_counted_once_and_the_buffer_stays_bounded() -> None:
+    good = encode_packet((1, 2, 3, 4, 5, 6, 7))
+    scanner = PacketScanner()
+    junk = bytes([0x80, 1, 2]) + bytes(range(0x70, 0x90)) + b"\x80" * 50
+    got = scanner.feed(junk[:20]) + scanner.feed(junk[20:] + good + good)
+    assert len(got) == 2 and scanner.bad_records == 1
+    assert scanner.skipped_bytes == len(junk)
+    scanner.feed(b"\x80" * 100_000)
+    assert len(scanner.buffer) < PACKET_SIZE and scanner.bad_records == 2
+
+
+# -- standalone over the pty ------------------------------------------------------------------
+
+
+def test_standalone_reads_every_packet_in_order(emulator) -> None:
+    emu = emulator("motion", hand=LEFT)
+    with DataGlove(emu.address, **FAST) as device:
+        got = []
+        assert wait_until(lambda: len(got) >= 30, step=lambda: got.extend(device.poll()))
+    aligned([s.analog for s in got], emu.sent, capability=LEFT)
+    assert all(s.hand == "left" for s in got)
+    assert device.scanner.bad_records == 0
+
+
+# -- in the input manager ---------------------------------------------------------------------
+
+
+def test_units_scaling_and_glove_angles(emulator, managers) -> None:
+    emu = emulator("buttons", rate=100.0)
+    manager = managers(glove("Glove", emu.address))
+    assert not manager.pending()
+    frame, analog = collect(manager, "Glove")
+    assert wait_until(lambda: len(analog) > 12, step=frame)
+    aligned(analog, emu.sent)
+    assert {a[7] for a in analog} >= {0.0, 15.0}  # a fist, then an open hand
+    device = manager.device("Glove")
+    latest = device.store.latest(DeviceKind.ANALOG).values
+    angles = manager.proxy("Glove Hand").data
+    assert angles.shape == (6, 4)
+    for finger in range(5):
+        np.testing.assert_allclose(angles[finger, :3], latest[finger] * math.pi / 2)
+        assert angles[finger, 3] == 0
+    assert not angles[5].any()
+    assert manager.proxy("Glove A1").data == pytest.approx(latest[1])  # flexure is 0..1 already
+
+
+def test_garbage_is_resynchronised_and_counted_without_a_fault(emulator, managers) -> None:
+    emu = emulator("garbage")
+    manager = managers(glove("Glove", emu.address))
+    frame, analog = collect(manager, "Glove")
+    assert wait_until(lambda: len(analog) > 30, step=frame)
+    aligned(analog, emu.sent)
+    device = manager.device("Glove")
+    assert device.bad_records >= 20 and device.skipped_bytes > 100
+    assert device.faults == 0 and manager.status("Glove").state == "running"
+
+
+def test_lost_line_faults_then_samples_within_two_seconds(tmp_path, emulator, managers) -> None:
+    link = tmp_path / "glove"
+    emu = emulator("disconnect", rate=100.0, disconnect_after=5, link=link)
+    manager = managers(glove("Glove", str(link)))
+    frame, analog = collect(manager, "Glove")
+    assert emu.disconnected.wait(5)
+    assert wait_until(
+        lambda: manager.status("Glove").state in ("faulted", "reconnecting"), step=frame
+    )
+    assert manager.status("Glove").stats.faults >= 1
+    emu.stop()
+    count = len(analog)
+    emulator("motion", rate=100.0, link=link)
+    back = time.monotonic()
+    assert wait_until(lambda: len(analog) > count + 1, timeout=2.0, step=frame)
+    assert time.monotonic() - back < 2.0
+    assert manager.status("Glove").state == "running"
