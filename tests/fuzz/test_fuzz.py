@@ -36,4 +36,7 @@ def test_parser_takes_hostile_input(name: str) -> None:
 def test_every_bundled_driver_has_a_target() -> None:
     drivers = {p.name for p in DRIVERS.iterdir() if (p / "standalone.py").is_file()}
     covered = {TARGETS[name].driver for name in TARGETS} - {None}
-    assert drivers <= covered, f"drivers without a fuzz target: {sorted(drivers - covered)}"
+    assert drivers <= covered, (
+        f"drivers without a fuzz target: {sorted(drivers - covered)}; add a "
+        "@target(..., driver=NAME) entry for each decoder in tests/fuzz/targets.py"
+    )
