@@ -176,6 +176,31 @@ def _dataglove_decoder() -> tuple[Callable[[], object], Callable[[], object], in
     return ours, baseline, 2000
 
 
+# -- US Digital SEI encoders ---------------------------------------------------------------------
+
+
+def _encoder_emulator(link: str, rate: float) -> object:
+    from SerialEncoder_drv.emulator import SerialEncoderEmulator
+
+    return SerialEncoderEmulator("motion", 10 * rate, link=link).start()  # answers, not polls
+
+
+def _encoder_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
+    from SerialEncoder_drv.emulator import encode_reply
+    from SerialEncoder_drv.standalone import decode_reply
+
+    replies = [encode_reply(1 + i % 2, i / 7) for i in range(2000)]
+    word = struct.Struct(">xf")
+
+    def ours() -> object:
+        return [decode_reply(1 + i % 2, r) for i, r in enumerate(replies)]
+
+    def baseline() -> object:
+        return [word.unpack(r) for r in replies]
+
+    return ours, baseline, 2000
+
+
 ROWS: list[Row] = [
     Row(
         "IS900_drv",
@@ -217,6 +242,19 @@ ROWS: list[Row] = [
         lambda link: f'<data_glove name="Bench" version="1"><port>{link}</port></data_glove>',
         lambda device: device.records,  # type: ignore[attr-defined]
         decoder=_dataglove_decoder,
+    ),
+    Row(
+        "SerialEncoder_drv",
+        96.0,
+        "SEI encoders: 96 polls/s of tilt and height fill 9600 baud (5-byte answers, 2 per poll)",
+        _encoder_emulator,
+        lambda emu: len(emu.sent),  # type: ignore[attr-defined]
+        lambda link: (
+            f'<serial_encoder name="Bench" version="1"><port>{link}</port></serial_encoder>'
+        ),
+        lambda device: device.records,  # type: ignore[attr-defined]
+        per_rate=2,
+        decoder=_encoder_decoder,
     ),
 ]
 

@@ -431,6 +431,62 @@ def _dataglove(data: bytes) -> None:
         assert 0 <= sample.gesture <= NO_GESTURE and sample.capability in (0, 6)
 
 
+# -- US Digital SEI encoders ----------------------------------------------------------------------
+
+
+def _encoder_seeds() -> list[bytes]:
+    from SerialEncoder_drv.emulator import JUNK, encode_reply, table_position
+
+    replies = [
+        encode_reply(a, table_position("motion", i)[a - 1]) for i in range(6) for a in (1, 2)
+    ]
+    return [b"".join(replies), b"".join(j + r for j, r in zip(JUNK * 4, replies, strict=False))]
+
+
+@target("serialencoder.replies", seeds=_encoder_seeds, examples=100, driver="SerialEncoder_drv")
+def _encoder(data: bytes) -> None:
+    import math
+
+    from SerialEncoder_drv.standalone import MAX_POSITION, SerialEncoderBus
+
+    class Bus:
+        """A pyserial-like port: each command is answered by the next piece of ``data``."""
+
+        timeout = 0.0
+
+        def __init__(self) -> None:
+            self.pending = bytearray()
+            self.rest = memoryview(data)
+
+        @property
+        def in_waiting(self) -> int:
+            return len(self.pending)
+
+        def read(self, size: int = 1) -> bytes:
+            out = bytes(self.pending[:size])
+            del self.pending[:size]
+            return out
+
+        def write(self, command: bytes) -> None:
+            cut = 1 + (command[0] * 7 + len(self.rest)) % 11
+            self.pending += self.rest[:cut]
+            self.rest = self.rest[cut:]
+
+        def flush(self) -> None:
+            pass
+
+    port = Bus()
+    bus = SerialEncoderBus(port, reply_timeout=0.001, poll_interval=0.0)
+    bus.open()
+    for _ in range(len(data) // 5 + 2):
+        value = bus.position(1)
+        assert value is None or (math.isfinite(value) and abs(value) <= MAX_POSITION)
+    c = bus.counters
+    assert c.records + c.bad_records + c.timeouts >= len(data) // 5 + 2
+    consumed = len(data) - len(port.rest)
+    assert c.skipped_bytes + 5 * c.records <= consumed  # every byte counted once at most
+
+
 # -- Linux joystick -------------------------------------------------------------------------------
 
 

@@ -117,6 +117,7 @@ UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]
         "glove": _fixed(2, "Glove 0 is the left hand, glove 1 the right."),
     },
     "intersense": {k: _station_spans(k) for k in ("position", "digital", "analog")},
+    "serial_encoder": {"position": _fixed(1, "Position unit 0 is the table (tilt and height).")},
     "data_glove": {
         "analog": _fixed(9, "Analog units 0-8: five flexures, pitch, roll, gesture, hand."),
         "glove": _fixed(1, "A data_glove is one hand: glove unit 0."),
