@@ -17,6 +17,7 @@ every packet read is added; a lost line raises so the input manager restarts the
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 
@@ -50,6 +51,7 @@ class DataGloveDevice(Glove, Analog):
         self.port = ""
         self.baud = 38400
         self.glove: DataGlove | None = None
+        self._count_lock = threading.Lock()
         self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
 
     def config(self, access: ElementAccess) -> None:
@@ -84,15 +86,18 @@ class DataGloveDevice(Glove, Analog):
             self.add_glove_sample(glove_angles(packet), stamp)
 
     def stop_sampling(self) -> None:
-        glove, self.glove = self.glove, None
+        with self._count_lock:  # readers never see the glove gone and its counts not yet kept
+            glove, self.glove = self.glove, None
+            if glove is not None:
+                for key in self._counts:
+                    self._counts[key] += getattr(glove.scanner, key)
         if glove is not None:
-            for key in self._counts:
-                self._counts[key] += getattr(glove.scanner, key)
             glove.close()
 
     def _count(self, key: str) -> int:
-        glove = self.glove
-        return self._counts[key] + (getattr(glove.scanner, key) if glove is not None else 0)
+        with self._count_lock:
+            glove = self.glove
+            return self._counts[key] + (getattr(glove.scanner, key) if glove is not None else 0)
 
     @property
     def records(self) -> int:

@@ -19,6 +19,7 @@ Differences from the C++, on purpose:
 
 from __future__ import annotations
 
+import threading
 import time
 
 from gadgetctl.input import DeviceConfigError, Position
@@ -43,6 +44,7 @@ class SerialEncoderDevice(Position):
         self.baud = BAUD
         self.bus: SerialEncoderBus | None = None
         self._next_poll = 0.0
+        self._count_lock = threading.Lock()
         self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0, "timeouts": 0}
 
     def config(self, access: ElementAccess) -> None:
@@ -75,15 +77,18 @@ class SerialEncoderDevice(Position):
             self.add_position_sample([table_matrix(tilt, height)])
 
     def stop_sampling(self) -> None:
-        bus, self.bus = self.bus, None
+        with self._count_lock:  # readers never see the bus gone and its counts not yet kept
+            bus, self.bus = self.bus, None
+            if bus is not None:
+                for key in self._counts:
+                    self._counts[key] += getattr(bus.counters, key)
         if bus is not None:
-            for key in self._counts:
-                self._counts[key] += getattr(bus.counters, key)
             bus.close()
 
     def _count(self, key: str) -> int:
-        bus = self.bus
-        return self._counts[key] + (getattr(bus.counters, key) if bus is not None else 0)
+        with self._count_lock:
+            bus = self.bus
+            return self._counts[key] + (getattr(bus.counters, key) if bus is not None else 0)
 
     @property
     def records(self) -> int:

@@ -14,6 +14,8 @@ buttons 1..12. Differences from the C++ ``PuckDevice``, on purpose:
 
 from __future__ import annotations
 
+import threading
+
 from gadgetctl.input import Analog, DeviceConfigError, Digital
 from gadgetctl.jccl.access import ElementAccess
 
@@ -36,6 +38,7 @@ class PuckDevice(Analog, Digital):
         self.model = MODELS[0]
         self.puck: SpaceBall | None = None
         self.version = ""
+        self._count_lock = threading.Lock()
         self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
         self._axes = (0,) * AXES
         self._buttons = (0,) * BUTTONS
@@ -87,15 +90,18 @@ class PuckDevice(Analog, Digital):
                 self.add_digital_sample(record.buttons, stamp)
 
     def stop_sampling(self) -> None:
-        puck, self.puck = self.puck, None
+        with self._count_lock:  # readers never see the puck gone and its counts not yet kept
+            puck, self.puck = self.puck, None
+            if puck is not None:
+                for key in self._counts:
+                    self._counts[key] += getattr(puck.decoder, key)
         if puck is not None:
-            for key in self._counts:
-                self._counts[key] += getattr(puck.decoder, key)
             puck.close()
 
     def _count(self, key: str) -> int:
-        puck = self.puck
-        return self._counts[key] + (getattr(puck.decoder, key) if puck is not None else 0)
+        with self._count_lock:
+            puck = self.puck
+            return self._counts[key] + (getattr(puck.decoder, key) if puck is not None else 0)
 
     @property
     def records(self) -> int:
