@@ -198,6 +198,29 @@ def _encoder_decoder() -> tuple[Callable[[], object], Callable[[], object], int]
     def baseline() -> object:
         return [word.unpack(r) for r in replies]
 
+
+# -- Logitech 3D mouse ------------------------------------------------------------------------
+
+
+def _three_d_mouse_emulator(link: str, rate: float) -> object:
+    from ThreeDMouse_drv.emulator import ThreeDMouseEmulator
+
+    return ThreeDMouseEmulator("motion", rate, link=link).start()
+
+
+def _three_d_mouse_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
+    from ThreeDMouse_drv.emulator import encode_report, state
+    from ThreeDMouse_drv.standalone import REPORT_SIZE, ReportScanner
+
+    data = b"".join(encode_report(*state("motion", i)) for i in range(2000))
+    body = struct.Struct("16B")
+
+    def ours() -> object:
+        return ReportScanner().feed(data)
+
+    def baseline() -> object:
+        return [body.unpack_from(data, i) for i in range(0, len(data), REPORT_SIZE)]
+
     return ours, baseline, 2000
 
 
@@ -256,6 +279,18 @@ ROWS: list[Row] = [
         per_rate=2,
         decoder=_encoder_decoder,
     ),
+    Row(
+        "ThreeDMouse_drv",
+        109.0,
+        "3D mouse: 16-byte reports fill 19200 baud 8N2 at 109/s (the line's limit)",
+        _three_d_mouse_emulator,
+        lambda emu: len(emu.sent),  # type: ignore[attr-defined]
+        lambda link: (
+            f'<three_d_mouse name="Bench" version="1"><port>{link}</port><baud>19200</baud></three_d_mouse>'
+        ),
+        lambda device: device.records,  # type: ignore[attr-defined]
+        decoder=_three_d_mouse_decoder,
+    ),
 ]
 
 
@@ -267,9 +302,8 @@ def child(driver: str, link: str, rate: float) -> None:
     emu = row.emulator(link, rate)
     print("ready", flush=True)
     sys.stdin.readline()  # "count": the measured window is over
-    if hasattr(emu, "paused") and hasattr(emu, "unread"):  # emulators that can hold still
-        emu.paused = True
-        time.sleep(0.05)  # a record being written when the pause came
+    if hasattr(emu, "pause") and hasattr(emu, "unread"):  # emulators that can hold still
+        emu.pause()
         deadline = time.monotonic() + 2.0
         while emu.unread() and time.monotonic() < deadline:
             time.sleep(0.01)  # the driver reads what was sent (a hang-up would drop it)

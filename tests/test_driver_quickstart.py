@@ -34,6 +34,7 @@ DRIVERS = [
     ("Fastrak_drv", {"position", "digital"}, r"<port>"),
     ("DataGlove_drv", {"analog", "glove"}, r"<port>"),
     ("SerialEncoder_drv", {"position"}, r"<port>"),
+    ("ThreeDMouse_drv", {"position", "digital"}, r"<port>"),
 ]
 # The examples use fixed addresses (/tmp/gadgetctl-pinch, TCP 6000, ...): two test runs on
 # one machine would take them from each other, so runs take turns here.

@@ -133,6 +133,7 @@ class FastrakEmulator:
         self.disconnected = threading.Event()
         #: while True nothing is sent (a benchmark counts what was sent)
         self.paused = False
+        self._emit_lock = threading.Lock()
         self.address = ""
         self._pty = PseudoTerminal(self.link)
         self._rng = random.Random(seed)
@@ -168,6 +169,11 @@ class FastrakEmulator:
     ) -> None:
         self.stop()
 
+    def pause(self) -> None:
+        """Send nothing more; returns once a record being sent is out, so ``sent`` is final."""
+        with self._emit_lock:
+            self.paused = True
+
     def send_raw(self, data: bytes) -> None:
         self._write(data)
 
@@ -184,13 +190,16 @@ class FastrakEmulator:
                     for value in os.read(self._pty.master, 4096):
                         self._on_byte(value)
                 # several records when the loop fell behind, so the rate holds on a busy machine
-                for _ in range(16):
-                    if not (
-                        self.continuous and not self.paused and time.monotonic() >= self._next_due
-                    ):
-                        break
-                    self._next_due += 1.0 / self.rate
-                    self._emit()
+                with self._emit_lock:
+                    for _ in range(16):
+                        if not (
+                            self.continuous
+                            and not self.paused
+                            and time.monotonic() >= self._next_due
+                        ):
+                            break
+                        self._next_due += 1.0 / self.rate
+                        self._emit()
             except OSError:
                 break
 

@@ -133,6 +133,7 @@ class IS900Emulator:
         self.disconnected = threading.Event()
         #: while True nothing is sent (a benchmark counts what was sent)
         self.paused = False
+        self._emit_lock = threading.Lock()
         self.address = ""
         self._pty = PseudoTerminal(self.link)
         self._rng = random.Random(seed)
@@ -171,6 +172,11 @@ class IS900Emulator:
     ) -> None:
         self.stop()
 
+    def pause(self) -> None:
+        """Send nothing more; returns once a record being sent is out, so ``sent`` is final."""
+        with self._emit_lock:
+            self.paused = True
+
     def send_raw(self, data: bytes) -> None:
         """Write bytes to the driver as they are (for tests)."""
         self._write(data)
@@ -187,8 +193,9 @@ class IS900Emulator:
                 if ready:
                     for value in os.read(self._pty.master, 4096):
                         self._on_byte(value)
-                if self._polls and not self.paused and time.monotonic() >= self._next_due:
-                    self._answer_poll()
+                with self._emit_lock:
+                    if self._polls and not self.paused and time.monotonic() >= self._next_due:
+                        self._answer_poll()
             except OSError:
                 break
 

@@ -382,7 +382,9 @@ def _fastrak_seeds() -> list[bytes]:
 
     def records(scenario: str) -> bytes:
         return b"".join(
-            encode_record(s, *pose(scenario, s, i), stylus(scenario, s, i)) for i in range(8) for s in (1, 2)
+            encode_record(s, *pose(scenario, s, i), stylus(scenario, s, i))
+            for i in range(8)
+            for s in (1, 2)
         )
 
     return [records("motion"), records("buttons"), b"".join(GARBAGE_CHUNKS) + records("motion")]
@@ -485,6 +487,34 @@ def _encoder(data: bytes) -> None:
     assert c.records + c.bad_records + c.timeouts >= len(data) // 5 + 2
     consumed = len(data) - len(port.rest)
     assert c.skipped_bytes + 5 * c.records <= consumed  # every byte counted once at most
+
+
+# -- Logitech 3D mouse ----------------------------------------------------------------------------
+
+
+def _three_d_mouse_seeds() -> list[bytes]:
+    from ThreeDMouse_drv.emulator import GARBAGE_CHUNKS, encode_report, state
+
+    def reports(scenario: str) -> bytes:
+        return b"".join(encode_report(*state(scenario, i)) for i in range(12))
+
+    return [reports("motion"), reports("buttons"), b"".join(GARBAGE_CHUNKS) + reports("motion")]
+
+
+@target("three_d_mouse.reports", seeds=_three_d_mouse_seeds, examples=100, driver="ThreeDMouse_drv")
+def _three_d_mouse(data: bytes) -> None:
+    from ThreeDMouse_drv.standalone import REPORT_SIZE, ReportScanner
+
+    scanner = ReportScanner()
+    got = []
+    for start in range(0, len(data), 37):
+        got += scanner.feed(data[start : start + 37])
+        assert len(scanner.buffer) < REPORT_SIZE
+    assert scanner.records == len(got)
+    assert scanner.skipped_bytes + REPORT_SIZE * len(got) + len(scanner.buffer) == len(data)
+    for report in got:
+        assert set(report.buttons) <= {0, 1} and all(0 <= a <= 360 for a in report.angles)
+        assert all(abs(v) <= (1 << 20) / 1000 * 0.0254 for v in report.position)
 
 
 # -- Linux joystick -------------------------------------------------------------------------------

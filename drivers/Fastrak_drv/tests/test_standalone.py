@@ -56,7 +56,9 @@ def test_port_is_opened_before_the_set_up_which_ends_in_streaming(emulator) -> N
     assert emu.output_lists == {s: "2,11,16,1" for s in (1, 2, 3, 4)}
     assert emu.hemispheres == {s: "0,0,1" for s in (1, 2, 3, 4)}  # 4: lower
     assert emu.stylus_modes == {1: "0"}
-    assert emu.commands[-3:] == [b"l1", b"S", b"C"]
+    streaming = emu.commands.index(b"C")
+    assert emu.commands[streaming - 2 : streaming + 1] == [b"l1", b"S", b"C"]
+    assert emu.commands[streaming + 1 :] in ([], [b"c"])  # close() stops the stream
 
 
 def test_records_decode_to_metres_quaternions_and_a_0_1_stylus(emulator) -> None:

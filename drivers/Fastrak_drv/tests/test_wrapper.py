@@ -98,16 +98,21 @@ def test_station_four_is_unit_three_and_the_stylus_digital_zero(
         lambda: device.records >= 40 and {0, 1} <= {v[0] for v in seen}, timeout=5, step=frame
     )
     assert all(v in ((0,), (1,)) for v in seen)
-    newest = {s[0]: s for s in emu.sent[: device.records]}
-    for station in (1, 4):
-        proxy = manager.proxy(f"F S{station}")
-        np.testing.assert_allclose(
-            proxy.matrix[:3, 3], np.asarray(newest[station][1]) * CM, rtol=1e-5
+    emu.pause()  # the last records sent are final: wait for the proxies to show them
+    newest = {s[0]: s for s in emu.sent}
+
+    def shown() -> bool:
+        stylus = manager.proxy("F Stylus").data in (DigitalState.ON, DigitalState.TOGGLE_ON)
+        return stylus == bool(newest[1][3]) and all(
+            np.allclose(
+                manager.proxy(f"F S{st}").matrix[:3, 3], np.asarray(newest[st][1]) * CM, atol=1e-7
+            )
+            for st in (1, 4)
         )
+
+    assert wait_until(shown, timeout=5, step=manager.update)
     for station in (2, 3):  # not reported: identity
         np.testing.assert_array_equal(manager.proxy(f"F S{station}").matrix, np.eye(4))
-    stylus = manager.proxy("F Stylus").data
-    assert (stylus in (DigitalState.ON, DigitalState.TOGGLE_ON)) == bool(newest[1][3])
 
 
 def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> None:
@@ -161,10 +166,16 @@ def test_example_delivers_through_its_aliases(tmp_path, emulator, managers) -> N
     manager = managers(path)
     device = manager.device("Fastrak")
     assert wait_until(lambda: device.records >= 10, timeout=5, step=manager.update)
-    manager.update()
-    newest = {s[0]: s for s in emu.sent[: device.records]}
-    for alias, station in (("VJWand", 1), ("VJHead", 2)):
-        np.testing.assert_allclose(
-            manager.proxy(alias).matrix[:3, 3], np.asarray(newest[station][1]) * CM, rtol=1e-5
+    emu.pause()
+    newest = {s[0]: s for s in emu.sent}
+
+    def shown() -> bool:
+        return all(
+            np.allclose(
+                manager.proxy(alias).matrix[:3, 3], np.asarray(newest[st][1]) * CM, atol=1e-7
+            )
+            for alias, st in (("VJWand", 1), ("VJHead", 2))
         )
+
+    assert wait_until(shown, timeout=5, step=manager.update)
     assert not manager.proxy("VJButton0").stupefied

@@ -134,18 +134,22 @@ def test_station_units_buttons_and_joystick_reach_proxies(tmp_path, emulator, ma
     assert any(values[2:6] != (0, 0, 0, 0) for values in seen)
     for values in seen:
         assert len(values) == 6 and values[:2] == (0, 0) and sum(values[2:]) <= 1
-    newest_sent = {s[0]: s for s in emu.sent[: device.records]}
-    wand, head = newest_sent[0], newest_sent[1]
-    positions = device.store.latest(DeviceKind.POSITION).values
-    np.testing.assert_allclose(
-        positions[0], pose_matrix(tuple(v * INCH for v in wand[1]), wand[2]), atol=1e-6
-    )
-    np.testing.assert_allclose(
-        positions[1], pose_matrix(tuple(v * INCH for v in head[1]), head[2]), atol=1e-6
-    )
-    analog = device.store.latest(DeviceKind.ANALOG).values
-    assert analog == (0.0, *map(float, wand[4]))  # raw bytes at analog units 1 and 2
-    assert manager.proxy("A1").data == pytest.approx(wand[4][0] / 255.0)
+    emu.pause()  # the last records sent are final: wait for the proxies to show them
+    wand = next(s for s in reversed(emu.sent) if s[0] == 0)
+    head = next(s for s in reversed(emu.sent) if s[0] == 1)
+    expected_wand = pose_matrix(tuple(v * INCH for v in wand[1]), wand[2])
+    expected_head = pose_matrix(tuple(v * INCH for v in head[1]), head[2])
+
+    def shown() -> bool:
+        positions = device.store.latest(DeviceKind.POSITION).values
+        return bool(
+            np.allclose(positions[0], expected_wand, atol=1e-6)
+            and np.allclose(positions[1], expected_head, atol=1e-6)
+            and device.store.latest(DeviceKind.ANALOG).values == (0.0, *map(float, wand[4]))
+        )
+
+    assert wait_until(shown, timeout=5, step=frame)
+    assert manager.proxy("A1").data == pytest.approx(wand[4][0] / 255.0)  # raw byte at unit 1
     buttons = [manager.proxy(f"B{u}").data for u in range(2, 6)]
     expected = [bool(wand[3] >> k & 1) for k in range(4)]
     assert [b in (DigitalState.ON, DigitalState.TOGGLE_ON) for b in buttons] == expected
@@ -211,14 +215,23 @@ def test_corpus_example_delivers_through_its_proxies_and_aliases(
     assert not [d for d in manager.diagnostics if d.code == "CFG034"]
     device = manager.device("Isense1")
     assert wait_until(lambda: device.records >= 20, timeout=5, step=manager.update)
-    manager.update()
-    newest = {s[0]: s for s in emu.sent[: device.records]}
-    for alias, station in (("VJWand", 0), ("VJHead", 1)):
-        proxy = manager.proxy(alias)
-        assert not proxy.stupefied
+    emu.pause()  # the last records sent are final: wait for the aliases to show them
+    distances = {
+        station: np.linalg.norm(
+            np.asarray(next(s for s in reversed(emu.sent) if s[0] == station)[1]) * INCH
+        )
+        for station in (0, 1)
+    }
+
+    def shown() -> bool:
         # the filters rotate; the distance from the tracker's origin stays
-        distance = np.linalg.norm(np.asarray(newest[station][1]) * INCH)
-        assert np.linalg.norm(proxy.matrix[:3, 3]) == pytest.approx(distance, rel=1e-5)
+        return all(
+            abs(np.linalg.norm(manager.proxy(alias).matrix[:3, 3]) - distances[station]) < 1e-6
+            for alias, station in (("VJWand", 0), ("VJHead", 1))
+        )
+
+    assert wait_until(shown, timeout=5, step=manager.update)
+    assert not manager.proxy("VJWand").stupefied and not manager.proxy("VJHead").stupefied
     # the example reads neither buttons nor joystick (use_digital/use_analog false): units exist, 0
     for alias in ("VJButton0", "VJButton1", "VJButton2", "VJButton3"):
         assert manager.proxy(alias).data == DigitalState.OFF

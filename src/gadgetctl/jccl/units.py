@@ -130,6 +130,10 @@ UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]
         "position": _fixed(4, "Units 0-3 are stations 1-4."),
         "digital": _fixed(1, "Digital unit 0 is the stylus switch on station 1."),
     },
+    "three_d_mouse": {
+        "position": _fixed(1, "Position unit 0 is the mouse."),
+        "digital": _fixed(3, "Digital units 0-2 are the left, middle and right buttons."),
+    },
     "simulated_digital_device": {"digital": _listed("key_pair", "bindings")},
     "simulated_analog_device": {"analog": _listed("increment_keypress", "bindings")},
     "simulated_digital_glove": {"digital": _fixed(10), "glove": _fixed(2)},
