@@ -224,6 +224,38 @@ def _three_d_mouse_decoder() -> tuple[Callable[[], object], Callable[[], object]
     return ours, baseline, 2000
 
 
+# -- Flock of Birds ------------------------------------------------------------------------------
+
+
+def _flock_emulator(link: str, rate: float) -> object:
+    from Flock_drv.emulator import FlockEmulator
+
+    return FlockEmulator("motion", rate, birds=4, link=link).start()
+
+
+def _flock_element(link: str) -> str:
+    return f'<flock name="Bench" version="2"><port>{link}</port><baud>115200</baud></flock>'
+
+
+def _flock_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
+    from Flock_drv.emulator import encode_record, pose
+    from Flock_drv.standalone import POS_QUATERNION, RecordScanner
+
+    data = b"".join(
+        encode_record(POS_QUATERNION, *pose("motion", i % 4, i), 3.0, i % 4 + 1)
+        for i in range(2000)
+    )
+    words = struct.Struct("<14B1x")
+
+    def ours() -> object:
+        return RecordScanner(POS_QUATERNION, 3.0, True, frozenset({1, 2, 3, 4})).feed(data)
+
+    def baseline() -> object:
+        return [words.unpack_from(data, i) for i in range(0, len(data), 15)]
+
+    return ours, baseline, 2000
+
+
 ROWS: list[Row] = [
     Row(
         "IS900_drv",
@@ -290,6 +322,17 @@ ROWS: list[Row] = [
         ),
         lambda device: device.records,  # type: ignore[attr-defined]
         decoder=_three_d_mouse_decoder,
+    ),
+    Row(
+        "Flock_drv",
+        144.0,
+        "Flock of Birds: 4 birds in group mode at 144 Hz (PosQuaternion, 15 bytes per bird)",
+        _flock_emulator,
+        lambda emu: len(emu.sent),  # type: ignore[attr-defined]
+        _flock_element,
+        lambda device: device.records,  # type: ignore[attr-defined]
+        per_rate=4,
+        decoder=_flock_decoder,
     ),
 ]
 

@@ -338,6 +338,44 @@ def _is900(data: bytes) -> None:
         )
 
 
+# -- Flock of Birds ---------------------------------------------------------------------------------
+
+
+def _flock_seeds() -> list[bytes]:
+    from Flock_drv.emulator import GARBAGE_CHUNKS, encode_record, pose
+
+    def frames(scenario: str, fmt: int) -> bytes:
+        return b"".join(
+            encode_record(fmt, *pose(scenario, bird, step), 3.0, bird + 1)
+            for step in range(8)
+            for bird in (0, 1)
+        )
+
+    return [
+        frames("motion", ord("]")),
+        frames("buttons", ord("]")),
+        b"".join(GARBAGE_CHUNKS) + frames("motion", ord("]")),
+    ]
+
+
+@target("flock.records", seeds=_flock_seeds, examples=100, driver="Flock_drv")
+def _flock(data: bytes) -> None:
+    from Flock_drv.standalone import POS_QUATERNION, RecordScanner, record_size
+
+    scanner = RecordScanner(POS_QUATERNION, 3.0, True, frozenset({1, 2}))
+    size = record_size(POS_QUATERNION, True)
+    got = []
+    for start in range(0, len(data), 97):  # arbitrary chunks, as reads split the line
+        got += scanner.feed(data[start : start + 97])
+        assert len(scanner.buffer) < size
+    assert scanner.records == len(got) <= len(data) // size
+    assert scanner.skipped_bytes + size * len(got) + len(scanner.buffer) == len(data)
+    assert scanner.bad_records <= scanner.skipped_bytes
+    for record in got:
+        assert record.address in (1, 2) and all(abs(v) <= 3.0 for v in record.position)
+        assert record.quaternion is not None and all(abs(v) <= 1.0 for v in record.quaternion)
+
+
 # -- SpaceBall / SpaceMouse -----------------------------------------------------------------------
 
 

@@ -1,0 +1,240 @@
+"""The Flock device in an input manager, against the emulator over a real pty pair."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+from Flock_drv.emulator import FlockEmulator
+from Flock_drv.standalone import euler_matrix
+
+from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
+from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.testing import wait_until
+
+pytestmark = pytest.mark.timeout(30)
+
+HERE = Path(__file__).resolve()
+REPO = HERE.parents[3]
+CONFIG_FILES = (
+    REPO.parent
+    / "shared"
+    / "corpus"
+    / "vrjuggler"
+    / "modules"
+    / "vrjuggler"
+    / "data"
+    / "configFiles"
+)
+FAST = {"reset_time": 0.0, "examine_delay": 0.0, "read_timeout": 1.0, "poll_interval": 0.005}
+FOOT = 0.3048
+HEAD = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
+    '<elements>\n<input_manager name="IM" version="2"><driver>Flock_drv</driver></input_manager>\n'
+)
+TAIL = "</elements>\n</configuration>\n"
+
+
+def flock_element(name: str, port: str, extra: str = "") -> str:
+    return (
+        f'<flock name="{name}" version="2"><port>{port}</port><hemisphere>Upper</hemisphere>'
+        f"{extra}</flock>\n"
+        f'<position_proxy name="P0" version="1"><device>{name}</device><unit>0</unit></position_proxy>\n'
+        f'<position_proxy name="P1" version="1"><device>{name}</device><unit>1</unit></position_proxy>\n'
+    )
+
+
+def write(tmp_path: Path, body: str) -> Path:
+    path = tmp_path / "test.jconf"
+    path.write_text(HEAD + body + TAIL)
+    return path
+
+
+def pose_matrix(position: tuple[float, ...], angles: tuple[float, ...]) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, :3] = euler_matrix(*angles)
+    m[:3, 3] = position
+    return m
+
+
+@pytest.fixture
+def emulator() -> Iterator[Callable[..., FlockEmulator]]:
+    made: list[FlockEmulator] = []
+
+    def make(scenario: str = "motion", **kwargs: object) -> FlockEmulator:
+        emu = FlockEmulator(scenario, **{"rate": 144.0, **kwargs})  # type: ignore[arg-type]
+        made.append(emu.start())
+        return emu
+
+    yield make
+    for emu in made:
+        emu.stop()
+
+
+@pytest.fixture
+def managers(monkeypatch) -> Iterator[Callable[..., InputManager]]:
+    made: list[InputManager] = []
+
+    def build(path: Path, drivers: tuple[str, ...] = ("Flock_drv",)) -> InputManager:
+        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
+        manager, configuration = InputManager.from_files([path], options=options)
+        made.append(manager)
+        for driver in drivers:
+            loaded = manager.loader.load_name(driver, manager.search)
+            assert loaded.ok, [d.message for d in loaded.diagnostics]
+        device_class = manager.registry.get("flock").device_class
+        for name, value in FAST.items():
+            monkeypatch.setattr(device_class, name, value)
+        manager.configure(configuration)
+        return manager
+
+    yield build
+    for manager in made:
+        manager.shutdown()
+
+
+def test_birds_reach_their_proxies_in_feet(tmp_path, emulator, managers) -> None:
+    emu = emulator("motion", birds=2)
+    manager = managers(write(tmp_path, flock_element("F", emu.address)))
+    assert not manager.pending()
+    device = manager.device("F")
+    assert wait_until(lambda: device.records >= 20, timeout=5, step=manager.update)
+    assert set(emu.hemispheres.values()) == {b"\x0c\x01"}  # Upper
+    manager.update()
+    positions = device.store.latest(DeviceKind.POSITION).values
+    assert len(positions) == 2
+    sent = list(emu.sent)
+    for unit in (0, 1):
+        # the newest frame is one the emulator sent for that bird (the device may have read on)
+        assert any(
+            np.allclose(positions[unit], pose_matrix(position, angles), atol=2e-3)
+            for bird, position, angles in sent
+            if bird == unit
+        ), unit
+    assert device.faults == 0 and device.bad_records == 0
+
+
+def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> None:
+    emu = emulator("garbage", birds=2)
+    manager = managers(write(tmp_path, flock_element("F", emu.address)))
+    device = manager.device("F")
+    assert wait_until(lambda: device.records >= 40, timeout=5, step=manager.update)
+    assert device.bad_records >= 20 and device.skipped_bytes > 0
+    assert device.counters["records"] == device.records
+    assert device.faults == 0 and manager.status("F").state == "running"
+
+
+def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, managers) -> None:
+    link = tmp_path / "flock"
+    emu = emulator("disconnect", birds=2, disconnect_after=10, link=link)
+    manager = managers(write(tmp_path, flock_element("F", str(link))))
+    device = manager.device("F")
+    assert emu.disconnected.wait(5)
+    assert wait_until(
+        lambda: manager.status("F").state in ("faulted", "reconnecting"),
+        timeout=5,
+        step=manager.update,
+    )
+    status = manager.status("F")
+    assert status.reason and "serial line lost" in status.reason
+    assert device.records == 20  # 10 frames of 2 birds, none lost
+    emu.stop()
+    before = device.records
+    emulator("motion", birds=2, link=link)  # the flock is back, on a new pty behind the same link
+    back = time.monotonic()
+    assert wait_until(lambda: device.records > before, timeout=2.0, step=manager.update)
+    assert time.monotonic() - back < 2.0
+    assert manager.status("F").state == "running" and device.restarts >= 1
+
+
+def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> None:
+    body = (
+        '<flock name="Bad Hemisphere" version="2"><port>/dev/null</port>'
+        "<hemisphere>9</hemisphere></flock>\n"
+        '<flock name="No Port" version="2"><port></port></flock>\n'
+    )
+    pending = {p.name: p.message for p in managers(write(tmp_path, body)).pending()}
+    assert "hemisphere 9" in pending["Bad Hemisphere"]
+    assert "port is empty" in pending["No Port"]
+
+
+def rewritten(source: Path, tmp_path: Path, replacements: dict[str, str]) -> Path:
+    text = source.read_text(encoding="utf-8")
+    for old, new in replacements.items():
+        assert text.count(old) == 1, f"{old!r} not found once in {source}"
+        text = text.replace(old, new)
+    path = tmp_path / source.name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def corpus_example(tmp_path: Path, port: str) -> Path:
+    source = CONFIG_FILES / "example.flock.jconf"
+    assert source.is_file(), f"the VR Juggler corpus is missing: {source}"
+    return rewritten(source, tmp_path, {"<port>/dev/ttyd3</port>": f"<port>{port}</port>"})
+
+
+def test_corpus_example_delivers_through_its_proxies_and_aliases(
+    tmp_path, emulator, managers
+) -> None:
+    emu = emulator("motion", birds=2)
+    manager = managers(corpus_example(tmp_path, emu.address))
+    assert not manager.pending()
+    device = manager.device("Flock")
+    assert wait_until(lambda: device.records >= 20, timeout=5, step=manager.update)
+    manager.update()
+    for alias in ("VJWand", "VJHead"):
+        assert not manager.proxy(alias).stupefied
+    # The device filter pre-translates by (0, 1.011936, 2.4384) m, rotates and turns the birds'
+    # feet into metres; the wand proxy only post-rotates: its distance from the pre-translation
+    # is the bird's distance from the transmitter, in metres.
+    wand = np.asarray(manager.proxy("VJWand").matrix)
+    offset = np.linalg.norm(wand[:3, 3] - np.array((0.0, 1.011936, 2.4384)))
+    distances = [FOOT * np.linalg.norm(p) for bird, p, _a in list(emu.sent) if bird == 0]
+    assert min(abs(offset - d) for d in distances) < 2e-3
+
+
+def test_gadgetctl_monitor_reads_the_corpus_example(tmp_path, emulator) -> None:
+    emu = emulator("motion", birds=2)
+    config = corpus_example(tmp_path, emu.address)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "gadgetctl",
+            "monitor",
+            str(config),
+            "--duration",
+            "3",
+            "--format",
+            "ndjson",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=30,
+        cwd=REPO,
+    )
+    records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+    samples = [r for r in records if r.get("type") == "sample" and r.get("device") == "Flock"]
+    assert {r["kind"] for r in samples} == {"position"}, done.stderr[-2000:]
+    assert {r["unit"] for r in samples} == {0, 1}
+    for command in (["validate"], ["doctor"], ["config", "pending"]):
+        out = subprocess.run(
+            [sys.executable, "-m", "gadgetctl", *command, str(config)],
+            capture_output=True,
+            text=True,
+            timeout=30,
+            cwd=REPO,
+        )
+        text = out.stdout + out.stderr
+        assert "DRV001" not in text and "PENDING" not in text and "stays pending" not in text, text
+        if command == ["config", "pending"]:
+            assert "0 pending" in text
