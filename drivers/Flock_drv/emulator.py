@@ -160,6 +160,8 @@ class FlockEmulator:
         self.addressed: list[tuple[int | None, bytes]] = []
         self.sent: list[Sample] = []
         self.frames = 0
+        #: while True, no frame is sent (a benchmark holds the count still)
+        self.paused = False
         self.dropped_bytes = 0
         self.disconnected = threading.Event()
         self.address = ""
@@ -191,7 +193,7 @@ class FlockEmulator:
         # A streaming device's last frame may still be in the line: let the reader drain it
         # (at most ``linger`` seconds) before the pty goes away with it.
         deadline = time.monotonic() + self.linger
-        while self._unread() and time.monotonic() < deadline:
+        while self.unread() and time.monotonic() < deadline:
             time.sleep(0.005)
         self._pty.close()
 
@@ -331,11 +333,13 @@ class FlockEmulator:
         if self.scenario == "disconnect" and self.frames >= self.disconnect_after:
             if self._hangup_due is None:
                 self._hangup_due = time.monotonic() + self.linger
-            if self._unread() and time.monotonic() < self._hangup_due:
+            if self.unread() and time.monotonic() < self._hangup_due:
                 return  # hang up once the driver has read what was sent
             self.disconnected.set()
             self.streaming = False
             self._pty.hang_up()
+            return
+        if self.paused:
             return
         step = self.frames
         self.frames += 1
@@ -350,7 +354,8 @@ class FlockEmulator:
             self.sent.append((bird, position, angles))
         self._write(bytes(out))
 
-    def _unread(self) -> int:
+    def unread(self) -> int:
+        """Bytes written that the driver has not read yet."""
         slave = self._pty.slave
         if slave < 0:
             return 0
