@@ -198,6 +198,8 @@ def _encoder_decoder() -> tuple[Callable[[], object], Callable[[], object], int]
     def baseline() -> object:
         return [word.unpack(r) for r in replies]
 
+    return ours, baseline, 2000
+
 
 # -- Logitech 3D mouse ------------------------------------------------------------------------
 
