@@ -555,6 +555,39 @@ def _three_d_mouse(data: bytes) -> None:
         assert all(abs(v) <= (1 << 20) / 1000 * 0.0254 for v in report.position)
 
 
+# -- 5DT Data Glove Ultra Wireless ----------------------------------------------------------------
+
+
+def _ultraglove_seeds() -> list[bytes]:
+    from DataGloveUltraWireless_drv.emulator import GARBAGE, encode_record, readings
+
+    records = [encode_record(i % 2, readings("motion", i % 2, i)) for i in range(8)]
+    return [b"".join(records), b"".join(g + r for g, r in zip(GARBAGE * 2, records, strict=True))]
+
+
+@target("ultraglove.records", seeds=_ultraglove_seeds, examples=100, driver="DataGloveUltraWireless_drv")
+def _ultraglove(data: bytes) -> None:
+    from DataGloveUltraWireless_drv.standalone import (
+        RECORD_SIZE,
+        SENSORS,
+        AutoRange,
+        RecordScanner,
+        gesture,
+    )
+
+    scanner, ranged = RecordScanner(), AutoRange()
+    got = []
+    for start in range(0, len(data), 17):  # arbitrary chunks, as reads split the line
+        got += scanner.feed(data[start : start + 17])
+        assert len(scanner.buffer) < RECORD_SIZE
+    assert scanner.records == len(got) <= len(data) // RECORD_SIZE
+    assert scanner.skipped_bytes + RECORD_SIZE * len(got) + len(scanner.buffer) == len(data)
+    for record in got:
+        assert record.port in (0, 1) and len(record.raw) == SENSORS
+        scaled = ranged.scale(record)
+        assert all(0.0 <= v <= 1.0 for v in scaled) and -1 <= gesture(scaled) <= 15
+
+
 # -- Linux joystick -------------------------------------------------------------------------------
 
 

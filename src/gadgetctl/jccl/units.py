@@ -118,6 +118,10 @@ UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]
     },
     "intersense": {k: _station_spans(k) for k in ("position", "digital", "analog")},
     "serial_encoder": {"position": _fixed(1, "Position unit 0 is the table (tilt and height).")},
+    "data_glove_ultra_wireless": {
+        "analog": _fixed(28, "Analog units 0-13 are glove A's sensors, 14-27 glove B's."),
+        "command": _fixed(2, "Command unit 0 is glove A's gesture, 1 glove B's."),
+    },
     "data_glove": {
         "analog": _fixed(9, "Analog units 0-8: five flexures, pitch, roll, gesture, hand."),
         "glove": _fixed(1, "A data_glove is one hand: glove unit 0."),
