@@ -85,7 +85,7 @@ def apply_transform(stylesheet: bytes, element: etree._Element, source: str | No
     except SandboxError as err:
         raise TransformError(f"the upgrade stylesheet of {source or 'a definition'} was {err}") from None
     except ValueError as err:
-        raise TransformError(str(err)) from None
+        raise TransformError(f"{err} (stylesheet of {source or 'a definition'})") from None
     wrapper = etree.fromstring(answer, _safe_parser())
     return [child for child in wrapper if isinstance(child.tag, str)]
 

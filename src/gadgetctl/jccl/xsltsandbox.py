@@ -128,12 +128,22 @@ def run_sandboxed(stylesheet: bytes, element: bytes, *, time_limit: float = TIME
         raise SandboxError(
             f"stopped at the memory limit of {MEMORY_LIMIT // (1024 * 1024)} MB"
         ) from None
+    if status == b"M":
+        _stop_child()
+        raise SandboxError(f"stopped at the memory limit of {MEMORY_LIMIT // (1024 * 1024)} MB")
     if status == b"E":
         raise ValueError(payload.decode("utf-8", "replace"))
     return payload
 
 
 # --------------------------------------------------------------------------- the child
+
+
+def _peak_memory() -> int:
+    """Bytes of the largest resident set this process has had."""
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
 
 def serve(handler: Callable[[bytes, bytes], bytes], errors: tuple[type[Exception], ...]) -> None:
@@ -156,7 +166,9 @@ def serve(handler: Callable[[bytes, bytes], bytes], errors: tuple[type[Exception
         try:
             status, payload = b"R", handler(stylesheet, element)
         except errors as err:
-            status, payload = b"E", str(err).encode("utf-8")
+            # libxslt reports a failed allocation as an ordinary error: near the limit it is ours
+            status = b"M" if _peak_memory() > MEMORY_LIMIT // 2 else b"E"
+            payload = str(err).encode("utf-8")
         except MemoryError:
             return
         stdout.write(status + _HEADER.pack(len(payload)) + payload)
