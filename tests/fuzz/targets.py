@@ -605,6 +605,33 @@ def _joystick_seeds() -> list[bytes]:
     ]
 
 
+# -- OptiTrack (NatNet) ---------------------------------------------------------------------------
+
+
+def _natnet_seeds() -> list[bytes]:
+    from OptiTrack_drv.emulator import FrameWriter, encode_frame
+
+    return [
+        FrameWriter("motion", 3, 4).frame(5),
+        FrameWriter("buttons", 4, 0).frame(1),
+        encode_frame(1, [(1, (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0))], [(1.0, 2.0, 3.0)]),
+    ]
+
+
+@target("natnet.frame", seeds=_natnet_seeds, examples=100, driver="OptiTrack_drv")
+def _natnet(data: bytes) -> None:
+    from OptiTrack_drv.standalone import DEFAULT_LIMITS, NatNetReceiver, NatNetUnits
+
+    receiver = NatNetReceiver(0, group=None)
+    frame = receiver.decode(data)
+    assert receiver.frames + receiver.bad_datagrams + receiver.other_messages == 1
+    if frame is not None:
+        assert len(frame.bodies) <= DEFAULT_LIMITS.rigid_bodies
+        assert len(frame.markers) <= DEFAULT_LIMITS.markers
+        units = NatNetUnits([1, 2, 1 << 31 - 1], [1000, 1199, 5])
+        assert units.update(frame).shape == (6, 4, 4)
+
+
 @target("joystick.events", seeds=_joystick_seeds, examples=100, driver="LinuxJoydev_drv")
 def _joystick(data: bytes) -> None:
     from LinuxJoydev_drv.standalone import (

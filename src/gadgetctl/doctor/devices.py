@@ -6,7 +6,14 @@ from dataclasses import dataclass
 
 from gadgetctl.doctor.model import PortCheck, Status
 from gadgetctl.doctor.permissions import Identity
-from gadgetctl.doctor.ports import JOYSTICK_GLOB, check_path, check_tcp, check_udp, list_joysticks
+from gadgetctl.doctor.ports import (
+    JOYSTICK_GLOB,
+    check_multicast,
+    check_path,
+    check_tcp,
+    check_udp,
+    list_joysticks,
+)
 from gadgetctl.doctor.transports import Transport
 from gadgetctl.jccl.access import ElementAccess, UnknownProperty
 
@@ -61,6 +68,8 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
     if kind == "udp":
         port = int(_read(access, transport, "port", number=True) or 0)
         checks = [check_udp(port).with_prop(transport.props["port"])]
+        if transport.prop("group"):  # a literal multicast address the driver joins
+            checks.append(check_multicast(transport.props["group"]))
         host = _read(access, transport, "host")
         if host:
             peer = _read(access, transport, "peer_port", number=True)

@@ -120,6 +120,30 @@ def check_udp(port: int, host: str = LOOPBACK) -> PortCheck:
     return PortCheck("udp", target, Status.OK, f"UDP port {port} is free (bound and released on {host})")
 
 
+def check_multicast(group: str, interface: str = "0.0.0.0") -> PortCheck:
+    """Whether a socket can join multicast ``group`` (a literal address) on ``interface``.
+    Only link-local groups (224.0.0.x, never reported by the kernel) are joined; others are
+    left unchecked, as joining one announces the membership on the network."""
+    target = f"{group} (multicast)"
+    try:
+        packed = socket.inet_aton(group)
+    except OSError:
+        return _problem("udp", target, "DRV106", f"{group!r} is not an IPv4 address")
+    if not 224 <= packed[0] <= 239:
+        return _problem("udp", target, "DRV106", f"{group} is not a multicast address (224.0.0.0 to 239.255.255.255)")
+    if packed[:3] != bytes([224, 0, 0]):
+        return PortCheck("udp", target, Status.UNCHECKED, f"joins multicast group {group} (not tried: it would be announced)")
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        sock.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP, packed + socket.inet_aton(interface))
+    except OSError as err:
+        return _problem("udp", target, "DRV103", f"cannot join multicast group {group}: {err.strerror or err}",
+                        "the host needs a multicast route (an interface that is up); unicast still arrives")
+    finally:
+        sock.close()
+    return PortCheck("udp", target, Status.OK, f"multicast group {group} can be joined")
+
+
 def check_tcp(host: str, port: int, *, probe: bool, timeout: float) -> PortCheck:
     """Whether ``host:port`` accepts a TCP connection; only tried when ``probe``."""
     target = f"{host}:{port}"

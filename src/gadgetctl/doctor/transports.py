@@ -20,6 +20,7 @@ KNOWN_TRANSPORTS: dict[str, list[dict[str, str]]] = {
     "linux_joydev": [{"kind": "file", "path": "port_name"}],
     "dtrack": [{"kind": "udp", "port": "receive_port", "host": "server_name", "peer_port": "command_port"}],
     "TUIO_drv": [{"kind": "udp", "port": "port"}],
+    "optitrack": [{"kind": "udp", "port": "port", "group": "224.0.0.1"}],
     "motion_star": [{"kind": "tcp", "host": "address", "port": "server_port"}],
 }
 UPSTREAM = "upstream property names"

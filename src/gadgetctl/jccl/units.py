@@ -65,6 +65,18 @@ def _listed(prop: str, what: str) -> Callable[[ElementAccess, str], UnitRange | 
     return count
 
 
+def _children(props: tuple[str, ...], what: str) -> Callable[[ElementAccess, str], UnitRange | None]:
+    """One unit per value of each of several variable properties, together."""
+
+    def count(access: ElementAccess, kind: str) -> UnitRange | None:
+        if not all(access.has(p) for p in props):
+            return None
+        written = sum(access.count(p) for p in props)
+        return UnitRange(kind, written, f"{written} {what}", f"Add a {' or '.join(props)} for each unit.")
+
+    return count
+
+
 def _fixed(
     number: int, hint: str | None = None
 ) -> Callable[[ElementAccess, str], UnitRange | None]:
@@ -144,6 +156,7 @@ UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]
     "simulated_positional_device": {"position": _fixed(1)},
     "simulated_relative_position": {"position": _fixed(1)},
     "simulated_setable_position": {"position": _fixed(1)},
+    "optitrack": {"position": _children(("rigid_body", "marker"), "embedded bodies and markers")},
     "waveform_device": {
         "analog": _listed("analog_waveform", "channels"),
         "digital": _listed("button_period", "buttons"),

@@ -259,7 +259,11 @@ class DriverSearch:
         for info in self.plugins():
             if info.name == name and info.shadowed_by is None:
                 return info
-        return None
+        # VR Juggler's input_manager definition spells some plug-ins differently from their
+        # library (its "Optitrack_drv" is the OptiTrack_drv library; Windows does not care):
+        # a single plug-in whose name differs only in case is the one meant.
+        folded = [p for p in self.plugins() if p.name.casefold() == name.casefold() and p.shadowed_by is None]
+        return folded[0] if len(folded) == 1 else None
 
     def in_directory(self, directory: DriverDirectory) -> list[PluginInfo]:
         return [p for p in self.plugins() if p.origin == str(directory.path) and p.shadowed_by is None]

@@ -1,0 +1,295 @@
+"""The OptiTrack driver against its loopback NatNet emulator: units and their order, metres and
+quaternion rotations, the upstream defects fixed (markers stored, bodies with zeros kept),
+bounded decoding, garbage, disconnection and return, multicast through loopback."""
+
+from __future__ import annotations
+
+import math
+import socket
+import struct
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+from OptiTrack_drv.emulator import OptiTrackEmulator, body_pose, encode_frame, marker_position
+from OptiTrack_drv.standalone import (
+    DEFAULT_LIMITS,
+    NatNetFormatError,
+    NatNetReceiver,
+    NatNetUnits,
+    decode_frame,
+    quaternion_matrix,
+)
+
+from gadgetctl.input import DeviceKind, InputManager, ManagerOptions
+from gadgetctl.input.testing import frames_until, wait_until
+
+pytestmark = pytest.mark.timeout(30)
+
+HEAD = """<?xml version="1.0" encoding="UTF-8"?>
+<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
+<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">
+<elements>
+<input_manager name="IM" version="2"><driver>Optitrack_drv</driver></input_manager>
+"""
+RATE = 200.0
+
+
+def free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def device(name: str, port: int, bodies: list[int], markers: list[int]) -> str:
+    parts = [f'<optitrack name="{name}" version="2"><port>{port}</port>']
+    for i, b in enumerate(bodies):
+        parts.append(
+            f'<rigid_body><optitrack_rigid_body name="{name} B{i}" version="1">'
+            f"<body_index>{b}</body_index></optitrack_rigid_body></rigid_body>"
+        )
+    for i, m in enumerate(markers):
+        parts.append(
+            f'<marker><optitrack_marker name="{name} M{i}" version="1">'
+            f"<marker_index>{m}</marker_index></optitrack_marker></marker>"
+        )
+    return "".join(parts) + "</optitrack>\n"
+
+
+def proxy(name: str, dev: str, unit: int) -> str:
+    return f'<position_proxy name="{name}" version="1"><device>{dev}</device><unit>{unit}</unit></position_proxy>\n'
+
+
+@pytest.fixture
+def build(tmp_path: Path, monkeypatch) -> Iterator[Callable[..., InputManager]]:
+    from OptiTrack_drv.wrapper import OptiTrackDevice
+
+    monkeypatch.setattr(OptiTrackDevice, "multicast_interface", "127.0.0.1")
+    made: list[InputManager] = []
+
+    def make(body: str, peer_timeout: float | None = None) -> InputManager:
+        path = tmp_path / f"t{len(made)}.jconf"
+        path.write_text(HEAD + body + "</elements>\n</configuration>\n")
+        manager, configuration = InputManager.from_files(
+            [path], options=ManagerOptions(retry_interval=None, entry_points=False)
+        )
+        made.append(manager)
+        manager.configure(configuration)
+        assert not manager.pending(), [(p.name, p.message) for p in manager.pending()]
+        if peer_timeout is not None:
+            for dev in manager.devices.values():
+                dev.peer_timeout = peer_timeout
+        return manager
+
+    yield make
+    for manager in made:
+        manager.shutdown()
+
+
+def expected_body(index: int, frame: int = 0, moving: bool = False) -> np.ndarray:
+    pose = body_pose(frame, index, moving)
+    matrix = np.eye(4)
+    matrix[:3, :3] = quaternion_matrix(*pose[3:])
+    matrix[:3, 3] = pose[:3]
+    return matrix
+
+
+# -- decoding ----------------------------------------------------------------------------------
+
+
+def test_quaternion_convention_is_x_y_z_w_right_handed() -> None:
+    half = math.sqrt(0.5)
+    turn = quaternion_matrix(0.0, 0.0, half, half)  # a quarter turn about +z
+    np.testing.assert_allclose(turn @ [1, 0, 0], [0, 1, 0], atol=1e-12)
+    np.testing.assert_allclose(quaternion_matrix(0, 0, 0, 2.0), np.eye(3))  # normalised
+
+
+def test_bodies_with_zero_components_and_markers_are_kept() -> None:
+    # upstream dropped body 5 (zeros) and never stored markers
+    packet = encode_frame(
+        9,
+        [(5, (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)), (6, (1.0, 0.0, 2.0, 0, 0, 0, 1.0))],
+        [(0.1, 0.2, 0.3), (0.4, 0.5, 0.6)],
+        [("set", [(1.0, 1.0, 1.0)])],
+        body_markers=2,
+    )
+    frame = decode_frame(packet)
+    assert frame.number == 9 and set(frame.bodies) == {5, 6} and frame.bad_records == 0
+    np.testing.assert_allclose(frame.markers, [[0.1, 0.2, 0.3], [0.4, 0.5, 0.6]], rtol=1e-6)
+    assert set(frame.body_markers) == {500, 501, 600, 601}
+    units = NatNetUnits([6, 5, 77], [1001, 1000, 601])
+    m = units.update(frame)
+    np.testing.assert_allclose(m[0, :3, 3], [1.0, 0.0, 2.0])
+    np.testing.assert_allclose(m[1], np.eye(4))  # body 5 at the origin: tracked, identity
+    np.testing.assert_allclose(m[2], np.eye(4))  # body 77 never seen
+    np.testing.assert_allclose(m[3, :3, 3], [0.4, 0.5, 0.6], rtol=1e-6)
+    np.testing.assert_allclose(m[4, :3, 3], [0.1, 0.2, 0.3], rtol=1e-6)
+    np.testing.assert_allclose(m[5, :3, 3], [1.01, 0.0, 2.0], rtol=1e-6)
+
+
+@pytest.mark.parametrize(
+    "payload",
+    [
+        struct.pack("<ii", 1, DEFAULT_LIMITS.marker_sets + 1),
+        struct.pack("<ii", 1, -1),
+        struct.pack("<iii", 1, 0, DEFAULT_LIMITS.markers + 1),
+        struct.pack("<iiii", 1, 0, 0, DEFAULT_LIMITS.rigid_bodies + 1),
+        struct.pack("<iiii", 1, 0, 0, 1) + struct.pack("<i7fi", 1, 0, 0, 0, 0, 0, 0, 1, 10_000),
+        struct.pack("<iiii", 1, 0, 0, 2),  # bodies announced, none present
+    ],
+)
+def test_counts_beyond_the_limits_are_bad_packets(payload: bytes) -> None:
+    with pytest.raises(NatNetFormatError):
+        decode_frame(struct.pack("<HH", 7, len(payload)) + payload)
+
+
+def test_a_body_without_a_rotation_is_a_bad_record() -> None:
+    packet = encode_frame(
+        1, [(1, (1.0, 2.0, 3.0, 0, 0, 0, 0)), (2, (1.0, math.nan, 3.0, 0, 0, 0, 1))], []
+    )
+    frame = decode_frame(packet)
+    assert frame.bodies == {} and frame.bad_records == 2
+
+
+# -- through the input manager -------------------------------------------------------------------
+
+
+def test_bodies_then_markers_in_metres_through_proxies(build) -> None:
+    port = free_port()
+    body = device("OT", port, [2, 1, 3], [1000, 1002])
+    for unit, name in enumerate(["B2", "B1", "B3", "M0", "M2"]):
+        body += proxy(name, "OT", unit)
+    manager = build(body)
+    with OptiTrackEmulator(port, scenario="idle", rate=RATE, bodies=3, markers=3):
+        frames_until(manager, lambda: manager.device("OT").store.total(DeviceKind.POSITION) > 3)
+    np.testing.assert_allclose(manager.proxy("B2").matrix, expected_body(1), atol=1e-6)
+    np.testing.assert_allclose(manager.proxy("B3").matrix, expected_body(2), atol=1e-6)
+    # body id 1 rests at the origin with the identity rotation: kept (upstream dropped it)
+    np.testing.assert_allclose(manager.proxy("B1").matrix, np.eye(4), atol=1e-6)
+    assert manager.proxy("B1").timestamp is not None
+    np.testing.assert_allclose(
+        manager.proxy("M2").translation, marker_position(0, 2, False), atol=1e-6
+    )
+    np.testing.assert_allclose(manager.proxy("M0").matrix[:3, :3], np.eye(3))
+    # a quarter of a turn etc.: body index 2 is turned 30 degrees about z
+    turned = manager.proxy("B3").matrix[:3, :3] @ [1, 0, 0]
+    np.testing.assert_allclose(
+        turned, [math.cos(math.radians(30)), math.sin(math.radians(30)), 0], atol=1e-6
+    )
+
+
+def test_moving_bodies_follow_the_frames(build) -> None:
+    port = free_port()
+    manager = build(device("OT", port, [2], [1000]) + proxy("B", "OT", 0) + proxy("M", "OT", 1))
+    with OptiTrackEmulator(port, scenario="motion", rate=RATE, max_frames=40) as emu:
+        frames_until(
+            manager, lambda: emu.finished.is_set() and manager.device("OT").counters["frames"] >= 40
+        )
+        frames_until(manager, lambda: manager.device("OT").store.total(DeviceKind.POSITION) >= 40)
+    np.testing.assert_allclose(manager.proxy("B").matrix, expected_body(1, 40, True), atol=1e-5)
+    np.testing.assert_allclose(
+        manager.proxy("M").translation, marker_position(40, 0, True), atol=1e-6
+    )
+    assert manager.device("OT").counters["missed_frames"] == 0
+
+
+def test_garbage_is_counted_and_every_frame_is_a_sample(build) -> None:
+    port = free_port()
+    manager = build(device("OT", port, [1], []) + proxy("B", "OT", 0))
+    dev = manager.device("OT")
+    with OptiTrackEmulator(port, scenario="garbage", rate=RATE, max_frames=40, seed=2) as emu:
+        frames_until(
+            manager,
+            lambda: (
+                emu.finished.is_set()
+                and dev.counters["datagrams"] >= 80
+                and dev.store.total(DeviceKind.POSITION) >= 40
+            ),
+        )
+        assert manager.status("OT").state == "running" and dev.faults == 0
+    counters = dev.counters
+    assert counters["bad_datagrams"] == emu.garbage_sent == 40
+    assert counters["frames"] == dev.store.total(DeviceKind.POSITION) == 40
+
+
+def test_a_silent_server_faults_and_data_returns_within_two_seconds(build) -> None:
+    port = free_port()
+    manager = build(device("OT", port, [1], []) + proxy("B", "OT", 0), peer_timeout=0.3)
+    dev = manager.device("OT")
+    with OptiTrackEmulator(port, scenario="disconnect", rate=RATE, disconnect_after=20) as emu:
+        frames_until(manager, lambda: emu.finished.is_set() and dev.store.total() >= 20)
+        frames_until(manager, lambda: manager.status("OT").state == "faulted")
+    assert "NatNet" in manager.status("OT").reason
+    with OptiTrackEmulator(port, scenario="motion", rate=RATE, first_frame=500):
+        count = dev.store.total()
+        resumed = frames_until(manager, lambda: dev.store.total() > count, timeout=4.0)
+        assert resumed < 2.0
+        frames_until(manager, lambda: manager.status("OT").state == "running")
+    assert dev.restarts >= 1
+
+
+def test_multicast_through_loopback_reaches_the_receiver() -> None:
+    receiver = NatNetReceiver(0, group="224.0.0.1", interface="127.0.0.1", receive_timeout=0.05)
+    receiver.open()
+    try:
+        assert receiver.joined
+        with OptiTrackEmulator(receiver.port, scenario="idle", rate=RATE, group="224.0.0.1"):
+            frames: list = []
+            assert wait_until(
+                lambda: bool(frames.extend(receiver.sample_all()) or frames), timeout=5.0
+            )
+        assert frames[0].bodies[2] == pytest.approx(body_pose(0, 1, False), rel=1e-6)
+    finally:
+        receiver.close()
+
+
+def test_unusable_ports_stay_pending_with_a_reason(tmp_path: Path) -> None:
+    path = tmp_path / "bad.jconf"
+    path.write_text(HEAD + device("Huge", 70000, [1], []) + "</elements>\n</configuration>\n")
+    manager, configuration = InputManager.from_files(
+        [path], options=ManagerOptions(retry_interval=None)
+    )
+    try:
+        manager.configure(configuration)
+        reasons = {p.name: p.message for p in manager.pending()}
+    finally:
+        manager.shutdown()
+    assert reasons["Huge"] == "port 70000 is not a UDP port (0 to 65535)"
+
+
+def test_doctor_checks_the_port_and_the_multicast_group(tmp_path: Path) -> None:
+    import json
+    import subprocess
+    import sys
+
+    port = free_port()
+    path = tmp_path / "doctor.jconf"
+    path.write_text(HEAD + device("OT", port, [1], []) + "</elements>\n</configuration>\n")
+    result = subprocess.run(
+        [sys.executable, "-m", "gadgetctl", "doctor", str(path), "--format", "json"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    report = json.loads(result.stdout)
+    checks = {c["target"]: c for d in report["devices"] for c in d["checks"]}
+    assert checks[f"{port}/udp"]["status"] == "ok"
+    assert checks["224.0.0.1 (multicast)"]["status"] in ("ok", "problem")
+
+
+def test_validate_counts_bodies_and_markers_as_units(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    path = tmp_path / "units.jconf"
+    body = device("OT", 1001, [1], [1000]) + proxy("Ok", "OT", 1) + proxy("Beyond", "OT", 2)
+    path.write_text(HEAD + body + "</elements>\n</configuration>\n")
+    result = subprocess.run(
+        [sys.executable, "-m", "gadgetctl", "validate", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert result.returncode == 1
+    assert "CFG034" in result.stdout and "'Beyond'" in result.stdout and "'Ok'" not in result.stdout

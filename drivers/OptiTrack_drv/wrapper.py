@@ -1,0 +1,163 @@
+"""The input-manager side of the OptiTrack driver: an ``optitrack`` element becomes a device
+whose position units are its embedded ``rigid_body`` elements (``body_index`` = NatNet
+rigid-body id), then its ``marker`` elements (``marker_index``: 1000 and up are the frame's
+unidentified markers in packet order, smaller values rigid-body markers by NatNet id), in
+configuration order. Matrices are in metres; rigid bodies carry the rotation of their
+quaternion, markers the identity rotation.
+
+Every NatNet frame becomes one sample (upstream polled at 100 Hz and kept the newest frame
+only). Silence longer than :attr:`OptiTrackDevice.peer_timeout` raises from ``sample()``, so
+the input manager marks the device faulted and restarts it; a restart after such a loss
+succeeds only once frames arrive again.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from gadgetctl.input import DeviceConfigError, Position
+from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.jccl.configuration import ConfigElement
+
+from .standalone import (
+    DEFAULT_GROUP,
+    DEFAULT_LIMITS,
+    NatNetDisconnected,
+    NatNetFrame,
+    NatNetReceiver,
+    NatNetUnits,
+)
+
+
+class OptiTrackDevice(Position):
+    """A NaturalPoint OptiTrack NatNet server (element type ``optitrack``)."""
+
+    ELEMENT_TYPE = "optitrack"
+    sample_interval = 0.0  # sample() waits for datagrams itself
+
+    #: The NatNet multicast group joined (None: unicast only) and the interface it is joined on.
+    multicast_group: str | None = DEFAULT_GROUP
+    multicast_interface = "0.0.0.0"
+    #: Seconds one sample() call waits for a datagram.
+    receive_timeout = 0.1
+    #: After a loss, seconds a restart waits for the server's first frame.
+    probe_timeout = 0.25
+    #: Frames read by one sample() call at most.
+    batch_limit = 100
+    limits = DEFAULT_LIMITS
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.port = 1001
+        self.peer_timeout = 2.0
+        self.body_ids: list[int] = []
+        self.marker_ids: list[int] = []
+        self._receiver: NatNetReceiver | None = None
+        self._units = NatNetUnits([], [])
+        self._open = False
+        self._started = False
+
+    def config(self, access: ElementAccess) -> None:
+        super().config(access)  # name, position filters
+        self.port = access.integer("port")
+        if not 0 <= self.port <= 65535:
+            raise DeviceConfigError(f"port {self.port} is not a UDP port (0 to 65535)")
+        self.body_ids = [
+            _child_integer(access, c, "body_index") for c in access.children("rigid_body")
+        ]
+        self.marker_ids = [
+            _child_integer(access, c, "marker_index") for c in access.children("marker")
+        ]
+        self._units = NatNetUnits(self.body_ids, self.marker_ids)
+
+    # -- sampling ---------------------------------------------------------------------------
+
+    def _driver(self) -> NatNetReceiver:
+        """One receiver for the device's life, so its counters add up over reconnections."""
+        if self._receiver is None:
+            self._receiver = NatNetReceiver(
+                self.port,
+                group=self.multicast_group,
+                interface=self.multicast_interface,
+                receive_timeout=self.receive_timeout,
+                peer_timeout=self.peer_timeout,
+                limits=self.limits,
+            )
+        self._receiver.peer_timeout = self.peer_timeout
+        return self._receiver
+
+    def start_sampling(self) -> None:
+        driver = self._driver()
+        driver.open()
+        self._open = True
+        if driver.requested_port == 0:
+            driver.requested_port = driver.port  # an OS-chosen port is kept for restarts
+        if self._started:
+            self._probe(driver)
+        self._started = True
+
+    def _probe(self, driver: NatNetReceiver) -> None:
+        """After a loss, succeed only when the server sends again."""
+        driver.receive_timeout = self.probe_timeout
+        try:
+            frames = driver.sample_all(self.batch_limit)
+            if not frames:
+                raise NatNetDisconnected(f"still no NatNet frames on UDP port {driver.port}")
+        except BaseException:
+            self.stop_sampling()
+            raise
+        finally:
+            driver.receive_timeout = self.receive_timeout
+        self._add(frames)
+
+    def sample(self) -> None:
+        driver = self._receiver
+        if driver is None or not self._open:
+            raise NatNetDisconnected("the receiver is closed")
+        frames = driver.sample_all(self.batch_limit)
+        if frames:
+            self._add(frames)
+
+    def stop_sampling(self) -> None:
+        if self._receiver is not None and self._open:
+            self._open = False
+            self._receiver.close()
+
+    def _add(self, frames: Sequence[NatNetFrame]) -> None:
+        if not self._units.matrices.shape[0]:
+            return  # no units configured: nothing to report
+        matrices = np.stack([self._units.update(f).copy() for f in frames])
+        self.add_position_samples(np.full(len(frames), self.now()), matrices)
+
+    # -- diagnostics ------------------------------------------------------------------------
+
+    @property
+    def counters(self) -> dict[str, int]:
+        """What the receiver counted since the device was made, reconnections included."""
+        r = self._receiver
+        if r is None:
+            return {}
+        return {
+            "datagrams": r.datagrams,
+            "frames": r.frames,
+            "bad_datagrams": r.bad_datagrams,
+            "bad_records": r.bad_records,
+            "other_messages": r.other_messages,
+            "missed_frames": r.missed_frames,
+            "join_failures": r.join_failures,
+            "kernel_dropped": r.kernel_dropped,
+        }
+
+    def transport_dropped(self) -> int:
+        """Datagrams the kernel dropped before the receiver read them (a full socket buffer)."""
+        return self._receiver.kernel_dropped if self._receiver is not None else 0
+
+
+def _child_integer(access: ElementAccess, child: ConfigElement, prop: str) -> int:
+    """An integer property of an embedded element (its definition's default when unset)."""
+    try:
+        return ElementAccess(child, access.repo).integer(prop)
+    except ValueError as err:
+        raise DeviceConfigError(f"{child.type} {child.full_name!r}: {prop}: {err}") from None
