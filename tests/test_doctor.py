@@ -282,8 +282,9 @@ def test_pty_behind_a_symlink_is_a_usable_serial_port(tmp_path):
 
 
 def test_missing_serial_port_of_an_upstream_driver_lists_the_ports(tmp_path):
-    flock = '<flock name="Bird" version="1"><port>/dev/ttyUSB97</port></flock>'
-    report = diagnose([config(tmp_path, flock)])
+    # cyber_glove: an upstream serial driver gadgetctl does not bundle (its Makefile builds nothing)
+    glove = '<cyber_glove name="Glove" version="1"><port>/dev/ttyUSB97</port></cyber_glove>'
+    report = diagnose([config(tmp_path, glove)])
     device = report.devices[0]
     assert device.transport_source == "upstream property names"
     assert device.checks[0].code == "DRV100"

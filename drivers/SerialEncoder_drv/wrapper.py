@@ -48,6 +48,9 @@ class SerialEncoderDevice(Position):
         self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0, "timeouts": 0}
 
     def config(self, access: ElementAccess) -> None:
+        # Upstream quirk fixed: the C++ config() returned the bus set-up's status (0 on
+        # success) as its result, so it failed exactly when the bus worked. Here config()
+        # only checks the element; the bus is opened in start_sampling().
         super().config(access)
         self.port = access.string("port")
         self.baud = access.integer("baud") if access.count("baud") else BAUD

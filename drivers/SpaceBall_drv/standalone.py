@@ -80,7 +80,8 @@ class PuckSample:
 
 
 def bits_to_buttons(bits: int, count: int = BUTTONS) -> tuple[int, ...]:
-    """Bit N-1 of ``bits`` is button N; values are 0/1 (the C++ kept the masked bit)."""
+    """Bit N-1 of ``bits`` is button N. Upstream quirk fixed: the C++ stored the masked bit
+    (2048 for button 12) as the digital value; here every value is 0 or 1."""
     return tuple(bits >> k & 1 for k in range(count))
 
 
