@@ -32,6 +32,8 @@ from types import TracebackType
 from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
 
 OUTPUT_LIST = "2,11,16,1"
+#: Seconds after a write before the pty's reader queue shows the bytes for sure.
+PTY_SETTLE = 0.05
 SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
 DEFAULT_LINK = "/tmp/gadgetctl-fastrak"
 VERSION = "3.0GC "
@@ -134,6 +136,7 @@ class FastrakEmulator:
         #: while True nothing is sent (a benchmark counts what was sent)
         self.paused = False
         self._emit_lock = threading.Lock()
+        self._written_at = 0.0
         self.address = ""
         self._pty = PseudoTerminal(self.link)
         self._rng = random.Random(seed)
@@ -253,7 +256,7 @@ class FastrakEmulator:
         if self.scenario == "disconnect" and count >= self.disconnect_after:
             if self._hangup_due is None:
                 self._hangup_due = time.monotonic() + self.linger
-            if self._unread() and time.monotonic() < self._hangup_due:
+            if not self._all_read() and time.monotonic() < self._hangup_due:
                 return
             self.disconnected.set()
             self.continuous = False
@@ -290,7 +293,14 @@ class FastrakEmulator:
             return 0
         return struct.unpack("i", raw)[0]
 
+    def _all_read(self) -> bool:
+        """The driver has read everything sent. A pty moves written bytes to the reader's queue
+        a moment later (the kernel's flip buffer), so the queue is trusted only once
+        :data:`PTY_SETTLE` seconds have passed since the last write."""
+        return time.monotonic() - self._written_at >= PTY_SETTLE and not self.unread()
+
     def _write(self, data: bytes) -> None:
+        self._written_at = time.monotonic()
         self.dropped_bytes += len(data) - self._pty.write(data)
 
 

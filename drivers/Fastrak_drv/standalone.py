@@ -16,7 +16,8 @@ position, 4 x float32 quaternion W, X, Y, Z, the stylus item (a pad byte, then `
 ``'1'``), CR LF: :data:`RECORD_SIZE` bytes. Positions are inches or centimetres as the
 status record says; this module gives metres.
 
-Only the standard library, pyserial and numpy are used.
+Only the standard library, pyserial, numpy and the shared serial line
+(:mod:`gadgetctl.transport.serialline`, which knows nothing of the input manager) are used.
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ from types import TracebackType
 
 import numpy as np
 import serial
+
+from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 STATIONS = 4
 OUTPUT_LIST = "2,11,16,1"
@@ -203,8 +206,7 @@ class Fastrak:
         self.units = "inches"
         self.version = ""
         self.scanner = RecordScanner()
-        self._port: serial.SerialBase | None = None
-        self._owns_port = False
+        self._line: SerialLine | None = None
         self._heard_at = 0.0
 
     # -- life cycle -------------------------------------------------------------------
@@ -215,23 +217,13 @@ class Fastrak:
         The C++ driver sent its set-up in config(), before startSampling() opened the port
         (and ``u`` before that), so none of it reached the tracker; here the port is opened
         first and nothing is flushed right after a command, so no reply is lost."""
-        if self._port is not None:
+        if self._line is not None:
             return
+        line = SerialLine(self.port_spec, LineSettings(self.baud), poll_interval=self.poll_interval)
         try:
-            if isinstance(self.port_spec, str):
-                self._owns_port = True
-                self._port = serial.serial_for_url(
-                    self.port_spec,
-                    baudrate=self.baud,
-                    bytesize=serial.EIGHTBITS,
-                    parity=serial.PARITY_NONE,
-                    stopbits=serial.STOPBITS_ONE,
-                    timeout=self.poll_interval,
-                )
-            else:
-                self._owns_port, self._port = False, self.port_spec
-        except (serial.SerialException, OSError, ValueError) as exc:
-            raise FastrakDisconnected(f"cannot open {self.port_spec}: {exc}") from exc
+            self._line = line.open()
+        except SerialLineLost as exc:
+            raise FastrakDisconnected(str(exc)) from exc
         try:
             self._setup()
         except BaseException:
@@ -239,21 +231,17 @@ class Fastrak:
             raise
 
     def close(self) -> None:
-        port, self._port = self._port, None
-        if port is not None:
+        line, self._line = self._line, None
+        if line is not None:
             try:
-                port.write(b"c")  # stop the stream for whoever opens the port next
-            except (serial.SerialException, OSError):
+                line.write(b"c")  # stop the stream for whoever opens the port next
+            except SerialLineLost:
                 pass
-            if self._owns_port:
-                try:
-                    port.close()
-                except (serial.SerialException, OSError):
-                    pass
+            line.close()
 
     @property
     def is_open(self) -> bool:
-        return self._port is not None
+        return self._line is not None
 
     def __enter__(self) -> Fastrak:
         self.open()
@@ -353,28 +341,27 @@ class Fastrak:
                 if len(line) > MAX_LINE:
                     raise FastrakProtocolError(f"a reply longer than {MAX_LINE} bytes")
 
-    def _port_or_fail(self) -> serial.SerialBase:
-        if self._port is None:
+    def _line_or_fail(self) -> SerialLine:
+        if self._line is None:
             raise FastrakError("the tracker is not open")
-        return self._port
+        return self._line
 
     def _read_some(self) -> bytes:
-        port = self._port_or_fail()
+        """What has arrived, waiting up to ``poll_interval`` for it."""
         try:
-            return port.read(max(1, port.in_waiting))
-        except (serial.SerialException, OSError) as exc:
-            raise FastrakDisconnected(f"serial line lost: {exc}") from exc
+            return self._line_or_fail().read(self.poll_interval)
+        except SerialLineLost as exc:
+            raise FastrakDisconnected(str(exc)) from exc
 
     def _write(self, data: bytes) -> None:
-        port = self._port_or_fail()
         try:
-            port.write(data)
-            port.flush()
-        except (serial.SerialException, OSError) as exc:
-            raise FastrakDisconnected(f"serial line lost: {exc}") from exc
+            self._line_or_fail().write(data)
+        except SerialLineLost as exc:
+            raise FastrakDisconnected(str(exc)) from exc
 
     def _flush_input(self) -> None:
+        """Drop what came before (only ever before a command, never right after one)."""
         try:
-            self._port_or_fail().reset_input_buffer()
-        except (serial.SerialException, OSError) as exc:
-            raise FastrakDisconnected(f"serial line lost: {exc}") from exc
+            self._line_or_fail().discard_input()
+        except SerialLineLost as exc:
+            raise FastrakDisconnected(str(exc)) from exc

@@ -36,6 +36,8 @@ from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
 # mirrored here unnoticed.
 STATION_CHARS = "123456789abcdefghijklmnopqrstuv"
 OUTPUT_LIST = "2,4,40,22,23,1"
+#: Seconds after a write before the pty's reader queue shows the bytes for sure.
+PTY_SETTLE = 0.05
 SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
 DEFAULT_LINK = "/tmp/gadgetctl-is900"
 PRODUCT_IS900 = "9"
@@ -134,6 +136,7 @@ class IS900Emulator:
         #: while True nothing is sent (a benchmark counts what was sent)
         self.paused = False
         self._emit_lock = threading.Lock()
+        self._written_at = 0.0
         self.address = ""
         self._pty = PseudoTerminal(self.link)
         self._rng = random.Random(seed)
@@ -246,7 +249,7 @@ class IS900Emulator:
         if self.scenario == "disconnect" and self.polls_answered >= self.disconnect_after:
             if self._hangup_due is None:
                 self._hangup_due = time.monotonic() + self.linger
-            if self._unread() and time.monotonic() < self._hangup_due:
+            if not self._all_read() and time.monotonic() < self._hangup_due:
                 self._polls = 1  # hang up once the driver has read what was sent
                 return
             self.disconnected.set()
@@ -283,7 +286,14 @@ class IS900Emulator:
             return 0
         return struct.unpack("i", raw)[0]
 
+    def _all_read(self) -> bool:
+        """The driver has read everything sent. A pty moves written bytes to the reader's queue
+        a moment later (the kernel's flip buffer), so the queue is trusted only once
+        :data:`PTY_SETTLE` seconds have passed since the last write."""
+        return time.monotonic() - self._written_at >= PTY_SETTLE and not self.unread()
+
     def _write(self, data: bytes) -> None:
+        self._written_at = time.monotonic()
         self.dropped_bytes += len(data) - self._pty.write(data)
 
 

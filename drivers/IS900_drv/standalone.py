@@ -17,7 +17,8 @@ uses the part Gadgeteer needs:
 Stations are numbered from 1 on the wire (``'1'..'9'`` then ``'a'..``); gadgetctl's
 ``station_index`` counts from 0, as the ISD library's station arrays do.
 
-Only the standard library, pyserial and numpy are used.
+Only the standard library, pyserial, numpy and the shared serial line
+(:mod:`gadgetctl.transport.serialline`, which knows nothing of the input manager) are used.
 """
 
 from __future__ import annotations
@@ -30,6 +31,8 @@ from types import TracebackType
 
 import numpy as np
 import serial
+
+from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 RECORD_HEAD = ord("0")
 CRLF = b"\r\n"
@@ -243,8 +246,7 @@ class IS900:
         self.units = "inches"
         self.polls = 0
         self.scanner = RecordScanner(stations=frozenset(s.index for s in stations))
-        self._port: serial.SerialBase | None = None
-        self._owns_port = False
+        self._line: SerialLine | None = None
         self._answered: set[int] = set()
         self._polled_at = 0.0
         self._heard_at = 0.0
@@ -253,24 +255,14 @@ class IS900:
 
     def open(self) -> None:
         """Open the port, stop continuous output, read the system records, set up stations."""
-        if self._port is not None:
+        if self._line is not None:
             return
+        # One call for every setting: a pty ignores later changes (and is always 8N1).
+        line = SerialLine(self.port_spec, LineSettings(self.baud), poll_interval=self.poll_interval)
         try:
-            if isinstance(self.port_spec, str):
-                self._owns_port = True
-                # One call for every setting: a pty ignores later changes (and is always 8N1).
-                self._port = serial.serial_for_url(
-                    self.port_spec,
-                    baudrate=self.baud,
-                    bytesize=serial.EIGHTBITS,
-                    parity=serial.PARITY_NONE,
-                    stopbits=serial.STOPBITS_ONE,
-                    timeout=self.poll_interval,
-                )
-            else:
-                self._owns_port, self._port = False, self.port_spec
-        except (serial.SerialException, OSError, ValueError) as exc:
-            raise IS900Disconnected(f"cannot open {self.port_spec}: {exc}") from exc
+            self._line = line.open()
+        except SerialLineLost as exc:
+            raise IS900Disconnected(str(exc)) from exc
         try:
             self._handshake()
         except BaseException:
@@ -278,16 +270,13 @@ class IS900:
             raise
 
     def close(self) -> None:
-        port, self._port = self._port, None
-        if port is not None and self._owns_port:
-            try:
-                port.close()
-            except (serial.SerialException, OSError):
-                pass
+        line, self._line = self._line, None
+        if line is not None:
+            line.close()
 
     @property
     def is_open(self) -> bool:
-        return self._port is not None
+        return self._line is not None
 
     def __enter__(self) -> IS900:
         self.open()
@@ -397,29 +386,27 @@ class IS900:
                 if len(line) > MAX_LINE:
                     raise IS900ProtocolError(f"a reply longer than {MAX_LINE} bytes")
 
-    def _port_or_fail(self) -> serial.SerialBase:
-        if self._port is None:
+    def _line_or_fail(self) -> SerialLine:
+        if self._line is None:
             raise IS900Error("the tracker is not open")
-        return self._port
+        return self._line
 
     def _read_some(self) -> bytes:
-        port = self._port_or_fail()
+        """What has arrived, waiting up to ``poll_interval`` for it."""
         try:
-            return port.read(max(1, port.in_waiting))
-        except (serial.SerialException, OSError) as exc:
-            raise IS900Disconnected(f"serial line lost: {exc}") from exc
+            return self._line_or_fail().read(self.poll_interval)
+        except SerialLineLost as exc:
+            raise IS900Disconnected(str(exc)) from exc
 
     def _write(self, data: bytes) -> None:
-        port = self._port_or_fail()
         try:
-            port.write(data)
-            port.flush()
-        except (serial.SerialException, OSError) as exc:
-            raise IS900Disconnected(f"serial line lost: {exc}") from exc
+            self._line_or_fail().write(data)
+        except SerialLineLost as exc:
+            raise IS900Disconnected(str(exc)) from exc
 
     def _flush_input(self) -> None:
         """Drop what came before (only ever before a command, never right after one)."""
         try:
-            self._port_or_fail().reset_input_buffer()
-        except (serial.SerialException, OSError) as exc:
-            raise IS900Disconnected(f"serial line lost: {exc}") from exc
+            self._line_or_fail().discard_input()
+        except SerialLineLost as exc:
+            raise IS900Disconnected(str(exc)) from exc

@@ -29,6 +29,8 @@ from types import TracebackType
 
 from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
 
+#: Seconds after a write before the pty's reader queue shows the bytes for sure.
+PTY_SETTLE = 0.05
 SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
 DEFAULT_LINK = "/tmp/gadgetctl-3dmouse"
 BUTTONS = (0x04, 0x02, 0x01)  # left, middle, right
@@ -104,6 +106,7 @@ class ThreeDMouseEmulator:
         #: while True nothing is sent (a benchmark counts what was sent)
         self.paused = False
         self._emit_lock = threading.Lock()
+        self._written_at = 0.0
         self.address = ""
         self._pty = PseudoTerminal(self.link)
         self._rng = random.Random(seed)
@@ -185,7 +188,7 @@ class ThreeDMouseEmulator:
         if self.scenario == "disconnect" and count >= self.disconnect_after:
             if self._hangup_due is None:
                 self._hangup_due = time.monotonic() + self.linger
-            if self.unread() and time.monotonic() < self._hangup_due:
+            if not self._all_read() and time.monotonic() < self._hangup_due:
                 self._polled = True
                 return
             self.disconnected.set()
@@ -210,7 +213,14 @@ class ThreeDMouseEmulator:
             return 0
         return struct.unpack("i", raw)[0]
 
+    def _all_read(self) -> bool:
+        """The driver has read everything sent. A pty moves written bytes to the reader's queue
+        a moment later (the kernel's flip buffer), so the queue is trusted only once
+        :data:`PTY_SETTLE` seconds have passed since the last write."""
+        return time.monotonic() - self._written_at >= PTY_SETTLE and not self.unread()
+
     def _write(self, data: bytes) -> None:
+        self._written_at = time.monotonic()
         self.dropped_bytes += len(data) - self._pty.write(data)
 
 

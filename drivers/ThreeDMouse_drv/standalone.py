@@ -10,7 +10,8 @@ Z, each 21 bits two's complement, 7 bits per byte, high part first (the sign is 
 the first byte), in thousandths of an inch. Bytes 10..15 are the angles about x, y and z,
 each 14 bits unsigned (7 + 7), in fortieths of a degree.
 
-Only the standard library, pyserial and numpy are used.
+Only the standard library, pyserial, numpy and the shared serial line
+(:mod:`gadgetctl.transport.serialline`, which knows nothing of the input manager) are used.
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ from types import TracebackType
 
 import numpy as np
 import serial
+
+from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 REPORT_SIZE = 16
 FLAG = 0x80
@@ -198,20 +201,25 @@ class ThreeDMouse:
         self.character_format = "8N2"
         self.scanner = ReportScanner()
         self.polls = 0
-        self._port: serial.SerialBase | None = None
-        self._owns_port = False
+        self._line: SerialLine | None = None
         self._polled_at = 0.0
         self._answered = True
         self._heard_at = 0.0
 
     def open(self) -> None:
         """Open the port, reset and check the mouse, choose head-tracker and Euler modes."""
-        if self._port is not None:
+        if self._line is not None:
             return
+        # A line that cannot do two stop bits (a pty) still carries the reports at 8N1.
+        line = SerialLine(
+            self.port_spec, LineSettings(self.baud, stopbits=2), poll_interval=self.poll_interval
+        )
         try:
-            self._port = self._open_port()
-        except (serial.SerialException, OSError, ValueError) as exc:
-            raise ThreeDMouseDisconnected(f"cannot open {self.port_spec}: {exc}") from exc
+            self._line = line.open()
+        except SerialLineLost as exc:
+            raise ThreeDMouseDisconnected(str(exc)) from exc
+        if line.degraded:
+            self.character_format = "8N1"
         try:
             self._start()
         except BaseException:
@@ -219,16 +227,13 @@ class ThreeDMouse:
             raise
 
     def close(self) -> None:
-        port, self._port = self._port, None
-        if port is not None and self._owns_port:
-            try:
-                port.close()
-            except (serial.SerialException, OSError):
-                pass
+        line, self._line = self._line, None
+        if line is not None:
+            line.close()
 
     @property
     def is_open(self) -> bool:
-        return self._port is not None
+        return self._line is not None
 
     def __enter__(self) -> ThreeDMouse:
         self.open()
@@ -275,28 +280,6 @@ class ThreeDMouse:
 
     # -- internals ------------------------------------------------------------------------
 
-    def _open_port(self) -> serial.SerialBase:
-        if not isinstance(self.port_spec, str):
-            self._owns_port = False
-            return self.port_spec
-        self._owns_port = True
-        try:
-            # Every setting in one call: a pty ignores later changes.
-            return serial.serial_for_url(
-                self.port_spec,
-                baudrate=self.baud,
-                bytesize=serial.EIGHTBITS,
-                parity=serial.PARITY_NONE,
-                stopbits=serial.STOPBITS_TWO,
-                timeout=self.poll_interval,
-            )
-        except (ValueError, serial.SerialException):
-            # A line that cannot do two stop bits (a pty) still carries the reports at 8N1.
-            self.character_format = "8N1"
-            return serial.serial_for_url(
-                self.port_spec, baudrate=self.baud, timeout=self.poll_interval
-            )
-
     def _start(self) -> None:
         self._write(b"*D")
         time.sleep(self.demand_wait)
@@ -319,37 +302,32 @@ class ThreeDMouse:
         deadline = time.monotonic() + self.read_timeout
         got = bytearray()
         while len(got) < count:
-            port = self._port_or_fail()
-            try:
-                got += port.read(count - len(got))
-            except (serial.SerialException, OSError) as exc:
-                raise ThreeDMouseDisconnected(f"serial line lost: {exc}") from exc
+            got += self._read_some()
             if len(got) < count and time.monotonic() >= deadline:
                 raise ThreeDMouseTimeout("no answer from the 3D mouse")
-        return bytes(got)
+        return bytes(got[:count])
 
-    def _port_or_fail(self) -> serial.SerialBase:
-        if self._port is None:
+    def _line_or_fail(self) -> SerialLine:
+        if self._line is None:
             raise ThreeDMouseError("the mouse is not open")
-        return self._port
+        return self._line
 
     def _read_some(self) -> bytes:
-        port = self._port_or_fail()
+        """What has arrived, waiting up to ``poll_interval`` for it."""
         try:
-            return port.read(max(1, port.in_waiting))
-        except (serial.SerialException, OSError) as exc:
-            raise ThreeDMouseDisconnected(f"serial line lost: {exc}") from exc
+            return self._line_or_fail().read(self.poll_interval)
+        except SerialLineLost as exc:
+            raise ThreeDMouseDisconnected(str(exc)) from exc
 
     def _write(self, data: bytes) -> None:
-        port = self._port_or_fail()
         try:
-            port.write(data)
-            port.flush()
-        except (serial.SerialException, OSError) as exc:
-            raise ThreeDMouseDisconnected(f"serial line lost: {exc}") from exc
+            self._line_or_fail().write(data)
+        except SerialLineLost as exc:
+            raise ThreeDMouseDisconnected(str(exc)) from exc
 
     def _flush_input(self) -> None:
+        """Drop what came before (only ever before a command, never right after one)."""
         try:
-            self._port_or_fail().reset_input_buffer()
-        except (serial.SerialException, OSError) as exc:
-            raise ThreeDMouseDisconnected(f"serial line lost: {exc}") from exc
+            self._line_or_fail().discard_input()
+        except SerialLineLost as exc:
+            raise ThreeDMouseDisconnected(str(exc)) from exc

@@ -14,6 +14,18 @@ from dataclasses import dataclass
 
 import serial
 
+try:
+    from termios import error as TermiosError
+except ImportError:  # not a POSIX system
+
+    class TermiosError(Exception):  # type: ignore[no-redef]
+        """Stands in for termios.error where there is no termios."""
+
+
+#: What a port raises when its line is gone. pyserial reconfigures the port (tcsetattr) when
+#: its timeout changes, and a hung-up pty answers that with termios.error, not an OSError.
+LOST = (serial.SerialException, OSError, TermiosError)
+
 PARITIES = {"none": serial.PARITY_NONE, "even": serial.PARITY_EVEN, "odd": serial.PARITY_ODD}
 
 
@@ -139,7 +151,7 @@ class SerialLine:
                 else:
                     port.timeout = max(0.0, min(self.poll_interval, deadline - time.monotonic()))
                     chunk = port.read(1)
-            except (serial.SerialException, OSError, TypeError) as exc:
+            except (*LOST, TypeError) as exc:
                 raise SerialLineLost(f"serial line lost: {exc}") from exc
             if chunk:
                 self.bytes_read += len(chunk)
@@ -150,13 +162,13 @@ class SerialLine:
         try:
             port.write(data)
             port.flush()
-        except (serial.SerialException, OSError) as exc:
+        except LOST as exc:
             raise SerialLineLost(f"serial line lost: {exc}") from exc
 
     def discard_input(self) -> None:
         try:
             self._require().reset_input_buffer()
-        except (serial.SerialException, OSError) as exc:
+        except LOST as exc:
             raise SerialLineLost(f"serial line lost: {exc}") from exc
 
     def _require(self) -> serial.SerialBase:
