@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import os
-import time
 from pathlib import Path
 
 import pytest
@@ -78,14 +77,19 @@ def test_missing_parent_and_cycle_are_diagnostics_not_crashes(tmp_path):
     assert {p.name for p in repo.effective_properties("a")} == {"pa", "pb"}
 
 
+@pytest.mark.timeout(120)  # a hang guard only; the time is not the assertion
 def test_thousand_level_chain_is_bounded(tmp_path):
     for i in range(1000):
         parent = f"<parent>t{i + 1}</parent>" if i < 999 else "<parent>t0</parent>"
         write(tmp_path / f"t{i}.jdef", jdef(f"t{i}", prop(f"p{i}"), parents=parent))
-    start = time.perf_counter()
     result = validate_paths([tmp_path])
-    assert time.perf_counter() - start < 20
-    assert sum(d.code == "DEF006" for d in result.diagnostics) == 1000
+    cycles = [d for d in result.diagnostics if d.code == "DEF006"]
+    assert len(cycles) == 1000
+    # Each report shows the first steps of the cycle and its size, not all 1000 names, so
+    # reporting a cycle of N definitions is linear in N (it was quadratic in time and text).
+    assert all(len(d.message) < 200 for d in cycles), cycles[0].message
+    assert "t0 inherits from itself: t0 -> t1 -> " in next(d.message for d in cycles if d.message.startswith("t0 "))
+    assert all("(a cycle of 1000 definitions)" in d.message for d in cycles)
     repo = repo_of(tmp_path)
     assert len(repo.effective_properties("t0")) == 1000
     assert repo.is_a("t0", "t999")

@@ -95,9 +95,12 @@ def _check_properties(version: DefinitionVersion, repo: DefinitionRepository, *,
 
 
 def _inherited_property(version: DefinitionVersion, name: str, repo: DefinitionRepository):
+    owners = repo.property_owners(name) - {version.name}
+    if not owners:  # nobody else declares it: no ancestor walk (linear in long chains)
+        return None
     for ancestor in repo.ancestors(version.name, version.version):
-        parent = repo.get(ancestor)
-        if parent is not None and parent.name != version.name:
+        parent = repo.get(ancestor) if ancestor in owners else None
+        if parent is not None:
             prop = parent.own_property(name)
             if prop is not None:
                 return prop
@@ -113,29 +116,41 @@ def _check_parents(version: DefinitionVersion, repo: DefinitionRepository) -> li
     return found
 
 
+_CYCLE_PATH_SHOWN = 8
+
+
 def check_cycles(definitions: Iterable[Definition], repo: DefinitionRepository) -> list[Diagnostic]:
-    """One DEF006 per definition given that takes part in an inheritance cycle."""
+    """One DEF006 per definition given that takes part in an inheritance cycle.
+
+    Each message shows at most ``_CYCLE_PATH_SHOWN`` steps of the cycle, so a cycle of N
+    definitions costs O(N) to report, not O(N^2)."""
     mine = {d.name: d for d in definitions}
     found = []
     for cycle in repo.cycles():
+        members = set(cycle)
         for name in cycle:
             if name in mine:
-                path = " -> ".join([name, *_cycle_path(name, set(cycle), repo)])
+                steps, cut = _cycle_path(name, members, repo)
+                path = " -> ".join([name, *steps])
+                if cut:
+                    path += f" -> ... (a cycle of {len(cycle)} definitions)"
                 found.append(_at("DEF006", f"{name} inherits from itself: {path}", mine[name].newest.location))
     return found
 
 
-def _cycle_path(start: str, members: set[str], repo: DefinitionRepository) -> list[str]:
+def _cycle_path(start: str, members: set[str], repo: DefinitionRepository) -> tuple[list[str], bool]:
+    """The first steps of the cycle from ``start``, and whether the walk was cut short."""
     path, current, seen = [], start, {start}
-    while True:
+    while len(path) < _CYCLE_PATH_SHOWN:
         nxt = next((p for p in repo.parents_of(current) if p in members), None)
         if nxt is None:
-            return path
+            return path, False
         path.append(nxt)
         if nxt in seen:
-            return path
+            return path, False
         seen.add(nxt)
         current = nxt
+    return path, True
 
 
 def _suggest(name: str, candidates: list[str]) -> str | None:

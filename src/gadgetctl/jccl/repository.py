@@ -61,6 +61,7 @@ class DefinitionRepository:
     _versions: dict[str, dict[int, DefinitionVersion]] = field(default_factory=dict)
     _origins: dict[tuple[str, int], SearchPathEntry | None] = field(default_factory=dict)
     _ancestor_cache: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    _property_owners: dict[str, frozenset[str]] | None = None
 
     # -- building ---------------------------------------------------------------------
 
@@ -103,6 +104,7 @@ class DefinitionRepository:
     def add(self, definition: Definition, entry: SearchPathEntry | None = None) -> int:
         """Add every version of ``definition``; an existing name and version wins. Returns how many were added."""
         self._ancestor_cache.clear()
+        self._property_owners = None
         versions = self._versions.setdefault(definition.name, {})
         added = 0
         for number, version in sorted(definition.versions.items()):
@@ -196,6 +198,17 @@ class DefinitionRepository:
         if version is None:
             self._ancestor_cache[name] = result
         return result
+
+    def property_owners(self, prop_name: str) -> frozenset[str]:
+        """Names of the definitions whose newest version declares a property ``prop_name``
+        itself (an index built once, so a lookup per property stays constant time)."""
+        if self._property_owners is None:
+            owners: dict[str, set[str]] = {}
+            for definition in self.all_newest():
+                for prop in definition.properties:
+                    owners.setdefault(prop.name, set()).add(definition.name)
+            self._property_owners = {k: frozenset(v) for k, v in owners.items()}
+        return self._property_owners.get(prop_name, frozenset())
 
     def is_a(self, name: str, base: str) -> bool:
         """True when ``name`` is ``base`` or inherits from it through any parent."""
