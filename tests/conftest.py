@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import ipaddress
+import os
+import shutil
 import signal
 import socket
 import sys
@@ -32,6 +34,18 @@ def corpus() -> Path:
     """The VR Juggler corpus beside the repository. Missing corpus is a failure, not a skip."""
     assert CORPUS.is_dir(), f"corpus not found at {CORPUS}; ../shared must sit beside the repository"
     return CORPUS
+
+
+def require_tool(name: str, package: str) -> str:
+    """The path of a system tool a test needs. Missing, it is a skip on a developer's machine
+    and a failure in CI (``CI`` set), where `.ci/run` installs it: no test skips itself in CI."""
+    path = shutil.which(name)
+    if path is None:
+        message = f"{name} is not installed (apt-get install {package}; .ci/run installs it)"
+        if os.environ.get("CI"):
+            pytest.fail(message)
+        pytest.skip(message)
+    return path
 
 
 def _is_local(address) -> bool:

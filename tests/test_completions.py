@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import shutil
 import subprocess
 
 import pytest
 
 from gadgetctl.cli.completions import FILES, scripts
 
-from conftest import REPO
+from conftest import REPO, require_tool
 
 
 def test_completion_files_are_up_to_date():
@@ -37,8 +36,7 @@ def test_bash_completes_commands_options_and_choices():
 
 @pytest.mark.parametrize("shell", ["zsh", "fish"])
 def test_other_shells_parse_the_scripts(shell, tmp_path):
-    if shutil.which(shell) is None:
-        pytest.skip(f"{shell} is not installed (.ci/run installs it)")
+    require_tool(shell, shell)
     path = REPO / "completions" / FILES[shell]
     flag = ["-n"] if shell == "zsh" else ["--no-execute"]
     subprocess.run([shell, *flag, str(path)], check=True, timeout=10)

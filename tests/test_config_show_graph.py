@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import shutil
 import subprocess
 
 import pytest
@@ -13,7 +12,7 @@ from gadgetctl.input.plugins.metadata import read_metadata
 from gadgetctl.resources import drivers_dir
 
 from config_samples import configuration, write_definitions
-from conftest import CORPUS_CONFIGS, CORPUS_DEFINITIONS, write
+from conftest import CORPUS_CONFIGS, CORPUS_DEFINITIONS, require_tool, write
 
 ELEMENTS = """      <input_manager name="Inputs" version="2">
          <driver>DTrack_drv</driver>
@@ -102,9 +101,9 @@ def test_dtrack_device_is_handled_by_the_bundled_plugin(cli):
     assert "handled by → plug-in DTrack_drv" in result.stdout
 
 
-@pytest.mark.skipif(shutil.which("dot") is None, reason="Graphviz dot is not installed (apt-get install graphviz)")
 @pytest.mark.parametrize("name", ["sim.base.jconf", "example.sim.cluster.jconf", "C4.closed.jconf", "example.dtrack.jconf"])
 def test_dot_output_is_accepted_by_graphviz(cli, name):
+    require_tool("dot", "graphviz")
     result = cli("config", "graph", CORPUS_CONFIGS / name, "--format", "dot")
     assert result.exit_code == 0
     done = subprocess.run(["dot", "-Tsvg"], input=result.stdout, capture_output=True, text=True, timeout=30)

@@ -13,7 +13,7 @@ from gadgetctl.resources import examples_dir
 CONFIGS = Path("/work/shared/corpus/vrjuggler/modules/vrjuggler/data/configFiles")
 CORPUS_DEFINITIONS = CONFIGS.parent / "definitions"
 PLUGINS = Path(__file__).parent / "data" / "plugins"
-needs_corpus = pytest.mark.skipif(not CONFIGS.is_dir(), reason="VR Juggler corpus not available")
+needs_corpus = pytest.mark.usefixtures("corpus")  # a missing corpus fails, never skips
 
 
 def run(*args):

@@ -31,7 +31,7 @@ BUTTONS = KEYBOARD + """
 <digital_proxy name="A Proxy" version="1"><device>Buttons</device><unit>0</unit></digital_proxy>
 <alias name="VJButton0" version="1"><proxy>A Proxy</proxy></alias>
 """
-needs_corpus = pytest.mark.skipif(not CONFIGS.is_dir(), reason="VR Juggler corpus not available")
+needs_corpus = pytest.mark.usefixtures("corpus")  # a missing corpus fails, never skips
 
 
 @pytest.fixture(scope="module")
