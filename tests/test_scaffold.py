@@ -61,7 +61,8 @@ def test_invalid_names_are_refused_with_the_reason(name, reason):
     ("SimulatedAnalogDevice", "standard definition simulated_analog_device"),
     ("digital_proxy", "standard definition digital_proxy"),
     ("InputManager", "standard definition input_manager"),
-    ("IS900", "upstream Gadgeteer driver plug-in IS900_drv"),
+    ("IS900", "bundled driver plug-in IS900_drv"),
+    ("IntersenseAPI", "upstream Gadgeteer driver plug-in IntersenseAPI_drv"),  # a vendor SDK's
 ])
 def test_names_of_standard_definitions_and_plugins_are_refused(name, clash):
     with pytest.raises(ScaffoldError, match=f"clashes with the {clash}"):
