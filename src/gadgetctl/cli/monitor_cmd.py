@@ -30,6 +30,7 @@ UNITS_OPTION = typer.Option(LengthUnits.meters, "--units", help="Length unit of 
 QUATERNION_OPTION = typer.Option(False, "--quaternion", help="Also show orientations as quaternions (w x y z).")
 INTERVAL_OPTION = typer.Option(1.0, "--interval", metavar="SECONDS", help="Seconds between two tables of --format table.")
 MOUSE_OPTION = typer.Option(True, "--mouse/--no-mouse", help="Live view: report mouse buttons, motion and wheel to the keyboard_mouse_device.")
+KEYBOARD_OPTION = typer.Option(None, "--keyboard", metavar="NAME", help="Live view: the keyboard_mouse_device that gets the keys and the mouse first (Tab gives them to the next one). Default: the first.")
 
 
 def register(app: typer.Typer) -> None:
@@ -49,6 +50,7 @@ def monitor(
     quaternion: bool = QUATERNION_OPTION,
     interval: float = INTERVAL_OPTION,
     mouse: bool = MOUSE_OPTION,
+    keyboard: str | None = KEYBOARD_OPTION,
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
     trust_driver_path: bool = TRUST_OPTION,
     definitions: list[Path] = DEFINITIONS_OPTION,
@@ -62,8 +64,8 @@ def monitor(
     arguments watch a VRPN device with no configuration (asked first for its layout); the others
     select what to show by name or glob pattern ('Wave*'). Keys in the live view: q quits,
     p pauses the display (sampling goes on), r resets the statistics, m writes a named
-    marker, PgUp/PgDn scroll; other keys and the mouse go to the configuration's
-    keyboard_mouse_device, as VR Juggler's simulator window does.
+    marker, PgUp/PgDn scroll, Tab gives the keys to the next keyboard_mouse_device; other
+    keys and the mouse go to that one device, as VR Juggler's simulator window does.
 
     Exit status: 0; 1 when a selected element ended pending, faulted or stupefied, or a
     device faulted; 2 for usage errors (unreadable configuration, unknown name).
@@ -80,7 +82,7 @@ def monitor(
             configs.append(write_configuration(watched, Path(scratch)))
         code = run_monitor(configs, selectors, rate=rate, duration=duration, fmt=fmt, per_frame=per_frame,
                            record=record, overwrite=overwrite, stats=stats, units=units.value,
-                           quaternion=quaternion, interval=interval, mouse=mouse, driver_paths=driver_paths,
+                           quaternion=quaternion, interval=interval, mouse=mouse, keyboard=keyboard, driver_paths=driver_paths,
                            definitions=definitions, bundled=bundled)
     raise typer.Exit(code)
 
@@ -136,10 +138,24 @@ def check_options(rate: float, duration: float | None, interval: float) -> None:
         raise GadgetctlError(f"--interval must be positive, not {interval:g}")
 
 
+def check_keyboard(name: str | None, keyboards: list[str]) -> None:
+    """``--keyboard NAME`` must name a keyboard_mouse_device of the configuration."""
+    from gadgetctl.errors import GadgetctlError
+    from gadgetctl.suggest import did_you_mean
+
+    if name is None or name in keyboards:
+        return
+    if not keyboards:
+        raise GadgetctlError(f"--keyboard {name!r}: the configuration has no keyboard_mouse_device")
+    hint = did_you_mean(name, keyboards)
+    raise GadgetctlError(f"--keyboard {name!r}: no keyboard_mouse_device of that name"
+                         + (f"; {hint}" if hint else f" (there are: {', '.join(keyboards)})"))
+
+
 def run_monitor(configs: list[Path], selectors: list[str], *, rate: float = 60.0, duration: float | None = None,
                 fmt: OutputFormat | None = None, per_frame: bool = False, record: Path | None = None,
                 overwrite: bool = False, stats: bool = False, units: str = "meters", quaternion: bool = False,
-                interval: float = 1.0, mouse: bool = True, driver_paths: list[Path] | None = None,
+                interval: float = 1.0, mouse: bool = True, keyboard: str | None = None, driver_paths: list[Path] | None = None,
                 definitions: list[Path] | None = None, bundled: bool = True, heading: str = "gadgetctl monitor") -> int:
     from gadgetctl.cli.monitor_run import RunOptions, check_record_path, choose_format, run
     from gadgetctl.input.manager import InputManager, ManagerOptions
@@ -159,9 +175,14 @@ def run_monitor(configs: list[Path], selectors: list[str], *, rate: float = 60.0
     except BaseException:
         manager.shutdown()
         raise
+    try:
+        check_keyboard(keyboard, session.keyboards())
+    except BaseException:
+        manager.shutdown()
+        raise
     notes = [f"{d.location}: {d.message}" for d in configuration.diagnostics if d.severity.value == "warning"]
     title = " ".join(str(p) for p in configs)
     return run(session, RunOptions(format=mode, duration=duration, per_frame=per_frame, stats=stats,
                                    record=record, overwrite=overwrite, interval=interval, length_unit=units,
-                                   quaternion=quaternion, mouse=mouse, title=title, heading=heading,
+                                   quaternion=quaternion, mouse=mouse, keyboard=keyboard, title=title, heading=heading,
                                    notes=notes))

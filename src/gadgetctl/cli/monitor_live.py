@@ -141,6 +141,7 @@ class LiveView:
         self.paused = False
         self.offset = 0
         self.prompt: str | None = None
+        self.focus: str | None = None  # the keyboard_mouse_device that gets the keys
         self.message = ""
         self.total_lines = 0
         self.screen = Screen(console)
@@ -215,7 +216,9 @@ class LiveView:
         keyboards = session.keyboards()
         second = Line().add("q quit  p pause  r reset stats  m marker  PgUp/PgDn scroll  ", "dim")
         if keyboards:
-            second.add("other keys and the mouse → " + ", ".join(keyboards), "dim")
+            second.add("other keys and the mouse → ", "dim").add(self.focus or keyboards[0], "bold")
+            if len(keyboards) > 1:
+                second.add(f"  (Tab: next of {len(keyboards)} keyboards)", "dim")
         else:
             second.add("(no keyboard_mouse_device: other keys are ignored)", "dim")
         third = Line()

@@ -32,6 +32,7 @@ class RunOptions:
     length_unit: str = "meters"
     quaternion: bool = False
     mouse: bool = True
+    keyboard: str | None = None  # the keyboard_mouse_device keys go to first (None: the first one)
     title: str = ""
     heading: str = "gadgetctl monitor"
     notes: list[str] = field(default_factory=list)
@@ -226,7 +227,7 @@ def _live(session: MonitorSession, options: RunOptions, human) -> None:
         if options.record else None
     view = LiveView(session, console, title=options.title, length_unit=options.length_unit,
                     quaternion=options.quaternion, recording=recording, heading=options.heading)
-    controls = _Controls(session, view, has_recording=options.record is not None)
+    controls = _Controls(session, view, has_recording=options.record is not None, keyboard=options.keyboard)
     notice = RateNotice(session, lambda text: setattr(view, "message", text))
     with RawTerminal(mouse=options.mouse) as terminal, view:
         # a finished replay stays on screen (FINISHED) until q, unless a duration was given
@@ -245,11 +246,23 @@ class _Controls:
     """What the keys of the live view do: the monitor's own keys, the marker prompt, and
     everything else forwarded to the keyboard/mouse devices."""
 
-    def __init__(self, session: MonitorSession, view, *, has_recording: bool) -> None:
+    def __init__(self, session: MonitorSession, view, *, has_recording: bool, keyboard: str | None = None) -> None:
         self.session = session
         self.view = view
         self.has_recording = has_recording
         self.quit = False
+        keyboards = session.keyboards()
+        view.focus = keyboard if keyboard in keyboards else (keyboards[0] if keyboards else None)
+
+    def cycle_focus(self, step: int) -> None:
+        """Give the keys to the next (or previous) keyboard_mouse_device."""
+        keyboards = self.session.keyboards()
+        if not keyboards:
+            return
+        current = keyboards.index(self.view.focus) if self.view.focus in keyboards else -step
+        self.view.focus = keyboards[(current + step) % len(keyboards)]
+        self.view.message = f"keys and the mouse go to {self.view.focus}"
+        self.view.draw(force=True)
 
     def handle(self, event) -> None:
         from gadgetctl.input.keys import Key
@@ -274,6 +287,9 @@ class _Controls:
             if text == "m":
                 view.prompt = ""
                 view.draw(force=True)
+                return
+            if event.key in (Key.KEY_TAB, Key.KEY_BACKTAB) and len(self.session.keyboards()) > 1:
+                self.cycle_focus(-1 if event.key is Key.KEY_BACKTAB else 1)
                 return
             if event.key in (Key.KEY_PRIOR, Key.KEY_NEXT):
                 view.scroll(-1 if event.key is Key.KEY_PRIOR else 1)
@@ -300,12 +316,16 @@ class _Controls:
         view.draw(force=True)
 
     def _forward(self, event) -> None:
+        """To the focused keyboard_mouse_device only (one window per device, as VR Juggler)."""
+        target = self.view.focus
+        if target is None:
+            return
         events = self.session.manager.events
         if event.kind == "key" and event.key is not None:
-            events.tap(event.key, modifiers=event.modifiers)
+            events.tap(event.key, modifiers=event.modifiers, target=target)
         elif event.kind == "button" and event.key is not None:
-            (events.press if event.pressed else events.release)(event.key)
+            (events.press if event.pressed else events.release)(event.key, target=target)
         elif event.kind == "move":
-            events.move(event.dx, event.dy)
+            events.move(event.dx, event.dy, target=target)
         elif event.kind == "scroll" and event.direction:
-            events.scroll(event.direction)
+            events.scroll(event.direction, target=target)

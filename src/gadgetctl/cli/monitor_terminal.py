@@ -121,6 +121,8 @@ class KeyDecoder:
         self._decoder = codecs.getincrementaldecoder("utf-8")(errors="replace")
 
     def feed(self, data: bytes, moment: float) -> list[TermEvent]:
+        if not data:
+            return []  # nothing new: a pending lone ESC keeps the time it arrived (see flush)
         self._pending += self._decoder.decode(data)
         events: list[TermEvent] = []
         self._parse(events, moment)

@@ -238,8 +238,11 @@ class KeyboardMouse(Input):
     ``key_pressed(k)`` is the number of presses of ``k`` since the previous frame plus one
     if it was held then and still is (for mouse axes: the motion, scaled by the sensitivity).
     ``modifier_only(m)`` is true when exactly that modifier (none, for ``Modifier.NONE``)
-    among shift, ctrl, alt and command counts as pressed this frame. Each event is also
-    kept as a sample, so monitors see them all.
+    among shift, ctrl, alt and command counts as pressed this frame. ``key_pressed_with(k, m)``
+    counts only the presses of ``k`` typed with exactly modifier ``m`` held, so several
+    keystrokes in one frame each keep their own modifiers (``Up Up Shift+Left``: two
+    unmodified Ups and one shifted Left). Each event is also kept as a sample, so monitors
+    see them all.
     """
 
     KIND = DeviceKind.KEYBOARD_MOUSE
@@ -255,45 +258,57 @@ class KeyboardMouse(Input):
         self._carried: set[int] = set()  # keys held at the previous frame
         self._counts: dict[int, float] = {}
         self._frame_counts: dict[int, float] = {}
+        self._combos: dict[tuple[int, frozenset[int]], float] = {}  # (key, modifiers held) -> count
+        self._frame_combos: dict[tuple[int, frozenset[int]], float] = {}
+
+    def _count(self, key: int, amount: float) -> None:
+        self._counts[key] = self._counts.get(key, 0) + amount
+        combo = (key, frozenset(self._held & _MODIFIERS) - {key})
+        self._combos[combo] = self._combos.get(combo, 0) + amount
 
     def process_events(self, events: Sequence[Event]) -> None:
         """Count ``events`` into the current frame and keep each one as a sample."""
-        counts = self._counts
         for event in events:
             if isinstance(event, KeyEvent):
                 key = int(event.key)
                 if event.pressed:
+                    self._count(key, 1)
                     self._held.add(key)
-                    counts[key] = counts.get(key, 0) + 1
                 else:
                     self._held.discard(key)
             elif isinstance(event, MouseMoveEvent):
                 for amount, positive, negative in ((event.dx, Key.MOUSE_POSX, Key.MOUSE_NEGX),
                                                    (event.dy, Key.MOUSE_POSY, Key.MOUSE_NEGY)):
                     if amount:
-                        key = int(positive if amount > 0 else negative)
-                        counts[key] = counts.get(key, 0) + abs(amount) * self.mouse_sensitivity
+                        self._count(int(positive if amount > 0 else negative), abs(amount) * self.mouse_sensitivity)
             elif isinstance(event, ScrollEvent):
                 keys = [SCROLL_KEYS[event.direction]]
                 if self.scroll_as_buttons:
                     keys.append(self.scroll_buttons[event.direction])
                 for key in keys:
-                    counts[int(key)] = counts.get(int(key), 0) + 1
+                    self._count(int(key), 1)
             self.store.add(DeviceKind.KEYBOARD_MOUSE, event.timestamp, (event,))
 
     def end_frame(self) -> None:
         """Freeze this frame's counts: presses since the previous frame, plus one for a key
         held since then and still held. (Gadgeteer adds the one for a key held at the
         previous frame even if it was released meanwhile, so a release shows a frame late.)"""
-        counts = self._counts
         for key in self._carried & self._held:
-            counts[key] = counts.get(key, 0) + 1
-        self._frame_counts = counts
-        self._counts = {}
+            self._count(key, 1)
+        self._frame_counts, self._frame_combos = self._counts, self._combos
+        self._counts, self._combos = {}, {}
         self._carried = set(self._held)
 
     def key_pressed(self, key: Key | int) -> float:
         return self._frame_counts.get(int(key), 0)
+
+    def key_pressed_with(self, key: Key | int, modifier: Modifier | int) -> float:
+        """Presses of ``key`` this frame typed while exactly ``modifier`` (none, for
+        ``Modifier.NONE``; whatever, for ``Modifier.ANY``) was held."""
+        if int(modifier) == Modifier.ANY:
+            return self.key_pressed(key)
+        wanted = frozenset() if int(modifier) == Modifier.NONE else frozenset({int(modifier)})
+        return self._frame_combos.get((int(key), wanted), 0)
 
     def modifier_only(self, modifier: Modifier | int) -> bool:
         down = {k for k in _MODIFIERS if self._frame_counts.get(k, 0) > 0}

@@ -394,6 +394,11 @@ class KeyboardMouseProxy(Proxy):
         device = self.device
         return device.key_pressed(key) if isinstance(device, KeyboardMouse) else 0
 
+    def key_pressed_with(self, key: Key | int, modifier: Modifier | int) -> float:
+        """Presses of ``key`` this frame typed with exactly ``modifier`` held (0 when stupefied)."""
+        device = self.device
+        return device.key_pressed_with(key, modifier) if isinstance(device, KeyboardMouse) else 0
+
     def modifier_only(self, modifier: Modifier | int) -> bool:
         device = self.device
         if isinstance(device, KeyboardMouse):

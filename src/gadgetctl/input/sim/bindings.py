@@ -24,12 +24,12 @@ class KeyBinding:
     name: str = ""
 
     def count(self, keyboard: KeyboardMouseProxy | None) -> float:
-        """Gadgeteer's checkKeyPair: the key's press count if the modifier condition holds."""
+        """Gadgeteer's checkKeyPair: the key's press count if the modifier condition holds,
+        judged per keystroke (the presses typed with exactly that modifier held), so keys of
+        one frame do not lend each other their modifiers."""
         if keyboard is None:
             return 0
-        if self.modifier == Modifier.ANY or keyboard.modifier_only(self.modifier):
-            return keyboard.key_pressed(self.key)
-        return 0
+        return keyboard.key_pressed_with(self.key, self.modifier)
 
     def __str__(self) -> str:
         key = Key(self.key).name if self.key in Key._value2member_map_ else str(self.key)
