@@ -62,7 +62,7 @@ def test_invalid_names_are_refused_with_the_reason(name, reason):
     ("digital_proxy", "standard definition digital_proxy"),
     ("InputManager", "standard definition input_manager"),
     ("IS900", "bundled driver plug-in IS900_drv"),
-    ("IntersenseAPI", "upstream Gadgeteer driver plug-in IntersenseAPI_drv"),  # a vendor SDK's
+    ("DirectXJoystick", "upstream Gadgeteer driver plug-in DirectXJoystick_drv"),  # Windows only
 ])
 def test_names_of_standard_definitions_and_plugins_are_refused(name, clash):
     with pytest.raises(ScaffoldError, match=f"clashes with the {clash}"):
