@@ -150,6 +150,8 @@ def _fastrak_decoder() -> tuple[Callable[[], object], Callable[[], object], int]
     def baseline() -> object:
         return [body.unpack_from(data, i) for i in range(0, len(data), RECORD_SIZE)]
 
+    return ours, baseline, 2000
+
 
 # -- 5DT DataGlove ------------------------------------------------------------------------------
 
@@ -255,6 +257,8 @@ def _flock_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
     def baseline() -> object:
         return [words.unpack_from(data, i) for i in range(0, len(data), 15)]
 
+    return ours, baseline, 2000
+
 
 # -- 5DT Data Glove Ultra Wireless ----------------------------------------------------------------
 
@@ -277,6 +281,31 @@ def _ultraglove_decoder() -> tuple[Callable[[], object], Callable[[], object], i
 
     def baseline() -> object:
         return [record.unpack_from(data, i) for i in range(0, len(data), RECORD_SIZE)]
+
+    return ours, baseline, 2000
+
+
+# -- Immersion IBox ------------------------------------------------------------------------------
+
+
+def _ibox_emulator(link: str, rate: float) -> object:
+    from IBox_drv.emulator import IBoxEmulator
+
+    return IBoxEmulator("motion", rate, link=link).start()
+
+
+def _ibox_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
+    from IBox_drv.emulator import controls, encode_packet
+    from IBox_drv.standalone import PacketScanner
+
+    data = b"".join(encode_packet(0x08, *controls("motion", i)) for i in range(2000))
+    packet = struct.Struct("<x6B")
+
+    def ours() -> object:
+        return PacketScanner().feed(data)
+
+    def baseline() -> object:
+        return [packet.unpack_from(data, i) for i in range(0, len(data), 7)]
 
     return ours, baseline, 2000
 
@@ -372,6 +401,16 @@ ROWS: list[Row] = [
         ),
         lambda device: device.records,  # type: ignore[attr-defined]
         decoder=_ultraglove_decoder,
+    ),
+    Row(
+        "IBox_drv",
+        548.0,
+        "IBox: 7-byte HCI packets (buttons, 4 analogs) fill 38400 baud 8N1 at 548/s",
+        _ibox_emulator,
+        lambda emu: len(emu.sent),  # type: ignore[attr-defined]
+        lambda link: f'<ibox name="Bench" version="1"><port>{link}</port></ibox>',
+        lambda device: device.records,  # type: ignore[attr-defined]
+        decoder=_ibox_decoder,
     ),
 ]
 

@@ -38,6 +38,7 @@ DRIVERS = [
     ("ThreeDMouse_drv", {"position", "digital"}, r"<port>"),
     ("Flock_drv", {"position"}, r"<port>"),
     ("DataGloveUltraWireless_drv", {"analog", "command"}, r"<port>"),
+    ("IBox_drv", {"digital", "analog"}, r"<port>"),
 ]
 # The examples use fixed addresses (/tmp/gadgetctl-pinch, TCP 6000, ...): two test runs on
 # one machine would take them from each other, so runs take turns here.

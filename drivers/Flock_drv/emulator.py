@@ -32,6 +32,9 @@ from types import TracebackType
 
 from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
 
+#: Seconds after the last write before the line counts as drained: the kernel moves what the
+#: master wrote to the slave's input queue a moment later, and only then does FIONREAD count it.
+QUIET = 0.1
 SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
 DEFAULT_LINK = "/tmp/gadgetctl-flock"
 MODEL = b"6DFOB     "
@@ -172,6 +175,7 @@ class FlockEmulator:
         self._points = 0
         self._next_due = 0.0
         self._hangup_due: float | None = None
+        self._written_at = 0.0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
@@ -193,7 +197,9 @@ class FlockEmulator:
         # A streaming device's last frame may still be in the line: let the reader drain it
         # (at most ``linger`` seconds) before the pty goes away with it.
         deadline = time.monotonic() + self.linger
-        while self.unread() and time.monotonic() < deadline:
+        while (self.unread() or time.monotonic() - self._written_at < QUIET) and (
+            time.monotonic() < deadline
+        ):
             time.sleep(0.005)
         self._pty.close()
 
@@ -333,7 +339,8 @@ class FlockEmulator:
         if self.scenario == "disconnect" and self.frames >= self.disconnect_after:
             if self._hangup_due is None:
                 self._hangup_due = time.monotonic() + self.linger
-            if self.unread() and time.monotonic() < self._hangup_due:
+            quiet = time.monotonic() - self._written_at >= QUIET
+            if not (quiet and not self.unread()) and time.monotonic() < self._hangup_due:
                 return  # hang up once the driver has read what was sent
             self.disconnected.set()
             self.streaming = False
@@ -366,6 +373,7 @@ class FlockEmulator:
         return struct.unpack("i", raw)[0]
 
     def _write(self, data: bytes) -> None:
+        self._written_at = time.monotonic()
         self.dropped_bytes += len(data) - self._pty.write(data)
 
 

@@ -376,6 +376,36 @@ def _flock(data: bytes) -> None:
         assert record.quaternion is not None and all(abs(v) <= 1.0 for v in record.quaternion)
 
 
+# -- Immersion IBox -------------------------------------------------------------------------------
+
+
+def _ibox_seeds() -> list[bytes]:
+    from IBox_drv.emulator import GARBAGE_CHUNKS, controls, encode_packet
+
+    def packets(scenario: str) -> bytes:
+        return b"".join(encode_packet(0x08, *controls(scenario, step)) for step in range(12))
+
+    return [packets("motion"), packets("buttons"), b"".join(GARBAGE_CHUNKS) + packets("motion")]
+
+
+@target("ibox.packets", seeds=_ibox_seeds, examples=100, driver="IBox_drv")
+def _ibox(data: bytes) -> None:
+    from IBox_drv.standalone import PacketScanner, packet_size
+
+    scanner = PacketScanner()
+    size = packet_size(scanner.query)
+    got = []
+    for start in range(0, len(data), 97):  # arbitrary chunks, as reads split the line
+        got += scanner.feed(data[start : start + 97])
+        assert len(scanner.buffer) < size
+    assert scanner.records == len(got) <= len(data) // size
+    assert scanner.skipped_bytes + size * len(got) + len(scanner.buffer) == len(data)
+    assert scanner.bad_records <= scanner.skipped_bytes
+    for packet in got:
+        assert set(packet.buttons) <= {0, 1} and len(packet.analog) == 4
+        assert all(0 <= a <= 255 for a in packet.analog)
+
+
 # -- SpaceBall / SpaceMouse -----------------------------------------------------------------------
 
 

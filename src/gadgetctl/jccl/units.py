@@ -128,6 +128,10 @@ UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]
         "digital": _fixed(10, _PINCH),
         "glove": _fixed(2, "Glove 0 is the left hand, glove 1 the right."),
     },
+    "ibox": {
+        "digital": _fixed(4, "Digital units 0-3 are the IBox's buttons 0-3."),
+        "analog": _fixed(4, "Analog units 0-3 are the IBox's analog inputs 0-3."),
+    },
     "intersense": {k: _station_spans(k) for k in ("position", "digital", "analog")},
     "serial_encoder": {"position": _fixed(1, "Position unit 0 is the table (tilt and height).")},
     "data_glove_ultra_wireless": {
