@@ -662,6 +662,32 @@ def _natnet(data: bytes) -> None:
         assert units.update(frame).shape == (6, 4, 4)
 
 
+# -- TUIO (OSC through python-osc) --------------------------------------------------------------
+
+
+def _tuio_seeds() -> list[bytes]:
+    from TUIO_drv.emulator import frame_bundle, message
+
+    return [
+        frame_bundle(3, 4, "motion"),
+        frame_bundle(5, 3, "buttons"),
+        message("set", 1, 0.5, 0.5, 0.0, 0.0, 0.0).build().dgram,
+    ]
+
+
+@target("tuio.datagram", seeds=_tuio_seeds, examples=100, driver="TUIO_drv")
+def _tuio(data: bytes) -> None:
+    from TUIO_drv.standalone import TuioReceiver
+
+    receiver = TuioReceiver(0, 4)
+    good = _tuio_seeds()[0]
+    for datagram in (good, data, data[: len(data) // 2]):
+        receiver.feed(datagram)
+    slots = receiver.slots
+    assert len(slots.digital()) == 4 and len(slots.analog()) == 8
+    assert set(slots.digital()) <= {0, 1} and len(slots._slot) <= 4
+
+
 @target("joystick.events", seeds=_joystick_seeds, examples=100, driver="LinuxJoydev_drv")
 def _joystick(data: bytes) -> None:
     from LinuxJoydev_drv.standalone import (

@@ -65,6 +65,18 @@ def _listed(prop: str, what: str) -> Callable[[ElementAccess, str], UnitRange | 
     return count
 
 
+def _scaled(prop: str, per: int, hint: str) -> Callable[[ElementAccess, str], UnitRange | None]:
+    """``per`` units for each of the count an integer property states."""
+
+    def count(access: ElementAccess, kind: str) -> UnitRange | None:
+        if not access.has(prop):
+            return None
+        value = access.integer(prop)
+        return UnitRange(kind, per * value, f"{per} per {prop} ({value})", hint)
+
+    return count
+
+
 def _children(props: tuple[str, ...], what: str) -> Callable[[ElementAccess, str], UnitRange | None]:
     """One unit per value of each of several variable properties, together."""
 
@@ -160,6 +172,10 @@ UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]
     "simulated_positional_device": {"position": _fixed(1)},
     "simulated_relative_position": {"position": _fixed(1)},
     "simulated_setable_position": {"position": _fixed(1)},
+    "TUIO_drv": {
+        "digital": _stated("points", "Unit i is touch slot i; raise {prop} for more fingers."),
+        "analog": _scaled("points", 2, "Units 2i and 2i+1 are the x and y of touch slot i."),
+    },
     "optitrack": {"position": _children(("rigid_body", "marker"), "embedded bodies and markers")},
     "waveform_device": {
         "analog": _listed("analog_waveform", "channels"),
