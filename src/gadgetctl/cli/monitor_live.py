@@ -35,14 +35,29 @@ BAR_WIDTH = 16
 SPARK_WIDTH = 20
 SPARK_REFRESH = 0.1  # seconds a sparkline is reused
 EIGHTHS = " ▏▎▍▌▋▊▉"
-STATE_STYLES = {"running": "green", "active": "green", "configured": "cyan", "faulted": "bold red",
-                "reconnecting": "yellow", "pending": "yellow", "unknown type": "dim", "stupefied": "yellow", "stopped": "red",
-                "removed": "red"}
+STATE_STYLES = {
+    "running": "green",
+    "active": "green",
+    "configured": "cyan",
+    "faulted": "bold red",
+    "reconnecting": "yellow",
+    "pending": "yellow",
+    "unknown type": "dim",
+    "stupefied": "yellow",
+    "stopped": "red",
+    "removed": "red",
+}
 HEADER_LINES = 3
+COMPACT = 2  # the compact layout shows segments of priority up to this
+DETAILED = 9  # the detailed layout: everything that fits
 NAME_WIDTH = 24
 TYPE_WIDTH = 28
-_SYSTEMS = {"standard": ColorSystem.STANDARD, "256": ColorSystem.EIGHT_BIT,
-            "truecolor": ColorSystem.TRUECOLOR, "windows": ColorSystem.WINDOWS}
+_SYSTEMS = {
+    "standard": ColorSystem.STANDARD,
+    "256": ColorSystem.EIGHT_BIT,
+    "truecolor": ColorSystem.TRUECOLOR,
+    "windows": ColorSystem.WINDOWS,
+}
 
 
 def bar(value: float, width: int = BAR_WIDTH) -> str:
@@ -57,11 +72,39 @@ def bar(value: float, width: int = BAR_WIDTH) -> str:
 
 
 class Line(list):
-    """A screen line: (text, style) segments."""
+    """A screen line: (text, style) segments, each with a priority for narrow terminals
+    (0: always shown; the higher, the sooner it is left out, see :meth:`fit`)."""
 
-    def add(self, text: str, style: str = "") -> Line:
-        self.append((printable(text), style))  # names, values and reasons come from devices and files
+    def __init__(self, *args: object) -> None:
+        super().__init__(*args)
+        self.priorities: list[int] = [0] * len(self)
+
+    def add(self, text: str, style: str = "", priority: int = 0) -> Line:
+        self.append(
+            (printable(text), style)
+        )  # names, values and reasons come from devices and files
+        self.priorities.append(priority)
         return self
+
+    def fit(self, width: int, most: int = DETAILED) -> Line:
+        """The line without segments of priority above ``most``, then without the least
+        important ones (the rightmost first among equals) until it fits ``width`` cells."""
+        keep = [i for i, p in enumerate(self.priorities) if p <= most]
+        size = sum(cell_len(self[i][0]) for i in keep)
+        for level in sorted(
+            {self.priorities[i] for i in keep if self.priorities[i] > 0}, reverse=True
+        ):
+            if size <= width:
+                break
+            for i in reversed([i for i in keep if self.priorities[i] == level]):
+                if size <= width:
+                    break
+                keep.remove(i)
+                size -= cell_len(self[i][0])
+        fitted = Line()
+        for i in keep:
+            fitted.add(self[i][0], self[i][1], self.priorities[i])
+        return fitted
 
     @property
     def plain(self) -> str:
@@ -97,7 +140,9 @@ class Screen:
             if self._system is None or not style:
                 codes = ("", "")
             else:
-                before, _, after = Style.parse(style).render("\0", color_system=self._system).partition("\0")
+                before, _, after = (
+                    Style.parse(style).render("\0", color_system=self._system).partition("\0")
+                )
                 codes = (before, after)
             self._codes[style] = codes
         return codes
@@ -128,9 +173,17 @@ class Screen:
 class LiveView:
     """Draws the dashboard of ``session`` on ``console``'s terminal."""
 
-    def __init__(self, session: MonitorSession, console: Console, *, title: str = "",
-                 length_unit: str = "meters", quaternion: bool = False, recording: str | None = None,
-                 heading: str = "gadgetctl monitor") -> None:
+    def __init__(
+        self,
+        session: MonitorSession,
+        console: Console,
+        *,
+        title: str = "",
+        length_unit: str = "meters",
+        quaternion: bool = False,
+        recording: str | None = None,
+        heading: str = "gadgetctl monitor",
+    ) -> None:
         self.session = session
         self.console = console
         self.title = title
@@ -142,6 +195,7 @@ class LiveView:
         self.offset = 0
         self.prompt: str | None = None
         self.focus: str | None = None  # the keyboard_mouse_device that gets the keys
+        self.compact = False  # v switches between the compact and the detailed layout
         self.message = ""
         self.total_lines = 0
         self.screen = Screen(console)
@@ -182,16 +236,20 @@ class LiveView:
             if shown >= budget:
                 index = position
                 break
+            most = COMPACT if self.compact else DETAILED
             for line in self._element_lines(session.element_view(name, moment)):
                 if line_no >= self.offset and shown < budget:
-                    lines.append(line)
+                    lines.append(line.fit(width, most))
                     shown += 1
                 line_no += 1
         self.total_lines = line_no + (len(names) - index)
         below = len(names) - index
         if below:
-            lines.append(Line().add(f"… {below} more below; PgUp/PgDn scroll, NAME patterns narrow the view",
-                                    "dim"))
+            lines.append(
+                Line().add(
+                    f"… {below} more below; PgUp/PgDn scroll, NAME patterns narrow the view", "dim"
+                )
+            )
         elif self.offset:
             lines.append(Line().add("(scrolled: PgUp goes back)", "dim"))
         return lines
@@ -205,8 +263,10 @@ class LiveView:
         first = Line().add(self.heading, "bold")
         if self.title:
             first.add(f"  {self.title}")
-        first.add(f"  frame {session.frame}  {session.frame_rate:.0f} fps  "
-                  f"{moment - (session.started_at or moment):.1f} s")
+        first.add(
+            f"  frame {session.frame}  {session.frame_rate:.0f} fps  "
+            f"{moment - (session.started_at or moment):.1f} s"
+        )
         if self.recording:
             first.add(f"  recording {self.recording}", "red")
         if session.finished:
@@ -214,11 +274,13 @@ class LiveView:
         if self.paused:
             first.add("  PAUSED (sampling goes on)", "bold yellow")
         keyboards = session.keyboards()
-        second = Line().add("q quit  p pause  r reset stats  m marker  PgUp/PgDn scroll  ", "dim")
+        layout = "detailed" if self.compact else "compact"
+        second = Line().add("q quit  p pause  ", "dim").add("r reset stats  m marker  ", "dim", 1)
+        second.add(f"v {layout}  ", "dim", 1).add("PgUp/PgDn scroll  ", "dim", 2)
         if keyboards:
             second.add("other keys and the mouse → ", "dim").add(self.focus or keyboards[0], "bold")
             if len(keyboards) > 1:
-                second.add(f"  (Tab: next of {len(keyboards)} keyboards)", "dim")
+                second.add(f"  (Tab: next of {len(keyboards)} keyboards)", "dim", 1)
         else:
             second.add("(no keyboard_mouse_device: other keys are ignored)", "dim")
         third = Line()
@@ -226,7 +288,8 @@ class LiveView:
             third.add(f"marker name (Enter to write, Esc to cancel): {self.prompt}▏", "bold")
         elif self.message:
             third.add(self.message, "cyan")
-        return [first, second, third]
+        width = self.console.size.width
+        return [first, second.fit(width), third]
 
     def _element_lines(self, view: ElementView) -> list[Line]:
         if view.element == "device":
@@ -239,31 +302,42 @@ class LiveView:
             target = f"{view.type} → {view.target or '?'}{unit}"
         else:
             target = view.type
-        line.add(f"{target:<40} ", "dim")
+        line.add(f"{target:<40} ", "dim", 3)
         line.add(f"{view.state:<12}", STATE_STYLES.get(view.state, ""))
         if view.reason:
-            line.add(f" {view.reason}", STATE_STYLES.get(view.state, ""))
+            line.add(f" {view.reason}", STATE_STYLES.get(view.state, ""), 1)
         if view.note:
-            line.add(" (VR Juggler would leave it pending)", "dim")
+            line.add(" (VR Juggler would leave it pending)", "dim", 4)
         for unit in view.values:
             line.add(" ")
             self._unit(line, unit, view.element)
         return [line]
 
     def _device_lines(self, view: ElementView) -> list[Line]:
-        head = Line().add(f"{view.name:<{NAME_WIDTH}}", "bold cyan").add(f" {view.type:<{TYPE_WIDTH}} ", "dim")
-        head.add(f"{view.state:<12}", STATE_STYLES.get(view.state, ""))
+        head = (
+            Line()
+            .add(f"{view.name:<{NAME_WIDTH}}", "bold cyan")
+            .add(f" {view.type:<{TYPE_WIDTH}}", "dim", 3)
+        )
+        head.add(f" {view.state:<12}", STATE_STYLES.get(view.state, ""))
         if view.reason:
-            head.add(f"{view.reason}  ", STATE_STYLES.get(view.state, "red"))
+            head.add(f"{view.reason}  ", STATE_STYLES.get(view.state, "red"), 1)
         stats = view.stats
         if stats is not None:
             spf = stats.mean_samples_per_frame
-            head.add(f" {rate_text(stats.window_rate):>8} Hz  {'-' if spf is None else f'{spf:.1f}':>5}/frame  ")
-            head.add(f"dropped {stats.dropped:<3}", "red" if stats.dropped else "")
-            head.add(f" age {age_text(view.age):>9}  jitter {ms_text(stats.jitter):>6} ms"
-                     f"  p99 {ms_text(stats.p99_interval):>6} ms  max gap {ms_text(stats.max_gap):>6} ms")
+            head.add(f" {rate_text(stats.window_rate):>8} Hz")
+            head.add(f"  {'-' if spf is None else f'{spf:.1f}':>5}/frame", "", 3)
+            head.add(
+                f"  dropped {stats.dropped:<3}",
+                "red" if stats.dropped else "",
+                1 if stats.dropped else 2,
+            )
             if stats.faults:
-                head.add(f"  faults {stats.faults}", "red")
+                head.add(f"  faults {stats.faults}", "red", 1)
+            head.add(f"  age {age_text(view.age):>9}", "", 2)
+            head.add(f"  jitter {ms_text(stats.jitter):>6} ms", "", 4)
+            head.add(f"  p99 {ms_text(stats.p99_interval):>6} ms", "", 5)
+            head.add(f"  max gap {ms_text(stats.max_gap):>6} ms", "", 5)
         lines = [head]
         digital = []
         for unit in view.values:
@@ -306,15 +380,23 @@ class LiveView:
         kind = unit.kind
         if kind == "analog":
             value = float(unit.value)
-            line.add(bar(value), "blue").add(f" {value:6.3f}")
+            line.add(bar(value), "blue", 3).add(f" {value:6.3f}")
             if unit.raw is not None:
-                line.add(f" raw {unit.raw:<9.4g}", "dim")
+                line.add(f" raw {unit.raw:<9.4g}", "dim", 2)
             if unit.history:
-                line.add(" " + self._spark(unit.history, now()), "magenta")
+                line.add(" " + self._spark(unit.history, now()), "magenta", 4)
         elif kind == "digital":
             self._button(line, unit, element)
         elif kind == "position":
-            line.add(position_text(unit.value, self.length_unit, self.quaternion))
+            translation, _, rest = position_text(
+                unit.value, self.length_unit, self.quaternion
+            ).partition("  rot")
+            line.add(translation)
+            if rest:
+                rotation, _, quaternion = rest.partition("  q ")
+                line.add("  rot" + rotation, "", 2)
+                if quaternion:
+                    line.add("  q " + quaternion, "", 4)
         elif kind == "glove":
             line.add(glove_text(unit.value))
         else:

@@ -284,6 +284,11 @@ class _Controls:
                 self.session.reset_stats()
                 view.message = "statistics reset"
                 return
+            if text == "v":
+                view.compact = not view.compact
+                view.message = f"{'compact' if view.compact else 'detailed'} layout (v switches)"
+                view.draw(force=True)
+                return
             if text == "m":
                 view.prompt = ""
                 view.draw(force=True)
