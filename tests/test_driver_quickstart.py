@@ -40,6 +40,7 @@ DRIVERS = [
     ("Flock_drv", {"position"}, r"<port>"),
     ("DataGloveUltraWireless_drv", {"analog", "command"}, r"<port>"),
     ("IBox_drv", {"digital", "analog"}, r"<port>"),
+    ("Trackd_drv", {"position", "digital", "analog"}, r"Press Ctrl-C"),
 ]
 # The examples use fixed addresses (/tmp/gadgetctl-pinch, TCP 6000, ...): two test runs on
 # one machine would take them from each other, so runs take turns here.

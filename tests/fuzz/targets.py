@@ -729,6 +729,35 @@ def _joystick(data: bytes) -> None:
             os.close(write_end)
 
 
+# -- trackd shared memory -------------------------------------------------------------------------
+
+
+def _trackd_seeds() -> list[bytes]:
+    from Trackd_drv.emulator import sensor_pose
+    from Trackd_drv.standalone import encode_controller, encode_tracker
+
+    return [
+        encode_tracker([sensor_pose(3, i) for i in range(16)], (1, 2)),
+        encode_tracker([sensor_pose(0, 0)], claimed=5),
+        encode_controller([1, 0, 1, 0], [0.5, -0.5], (1, 2)),
+        encode_controller([1], [], claimed_buttons=70000),
+    ]
+
+
+@target("trackd.segment", seeds=_trackd_seeds, examples=100, driver="Trackd_drv")
+def _trackd(data: bytes) -> None:
+    from Trackd_drv.standalone import MAX_UNITS, BadSegment, decode_controller, decode_tracker
+
+    for decode in (decode_tracker, decode_controller):
+        try:
+            state = decode(data)
+        except BadSegment:
+            continue
+        units = (state.sensors,) if hasattr(state, "sensors") else (state.buttons, state.valuators)
+        assert all(len(u) <= MAX_UNITS for u in units)
+        assert sum(len(u) for u in units) * 4 <= len(data)
+
+
 # -- JCCL files -----------------------------------------------------------------------------------
 
 

@@ -95,6 +95,12 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
 
         return [check_vrpn_name(name, probe=settings.probe, timeout=settings.timeout)
                 .with_prop(transport.props["name"])]
+    if kind == "shm":
+        from gadgetctl.doctor.shm import check_shm
+
+        key = int(_read(access, transport, "key", number=True) or 0)
+        return [check_shm(key, identity=settings.identity, emulator=settings.emulator)
+                .with_prop(transport.props["key"])]
     return []
 
 

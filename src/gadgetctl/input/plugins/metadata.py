@@ -34,6 +34,7 @@ TRANSPORT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "udp": (("port",), ("host", "peer_port")),
     "tcp": (("host", "port"), ()),
     "vrpn": (("name",), ("count",)),  # a Device@host name; count: 0 means unused
+    "shm": (("key",), ()),  # a System V shared-memory key (trackd)
 }
 
 
