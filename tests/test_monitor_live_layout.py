@@ -5,6 +5,7 @@ re-lays the view out, and v switches between the compact and the detailed layout
 
 from __future__ import annotations
 
+import re
 import shlex
 import sys
 
@@ -98,3 +99,26 @@ def test_v_switches_between_the_compact_and_the_detailed_layout():
         pane.wait_for(r"^Waveform\s+waveform_device\s+running.*max gap")
         pane.keys("q", literal=True)
         pane.wait_for(r"EXIT=0")
+
+
+def test_quitting_the_live_view_prints_a_summary_with_the_recording(tmp_path):
+    path = tmp_path / "run.ndjson"
+    shown = " ".join(shlex.quote(str(a)) for a in (sys.executable, "-m", "gadgetctl", "monitor", WAVEFORM,
+                                                    "Waveform Noise", "--record", path))
+    with Pane(shown, cols=160, rows=40) as pane:
+        pane.wait_for(r"^Waveform Noise\s+waveform_device\s+running")
+        pane.keys("m", literal=True)
+        pane.wait_for(r"marker name")
+        pane.keys("here", "Enter")
+        pane.wait_for(r"marker 'here' written to the recording")
+        pane.keys("q", literal=True)
+        pane.wait_for(r"EXIT=0")
+        screen = pane.screen()
+    assert "q quit" not in screen  # the live view is gone, the summary stays
+    assert "frames: " in screen and "statistics:" in screen
+    row = next(line for line in screen.splitlines() if line.startswith("Waveform Noise"))
+    assert "running" in row and int(row.split()[3]) > 0  # samples
+    found = re.search(r"recording: (\S+): (\d+) samples, 1 marker$", screen, re.MULTILINE)
+    assert found and found.group(1) == str(path)
+    records = path.read_text().splitlines()
+    assert int(found.group(2)) == sum('"type":"sample"' in line for line in records) > 0

@@ -192,8 +192,14 @@ def _finish(session: MonitorSession, mode: OutputFormat, options: RunOptions, fi
     from gadgetctl.cli.monitor_text import frames_text, stats_text
 
     human = human or sys.stdout
-    if mode is not OutputFormat.ndjson and options.stats:
+    if mode is not OutputFormat.ndjson and (options.stats or mode is OutputFormat.live):
+        # after the live view (which leaves the screen as it was) always, as demo does
         human.write(frames_text(session) + stats_text(final))
+    if mode is OutputFormat.live and options.record is not None:
+        where = "standard output" if records_to_stdout(options.record) else printable(str(options.record))
+        markers = len(session.markers)
+        human.write(f"recording: {where}: {session.samples_written} samples, "
+                    f"{markers} marker{'' if markers == 1 else 's'}\n")
     if session.finished and mode is not OutputFormat.ndjson:
         human.write("replay finished\n")
     human.flush()

@@ -966,6 +966,11 @@ class MonitorSession:
         return result
 
     @property
+    def samples_written(self) -> int:
+        """Sample records written to the recordings so far."""
+        return self._samples_written
+
+    @property
     def frame_rate(self) -> float:
         return 1.0 / self._frame_interval if self._frame_interval > 0 else 0.0
 
