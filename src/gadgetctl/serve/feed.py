@@ -122,11 +122,16 @@ class ServeFeed:
         offset = self.offset
         for kind, frame in frames.items():
             if kind is DeviceKind.POSITION:
-                for stamps, values in chunk_arrays(frame):
-                    matrices = np.asarray(values, dtype=np.float64)
+                for chunk in frame.chunks:
+                    if type(chunk) is Sample:
+                        stamps = np.array([chunk.timestamp + offset])
+                        matrices = np.asarray([chunk.values], dtype=np.float64)
+                    else:  # a batch's arrays as they are (no copy when already float64)
+                        stamps = np.add(chunk.timestamps, offset, dtype=np.float64)
+                        matrices = np.asarray(chunk.values, dtype=np.float64)
                     if matrices.ndim != 4 or not matrices.shape[1]:
                         continue
-                    outlet.tracker(sender, stamps + offset, matrices)
+                    outlet.tracker(sender, stamps, matrices)
                     self.reports += matrices.shape[0] * matrices.shape[1]
             elif kind is DeviceKind.DIGITAL:
                 state = self._buttons.setdefault(sender, _ButtonState())

@@ -111,16 +111,32 @@ class VrpnOutlet:
 
     def _frame_poses(self) -> None:
         pending, self._poses = self._poses, []
-        shapes = np.array([v.shape[:2] for _, _, v in pending])  # (samples, sensors) per batch
-        sizes = shapes[:, 0] * shapes[:, 1]
-        senders = np.repeat(np.array([sender for sender, _, _ in pending], dtype=np.int32), sizes)
-        times = np.repeat(
-            np.concatenate([stamps for _, stamps, _ in pending]),
-            np.repeat(shapes[:, 1], shapes[:, 0]),
-        )
-        # sensor number of each row: its place in its batch, modulo the batch's sensor count
-        starts = np.repeat(np.cumsum(sizes) - sizes, sizes)
-        sensor_numbers = (np.arange(len(senders)) - starts) % np.repeat(shapes[:, 1], sizes)
+        # (samples, sensors) of each batch read as Python ints: one small array per list,
+        # not an array built from a hundred tuples
+        ids: list[int] = []
+        counts: list[int] = []
+        widths: list[int] = []
+        for sender, _, matrices in pending:
+            ids.append(sender)
+            counts.append(matrices.shape[0])
+            widths.append(matrices.shape[1])
+        if len(set(widths)) == 1 and len(set(counts)) == 1:  # the usual frame: alike batches
+            samples, sensors = counts[0], widths[0]
+            senders = np.repeat(np.array(ids, dtype=np.int32), samples * sensors)
+            times = np.repeat(np.concatenate([stamps for _, stamps, _ in pending]), sensors)
+            sensor_numbers = np.tile(np.arange(sensors), len(pending) * samples)
+        else:
+            samples_of = np.array(counts)
+            sensors_of = np.array(widths)
+            sizes = samples_of * sensors_of
+            senders = np.repeat(np.array(ids, dtype=np.int32), sizes)
+            times = np.repeat(
+                np.concatenate([stamps for _, stamps, _ in pending]),
+                np.repeat(sensors_of, samples_of),
+            )
+            # sensor number of each row: its place in its batch, modulo its sensor count
+            starts = np.repeat(np.cumsum(sizes) - sizes, sizes)
+            sensor_numbers = (np.arange(len(senders)) - starts) % np.repeat(sensors_of, sizes)
         flat = np.concatenate([v.reshape(-1, 4, 4) for _, _, v in pending])
         data = pack_poses(
             senders, self._pose, times, sensor_numbers, flat[:, :3, 3], quaternions_xyzw(flat)
