@@ -26,6 +26,7 @@ from conftest import REPO
 DRIVERS = [
     ("LinuxJoydev_drv", {"digital", "analog"}, r"<port_name>"),
     ("DTrack_drv", {"position", "digital", "analog"}, r"<receive_port>"),
+    ("ElexolEther24_drv", {"digital"}, r"<ip_address>"),
     ("TUIO_drv", {"digital", "analog"}, r"<port>"),
     ("OptiTrack_drv", {"position"}, r"<port>"),
     ("PinchGlove_drv", {"glove", "digital"}, r"<port>"),

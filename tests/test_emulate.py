@@ -174,6 +174,7 @@ def test_motion_star_accepts_a_client_on_the_printed_port(emulate):
     ("DTrack_drv", ("--port", "{udp}"), "Press Ctrl-C"),
     ("OptiTrack_drv", ("--port", "{udp}"), "Press Ctrl-C"),
     ("TUIO_drv", ("--port", "{udp}"), "Press Ctrl-C"),
+    ("ElexolEther24_drv", ("--port", "0"), "Press Ctrl-C"),
     ("PinchGlove_drv", ("--port", "{tmp}/pinch"), "<port>"),
     ("MotionStar_drv", ("--port", "0"), "<server_port>"),
 ])
@@ -209,7 +210,7 @@ def test_plugin_without_emulator_exits_2(cli, tmp_path):
 def test_list_shows_the_bundled_emulators(cli):
     result = cli("emulate", "--list")
     assert result.exit_code == 0
-    for name in ("LinuxJoydev_drv", "DTrack_drv", "PinchGlove_drv", "MotionStar_drv", "OptiTrack_drv", "TUIO_drv"):
+    for name in ("LinuxJoydev_drv", "DTrack_drv", "PinchGlove_drv", "MotionStar_drv", "OptiTrack_drv", "TUIO_drv", "ElexolEther24_drv"):
         assert name in result.stdout
     listed = json.loads(cli("emulate", "--list", "--format", "json").stdout)["emulators"]
     dtrack = next(e for e in listed if e["plugin"] == "DTrack_drv")

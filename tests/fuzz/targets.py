@@ -688,6 +688,25 @@ def _tuio(data: bytes) -> None:
     assert set(slots.digital()) <= {0, 1} and len(slots._slot) <= 4
 
 
+# -- Elexol Ether I/O 24 -------------------------------------------------------------------------
+
+
+def _ether24_seeds() -> list[bytes]:
+    return [b"A\x05", b"B\xff", b"C\x00", b"IO24\x00\x0a\xbc\x12\x34\x56\x01\x05"]
+
+
+@target("ether24.reply", seeds=_ether24_seeds, examples=100, driver="ElexolEther24_drv")
+def _ether24(data: bytes) -> None:
+    from ElexolEther24_drv.standalone import Ether24Board, lines
+
+    board = Ether24Board("127.0.0.1")
+    for piece in (data, data[:2], data[2:4]):
+        port = board._classify(piece)
+        assert port is None or 0 <= port < 3
+    assert board.replies + board.bad_replies == 3
+    assert set(lines(board._values, [0, 0xFF, 0x0F])) <= {0, 1}
+
+
 @target("joystick.events", seeds=_joystick_seeds, examples=100, driver="LinuxJoydev_drv")
 def _joystick(data: bytes) -> None:
     from LinuxJoydev_drv.standalone import (

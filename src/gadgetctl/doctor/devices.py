@@ -78,6 +78,11 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
                                     f"commands are sent to {target} (UDP; not contacted)",
                                     prop=transport.props["host"]))
         return checks
+    if kind == "udp-peer":
+        host = str(_read(access, transport, "host") or "")
+        return [PortCheck("udp", host or "(no address)", Status.UNCHECKED,
+                          f"commands are sent to {host or 'no address'} (UDP; not contacted)",
+                          prop=transport.props["host"])]
     if kind == "tcp":
         host = str(_read(access, transport, "host"))
         port = int(_read(access, transport, "port", number=True) or 0)

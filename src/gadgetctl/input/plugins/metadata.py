@@ -31,7 +31,8 @@ _NAMES = (API_VERSION, PLUGIN_NAME, ELEMENT_TYPES, TRANSPORTS)
 TRANSPORT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "file": (("path",), ()),
     "serial": (("port",), ("baud",)),
-    "udp": (("port",), ("host", "peer_port")),
+    "udp": (("port",), ("host", "peer_port", "group")),  # group: a literal multicast address
+    "udp-peer": (("host",), ()),  # only sends to host (a property; "host:port" or a fixed port)
     "tcp": (("host", "port"), ()),
     "vrpn": (("name",), ("count",)),  # a Device@host name; count: 0 means unused
     "shm": (("key",), ()),  # a System V shared-memory key (trackd)

@@ -1,0 +1,168 @@
+"""The Elexol Ether I/O 24 protocol: binary commands to UDP port 2424 and the board's
+replies. Knows nothing of gadgetctl's input manager.
+
+Ports 0, 1, 2 are A, B, C. Read a port: ``'a'+p`` -> reply ``'A'+p, value``. Write a port:
+``'A'+p, value`` (no reply). Registers put a prefix before a write: ``'!'`` direction (1 =
+input), ``'@'`` pull-up (0 = on), ``'#'`` threshold (0 = 2.5 V, 1 = 1.4 V), ``'$'`` Schmitt
+trigger (0 = on). A reply that is not two bytes with a known port letter is a counted bad
+reply, never a fault.
+
+Upstream fix (Gadgeteer's ``Ether24``): a line is reported as 0 or 1; upstream stored the
+masked bit value (8, 16, ...), so line 3 read as 8 when on.
+"""
+
+from __future__ import annotations
+
+import select
+import socket
+import time
+from dataclasses import dataclass
+
+BOARD_PORT = 2424
+PORTS = 3
+LINES = 8 * PORTS
+REGISTERS = {"direction": b"!", "pullup": b"@", "threshold": b"#", "schmitt_trigger": b"$"}
+
+
+class Ether24Disconnected(ConnectionError):
+    """The board did not answer for longer than the peer timeout."""
+
+
+@dataclass(frozen=True)
+class PortSettings:
+    """One port's pins, bit-packed (bit i = pin i), as the board's registers take them."""
+
+    initial_value: int = 0
+    direction: int = 0xFF
+    pullup: int = 0xFF
+    threshold: int = 0xFF
+    schmitt_trigger: int = 0xFF
+    invert: int = 0
+
+
+def parse_address(text: str) -> tuple[str, int]:
+    """``host`` or ``host:port`` (the port defaults to 2424); raises ValueError."""
+    host, _, port = text.strip().rpartition(":") if ":" in text else (text.strip(), "", "")
+    if not host:
+        raise ValueError("no IP address")
+    number = int(port) if port else BOARD_PORT
+    if not 1 <= number <= 65535:
+        raise ValueError(f"port {number} is not between 1 and 65535")
+    return host, number
+
+
+def lines(values: list[int], inverts: list[int]) -> list[int]:
+    """The 24 lines as 0 or 1: line ``8p + b`` is bit b of port p's value XOR its invert mask."""
+    return [((values[p] ^ inverts[p]) >> b) & 1 for p in range(PORTS) for b in range(8)]
+
+
+class Ether24Board:
+    """A board at ``host:port``. Counters: ``requests``, ``replies``, ``bad_replies``,
+    ``timeouts``."""
+
+    def __init__(
+        self,
+        host: str,
+        port: int = BOARD_PORT,
+        *,
+        reply_timeout: float = 0.1,
+        peer_timeout: float = 1.0,
+    ) -> None:
+        self.host = host
+        self.port = port
+        self.reply_timeout = reply_timeout
+        self.peer_timeout = peer_timeout
+        self.requests = 0
+        self.replies = 0
+        self.bad_replies = 0
+        self.timeouts = 0
+        self._sock: socket.socket | None = None
+        self._last_reply = time.monotonic()
+        self._values = [0] * PORTS
+
+    @property
+    def is_open(self) -> bool:
+        return self._sock is not None
+
+    def open(self) -> None:
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            sock.connect((self.host, self.port))
+        except OSError:
+            sock.close()
+            raise
+        sock.setblocking(False)
+        self._sock = sock
+        self._last_reply = time.monotonic()
+
+    def close(self) -> None:
+        if self._sock is not None:
+            self._sock.close()
+            self._sock = None
+
+    def _send(self, data: bytes) -> None:
+        if self._sock is None:
+            raise Ether24Disconnected("the connection to the board is closed")
+        try:
+            self._sock.send(data)
+        except ConnectionRefusedError:
+            pass  # an ICMP refusal from an earlier datagram: the board is not there (yet)
+
+    def configure(self, ports: list[PortSettings]) -> None:
+        """Write each port's start value and registers, in upstream's order."""
+        for p, settings in enumerate(ports):
+            letter = bytes([ord("A") + p])
+            self._send(letter + bytes([settings.initial_value & 0xFF]))
+            for name, prefix in REGISTERS.items():
+                self._send(prefix + letter + bytes([getattr(settings, name) & 0xFF]))
+
+    def read_ports(self) -> list[int] | None:
+        """Ask for ports A, B, C and wait up to ``reply_timeout`` for the replies: the three
+        values, or None when some did not come (counted). Raises :class:`Ether24Disconnected`
+        after ``peer_timeout`` seconds without any good reply."""
+        sock = self._sock
+        if sock is None:
+            raise Ether24Disconnected("the connection to the board is closed")
+        while True:  # drop replies that came too late for an earlier request
+            try:
+                self._classify(sock.recv(64))
+            except (BlockingIOError, ConnectionRefusedError):
+                break
+        for p in range(PORTS):
+            self._send(bytes([ord("a") + p]))
+            self.requests += 1
+        seen: set[int] = set()
+        deadline = time.monotonic() + self.reply_timeout
+        while len(seen) < PORTS:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([sock], [], [], left)[0]:
+                break
+            try:
+                data = sock.recv(64)
+            except BlockingIOError:
+                continue
+            except ConnectionRefusedError:
+                break
+            port = self._classify(data)
+            if port is not None:
+                seen.add(port)
+        if len(seen) == PORTS:
+            self._last_reply = time.monotonic()
+            return list(self._values)
+        self.timeouts += 1
+        if time.monotonic() - self._last_reply > self.peer_timeout:
+            raise Ether24Disconnected(
+                f"the Ether I/O 24 at {self.host}:{self.port} has not answered "
+                f"for {self.peer_timeout:g} s"
+            )
+        return None
+
+    def _classify(self, data: bytes) -> int | None:
+        """Store a port reply; the port, or None for anything else (counted bad)."""
+        if len(data) == 2 and ord("A") <= data[0] < ord("A") + PORTS:
+            port = data[0] - ord("A")
+            self._values[port] = data[1]
+            self.replies += 1
+            return port
+        self.bad_replies += 1
+        return None
