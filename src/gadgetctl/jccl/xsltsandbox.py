@@ -139,8 +139,18 @@ def run_sandboxed(stylesheet: bytes, element: bytes, *, time_limit: float = TIME
 # --------------------------------------------------------------------------- the child
 
 
-def _peak_memory() -> int:
-    """Bytes of the largest resident set this process has had."""
+def _peak_address_space() -> int:
+    """Bytes of the largest address space this process has had (``VmPeak``): the quantity
+    ``RLIMIT_AS`` limits. The resident set can stay far below the limit when an allocation
+    fails (mappings not yet touched count against the limit, not in the resident set), so
+    judging by it called a failed allocation an ordinary error on a loaded machine."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            for line in status:
+                if line.startswith("VmPeak:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
     import resource
 
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
@@ -167,7 +177,7 @@ def serve(handler: Callable[[bytes, bytes], bytes], errors: tuple[type[Exception
             status, payload = b"R", handler(stylesheet, element)
         except errors as err:
             # libxslt reports a failed allocation as an ordinary error: near the limit it is ours
-            status = b"M" if _peak_memory() > MEMORY_LIMIT // 2 else b"E"
+            status = b"M" if _peak_address_space() > MEMORY_LIMIT // 2 else b"E"
             payload = str(err).encode("utf-8")
         except MemoryError:
             return
