@@ -21,6 +21,7 @@ from rich.style import Style
 from gadgetctl.cli.monitor_text import (
     age_text,
     glove_text,
+    health_text,
     ms_text,
     position_text,
     rate_text,
@@ -334,6 +335,9 @@ class LiveView:
             )
             if stats.faults:
                 head.add(f"  faults {stats.faults}", "red", 1)
+            health = health_text(view.health)
+            if health:
+                head.add(f"  health: {health}", "yellow", 1)
             head.add(f"  age {age_text(view.age):>9}", "", 2)
             head.add(f"  jitter {ms_text(stats.jitter):>6} ms", "", 4)
             head.add(f"  p99 {ms_text(stats.p99_interval):>6} ms", "", 5)

@@ -121,6 +121,27 @@ def difference_lines(snapshot: Snapshot) -> list[str]:
 COLUMNS = ("NAME", "KIND", "TYPE", "STATUS", "RATE Hz", "/FRAME", "DROPPED", "AGE ms", "JITTER ms", "VALUES")
 
 
+#: Driver counters of traffic, not of trouble: left out of the health summary.
+THROUGHPUT = frozenset({"datagrams", "packets", "frames", "records", "polls", "other_messages"})
+#: Health fields shown elsewhere (the dropped and faults columns) or formatted with another.
+_SHOWN_ELSEWHERE = frozenset({"dropped", "faults", "last_fault", "last_fault_at"})
+
+
+def health_text(health: Mapping[str, Any]) -> str:
+    """The trouble a driver counted (non-zero counters) and its last fault with its time;
+    empty when all is well."""
+    import time
+
+    parts = [f"{name} {value:g}" for name, value in health.items()
+             if name not in THROUGHPUT and name not in _SHOWN_ELSEWHERE and isinstance(value, int | float) and value]
+    reason = health.get("last_fault")
+    if reason:
+        at = health.get("last_fault_at")
+        when = time.strftime("%H:%M:%S", time.localtime(at)) + " " if isinstance(at, int | float) else ""
+        parts.append(f"last fault {when}{reason}")
+    return ", ".join(parts)
+
+
 def table_rows(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: bool = False) -> list[list[str]]:
     rows = []
     for element in snapshot.elements:
@@ -140,7 +161,8 @@ def table_rows(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: b
             ms_text(element.age) if element.age is not None else "-",
             ms_text(stats.jitter) if stats and own else ("-" if own else ""),
             values_text(element, length_unit=length_unit, quaternion=quaternion)
-            + (f"  [{element.reason}]" if element.reason else ""),
+            + (f"  [{element.reason}]" if element.reason else "")
+            + (f"  health: {health}" if (health := health_text(element.health)) else ""),
         ])
     return rows
 

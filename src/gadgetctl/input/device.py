@@ -18,6 +18,8 @@ devices), or nobody (devices that compute their data in ``update_data``).
 
 from __future__ import annotations
 
+import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import TYPE_CHECKING, ClassVar, Protocol
@@ -95,6 +97,7 @@ class Input:
         self.store = SampleStore(self.kinds(), DEFAULT_CAP)
         self.state = DeviceState.CONFIGURED
         self.error: str | None = None
+        self.error_at: float | None = None  # wall-clock time (time.time()) of the last fault
         self.faults = 0
         self.restarts = 0
         self.diagnostics: list[Diagnostic] = []
@@ -172,6 +175,7 @@ class Input:
         except Exception as err:  # a faulty driver must not stop the frame loop
             self.faults += 1
             self.error = describe(err)
+            self.error_at = time.time()
             self.state = DeviceState.FAULTED
         else:
             if self.state is DeviceState.FAULTED and self.SAMPLING is SamplingMode.FRAME:
@@ -182,6 +186,23 @@ class Input:
         buffer overflowing, counted by the kernel), added to the dropped samples. A driver that
         can tell overrides this; the default is 0."""
         return 0
+
+    def health(self) -> dict[str, int | float | str]:
+        """The driver's health, one API for every device: the counters its driver keeps
+        (``counters``: bad packets or records, bytes skipped, resynchronisations, kernel
+        drops... as the driver names them), ``faults``, ``reconnects`` (restarts after a
+        fault), ``dropped`` (samples over the per-frame cap) and, after a fault,
+        ``last_fault`` (its reason) and ``last_fault_at`` (wall-clock time)."""
+        counters = getattr(self, "counters", None)
+        found: dict[str, int | float | str] = {}
+        if isinstance(counters, Mapping):
+            found = {str(k): v for k, v in counters.items() if isinstance(v, int | float) and not isinstance(v, bool)}
+        found.update(faults=self.faults, reconnects=self.restarts, dropped=self.stats.dropped)
+        if self.error:
+            found["last_fault"] = self.error
+            if self.error_at is not None:
+                found["last_fault_at"] = round(self.error_at, 3)
+        return found
 
     @property
     def stats(self) -> DeviceStats:

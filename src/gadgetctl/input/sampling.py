@@ -12,6 +12,7 @@ sample. Other devices are not affected.
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -64,6 +65,7 @@ class _Supervision:
         device = self.device
         device.faults += 1
         device.error = describe(error)
+        device.error_at = time.time()
         device.state = DeviceState.FAULTED
         self.close()
 

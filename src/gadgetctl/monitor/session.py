@@ -125,6 +125,7 @@ class ElementView:
     age: float | None = None  # seconds since the newest sample
     count: int = 0  # samples this frame (sampling instants)
     values: list[UnitView] = field(default_factory=list)
+    health: dict[str, object] = field(default_factory=dict)  # a device's Input.health()
 
 
 @dataclass(slots=True)
@@ -959,6 +960,7 @@ class MonitorSession:
             entry["type"] = device.element_type
             entry["kinds"] = [k.value for k in device.kinds()]
             entry["units"] = dict(track.units)
+            entry["health"] = device.health()
             clock = getattr(device, "remote_clock", None)  # devices that keep their source's times
             if clock is not None and getattr(clock, "count", 0):
                 entry["source_clock"] = clock.to_dict()
@@ -1000,6 +1002,7 @@ class MonitorSession:
             if track is not None and track.device is device:
                 self._fill_from_track(view, track, moment)
                 view.values = track.unit_views()
+            view.health = device.health()
             return view
         proxy = manager.proxy(name)
         if proxy is None:
