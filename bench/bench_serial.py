@@ -310,6 +310,31 @@ def _ibox_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
     return ours, baseline, 2000
 
 
+# -- Ascension Wanda -----------------------------------------------------------------------------
+
+
+def _wanda_emulator(link: str, rate: float) -> object:
+    from Wanda_drv.emulator import WandaEmulator
+
+    return WandaEmulator("motion", rate, link=link).start()
+
+
+def _wanda_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
+    from Wanda_drv.emulator import controls, encode_packet
+    from Wanda_drv.standalone import PacketScanner
+
+    data = b"".join(encode_packet(*controls("motion", i)) for i in range(2000))
+    packet = struct.Struct("<3B")
+
+    def ours() -> object:
+        return PacketScanner().feed(data, quiet=True)
+
+    def baseline() -> object:
+        return [packet.unpack_from(data, i) for i in range(0, len(data), 3)]
+
+    return ours, baseline, 2000
+
+
 ROWS: list[Row] = [
     Row(
         "IS900_drv",
@@ -411,6 +436,16 @@ ROWS: list[Row] = [
         lambda link: f'<ibox name="Bench" version="1"><port>{link}</port></ibox>',
         lambda device: device.records,  # type: ignore[attr-defined]
         decoder=_ibox_decoder,
+    ),
+    Row(
+        "Wanda_drv",
+        44.0,
+        "Wanda: 3-byte packets fill 1200 baud 7N1 at 44/s",
+        _wanda_emulator,
+        lambda emu: len(emu.sent),  # type: ignore[attr-defined]
+        lambda link: f'<wanda name="Bench" version="1"><port>{link}</port></wanda>',
+        lambda device: device.records,  # type: ignore[attr-defined]
+        decoder=_wanda_decoder,
     ),
 ]
 

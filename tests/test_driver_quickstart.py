@@ -42,6 +42,7 @@ DRIVERS = [
     ("DataGloveUltraWireless_drv", {"analog", "command"}, r"<port>"),
     ("IBox_drv", {"digital", "analog"}, r"<port>"),
     ("Trackd_drv", {"position", "digital", "analog"}, r"Press Ctrl-C"),
+    ("Wanda_drv", {"digital", "analog"}, r"<port>"),
 ]
 # The examples use fixed addresses (/tmp/gadgetctl-pinch, TCP 6000, ...): two test runs on
 # one machine would take them from each other, so runs take turns here.

@@ -406,6 +406,35 @@ def _ibox(data: bytes) -> None:
         assert all(0 <= a <= 255 for a in packet.analog)
 
 
+# -- Ascension Wanda ------------------------------------------------------------------------------
+
+
+def _wanda_seeds() -> list[bytes]:
+    from Wanda_drv.emulator import GARBAGE_CHUNKS, controls, encode_packet
+
+    def packets(scenario: str) -> bytes:
+        return b"".join(encode_packet(*controls(scenario, step)) for step in range(30))
+
+    return [packets("motion"), packets("buttons"), b"".join(GARBAGE_CHUNKS) + packets("motion")]
+
+
+@target("wanda.packets", seeds=_wanda_seeds, examples=100, driver="Wanda_drv")
+def _wanda(data: bytes) -> None:
+    from Wanda_drv.standalone import LIMIT, PacketScanner
+
+    scanner = PacketScanner()
+    got = []
+    for start in range(0, len(data), 97):  # arbitrary chunks, as reads split the line
+        got += scanner.feed(data[start : start + 97])
+        assert len(scanner.buffer) <= 3
+    got += scanner.feed(b"", quiet=True)
+    assert not scanner.buffer or len(scanner.buffer) < 3
+    assert scanner.records == len(got) <= len(data) // 3
+    assert scanner.bad_records <= scanner.skipped_bytes <= len(data)
+    for packet in got:
+        assert set(packet.buttons) <= {0, 1} and all(-LIMIT <= a <= LIMIT for a in packet.axes)
+
+
 # -- SpaceBall / SpaceMouse -----------------------------------------------------------------------
 
 
@@ -595,7 +624,9 @@ def _ultraglove_seeds() -> list[bytes]:
     return [b"".join(records), b"".join(g + r for g, r in zip(GARBAGE * 2, records, strict=True))]
 
 
-@target("ultraglove.records", seeds=_ultraglove_seeds, examples=100, driver="DataGloveUltraWireless_drv")
+@target(
+    "ultraglove.records", seeds=_ultraglove_seeds, examples=100, driver="DataGloveUltraWireless_drv"
+)
 def _ultraglove(data: bytes) -> None:
     from DataGloveUltraWireless_drv.standalone import (
         RECORD_SIZE,

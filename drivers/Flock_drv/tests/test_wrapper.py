@@ -143,8 +143,9 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
         timeout=5,
         step=manager.update,
     )
-    status = manager.status("F")
-    assert status.reason and "serial line lost" in status.reason
+    reason = manager.status("F").reason or ""
+    # the line went, or (once the manager retried) the hung-up pty behind the link is gone
+    assert "serial line lost" in reason or "cannot open" in reason, reason
     assert device.records == 20  # 10 frames of 2 birds, none lost
     emu.stop()
     before = device.records

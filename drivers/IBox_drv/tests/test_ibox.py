@@ -197,7 +197,9 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
         timeout=5,
         step=manager.update,
     )
-    assert "serial line lost" in (manager.status("IB").reason or "")
+    reason = manager.status("IB").reason or ""
+    # the line went, or (once the manager retried) the hung-up pty behind the link is gone
+    assert "serial line lost" in reason or "cannot open" in reason, reason
     assert device.records == 20
     emu.stop()
     before = device.records

@@ -84,7 +84,9 @@ def _children(props: tuple[str, ...], what: str) -> Callable[[ElementAccess, str
         if not all(access.has(p) for p in props):
             return None
         written = sum(access.count(p) for p in props)
-        return UnitRange(kind, written, f"{written} {what}", f"Add a {' or '.join(props)} for each unit.")
+        return UnitRange(
+            kind, written, f"{written} {what}", f"Add a {' or '.join(props)} for each unit."
+        )
 
     return count
 
@@ -143,6 +145,10 @@ UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]
     "ibox": {
         "digital": _fixed(4, "Digital units 0-3 are the IBox's buttons 0-3."),
         "analog": _fixed(4, "Analog units 0-3 are the IBox's analog inputs 0-3."),
+    },
+    "wanda": {
+        "digital": _fixed(3, "Digital units 0-2 are the Wanda's buttons (the rightmost is 0)."),
+        "analog": _fixed(2, "Analog units 0 and 1 are the Wanda's joystick X and Y."),
     },
     "intersense": {k: _station_spans(k) for k in ("position", "digital", "analog")},
     "serial_encoder": {"position": _fixed(1, "Position unit 0 is the table (tilt and height).")},

@@ -9,6 +9,7 @@ file, a hang-up or an unplugged adapter raise :class:`SerialLineLost` (reopen to
 
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass
 
@@ -27,6 +28,11 @@ except ImportError:  # not a POSIX system
 LOST = (serial.SerialException, OSError, TermiosError)
 
 PARITIES = {"none": serial.PARITY_NONE, "even": serial.PARITY_EVEN, "odd": serial.PARITY_ODD}
+
+
+def _is_pseudo_terminal(spec: str) -> bool:
+    """Whether ``spec`` names a Unix98 pseudo-terminal (directly or through a link)."""
+    return os.path.realpath(spec).startswith("/dev/pts/")
 
 
 class SerialLineLost(ConnectionError):
@@ -80,6 +86,9 @@ class SerialLine:
         s = self.settings
         try:
             try:
+                if (s.bytesize, s.parity) != (8, "none") and _is_pseudo_terminal(self.spec):
+                    # Known at once: no second open (each open discards what waits in the line)
+                    raise ValueError("a pseudo-terminal carries 8 data bits without parity only")
                 port = serial.serial_for_url(
                     self.spec,
                     baudrate=s.baud,
@@ -88,14 +97,23 @@ class SerialLine:
                     stopbits=s.stopbits,
                     timeout=self.poll_interval,
                 )
-            except (ValueError, serial.SerialException):
+                if (s.bytesize, s.parity, s.stopbits) != (8, "none", 1):
+                    # A Linux pty ignores CS7 or parity in the opening call, then refuses every
+                    # later reconfiguration (each read's timeout change): find out now.
+                    try:
+                        port.timeout = self.poll_interval / 2 or 0.001
+                        port.timeout = self.poll_interval
+                    except (ValueError, serial.SerialException, TermiosError):
+                        port.close()
+                        raise
+            except (ValueError, serial.SerialException, TermiosError):
                 if (s.bytesize, s.parity, s.stopbits) == (8, "none", 1):
                     raise
                 # A pty (and some adapters) refuse the character format: 8N1 still carries
                 # every protocol here.
                 port = serial.serial_for_url(self.spec, baudrate=s.baud, timeout=self.poll_interval)
                 self.degraded.append(f"character format {s.describe()} (line stays 8N1)")
-        except (serial.SerialException, OSError, ValueError) as exc:
+        except (serial.SerialException, OSError, ValueError, TermiosError) as exc:
             raise SerialLineLost(f"cannot open {self.spec}: {exc}") from exc
         self._port, self._owns = port, True
         return self

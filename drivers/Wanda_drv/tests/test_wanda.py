@@ -1,0 +1,265 @@
+"""The Wanda protocol half and device against the emulator over a real pty pair."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+from Wanda_drv.emulator import GARBAGE_CHUNKS, WandaEmulator, encode_packet
+from Wanda_drv.standalone import PacketScanner, Wanda, WandaDisconnected, decode_packet
+
+from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
+from gadgetctl.input.devicetypes import DigitalState
+from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.testing import wait_until
+
+pytestmark = pytest.mark.timeout(30)
+
+HERE = Path(__file__).resolve()
+REPO = HERE.parents[3]
+CONFIG_FILES = (
+    REPO.parent
+    / "shared"
+    / "corpus"
+    / "vrjuggler"
+    / "modules"
+    / "vrjuggler"
+    / "data"
+    / "configFiles"
+)
+FAST = {"reset_time": 0.0, "hello_timeout": 2.0}
+HEAD = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
+    '<elements>\n<input_manager name="IM" version="2"><driver>Wanda_drv</driver></input_manager>\n'
+)
+TAIL = "</elements>\n</configuration>\n"
+
+
+@pytest.fixture
+def emulator() -> Iterator[Callable[..., WandaEmulator]]:
+    made: list[WandaEmulator] = []
+
+    def make(scenario: str = "motion", **kwargs: object) -> WandaEmulator:
+        emu = WandaEmulator(scenario, **{"rate": 100.0, **kwargs})  # type: ignore[arg-type]
+        made.append(emu.start())
+        return emu
+
+    yield make
+    for emu in made:
+        emu.stop()
+
+
+@pytest.fixture
+def managers(monkeypatch) -> Iterator[Callable[..., InputManager]]:
+    made: list[InputManager] = []
+
+    def build(path: Path) -> InputManager:
+        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
+        manager, configuration = InputManager.from_files([path], options=options)
+        made.append(manager)
+        loaded = manager.loader.load_name("Wanda_drv", manager.search)
+        assert loaded.ok, [d.message for d in loaded.diagnostics]
+        for name, value in FAST.items():
+            monkeypatch.setattr(manager.registry.get("wanda").device_class, name, value)
+        manager.configure(configuration)
+        return manager
+
+    yield build
+    for manager in made:
+        manager.shutdown()
+
+
+def write(tmp_path: Path, body: str) -> Path:
+    path = tmp_path / "test.jconf"
+    path.write_text(HEAD + body + TAIL)
+    return path
+
+
+def collect(wanda: Wanda, count: int) -> list:
+    got: list = []
+    assert wait_until(lambda: len(got) >= count, timeout=5, step=lambda: got.extend(wanda.read()))
+    return got
+
+
+def test_packet_bits_sign_and_button_numbering() -> None:
+    # byte 0: sync, button 0 (bit 5), Y bits 7..6 = 11, X bits 7..6 = 00; X 5 sent, Y -3
+    packet = bytes((0x40 | 0x20 | 0x0C, 0x05, 0x3D))
+    decoded = decode_packet(packet)
+    assert decoded is not None
+    assert decoded.buttons == (1, 0, 0) and decoded.axes == (-5, -3)  # X is negated
+    middle = decode_packet(bytes((0x40 | 0x10, 0, 0, 0x20)))
+    assert middle is not None and middle.buttons == (0, 1, 1)  # 0/1, never raw bits
+    clamped = decode_packet(bytes((0x40 | 0x01, 0x00, 0x3F)))  # X raw 64 -> -64 -> -34
+    assert clamped is not None and clamped.axes == (-34, 34 if 0x3F > 34 else 0x3F)
+    assert decode_packet(bytes((0x40, 0x41, 0x00))) is None  # a sync bit inside
+    for buttons, axes in (((1, 1, 0), (34, -34)), ((0, 0, 1), (-7, 12))):
+        assert decode_packet(encode_packet(buttons, axes)) is not None
+        assert decode_packet(encode_packet(buttons, axes)).axes == axes  # type: ignore[union-attr]
+
+
+def test_scanner_resynchronises_by_whole_runs() -> None:
+    a, b = encode_packet((1, 0, 0), (3, 4)), encode_packet((0, 1, 0), (-5, 6))
+    scanner = PacketScanner()
+    out = scanner.feed(b"".join(GARBAGE_CHUNKS) + a + b"\x93" + bytes(40) + b)
+    out += scanner.feed(b"", quiet=True)  # b's 4th byte came: nothing held
+    assert [p.buttons for p in out] == [(1, 0, 0), (0, 1, 0)]
+    assert scanner.bad_records == 2 and scanner.records == 2
+    assert scanner.skipped_bytes == sum(map(len, GARBAGE_CHUNKS)) + 41
+    held = scanner.feed(a)
+    assert held == [] and scanner.feed(b"", quiet=True)[0].axes == (3, 4)
+
+
+def test_hello_and_motion_over_a_pty(emulator) -> None:
+    emu = emulator("motion")
+    with Wanda(emu.address, reset_time=0.0) as wanda:
+        assert wanda.degraded  # the pty stays 8N1 (and has no RTS): tolerated
+        got = collect(wanda, 30)
+    for packet, (buttons, axes) in zip(got, emu.sent[: len(got)], strict=True):
+        assert packet.buttons == buttons and packet.axes == axes
+    assert {abs(p.axes[0]) for p in got} & {34}  # the joystick reaches its limit
+
+
+def test_lost_line_raises_disconnected(emulator) -> None:
+    emu = emulator("disconnect", disconnect_after=15)
+    with Wanda(emu.address, reset_time=0.0) as wanda:
+        got: list = []
+        with pytest.raises(WandaDisconnected):
+            wait_until(lambda: False, timeout=5, step=lambda: got.extend(wanda.read()))
+    assert len(got) == 15 and emu.disconnected.is_set()
+
+
+def element(port: str) -> str:
+    return (
+        f'<wanda name="W" version="1"><port>{port}</port></wanda>\n'
+        + "".join(
+            f'<digital_proxy name="B{u}" version="1"><device>W</device><unit>{u}</unit>'
+            "</digital_proxy>\n"
+            for u in range(3)
+        )
+        + '<analog_proxy name="X" version="1"><device>W</device><unit>0</unit></analog_proxy>\n'
+    )
+
+
+def test_buttons_and_joystick_reach_proxies(tmp_path, emulator, managers) -> None:
+    emu = emulator("buttons")
+    manager = managers(write(tmp_path, element(emu.address)))
+    assert not manager.pending()
+    device = manager.device("W")
+    seen: list[tuple] = []
+
+    def frame() -> None:
+        manager.update()
+        seen.extend(s.values for s in device.store.frame(DeviceKind.DIGITAL))
+
+    assert wait_until(
+        lambda: {(1, 0, 0), (0, 1, 0), (0, 0, 1)} <= set(seen), timeout=10, step=frame
+    ), set(seen)
+    assert device.store.latest(DeviceKind.ANALOG).values == (0.0, 0.0)
+    # the analog range is -34..34 whatever min/max say (definition defaults 0..255)
+    assert manager.proxy("X").data == pytest.approx(0.5)
+    assert all(isinstance(manager.proxy(f"B{u}").data, DigitalState) for u in range(3))
+
+
+def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> None:
+    emu = emulator("garbage")
+    manager = managers(write(tmp_path, element(emu.address)))
+    device = manager.device("W")
+    assert wait_until(lambda: device.records >= 30, timeout=10, step=manager.update)
+    assert device.bad_records >= 20 and device.skipped_bytes > 0
+    assert device.faults == 0 and manager.status("W").state == "running"
+    sent = list(emu.sent)
+    assert device.store.latest(DeviceKind.ANALOG).values in {tuple(map(float, a)) for _b, a in sent}
+
+
+def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, managers) -> None:
+    link = tmp_path / "wanda"
+    emu = emulator("disconnect", disconnect_after=20, link=link)
+    manager = managers(write(tmp_path, element(str(link))))
+    device = manager.device("W")
+    assert emu.disconnected.wait(5)
+    assert wait_until(
+        lambda: manager.status("W").state in ("faulted", "reconnecting"),
+        timeout=5,
+        step=manager.update,
+    )
+    reason = manager.status("W").reason or ""
+    # the line went, or (once the manager retried) the hung-up pty behind the link is gone
+    assert "serial line lost" in reason or "cannot open" in reason, reason
+    assert device.records == 20
+    emu.stop()
+    before = device.records
+    emulator("motion", link=link)
+    back = time.monotonic()
+    assert wait_until(lambda: device.records > before, timeout=2.0, step=manager.update)
+    assert time.monotonic() - back < 2.0
+    assert manager.status("W").state == "running" and device.restarts >= 1
+
+
+def corpus_example(tmp_path: Path, port: str) -> Path:
+    source = CONFIG_FILES / "example.wanda.jconf"
+    assert source.is_file(), f"the VR Juggler corpus is missing: {source}"
+    text = source.read_text(encoding="utf-8")
+    assert text.count("<port>/dev/ttyS1</port>") == 1
+    path = tmp_path / source.name
+    path.write_text(text.replace("<port>/dev/ttyS1</port>", f"<port>{port}</port>"))
+    return path
+
+
+def test_corpus_example_delivers_through_its_aliases(tmp_path, emulator, managers) -> None:
+    emu = emulator("buttons")
+    manager = managers(corpus_example(tmp_path, emu.address))
+    assert not manager.pending()
+    pressed: set[str] = set()
+
+    def frame() -> None:
+        manager.update()
+        for alias in ("VJButton0", "VJButton1", "VJButton2"):
+            if manager.proxy(alias).data in (DigitalState.ON, DigitalState.TOGGLE_ON):
+                pressed.add(alias)
+
+    assert wait_until(lambda: len(pressed) == 3, timeout=10, step=frame), pressed
+    assert manager.proxy("VJAnalog0").data == pytest.approx(0.5)  # centred: (0 + 34) / 68
+
+
+def test_gadgetctl_monitor_reads_the_corpus_example(tmp_path, emulator) -> None:
+    emu = emulator("motion")
+    config = corpus_example(tmp_path, emu.address)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "gadgetctl",
+            "monitor",
+            str(config),
+            "--duration",
+            "3",
+            "--format",
+            "ndjson",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=40,
+        cwd=REPO,
+    )
+    records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
+    samples = [r for r in records if r.get("type") == "sample" and r.get("device") == "Wanda"]
+    assert {r["kind"] for r in samples} == {"digital", "analog"}, done.stderr[-2000:]
+    for command in (["validate"], ["doctor"], ["config", "pending"]):
+        out = subprocess.run(
+            [sys.executable, "-m", "gadgetctl", *command, str(config)],
+            capture_output=True,
+            text=True,
+            timeout=30,
+            cwd=REPO,
+        )
+        text = out.stdout + out.stderr
+        assert "DRV001" not in text and "PENDING" not in text and "stays pending" not in text, text
+        if command == ["config", "pending"]:
+            assert "0 pending" in text

@@ -1,0 +1,103 @@
+"""The input-manager side of the Ascension Wanda (element type ``wanda``).
+
+Digital units 0..2 are buttons 0..2 as 0/1 (on the Wanda the rightmost button reports as 0:
+VR Juggler's ``example.wanda.jconf`` aliases VJButton0 to unit 2); analog units 0 and 1 the
+joystick's X and Y, raw -34..34. As Gadgeteer's Wanda driver does, the analog range is -34 to
+34 whatever ``min``/``max`` say (the definition's defaults, 0 and 255, would leave the
+joystick near one end).
+
+Differences from the C++, on purpose: a lost or silent line raises from ``sample`` and the
+input manager restarts the device; bytes outside packets are counted (``bad_records``,
+``skipped_bytes``) and skipped; a sample is added per packet, not per read.
+"""
+
+from __future__ import annotations
+
+from gadgetctl.input import Analog, DeviceConfigError, Digital
+from gadgetctl.jccl.access import ElementAccess
+
+from .standalone import LIMIT, Wanda, WandaError, WandaPacket
+
+
+class WandaDevice(Digital, Analog):
+    """Buttons and joystick of an Ascension Wanda on a serial port."""
+
+    ELEMENT_TYPE = "wanda"
+    sample_interval = 0.0  # sample() waits for packets (at most read_timeout)
+
+    # Protocol timing in seconds (the C++ driver's); tests shorten them.
+    reset_time = 0.1  # each half of the RTS pulse (only where the line has RTS)
+    hello_timeout = 2.0  # for the Wanda's M3
+    silence_timeout = 2.0  # no byte for this long: the line counts as lost
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.port = ""
+        self.read_timeout = 0.02
+        self.wanda: Wanda | None = None
+        self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
+
+    def config(self, access: ElementAccess) -> None:
+        super().config(access)
+        self.analog_min, self.analog_max = -float(LIMIT), float(LIMIT)
+        self.port = access.string("port")
+        timeout_ms = access.integer("read_timeout")
+        if not self.port:
+            raise DeviceConfigError("port is empty: name the serial device the Wanda is on")
+        if not 1 <= timeout_ms <= 10_000:
+            raise DeviceConfigError(f"read_timeout {timeout_ms} ms is outside 1..10000")
+        self.read_timeout = timeout_ms / 1000.0
+
+    def start_sampling(self) -> None:
+        wanda = Wanda(
+            self.port,
+            read_timeout=self.read_timeout,
+            hello_timeout=self.hello_timeout,
+            reset_time=self.reset_time,
+            silence_timeout=self.silence_timeout,
+        )
+        wanda.open()
+        self.wanda = wanda
+
+    def sample(self) -> None:
+        wanda = self.wanda
+        if wanda is None:
+            raise WandaError("the Wanda is not open")
+        for packet in wanda.read():  # raises WandaDisconnected when the line is lost or silent
+            self._add(packet)
+
+    def stop_sampling(self) -> None:
+        wanda, self.wanda = self.wanda, None
+        if wanda is not None:
+            for key in self._counts:
+                self._counts[key] += getattr(wanda, key)
+            wanda.close()
+
+    def _count(self, key: str) -> int:
+        wanda = self.wanda
+        return self._counts[key] + (getattr(wanda, key) if wanda is not None else 0)
+
+    @property
+    def records(self) -> int:
+        """Packets decoded."""
+        return self._count("records")
+
+    @property
+    def bad_records(self) -> int:
+        """Runs of bytes outside packets skipped."""
+        return self._count("bad_records")
+
+    @property
+    def skipped_bytes(self) -> int:
+        """Bytes outside any valid packet."""
+        return self._count("skipped_bytes")
+
+    @property
+    def counters(self) -> dict[str, int]:
+        """The driver's health counters, reconnections included."""
+        return {key: self._count(key) for key in self._counts}
+
+    def _add(self, packet: WandaPacket) -> None:
+        stamp = self.now()
+        self.add_digital_sample(list(packet.buttons), stamp)
+        self.add_analog_sample([float(v) for v in packet.axes], stamp)
