@@ -30,6 +30,8 @@ UNITS_OPTION = typer.Option(LengthUnits.meters, "--units", help="Length unit of 
 QUATERNION_OPTION = typer.Option(False, "--quaternion", help="Also show orientations as quaternions (w x y z).")
 INTERVAL_OPTION = typer.Option(1.0, "--interval", metavar="SECONDS", help="Seconds between two tables of --format table.")
 MOUSE_OPTION = typer.Option(True, "--mouse/--no-mouse", help="Live view: report mouse buttons, motion and wheel to the keyboard_mouse_device.")
+CHECK_OPTION = typer.Option(True, "--check/--no-check", help="Check the configurations first and print their errors and warnings as validate does (--no-check skips it).")
+STRICT_OPTION = typer.Option(False, "--strict", help="Do not start when the configuration checks find errors (exit status 1).")
 KEYBOARD_OPTION = typer.Option(None, "--keyboard", metavar="NAME", help="Live view: the keyboard_mouse_device that gets the keys and the mouse first (Tab gives them to the next one). Default: the first.")
 
 
@@ -51,6 +53,8 @@ def monitor(
     interval: float = INTERVAL_OPTION,
     mouse: bool = MOUSE_OPTION,
     keyboard: str | None = KEYBOARD_OPTION,
+    check: bool = CHECK_OPTION,
+    strict: bool = STRICT_OPTION,
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
     trust_driver_path: bool = TRUST_OPTION,
     definitions: list[Path] = DEFINITIONS_OPTION,
@@ -77,6 +81,10 @@ def monitor(
     watched = [a for a in arguments if is_vrpn_argument(a)]
     configs, selectors = split_arguments([a for a in arguments if not is_vrpn_argument(a)],
                                          require_config=not watched)
+    if check:
+        from gadgetctl.cli.preflight import check_before_running
+
+        check_before_running(configs, definitions=definitions, bundled=bundled, strict=strict)
     with tempfile.TemporaryDirectory(prefix="gadgetctl-vrpn-") as scratch:
         if watched:  # vrpn:Device@host: a vrpn element per device, laid out as the server shows
             configs.append(write_configuration(watched, Path(scratch)))

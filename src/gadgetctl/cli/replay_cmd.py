@@ -8,6 +8,7 @@ import typer
 
 from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION, TRUST_OPTION
 from gadgetctl.cli.monitor_cmd import (
+    CHECK_OPTION,
     DURATION_OPTION,
     FORMAT_OPTION,
     INTERVAL_OPTION,
@@ -17,6 +18,7 @@ from gadgetctl.cli.monitor_cmd import (
     QUATERNION_OPTION,
     RATE_OPTION,
     STATS_OPTION,
+    STRICT_OPTION,
     UNITS_OPTION,
     LengthUnits,
     OutputFormat,
@@ -47,6 +49,8 @@ def replay(
     quaternion: bool = QUATERNION_OPTION,
     interval: float = INTERVAL_OPTION,
     mouse: bool = MOUSE_OPTION,
+    check: bool = CHECK_OPTION,
+    strict: bool = STRICT_OPTION,
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
     trust_driver_path: bool = TRUST_OPTION,
     definitions: list[Path] = DEFINITIONS_OPTION,
@@ -63,6 +67,10 @@ def replay(
     if summary:
         _summary(recording, fmt)
         return
+    if check and configs:
+        from gadgetctl.cli.preflight import check_before_running
+
+        check_before_running(list(configs), definitions=definitions, bundled=bundled, strict=strict)
     code = run_replay(recording, list(names or ()), speed=speed, loop=loop, configs=configs, mapping=mapping,
                       rate=rate, duration=duration, fmt=fmt, per_frame=per_frame, record=record,
                       overwrite=overwrite, stats=stats, units=units.value, quaternion=quaternion,

@@ -1,0 +1,60 @@
+"""Checks before running: `monitor` and `replay --config` check their configurations as
+`validate` would and print the errors and warnings first (the first few, then a summary
+line), so that a mistyped property is seen before the device silently uses its default."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from gadgetctl.errors import GadgetctlError
+
+#: Findings printed in full; the rest are counted in one summary line.
+MOST_SHOWN = 10
+
+
+def check_before_running(
+    configs: list[Path],
+    *,
+    definitions: list[Path] | None = None,
+    bundled: bool = True,
+    strict: bool = False,
+    stream=None,
+) -> None:
+    """Print the configuration findings (errors and warnings) of ``configs`` checked together;
+    with ``strict``, errors stop the run (exit status 1)."""
+    from gadgetctl.diagnostics import Severity
+    from gadgetctl.report import render
+    from gadgetctl.validate import ValidateOptions, validate_paths
+
+    if not configs:
+        return
+    stream = stream or sys.stderr
+    options = ValidateOptions(
+        definition_dirs=list(definitions or ()), bundled=bundled, together=True
+    )
+    result = validate_paths(configs, options)
+    found = [d for d in result.diagnostics if d.severity in (Severity.ERROR, Severity.WARNING)]
+    if not found:
+        return
+    shown = found[:MOST_SHOWN]
+    text = render("text", shown, files_checked=len(result.files), hints=True).rstrip("\n")
+    if len(found) > len(shown):
+        body = [line for line in text.splitlines() if not line.startswith(tuple("0123456789"))]
+        errors = sum(d.severity is Severity.ERROR for d in found)
+        text = "\n".join(body) + (
+            f"\n… and {len(found) - len(shown)} more: {errors} error(s), "
+            f"{len(found) - errors} warning(s) in all (gadgetctl validate --together "
+            + " ".join(str(p) for p in configs)
+            + " shows them)"
+        )
+    stream.write(text + "\n")
+    stream.flush()
+    if strict and any(d.severity is Severity.ERROR for d in found):
+        raise StrictStop("configuration errors found (--strict); not starting")
+
+
+class StrictStop(GadgetctlError):
+    """Configuration errors with --strict: exit status 1, not a usage error."""
+
+    exit_code = 1

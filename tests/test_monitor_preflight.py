@@ -1,0 +1,83 @@
+"""Checks before running (issue 16 item 4): monitor and replay --config print the configuration
+findings as validate does before they start; errors stop the run only with --strict;
+--no-check skips the checks; many findings end in one summary line."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import REPO
+
+pytestmark = pytest.mark.timeout(120)
+
+WAVEFORM = REPO / "examples" / "waveform.jconf"
+HEAD = """<?xml version="1.0" encoding="UTF-8"?>
+<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
+<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">
+<elements>
+"""
+
+
+def mistyped(tmp_path: Path, count: int = 1) -> Path:
+    body = "".join(
+        f'<waveform_device name="DT{i}" version="1"><rate>50.0</rate><sead>{i}</sead></waveform_device>\n'
+        for i in range(count)
+    )
+    path = tmp_path / "typo.jconf"
+    path.write_text(HEAD + body + "</elements>\n</configuration>\n")
+    return path
+
+
+def gadgetctl(*args: object) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "gadgetctl", *map(str, args)],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=90,
+    )
+
+
+def test_a_mistyped_property_is_printed_before_the_monitor_starts(tmp_path):
+    path = mistyped(tmp_path)
+    done = gadgetctl("monitor", path, "--duration", "0.2", "--format", "table")
+    assert done.returncode == 0, done.stderr
+    assert f"{path}:5:" in done.stderr and "error CFG020" in done.stderr and "sead" in done.stderr
+    assert "Did you mean seed?" in done.stderr
+    assert "DT0" in done.stdout  # the run went on
+
+
+def test_strict_stops_on_errors_and_no_check_skips_the_checks(tmp_path):
+    path = mistyped(tmp_path)
+    strict = gadgetctl("monitor", path, "--duration", "0.2", "--format", "table", "--strict")
+    assert strict.returncode == 1 and "CFG020" in strict.stderr and "--strict" in strict.stderr
+    assert "DT0" not in strict.stdout  # never started
+    skipped = gadgetctl("monitor", path, "--duration", "0.2", "--format", "table", "--no-check")
+    assert skipped.returncode == 0 and "CFG020" not in skipped.stderr
+
+
+def test_many_findings_end_in_a_summary_line(tmp_path):
+    path = mistyped(tmp_path, count=14)
+    done = gadgetctl("monitor", path, "--duration", "0.2", "--format", "table")
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.count("error CFG020") == 10
+    assert (
+        "… and 4 more: 14 error(s), 0 warning(s) in all (gadgetctl validate --together"
+        in done.stderr
+    )
+
+
+def test_replay_with_a_configuration_checks_it_first(tmp_path):
+    recording = tmp_path / "run.ndjson"
+    gadgetctl(
+        "monitor", WAVEFORM, "--duration", "0.3", "--format", "ndjson", "--record", recording
+    ).check_returncode()
+    done = gadgetctl(
+        "replay", recording, "--config", mistyped(tmp_path), "--format", "table", "--speed", "10"
+    )
+    assert "error CFG020" in done.stderr and "sead" in done.stderr
+    assert "Waveform" in done.stdout  # the replay ran
