@@ -24,11 +24,14 @@ def check_before_running(
     """Print the configuration findings (errors and warnings) of ``configs`` checked together;
     with ``strict``, errors stop the run (exit status 1)."""
     from gadgetctl.diagnostics import Severity
+    from gadgetctl.files import require_file
     from gadgetctl.report import render
     from gadgetctl.validate import ValidateOptions, validate_paths
 
     if not configs:
         return
+    for path in configs:
+        require_file(path)  # the usual one-line message for a missing or unreadable file
     stream = stream or sys.stderr
     options = ValidateOptions(
         definition_dirs=list(definitions or ()), bundled=bundled, together=True
