@@ -22,6 +22,8 @@ Differences from the C++ wrapper, on purpose:
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from gadgetctl.input import DeviceConfigError, Digital, Glove
@@ -60,6 +62,7 @@ class PinchGloveDevice(Glove, Digital):
         self.info: dict[str, str] = {}
         self.glove: PinchGlove | None = None
         self._counts = {"frames": 0, "bad_frames": 0, "skipped_bytes": 0}
+        self._counts_lock = threading.Lock()
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)  # name, and the glove_position proxy (Glove)
@@ -99,17 +102,21 @@ class PinchGloveDevice(Glove, Digital):
             self._add(frame)
 
     def stop_sampling(self) -> None:
-        glove, self.glove = self.glove, None
+        # Under the lock, so a reader never sees the glove gone and its counts not yet kept.
+        with self._counts_lock:
+            glove, self.glove = self.glove, None
+            if glove is not None:
+                for key in self._counts:
+                    self._counts[key] += getattr(glove, key)
         if glove is not None:
-            for key in self._counts:
-                self._counts[key] += getattr(glove, key)
             glove.close()
 
     # -- counters over every start, for monitors and tests ------------------------------
 
     def _count(self, key: str) -> int:
-        glove = self.glove
-        return self._counts[key] + (getattr(glove, key) if glove is not None else 0)
+        with self._counts_lock:
+            glove = self.glove
+            return self._counts[key] + (getattr(glove, key) if glove is not None else 0)
 
     @property
     def frames(self) -> int:
