@@ -81,3 +81,13 @@ def test_replay_with_a_configuration_checks_it_first(tmp_path):
     )
     assert "error CFG020" in done.stderr and "sead" in done.stderr
     assert "Waveform" in done.stdout  # the replay ran
+
+
+def test_serve_checks_its_configuration_first(tmp_path):
+    path = mistyped(tmp_path)
+    done = gadgetctl("serve", path, "--list")
+    assert done.returncode == 0, done.stderr
+    assert "error CFG020" in done.stderr and "Did you mean seed?" in done.stderr
+    assert "DT0" in done.stdout
+    strict = gadgetctl("serve", path, "--list", "--strict")
+    assert strict.returncode == 1 and "DT0" not in strict.stdout

@@ -9,6 +9,7 @@ from pathlib import Path
 import typer
 
 from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION, TRUST_OPTION
+from gadgetctl.cli.monitor_cmd import CHECK_OPTION, STRICT_OPTION
 from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION, DataFormat, emit
 
 
@@ -87,6 +88,8 @@ def serve(
     trust_driver_path: bool = TRUST_OPTION,
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
+    check: bool = CHECK_OPTION,
+    strict: bool = STRICT_OPTION,
 ) -> None:
     """Run the input manager on CONFIG files and serve every device, proxy and alias over
     VRPN, so that VRPN clients (VR Juggler's VRPN_drv, gadgetctl's, Unity's, vrpn_print_devices)
@@ -106,6 +109,10 @@ def serve(
     from gadgetctl.serve.service import ServeOptions, ServeService
 
     configs, selectors = split_arguments(arguments)
+    if check:  # the configuration findings first, as monitor does
+        from gadgetctl.cli.preflight import check_before_running
+
+        check_before_running(configs, definitions=definitions, bundled=bundled, strict=strict)
     options = ServeOptions(
         selectors=selectors,
         renames=parse_renames(names),
