@@ -78,6 +78,7 @@ class UltraGloveEmulator:
         self.link = Path(link) if link is not None else None
         self.address = ""
         self.sent: list[tuple[int, tuple[int, ...]]] = []
+        self.probe = (ports[0], readings(scenario, ports[0], 0))  # sent before a driver is there
         self.dropped_bytes = 0
         self.drain = 0.5
         self.streaming = threading.Event()
@@ -94,7 +95,8 @@ class UltraGloveEmulator:
     def start(self) -> UltraGloveEmulator:
         if self._thread is None:
             self.address = self._pty.open().address
-            self._write(encode_record(self.ports[0], readings(self.scenario, 0, 0)))  # for a reader
+            # waits for a reader; opening the port discards it, unless it was still on its way
+            self._write(encode_record(*self.probe))
             self._stop.clear()
             self._thread = threading.Thread(
                 target=self._run, name="ultraglove-emulator", daemon=True

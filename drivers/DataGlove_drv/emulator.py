@@ -91,6 +91,7 @@ class DataGloveEmulator:
         self.link = Path(link) if link is not None else None
         self.address = ""
         self.sent: list[tuple[int, ...]] = []
+        self.probe = pose(scenario, 0)  # the packet sent before a driver is there
         self.dropped_bytes = 0
         self.streaming = threading.Event()  # a driver has the line
         self.disconnected = threading.Event()
@@ -107,7 +108,8 @@ class DataGloveEmulator:
     def start(self) -> DataGloveEmulator:
         if self._thread is None:
             self.address = self._pty.open().address
-            self._write(encode_packet(pose(self.scenario, 0), self.hand))  # waits for a reader
+            # waits for a reader; opening the port discards it, unless it was still on its way
+            self._write(encode_packet(self.probe, self.hand))
             self._stop.clear()
             self._thread = threading.Thread(
                 target=self._run, name="dataglove-emulator", daemon=True

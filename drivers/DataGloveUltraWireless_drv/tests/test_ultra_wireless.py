@@ -153,7 +153,8 @@ def test_standalone_reads_both_ports_in_order(emulator) -> None:
     with UltraGlove(emu.address, **FAST) as receiver:
         got = []
         assert wait_until(lambda: len(got) >= 30, step=lambda: got.extend(receiver.poll()))
-    assert [(r.port, r.raw) for r in got] == emu.sent[: len(got)]
+    decoded = [(r.port, r.raw) for r in got]
+    assert decoded in (emu.sent[: len(got)], [emu.probe, *emu.sent][: len(got)])
     assert {r.port for r in got} == {0, 1}
 
 
@@ -166,11 +167,17 @@ def test_units_of_both_gloves_and_their_gestures(emulator, managers) -> None:
     assert not manager.pending()
     frame, analog, commands = collect(manager, "Gloves")
     assert wait_until(lambda: len(analog) > 16, step=frame)
-    want = auto_ranged(emu.sent[: len(analog)])
-    a, b = [0.0] * 14, [0.0] * 14
-    for got, (port, scaled) in zip(analog, want, strict=True):
-        (a if port == 0 else b)[:] = scaled
-        assert got == pytest.approx(tuple(a + b))  # glove A in 0..13, glove B in 14..27
+
+    def replayed(sent: list[tuple[int, tuple[int, ...]]]) -> list[tuple[float, ...]]:
+        a, b, out = [0.0] * 14, [0.0] * 14, []
+        for port, scaled in auto_ranged(sent[: len(analog)]):
+            (a if port == 0 else b)[:] = scaled
+            out.append(tuple(a + b))  # glove A in 0..13, glove B in 14..27
+        return out
+
+    # the record sent before the driver came is discarded, unless it was on its way
+    candidates = [replayed(emu.sent), replayed([emu.probe, *emu.sent])]
+    assert any(analog == [pytest.approx(w) for w in want] for want in candidates), analog[:3]
     seen = {value for c in commands for value in c}
     assert {0, 15} <= seen  # open hands and fists on both gloves
     manager.update()
@@ -195,10 +202,12 @@ def test_garbage_is_resynchronised_and_counted_without_a_fault(emulator, manager
     assert wait_until(lambda: len(analog) > 30, step=frame)
     device = manager.device("Gloves")
     assert device.records >= len(analog)
-    want = auto_ranged(emu.sent[: len(analog)])
     last = analog[-1]
-    port, scaled = want[-1]
-    assert last[14 * port : 14 * port + 14] == pytest.approx(scaled)
+    matches = []
+    for sent in (emu.sent, [emu.probe, *emu.sent]):  # the probe, if it was on its way
+        port, scaled = auto_ranged(sent[: len(analog)])[-1]
+        matches.append(last[14 * port : 14 * port + 14] == pytest.approx(scaled))
+    assert any(matches)
     assert device.bad_records >= 20 and device.skipped_bytes > 100
     assert device.faults == 0 and manager.status("Gloves").state == "running"
 
