@@ -50,7 +50,10 @@ def test_monitor_duration_is_seconds_when_the_frame_rate_is_not_reached() -> Non
     assert achieved == pytest.approx(frames / seconds, rel=0.02)
     notes = [line for line in result.stderr.splitlines() if "not reached" in line]
     assert len(notes) == 1, result.stderr  # said once
-    assert "10000 Hz is not reached" in notes[0] and f"about {achieved:.0f} frames per second" in notes[0]
+    assert "10000 Hz is not reached" in notes[0]
+    # the note is said once, when the shortfall shows; the statistics cover the whole run
+    said = float(re.search(r"about (\d+) frames per second", notes[0]).group(1))
+    assert said == pytest.approx(achieved, rel=0.25)
 
 
 def test_ndjson_monitor_says_so_once_too() -> None:
