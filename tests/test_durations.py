@@ -79,9 +79,14 @@ def test_replay_duration_is_seconds(tmp_path) -> None:
     result = gadgetctl("replay", path, "--loop", "--rate", "10000", "--duration", "1", "--format", "table",
                        "--stats")
     assert result.returncode == 0, result.stderr
-    frames, seconds, _achieved, _requested = frames_of(result)
-    assert frames < 10000 and 1.0 <= seconds < 3.0
-    assert result.stderr.count("not reached") == 1
+    _frames, seconds, achieved, requested = frames_of(result)
+    assert 1.0 <= seconds < 3.0  # wall-clock, not 10,000 frames
+    # 10,000 Hz (the most --rate allows) is reached on a quiet fast machine (9,265 Hz was seen)
+    # and not on a loaded one: the note is said at most once, and surely when far below.
+    notes = result.stderr.count("not reached")
+    assert notes <= 1
+    if achieved < 0.8 * requested:
+        assert notes == 1, result.stderr
 
 
 def test_input_manager_run_duration_is_seconds() -> None:
