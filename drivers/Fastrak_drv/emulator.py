@@ -16,25 +16,16 @@ stylus on station 1) in turn, as the tracker multiplexes them. Scenarios:
 
 from __future__ import annotations
 
-import fcntl
 import math
 import os
 import random
-import select
 import struct
 import sys
-import termios
-import threading
-import time
-from pathlib import Path
-from types import TracebackType
 
-from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
+from gadgetctl.emulation.device import STANDARD_SCENARIOS, PtyDeviceEmulator, pty_parser, run_pty
 
 OUTPUT_LIST = "2,11,16,1"
-#: Seconds after a write before the pty's reader queue shows the bytes for sure.
-PTY_SETTLE = 0.05
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 DEFAULT_LINK = "/tmp/gadgetctl-fastrak"
 VERSION = "3.0GC "
 SYSTEM_ID = "Fastrak gadgetctl emulator"
@@ -97,10 +88,14 @@ def stylus(scenario: str, station: int, step: int) -> int:
     return int(scenario == "buttons" and station == 1 and step // 4 % 2 == 1)
 
 
-class FastrakEmulator:
+class FastrakEmulator(PtyDeviceEmulator):
     """The tracker side on a pty pair. ``rate`` is records per second (all stations together).
     ``sent`` records each valid record as ``(station, position in the unit set, quaternion,
     stylus)``."""
+
+    DEVICE = "Fastrak"
+    BURST = 16  # several records when the loop fell behind, so the rate holds on a busy machine
+    CATCH_UP = math.inf
 
     def __init__(
         self,
@@ -113,100 +108,26 @@ class FastrakEmulator:
         active: tuple[int, ...] = (1, 2),
         seed: int = 7,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
-        self.scenario = scenario
-        self.rate = rate
-        self.disconnect_after = disconnect_after
-        self.linger = linger
-        self.link = Path(link) if link is not None else None
+        super().__init__(
+            scenario, rate, disconnect_after=disconnect_after, linger=linger, link=link
+        )
         self.active = tuple(sorted(active))
-        self.continuous = False
         self.binary = False
         self.centimetres = False
         self.output_lists: dict[int, str] = {}
         self.hemispheres: dict[int, str] = {}
         self.stylus_modes: dict[int, str] = {}
-        self.commands: list[bytes] = []
         self.sent: list[Sample] = []
-        self.dropped_bytes = 0
-        self.disconnected = threading.Event()
-        #: while True nothing is sent (a benchmark counts what was sent)
-        self.paused = False
-        self._emit_lock = threading.Lock()
-        self._written_at = 0.0
-        self.address = ""
-        self._pty = PseudoTerminal(self.link)
         self._rng = random.Random(seed)
         self._line = bytearray()
-        self._next_due = 0.0
-        self._hangup_due: float | None = None
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
 
-    def start(self) -> FastrakEmulator:
-        if self._thread is None:
-            self.address = self._pty.open().address
-            self._stop.clear()
-            self._thread = threading.Thread(target=self._run, name="fastrak-emulator", daemon=True)
-            self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-            self._thread = None
-        self._pty.close()
-
-    def __enter__(self) -> FastrakEmulator:
-        return self.start()
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.stop()
-
-    def pause(self) -> None:
-        """Send nothing more; returns once a record being sent is out, so ``sent`` is final."""
-        with self._emit_lock:
-            self.paused = True
-
-    def send_raw(self, data: bytes) -> None:
-        self._write(data)
+    @property
+    def continuous(self) -> bool:
+        return self.streaming.is_set()
 
     # -- device behaviour ---------------------------------------------------------------
 
-    def _run(self) -> None:
-        while not self._stop.is_set() and self._pty.master >= 0:
-            wait = 0.05
-            if self.continuous:
-                wait = max(0.0, min(wait, self._next_due - time.monotonic()))
-            try:
-                ready, _, _ = select.select([self._pty.master], [], [], wait)
-                if ready:
-                    for value in os.read(self._pty.master, 4096):
-                        self._on_byte(value)
-                # several records when the loop fell behind, so the rate holds on a busy machine
-                with self._emit_lock:
-                    for _ in range(16):
-                        if not (
-                            self.continuous
-                            and not self.paused
-                            and time.monotonic() >= self._next_due
-                        ):
-                            break
-                        self._next_due += 1.0 / self.rate
-                        self._emit()
-            except OSError:
-                break
-
-    def _on_byte(self, value: int) -> None:
+    def on_byte(self, value: int) -> None:
         if self._line:
             if value == ord("\r"):
                 self._on_line(bytes(self._line))
@@ -222,11 +143,9 @@ class FastrakEmulator:
             return
         self.commands.append(bytes([value]))
         if char == "c":
-            self.continuous = False
+            self.streaming.clear()
         elif char == "C" and self.binary:
-            if not self.continuous:
-                self._next_due = time.monotonic()
-            self.continuous = True
+            self.begin_sending()
         elif char in "fF":
             self.binary = char == "f"
         elif char in "uU":
@@ -234,7 +153,7 @@ class FastrakEmulator:
         elif char == "S":
             flags = int(self.binary) | int(self.centimetres) << 1 | int(self.continuous) << 3
             text = f"21S{flags:03X}000      {VERSION:6.6}{SYSTEM_ID:<32.32}".encode("ascii")
-            self._write(text + b"\r\n")
+            self.write(text + b"\r\n")
 
     def _on_line(self, line: bytes) -> None:
         self.commands.append(line)
@@ -243,7 +162,7 @@ class FastrakEmulator:
         station, _, value = rest.partition(",")
         if head == "l" and rest == "1":
             flags = "".join("1" if s in self.active else "0" for s in range(1, 5))
-            self._write(f"21l{flags}\r\n".encode("ascii"))
+            self.write(f"21l{flags}\r\n".encode("ascii"))
         elif head == "O" and station.isdigit():
             self.output_lists[int(station)] = value
         elif head == "H" and station.isdigit():
@@ -251,16 +170,10 @@ class FastrakEmulator:
         elif head == "e" and station.isdigit():
             self.stylus_modes[int(station)] = value
 
-    def _emit(self) -> None:
+    def emit(self) -> None:
         count = len(self.sent)
         if self.scenario == "disconnect" and count >= self.disconnect_after:
-            if self._hangup_due is None:
-                self._hangup_due = time.monotonic() + self.linger
-            if not self._all_read() and time.monotonic() < self._hangup_due:
-                return
-            self.disconnected.set()
-            self.continuous = False
-            self._pty.hang_up()
+            self.hang_up_once_read()
             return
         if not self.active:
             return
@@ -277,67 +190,24 @@ class FastrakEmulator:
             junk = GARBAGE_CHUNKS[count % len(GARBAGE_CHUNKS)]
             junk += bytes(self._rng.randrange(0x31, 0x100) for _ in range(count % 3))
         self.sent.append((station, position, quaternion, button))
-        self._write(junk + encode_record(station, position, quaternion, button))
-
-    def unread(self) -> int:
-        """Bytes sent that the driver has not read yet."""
-        return self._unread()
-
-    def _unread(self) -> int:
-        slave = self._pty.slave
-        if slave < 0:
-            return 0
-        try:
-            raw = fcntl.ioctl(slave, termios.FIONREAD, b"\0\0\0\0")
-        except OSError:
-            return 0
-        return struct.unpack("i", raw)[0]
-
-    def _all_read(self) -> bool:
-        """The driver has read everything sent. A pty moves written bytes to the reader's queue
-        a moment later (the kernel's flip buffer), so the queue is trusted only once
-        :data:`PTY_SETTLE` seconds have passed since the last write."""
-        return time.monotonic() - self._written_at >= PTY_SETTLE and not self.unread()
-
-    def _write(self, data: bytes) -> None:
-        self._written_at = time.monotonic()
-        self.dropped_bytes += len(data) - self._pty.write(data)
+        self.write(junk + encode_record(station, position, quaternion, button))
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the emulator until Ctrl-C, SIGTERM, SIGHUP or ``--duration`` seconds."""
-    parser = emulator_parser(
+    parser = pty_parser(
         "Fastrak_drv.emulator",
         "Emulate a Polhemus Fastrak tracker on a pseudo-terminal.",
-        scenarios=SCENARIOS,
-        default_scenario="motion",
+        default_link=DEFAULT_LINK,
         rate=120.0,
         rate_help="records per second, all stations together",
+        disconnect_after=20,
     )
-    parser.add_argument(
-        "--port",
-        default=DEFAULT_LINK,
-        help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
-        "drivers/Fastrak_drv/example.jconf looks; '' for none)",
-    )
-    parser.add_argument("--disconnect-after", type=int, default=20, help="records before hang-up")
     args = parser.parse_args(argv)
     emulator = FastrakEmulator(
         args.scenario, args.rate, disconnect_after=args.disconnect_after, link=args.port or None
     )
-
-    def announce() -> None:
-        where = str(emulator.link) if emulator.link is not None else emulator.address
-        print(f"Fastrak emulator ({args.scenario}) on {emulator.address}", flush=True)
-        print(f"point the fastrak element at it: <port>{where}</port>", flush=True)
-
-    def check() -> int | None:
-        if emulator.disconnected.is_set():
-            print("scenario finished: the line was hung up", flush=True)
-            return 0
-        return None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run_pty(emulator, title="Fastrak", element="fastrak", duration=args.duration)
 
 
 if __name__ == "__main__":

@@ -17,28 +17,19 @@ two-axis joystick, and a head tracker. Scenarios:
 
 from __future__ import annotations
 
-import fcntl
 import math
 import os
 import random
-import select
 import struct
 import sys
-import termios
-import threading
-import time
-from pathlib import Path
-from types import TracebackType
 
-from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
+from gadgetctl.emulation.device import STANDARD_SCENARIOS, PtyDeviceEmulator, pty_parser, run_pty
 
 # The emulator keeps its own copy of the wire layout, so a mistake in the driver is not
 # mirrored here unnoticed.
 STATION_CHARS = "123456789abcdefghijklmnopqrstuv"
 OUTPUT_LIST = "2,4,40,22,23,1"
-#: Seconds after a write before the pty's reader queue shows the bytes for sure.
-PTY_SETTLE = 0.05
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 DEFAULT_LINK = "/tmp/gadgetctl-is900"
 PRODUCT_IS900 = "9"
 FIRMWARE = "4.26  IS-900 gadgetctl emulator"
@@ -96,11 +87,13 @@ def controls(scenario: str, station: int, step: int) -> tuple[int, tuple[int, in
     return 1 << (step // 5 % 4) if step % 10 < 5 else 0, (step * 7 % 256, 255 - step * 3 % 256)
 
 
-class IS900Emulator:
+class IS900Emulator(PtyDeviceEmulator):
     """The tracker side on a pty pair. ``address`` is the slave's path once started; ``link``
     optionally a symlink to it. ``sent`` records each valid record as ``(station, position in
     inches or centimetres, euler, buttons, analog)``. ``units`` is ``"inches"`` or
     ``"centimetres"`` at power-up."""
+
+    DEVICE = "IS-900"
 
     def __init__(
         self,
@@ -114,95 +107,22 @@ class IS900Emulator:
         stations_on: tuple[int, ...] = (0, 1),
         seed: int = 7,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
-        self.scenario = scenario
-        self.rate = rate
-        self.disconnect_after = disconnect_after
-        self.linger = linger
-        self.link = Path(link) if link is not None else None
+        super().__init__(
+            scenario, rate, disconnect_after=disconnect_after, linger=linger, link=link
+        )
         self.centimetres = units == "centimetres"
         self.binary = False
         self.continuous = True
         self.stations_on = set(stations_on)
         self.output_lists: dict[int, str] = {}
-        self.commands: list[bytes] = []
         self.sent: list[Sample] = []
         self.polls_answered = 0
-        self.dropped_bytes = 0
-        self.disconnected = threading.Event()
-        #: while True nothing is sent (a benchmark counts what was sent)
-        self.paused = False
-        self._emit_lock = threading.Lock()
-        self._written_at = 0.0
-        self.address = ""
-        self._pty = PseudoTerminal(self.link)
         self._rng = random.Random(seed)
         self._line = bytearray()
-        self._polls = 0
-        self._next_due = 0.0
-        self._hangup_due: float | None = None
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
-
-    # -- life cycle -------------------------------------------------------------------
-
-    def start(self) -> IS900Emulator:
-        if self._thread is None:
-            self.address = self._pty.open().address
-            self._stop.clear()
-            self._thread = threading.Thread(target=self._run, name="is900-emulator", daemon=True)
-            self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-            self._thread = None
-        self._pty.close()
-
-    def __enter__(self) -> IS900Emulator:
-        return self.start()
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.stop()
-
-    def pause(self) -> None:
-        """Send nothing more; returns once a record being sent is out, so ``sent`` is final."""
-        with self._emit_lock:
-            self.paused = True
-
-    def send_raw(self, data: bytes) -> None:
-        """Write bytes to the driver as they are (for tests)."""
-        self._write(data)
 
     # -- device behaviour ---------------------------------------------------------------
 
-    def _run(self) -> None:
-        while not self._stop.is_set() and self._pty.master >= 0:
-            wait = 0.05
-            if self._polls:
-                wait = max(0.0, min(wait, self._next_due - time.monotonic()))
-            try:
-                ready, _, _ = select.select([self._pty.master], [], [], wait)
-                if ready:
-                    for value in os.read(self._pty.master, 4096):
-                        self._on_byte(value)
-                with self._emit_lock:
-                    if self._polls and not self.paused and time.monotonic() >= self._next_due:
-                        self._answer_poll()
-            except OSError:
-                break
-
-    def _on_byte(self, value: int) -> None:
+    def on_byte(self, value: int) -> None:
         if self._line:  # a command that ends with CR LF
             self._line.append(value)
             if self._line.endswith(b"\r\n"):
@@ -226,35 +146,27 @@ class IS900Emulator:
             self.centimetres = char == "u"
         elif char == "S":
             flags = int(self.binary) | int(self.centimetres) << 1 | int(self.continuous) << 3
-            self._write(f"21S{flags:03X}000      {FIRMWARE:<38.38}\r\n".encode("ascii"))
+            self.write(f"21S{flags:03X}000      {FIRMWARE:<38.38}\r\n".encode("ascii"))
         elif char == "P" and self.binary:
-            if not self._polls:
-                self._next_due = max(self._next_due, time.monotonic())
-            self._polls = 1  # polls asked while one is pending are answered once
+            self.begin_sending()  # polls asked while one is pending are answered once
 
     def _on_line(self, line: bytes) -> None:
         self.commands.append(line)
         text = line.decode("ascii", "replace")
         if text == "MS":
-            self._write(f"31S{PRODUCT_IS900}IS-900 SimTracker\r\n".encode("ascii"))
+            self.write(f"31S{PRODUCT_IS900}IS-900 SimTracker\r\n".encode("ascii"))
         elif text.startswith("l") and text[2:] in (",0", ",1") and text[1] in STATION_CHARS:
             station = STATION_CHARS.index(text[1])
             (self.stations_on.add if text[3] == "1" else self.stations_on.discard)(station)
         elif text.startswith("O") and text[1:2] in tuple(STATION_CHARS) and text[2:3] == ",":
             self.output_lists[STATION_CHARS.index(text[1])] = text[3:]
 
-    def _answer_poll(self) -> None:
-        self._polls = 0
-        self._next_due = max(self._next_due + 1.0 / self.rate, time.monotonic() - 1.0 / self.rate)
+    def emit(self) -> None:
+        """Answer the poll waiting."""
         if self.scenario == "disconnect" and self.polls_answered >= self.disconnect_after:
-            if self._hangup_due is None:
-                self._hangup_due = time.monotonic() + self.linger
-            if not self._all_read() and time.monotonic() < self._hangup_due:
-                self._polls = 1  # hang up once the driver has read what was sent
-                return
-            self.disconnected.set()
-            self._pty.hang_up()
+            self.hang_up_once_read()  # the poll stays waiting until the line is hung up
             return
+        self.streaming.clear()
         step = self.polls_answered
         self.polls_answered += 1
         scale = 2.54 if self.centimetres else 1.0
@@ -270,51 +182,21 @@ class IS900Emulator:
                 out += bytes(self._rng.randrange(0x31, 0x100) for _ in range(step % 3))
             out += encode_record(station, position, euler, buttons, analog)
             self.sent.append((station, position, euler, buttons, analog))
-        self._write(bytes(out))
-
-    def unread(self) -> int:
-        """Bytes sent that the driver has not read yet."""
-        return self._unread()
-
-    def _unread(self) -> int:
-        slave = self._pty.slave
-        if slave < 0:
-            return 0
-        try:
-            raw = fcntl.ioctl(slave, termios.FIONREAD, b"\0\0\0\0")
-        except OSError:
-            return 0
-        return struct.unpack("i", raw)[0]
-
-    def _all_read(self) -> bool:
-        """The driver has read everything sent. A pty moves written bytes to the reader's queue
-        a moment later (the kernel's flip buffer), so the queue is trusted only once
-        :data:`PTY_SETTLE` seconds have passed since the last write."""
-        return time.monotonic() - self._written_at >= PTY_SETTLE and not self.unread()
-
-    def _write(self, data: bytes) -> None:
-        self._written_at = time.monotonic()
-        self.dropped_bytes += len(data) - self._pty.write(data)
+        self.write(bytes(out))
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the emulator until Ctrl-C, SIGTERM, SIGHUP or ``--duration`` seconds."""
-    parser = emulator_parser(
+    parser = pty_parser(
         "IS900_drv.emulator",
         "Emulate an InterSense IS-900 tracker on a pseudo-terminal.",
-        scenarios=SCENARIOS,
-        default_scenario="motion",
+        default_link=DEFAULT_LINK,
         rate=180.0,
         rate_help="polls answered per second at most",
-    )
-    parser.add_argument(
-        "--port",
-        default=DEFAULT_LINK,
-        help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
-        "drivers/IS900_drv/example.jconf looks; '' for none)",
+        disconnect_after=20,
+        disconnect_help="polls before hang-up",
     )
     parser.add_argument("--units", choices=("inches", "centimetres"), default="inches")
-    parser.add_argument("--disconnect-after", type=int, default=20, help="polls before hang-up")
     args = parser.parse_args(argv)
     emulator = IS900Emulator(
         args.scenario,
@@ -323,19 +205,7 @@ def main(argv: list[str] | None = None) -> int:
         link=args.port or None,
         units=args.units,
     )
-
-    def announce() -> None:
-        where = str(emulator.link) if emulator.link is not None else emulator.address
-        print(f"IS-900 emulator ({args.scenario}) on {emulator.address}", flush=True)
-        print(f"point the intersense element at it: <port>{where}</port>", flush=True)
-
-    def check() -> int | None:
-        if emulator.disconnected.is_set():
-            print("scenario finished: the line was hung up", flush=True)
-            return 0
-        return None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run_pty(emulator, title="IS-900", element="intersense", duration=args.duration)
 
 
 if __name__ == "__main__":

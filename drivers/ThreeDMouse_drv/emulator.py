@@ -14,24 +14,14 @@ Scenarios:
 
 from __future__ import annotations
 
-import fcntl
 import math
 import os
 import random
-import select
-import struct
 import sys
-import termios
-import threading
-import time
-from pathlib import Path
-from types import TracebackType
 
-from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
+from gadgetctl.emulation.device import STANDARD_SCENARIOS, PtyDeviceEmulator, pty_parser, run_pty
 
-#: Seconds after a write before the pty's reader queue shows the bytes for sure.
-PTY_SETTLE = 0.05
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 DEFAULT_LINK = "/tmp/gadgetctl-3dmouse"
 BUTTONS = (0x04, 0x02, 0x01)  # left, middle, right
 
@@ -74,9 +64,11 @@ def state(scenario: str, step: int) -> Sample:
     return (1500, -2500, 9000), (40 * 30, 40 * 45, 40 * 60), flags
 
 
-class ThreeDMouseEmulator:
+class ThreeDMouseEmulator(PtyDeviceEmulator):
     """The mouse side on a pty pair. ``sent`` records each valid report as ``(position in
     1/1000 inch, angles in 1/40 degree, flag bits)``."""
+
+    DEVICE = "3D-mouse"
 
     def __init__(
         self,
@@ -89,85 +81,15 @@ class ThreeDMouseEmulator:
         diagnostic: bytes = b"\xbf\x3f",
         seed: int = 7,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
-        self.scenario = scenario
-        self.rate = rate
-        self.disconnect_after = disconnect_after
-        self.linger = linger
-        self.link = Path(link) if link is not None else None
+        super().__init__(
+            scenario, rate, disconnect_after=disconnect_after, linger=linger, link=link
+        )
         self.diagnostic = diagnostic
-        self.commands: list[bytes] = []
         self.sent: list[Sample] = []
-        self.dropped_bytes = 0
-        self.disconnected = threading.Event()
-        #: while True nothing is sent (a benchmark counts what was sent)
-        self.paused = False
-        self._emit_lock = threading.Lock()
-        self._written_at = 0.0
-        self.address = ""
-        self._pty = PseudoTerminal(self.link)
         self._rng = random.Random(seed)
         self._pending: int | None = None
-        self._polled = False
-        self._next_due = 0.0
-        self._hangup_due: float | None = None
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
 
-    def start(self) -> ThreeDMouseEmulator:
-        if self._thread is None:
-            self.address = self._pty.open().address
-            self._stop.clear()
-            self._thread = threading.Thread(target=self._run, name="3dmouse-emulator", daemon=True)
-            self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-            self._thread = None
-        self._pty.close()
-
-    def __enter__(self) -> ThreeDMouseEmulator:
-        return self.start()
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.stop()
-
-    def pause(self) -> None:
-        """Send nothing more; returns once a record being sent is out, so ``sent`` is final."""
-        with self._emit_lock:
-            self.paused = True
-
-    def send_raw(self, data: bytes) -> None:
-        self._write(data)
-
-    def _run(self) -> None:
-        while not self._stop.is_set() and self._pty.master >= 0:
-            wait = 0.05
-            if self._polled:
-                wait = max(0.0, min(wait, self._next_due - time.monotonic()))
-            try:
-                ready, _, _ = select.select([self._pty.master], [], [], wait)
-                if ready:
-                    for value in os.read(self._pty.master, 4096):
-                        self._on_byte(value)
-                with self._emit_lock:
-                    if self._polled and not self.paused and time.monotonic() >= self._next_due:
-                        self._report()
-            except OSError:
-                break
-
-    def _on_byte(self, value: int) -> None:
+    def on_byte(self, value: int) -> None:
         if self._pending is None:
             if value == ord("*"):
                 self._pending = value
@@ -175,89 +97,42 @@ class ThreeDMouseEmulator:
         self._pending = None
         self.commands.append(b"*" + bytes([value]))
         if value == 0x05:
-            self._write(self.diagnostic)
+            self.write(self.diagnostic)
         elif value == ord("d"):
-            if not self._polled:
-                self._next_due = max(self._next_due, time.monotonic())
-            self._polled = True
+            self.begin_sending()
 
-    def _report(self) -> None:
-        self._polled = False
-        self._next_due = max(self._next_due + 1.0 / self.rate, time.monotonic() - 1.0 / self.rate)
+    def emit(self) -> None:
+        """Answer the poll waiting with one report."""
         count = len(self.sent)
         if self.scenario == "disconnect" and count >= self.disconnect_after:
-            if self._hangup_due is None:
-                self._hangup_due = time.monotonic() + self.linger
-            if not self._all_read() and time.monotonic() < self._hangup_due:
-                self._polled = True
-                return
-            self.disconnected.set()
-            self._pty.hang_up()
+            self.hang_up_once_read()  # the poll stays waiting until the line is hung up
             return
+        self.streaming.clear()
         sample = state(self.scenario, count)
         junk = b""
         if self.scenario == "garbage":
             junk = GARBAGE_CHUNKS[count % len(GARBAGE_CHUNKS)]
             junk += bytes(self._rng.randrange(0x00, 0x80) for _ in range(count % 3))
         self.sent.append(sample)
-        self._write(junk + encode_report(*sample))
-
-    def unread(self) -> int:
-        """Bytes sent that the driver has not read yet."""
-        slave = self._pty.slave
-        if slave < 0:
-            return 0
-        try:
-            raw = fcntl.ioctl(slave, termios.FIONREAD, b"\0\0\0\0")
-        except OSError:
-            return 0
-        return struct.unpack("i", raw)[0]
-
-    def _all_read(self) -> bool:
-        """The driver has read everything sent. A pty moves written bytes to the reader's queue
-        a moment later (the kernel's flip buffer), so the queue is trusted only once
-        :data:`PTY_SETTLE` seconds have passed since the last write."""
-        return time.monotonic() - self._written_at >= PTY_SETTLE and not self.unread()
-
-    def _write(self, data: bytes) -> None:
-        self._written_at = time.monotonic()
-        self.dropped_bytes += len(data) - self._pty.write(data)
+        self.write(junk + encode_report(*sample))
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the emulator until Ctrl-C, SIGTERM, SIGHUP or ``--duration`` seconds."""
-    parser = emulator_parser(
+    parser = pty_parser(
         "ThreeDMouse_drv.emulator",
         "Emulate a Logitech 3D mouse / head tracker on a pseudo-terminal.",
-        scenarios=SCENARIOS,
-        default_scenario="motion",
+        default_link=DEFAULT_LINK,
         rate=100.0,
         rate_help="reports per second at most",
+        disconnect_after=20,
+        disconnect_help="reports before hang-up",
     )
-    parser.add_argument(
-        "--port",
-        default=DEFAULT_LINK,
-        help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
-        "drivers/ThreeDMouse_drv/example.jconf looks; '' for none)",
-    )
-    parser.add_argument("--disconnect-after", type=int, default=20, help="reports before hang-up")
     args = parser.parse_args(argv)
     emulator = ThreeDMouseEmulator(
         args.scenario, args.rate, disconnect_after=args.disconnect_after, link=args.port or None
     )
-
-    def announce() -> None:
-        where = str(emulator.link) if emulator.link is not None else emulator.address
-        print(f"3D mouse emulator ({args.scenario}) on {emulator.address}", flush=True)
-        print(f"point the three_d_mouse element at it: <port>{where}</port>", flush=True)
-
-    def check() -> int | None:
-        if emulator.disconnected.is_set():
-            print("scenario finished: the line was hung up", flush=True)
-            return 0
-        return None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run_pty(emulator, title="3D mouse", element="three_d_mouse", duration=args.duration)
 
 
 if __name__ == "__main__":

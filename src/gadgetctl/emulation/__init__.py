@@ -11,25 +11,45 @@ manager, as Gadgeteer drivers depend on VPR only:
 * :mod:`~gadgetctl.emulation.signals`: SIGTERM and SIGHUP stop an emulator cleanly, as
   Ctrl-C does (:func:`stop_on_signals`, :class:`StopRequested`);
 * :mod:`~gadgetctl.emulation.command`: the shared command line (``--scenario``, ``--rate``,
-  ``--duration`` in wall-clock seconds) and the run loop (:func:`run`).
+  ``--duration`` in wall-clock seconds) and the run loop (:func:`run`);
+* :mod:`~gadgetctl.emulation.console`: the lines an emulator prints when a client connects
+  or disconnects and when its scenario stops sending (:class:`Console`);
+* :mod:`~gadgetctl.emulation.clients`: who opens and closes a device file (:class:`OpenWatch`);
+* :mod:`~gadgetctl.emulation.device`: a serial device on a pty (:class:`PtyDeviceEmulator`:
+  life cycle, commands, records at a rate, pause, hang-up) and its command line
+  (:func:`pty_parser`, :func:`run_pty`).
 """
 
 from __future__ import annotations
 
 from gadgetctl.emulation.beacon import Beacon, is_held
+from gadgetctl.emulation.clients import OpenWatch
 from gadgetctl.emulation.command import duration_seconds, emulator_parser, run
+from gadgetctl.emulation.console import Console
+from gadgetctl.emulation.device import (
+    STANDARD_SCENARIOS,
+    PtyDeviceEmulator,
+    pty_parser,
+    run_pty,
+)
 from gadgetctl.emulation.endpoints import Fifo, PseudoTerminal, UnixSocket
 from gadgetctl.emulation.signals import StopRequested, stop_on_signals
 
 __all__ = [
+    "STANDARD_SCENARIOS",
     "Beacon",
+    "Console",
     "Fifo",
+    "OpenWatch",
     "PseudoTerminal",
+    "PtyDeviceEmulator",
     "StopRequested",
     "UnixSocket",
     "duration_seconds",
     "emulator_parser",
     "is_held",
+    "pty_parser",
     "run",
+    "run_pty",
     "stop_on_signals",
 ]

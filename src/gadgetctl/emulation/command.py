@@ -16,6 +16,7 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
+from gadgetctl.emulation.console import attach
 from gadgetctl.emulation.signals import StopRequested, stop_on_signals
 
 
@@ -69,7 +70,9 @@ def run(
 ) -> int:
     """Run ``emulator`` until ``duration`` seconds, Ctrl-C, SIGTERM or SIGHUP (exit status
     0), or until ``check`` (called every ``interval`` seconds) returns an exit status.
-    ``announce`` runs once the emulator has started (to print where it is)."""
+    ``announce`` runs once the emulator has started (to print where it is). The emulator's
+    console lines (clients coming and going, the scenario's end) go to standard output."""
+    attach(emulator)
     with stop_on_signals():
         try:
             try:

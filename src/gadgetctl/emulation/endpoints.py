@@ -14,9 +14,12 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import fcntl
 import os
 import socket
 import stat
+import struct
+import termios
 import threading
 import tty
 from pathlib import Path
@@ -104,6 +107,19 @@ class PseudoTerminal:
                 return os.write(self.master, data)
             except BlockingIOError:
                 return 0
+
+    def unread(self) -> int:
+        """Bytes written to the driver that it has not read yet (0 once closed). The kernel
+        moves written bytes to the reader's queue a moment later, so a write just made may
+        not show yet."""
+        with self._lock:
+            if self.slave < 0:
+                return 0
+            try:
+                raw = fcntl.ioctl(self.slave, termios.FIONREAD, b"\0\0\0\0")
+            except OSError:
+                return 0
+        return struct.unpack("i", raw)[0]
 
     def __enter__(self) -> PseudoTerminal:
         return self.open()
