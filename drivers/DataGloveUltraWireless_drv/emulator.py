@@ -15,21 +15,15 @@ discards it):
 
 from __future__ import annotations
 
-import fcntl
 import math
 import os
-import struct
 import sys
-import termios
-import threading
-import time
-from pathlib import Path
 
-from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
+from gadgetctl.emulation.device import STANDARD_SCENARIOS, PtyDeviceEmulator, pty_parser, run_pty
 
 # The emulator keeps its own copy of the wire format so that a mistake in the driver cannot be
 # mirrored here and go unnoticed by the tests.
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 DEFAULT_LINK = "/tmp/gadgetctl-ultraglove"
 PORT_IDS = {0: 0x02, 1: 0x05}  # A: low nibble 2 (or 3); B: anything else
 GARBAGE = (b"\x00\x3e\x3e", b"<" + bytes(27) + b"!", b"\xff" * 12, b"<<")
@@ -55,9 +49,12 @@ def readings(scenario: str, port: int, step: int) -> tuple[int, ...]:
     return tuple(round(2047.5 + 1800 * math.sin(step / (6 + i) + port + i)) for i in range(14))
 
 
-class UltraGloveEmulator:
+class UltraGloveEmulator(PtyDeviceEmulator):
     """The receiver's side of the line on a pty pair. ``sent`` lists every good record sent
     as ``(port, readings)`` (not the first one, which waits for a driver)."""
+
+    DEVICE = "UltraGlove"
+    CATCH_UP = 0.05  # catch up at most a few records, never a burst after a stall
 
     def __init__(
         self,
@@ -69,85 +66,27 @@ class UltraGloveEmulator:
         linger: float = 1.0,
         link: str | os.PathLike[str] | None = None,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
-        self.scenario, self.rate, self.ports = scenario, rate, ports
-        self.disconnect_after, self.linger = disconnect_after, linger
-        self.link = Path(link) if link is not None else None
-        self.address = ""
+        super().__init__(
+            scenario, rate, disconnect_after=disconnect_after, linger=linger, link=link, drain=0.5
+        )
+        self.ports = ports
         self.sent: list[tuple[int, tuple[int, ...]]] = []
         self.probe = (ports[0], readings(scenario, ports[0], 0))  # sent before a driver is there
-        self.dropped_bytes = 0
-        self.drain = 0.5
-        self.streaming = threading.Event()
-        self.disconnected = threading.Event()
-        self._pty = PseudoTerminal(self.link)
-        self._stop = threading.Event()
-        self._quiet = threading.Event()
-        self._thread: threading.Thread | None = None
-        self._next_due = 0.0
         self._step = 0
-        self._hangup_due: float | None = None
-        self._lock = threading.Lock()
 
-    def start(self) -> UltraGloveEmulator:
-        if self._thread is None:
-            self.address = self._pty.open().address
-            # waits for a reader; opening the port discards it, unless it was still on its way
-            self._write(encode_record(*self.probe))
-            self._stop.clear()
-            self._thread = threading.Thread(
-                target=self._run, name="ultraglove-emulator", daemon=True
-            )
-            self._thread.start()
-        return self
+    def on_open(self) -> None:
+        # waits for a reader; opening the port discards it, unless it was still on its way
+        self.write(encode_record(*self.probe))
 
-    def stop(self) -> None:
-        """Stop sending, give a reading driver up to ``drain`` seconds to read what was sent,
-        then close the pty and remove the link."""
-        self._quiet.set()
-        deadline = time.monotonic() + self.drain
-        while self.streaming.is_set() and self._unread() and time.monotonic() < deadline:
-            time.sleep(0.005)
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-            self._thread = None
-        self._pty.close()
+    def sending(self) -> bool:
+        if not self.streaming.is_set() and self.probe_taken():
+            self.begin_sending()  # read or discarded: a driver is there
+        return self.streaming.is_set()
 
-    def __enter__(self) -> UltraGloveEmulator:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
-
-    def _run(self) -> None:
-        while not self._stop.is_set() and self._pty.master >= 0:
-            if not self.streaming.is_set():
-                if self._unread():
-                    self._stop.wait(0.005)
-                    continue
-                self.streaming.set()  # read or discarded: a driver is there
-                self._next_due = time.monotonic()
-            self._stop.wait(max(0.0, min(0.05, self._next_due - time.monotonic())))
-            now = time.monotonic()
-            if now >= self._next_due:
-                self._next_due = max(self._next_due + 1.0 / self.rate, now - 0.05)
-                self._emit()
-
-    def _emit(self) -> None:
-        if self._quiet.is_set():
-            return
+    def emit(self) -> None:
         step = self._step
         if self.scenario == "disconnect" and step >= self.disconnect_after:
-            if self._hangup_due is None:
-                self._hangup_due = time.monotonic() + self.linger
-            if self._unread() and time.monotonic() < self._hangup_due:
-                return
-            self.disconnected.set()
-            self._pty.hang_up()
+            self.hang_up_once_read()  # a pty drops unread input on hang-up
             return
         self._step += 1
         port = self.ports[step % len(self.ports)]
@@ -155,47 +94,22 @@ class UltraGloveEmulator:
         raw = readings(scenario, port, step)
         junk = GARBAGE[step % len(GARBAGE)] if self.scenario == "garbage" else b""
         self.sent.append((port, raw))
-        self._write(junk + encode_record(port, raw))
-
-    def _unread(self) -> int:
-        with self._lock:
-            if self._pty.slave < 0:
-                return 0
-            try:
-                raw = fcntl.ioctl(self._pty.slave, termios.FIONREAD, b"\0\0\0\0")
-            except OSError:
-                return 0
-        return struct.unpack("i", raw)[0]
-
-    def send_raw(self, data: bytes) -> None:
-        """Write bytes to the driver as they are (for tests)."""
-        self._write(data)
-
-    def _write(self, data: bytes) -> None:
-        with self._lock:
-            self.dropped_bytes += len(data) - self._pty.write(data)
+        self.write(junk + encode_record(port, raw))
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = emulator_parser(
+    parser = pty_parser(
         "DataGloveUltraWireless_drv.emulator",
         "Emulate a 5DT Data Glove Ultra Wireless receiver (gloves on ports A and B) on a "
         "pseudo-terminal.",
-        scenarios=SCENARIOS,
-        default_scenario="motion",
+        default_link=DEFAULT_LINK,
         rate=100.0,
         rate_help="records per second, both gloves together",
+        disconnect_after=6,
     )
     parser.add_argument(
         "--gloves", choices=("A", "B", "AB"), default="AB", help="ports with a glove"
     )
-    parser.add_argument(
-        "--port",
-        default=DEFAULT_LINK,
-        help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
-        "drivers/DataGloveUltraWireless_drv/example.jconf looks; '' for none)",
-    )
-    parser.add_argument("--disconnect-after", type=int, default=6, help="records before hang-up")
     args = parser.parse_args(argv)
     emulator = UltraGloveEmulator(
         args.scenario,
@@ -204,24 +118,12 @@ def main(argv: list[str] | None = None) -> int:
         disconnect_after=args.disconnect_after,
         link=args.port or None,
     )
-
-    def announce() -> None:
-        where = str(emulator.link) if emulator.link is not None else emulator.address
-        print(
-            f"5DT Data Glove Ultra Wireless emulator ({args.scenario}) on {emulator.address}",
-            flush=True,
-        )
-        print(
-            f"point the data_glove_ultra_wireless element at it: <port>{where}</port>", flush=True
-        )
-
-    def check() -> int | None:
-        if emulator.disconnected.is_set():
-            print("scenario finished: the line was hung up", flush=True)
-            return 0
-        return None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run_pty(
+        emulator,
+        title="5DT Data Glove Ultra Wireless",
+        element="data_glove_ultra_wireless",
+        duration=args.duration,
+    )
 
 
 if __name__ == "__main__":

@@ -13,22 +13,15 @@ The glove streams 10-byte packets at ``rate`` per second once a driver has the l
 
 from __future__ import annotations
 
-import fcntl
 import math
 import os
-import select
-import struct
 import sys
-import termios
-import threading
-import time
-from pathlib import Path
 
-from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
+from gadgetctl.emulation.device import STANDARD_SCENARIOS, PtyDeviceEmulator, pty_parser, run_pty
 
 # The emulator keeps its own copy of the wire format so that a mistake in the driver cannot be
 # mirrored here and go unnoticed by the tests.
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 DEFAULT_LINK = "/tmp/gadgetctl-dataglove"
 RIGHT, LEFT = 0, 6
 #: Flexure bytes (thumb..pinky) of the ``buttons`` scenario: fist, pointing, open hand.
@@ -68,9 +61,12 @@ def pose(scenario: str, step: int) -> tuple[int, ...]:
     )
 
 
-class DataGloveEmulator:
+class DataGloveEmulator(PtyDeviceEmulator):
     """The glove's side of the line on a pty pair. ``sent`` lists the data bytes of every good
     packet sent (not the first one, which waits for a driver and is discarded at its open)."""
+
+    DEVICE = "DataGlove"
+    CATCH_UP = 0.05  # catch up at most a few packets, never a burst after a stall
 
     def __init__(
         self,
@@ -82,93 +78,27 @@ class DataGloveEmulator:
         linger: float = 1.0,
         link: str | os.PathLike[str] | None = None,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
-        self.scenario, self.rate, self.hand = scenario, rate, hand
-        self.disconnect_after, self.linger = disconnect_after, linger
-        self.link = Path(link) if link is not None else None
-        self.address = ""
+        super().__init__(
+            scenario, rate, disconnect_after=disconnect_after, linger=linger, link=link, drain=0.5
+        )
+        self.hand = hand
         self.sent: list[tuple[int, ...]] = []
         self.probe = pose(scenario, 0)  # the packet sent before a driver is there
-        self.dropped_bytes = 0
-        self.streaming = threading.Event()  # a driver has the line
-        self.disconnected = threading.Event()
-        self._pty = PseudoTerminal(self.link)
-        self._stop = threading.Event()
-        self._quiet = threading.Event()
-        self.drain = 0.5
-        self._thread: threading.Thread | None = None
-        self._next_due = 0.0
         self._step = 0
-        self._hangup_due: float | None = None
-        self._lock = threading.Lock()
 
-    def start(self) -> DataGloveEmulator:
-        if self._thread is None:
-            self.address = self._pty.open().address
-            # waits for a reader; opening the port discards it, unless it was still on its way
-            self._write(encode_packet(self.probe, self.hand))
-            self._stop.clear()
-            self._thread = threading.Thread(
-                target=self._run, name="dataglove-emulator", daemon=True
-            )
-            self._thread.start()
-        return self
+    def on_open(self) -> None:
+        # waits for a reader; opening the port discards it, unless it was still on its way
+        self.write(encode_packet(self.probe, self.hand))
 
-    def stop(self) -> None:
-        """Stop sending, give a reading driver up to ``drain`` seconds to read what was sent
-        (a pty drops unread input when it closes), then close the pty and remove the link."""
-        self._quiet.set()
-        deadline = time.monotonic() + self.drain
-        while self.streaming.is_set() and self._unread() and time.monotonic() < deadline:
-            time.sleep(0.005)
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-            self._thread = None
-        self._pty.close()
+    def sending(self) -> bool:
+        if not self.streaming.is_set() and self.probe_taken():
+            self.begin_sending()  # read or discarded: a driver is there
+        return self.streaming.is_set()
 
-    def __enter__(self) -> DataGloveEmulator:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
-
-    def _run(self) -> None:
-        while not self._stop.is_set() and self._pty.master >= 0:
-            if not self.streaming.is_set():
-                if self._unread():
-                    self._stop.wait(0.005)
-                    continue
-                self.streaming.set()  # read or discarded: a driver is there
-                self._next_due = time.monotonic()
-            try:
-                select.select(
-                    [self._pty.master],
-                    [],
-                    [],
-                    max(0.0, min(0.05, self._next_due - time.monotonic())),
-                )
-                now = time.monotonic()
-                if now >= self._next_due:
-                    self._next_due = max(self._next_due + 1.0 / self.rate, now - 0.05)
-                    self._emit()
-            except OSError:
-                break
-
-    def _emit(self) -> None:
+    def emit(self) -> None:
         step = self._step
-        if self._quiet.is_set():
-            return
         if self.scenario == "disconnect" and step >= self.disconnect_after:
-            if self._hangup_due is None:
-                self._hangup_due = time.monotonic() + self.linger
-            if self._unread() and time.monotonic() < self._hangup_due:
-                return  # a pty drops unread input on hang-up: let the driver read first
-            self.disconnected.set()
-            self._pty.hang_up()
+            self.hang_up_once_read()  # a pty drops unread input on hang-up
             return
         self._step += 1
         data = pose(
@@ -176,44 +106,20 @@ class DataGloveEmulator:
         )
         junk = GARBAGE[step % len(GARBAGE)] if self.scenario == "garbage" else b""
         self.sent.append(data)
-        self._write(junk + encode_packet(data, self.hand))
-
-    def _unread(self) -> int:
-        with self._lock:
-            if self._pty.slave < 0:
-                return 0
-            try:
-                raw = fcntl.ioctl(self._pty.slave, termios.FIONREAD, b"\0\0\0\0")
-            except OSError:
-                return 0
-        return struct.unpack("i", raw)[0]
-
-    def send_raw(self, data: bytes) -> None:
-        """Write bytes to the driver as they are (for tests)."""
-        self._write(data)
-
-    def _write(self, data: bytes) -> None:
-        with self._lock:
-            self.dropped_bytes += len(data) - self._pty.write(data)
+        self.write(junk + encode_packet(data, self.hand))
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = emulator_parser(
+    parser = pty_parser(
         "DataGlove_drv.emulator",
         "Emulate a 5DT DataGlove on a pseudo-terminal.",
-        scenarios=SCENARIOS,
-        default_scenario="motion",
+        default_link=DEFAULT_LINK,
         rate=100.0,
         rate_help="packets per second (38400 baud carries 384)",
+        disconnect_after=5,
+        disconnect_help="packets before hang-up",
     )
     parser.add_argument("--hand", choices=("right", "left"), default="right")
-    parser.add_argument(
-        "--port",
-        default=DEFAULT_LINK,
-        help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
-        "drivers/DataGlove_drv/example.jconf looks; '' for none)",
-    )
-    parser.add_argument("--disconnect-after", type=int, default=5, help="packets before hang-up")
     args = parser.parse_args(argv)
     emulator = DataGloveEmulator(
         args.scenario,
@@ -222,22 +128,13 @@ def main(argv: list[str] | None = None) -> int:
         disconnect_after=args.disconnect_after,
         link=args.port or None,
     )
-
-    def announce() -> None:
-        where = str(emulator.link) if emulator.link is not None else emulator.address
-        print(
-            f"5DT DataGlove emulator ({args.scenario}, {args.hand} hand) on {emulator.address}",
-            flush=True,
-        )
-        print(f"point the data_glove element at it: <port>{where}</port>", flush=True)
-
-    def check() -> int | None:
-        if emulator.disconnected.is_set():
-            print("scenario finished: the line was hung up", flush=True)
-            return 0
-        return None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run_pty(
+        emulator,
+        title="5DT DataGlove",
+        element="data_glove",
+        duration=args.duration,
+        detail=f"{args.hand} hand",
+    )
 
 
 if __name__ == "__main__":

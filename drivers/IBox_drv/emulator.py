@@ -16,24 +16,16 @@ analog inputs are wired. Scenarios:
 
 from __future__ import annotations
 
-import fcntl
 import math
 import os
-import select
-import struct
 import sys
-import termios
-import threading
-import time
-from pathlib import Path
-from types import TracebackType
 
-from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
+from gadgetctl.emulation.device import STANDARD_SCENARIOS, PtyDeviceEmulator, pty_parser, run_pty
 
 #: Seconds after the last write before the line counts as drained: the kernel moves what the
 #: master wrote to the slave's input queue a moment later, and only then does FIONREAD count it.
 QUIET = 0.1
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 DEFAULT_LINK = "/tmp/gadgetctl-ibox"
 PRODUCT_ID = b"IBox emulator"
 INFO = {
@@ -95,9 +87,12 @@ def encode_packet(
     return bytes(out)
 
 
-class IBoxEmulator:
+class IBoxEmulator(PtyDeviceEmulator):
     """The box side on a pty pair. ``sent`` records each valid packet as ``(buttons,
     analogs 0..3)``."""
+
+    DEVICE = "IBox"
+    SETTLE = QUIET
 
     def __init__(
         self,
@@ -108,83 +103,24 @@ class IBoxEmulator:
         linger: float = 1.0,
         link: str | os.PathLike[str] | None = None,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
-        self.scenario = scenario
-        self.rate = rate
-        self.disconnect_after = disconnect_after
-        self.linger = linger
-        self.link = Path(link) if link is not None else None
+        super().__init__(
+            scenario,
+            rate,
+            disconnect_after=disconnect_after,
+            linger=linger,
+            link=link,
+            drain=linger,
+        )
         self.session = False
-        self.commands: list[bytes] = []
         self.queries: list[int] = []
         self.sent: list[Sample] = []
-        self.paused = False
-        self.dropped_bytes = 0
-        self.disconnected = threading.Event()
-        self.address = ""
-        self._pty = PseudoTerminal(self.link)
         self._text = bytearray()
         self._waiting: list[int] = []  # queries received, answered in order
-        self._next_due = 0.0
-        self._hangup_due: float | None = None
-        self._written_at = 0.0
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
 
-    def start(self) -> IBoxEmulator:
-        if self._thread is None:
-            self.address = self._pty.open().address
-            self._stop.clear()
-            self._thread = threading.Thread(target=self._run, name="ibox-emulator", daemon=True)
-            self._thread.start()
-        return self
+    def draining(self) -> bool:
+        return not self.all_read()  # let a reading driver drain the line before it goes away
 
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-            self._thread = None
-        deadline = time.monotonic() + self.linger
-        while (self.unread() or time.monotonic() - self._written_at < QUIET) and (
-            time.monotonic() < deadline
-        ):
-            time.sleep(0.005)  # let a reading driver drain the line before it goes away
-        self._pty.close()
-
-    def __enter__(self) -> IBoxEmulator:
-        return self.start()
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.stop()
-
-    def send_raw(self, data: bytes) -> None:
-        """Write bytes to the driver as they are (for tests)."""
-        self._write(data)
-
-    def _run(self) -> None:
-        while not self._stop.is_set() and self._pty.master >= 0:
-            wait = 0.05
-            if self._waiting:
-                wait = max(0.0, min(wait, self._next_due - time.monotonic()))
-            try:
-                ready, _, _ = select.select([self._pty.master], [], [], wait)
-                if ready:
-                    for value in os.read(self._pty.master, 4096):
-                        self._on_byte(value)
-                if self._waiting and time.monotonic() >= self._next_due:
-                    self._answer()
-            except OSError:
-                break
-
-    def _on_byte(self, value: int) -> None:
+    def on_byte(self, value: int) -> None:
         if 0x40 <= value < 0x80:  # letters: the text commands
             self._text.append(value)
             text = bytes(self._text)
@@ -193,100 +129,59 @@ class IBoxEmulator:
                     self._text.clear()
                     self.commands.append(word)
                     if word == b"IMMC":
-                        self._write(b"IMMC")
+                        self.write(b"IMMC")
                     elif word == b"BEGIN":
                         self.session = True
-                        self._write(PRODUCT_ID + b"\0")
+                        self.write(PRODUCT_ID + b"\0")
                     else:
                         self.session = False
                         self._waiting.clear()
+                        self.streaming.clear()
             del self._text[:-8]
             return
         if value in INFO:
             self.commands.append(bytes((value,)))
-            self._write(bytes((value,)) + INFO[value] + b"\0")
+            self.write(bytes((value,)) + INFO[value] + b"\0")
         elif value < 0x40 and self.session:
             self.queries.append(value)
-            if not self._waiting:
-                self._next_due = max(self._next_due, time.monotonic())
+            self.begin_sending()
             if len(self._waiting) < MAX_WAITING:  # a small input buffer; more are lost
                 self._waiting.append(value)
 
-    def _answer(self) -> None:
-        query = self._waiting.pop(0)
-        self._next_due = max(self._next_due + 1.0 / self.rate, time.monotonic() - 1.0 / self.rate)
+    def emit(self) -> None:
+        """Answer the oldest query waiting."""
         step = len(self.sent)
         if self.scenario == "disconnect" and step >= self.disconnect_after:
-            if self._hangup_due is None:
-                self._hangup_due = time.monotonic() + self.linger
-            quiet = time.monotonic() - self._written_at >= QUIET
-            if not (quiet and not self.unread()) and time.monotonic() < self._hangup_due:
-                self._waiting.insert(0, query)  # hang up once the driver has read what was sent
-                return
-            self.disconnected.set()
-            self._pty.hang_up()
+            self.hang_up_once_read()  # the query stays waiting until the line is hung up
             return
-        if self.paused:
-            self._waiting.clear()
-            return
+        query = self._waiting.pop(0)
+        if not self._waiting:
+            self.streaming.clear()
         buttons, analog = controls(self.scenario, step)
         out = b""
         if self.scenario == "garbage":
             out += GARBAGE_CHUNKS[step % len(GARBAGE_CHUNKS)]
         out += encode_packet(query, buttons, analog, timer=step & 0x3FFF)
         self.sent.append((buttons, analog))
-        self._write(out)
-
-    def unread(self) -> int:
-        """Bytes written that the driver has not read yet."""
-        slave = self._pty.slave
-        if slave < 0:
-            return 0
-        try:
-            raw = fcntl.ioctl(slave, termios.FIONREAD, b"\0\0\0\0")
-        except OSError:
-            return 0
-        return struct.unpack("i", raw)[0]
-
-    def _write(self, data: bytes) -> None:
-        self._written_at = time.monotonic()
-        self.dropped_bytes += len(data) - self._pty.write(data)
+        self.write(out)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the emulator until Ctrl-C, SIGTERM, SIGHUP or ``--duration`` seconds."""
-    parser = emulator_parser(
+    parser = pty_parser(
         "IBox_drv.emulator",
         "Emulate an Immersion Interface Box (HCI) on a pseudo-terminal.",
-        scenarios=SCENARIOS,
-        default_scenario="motion",
+        default_link=DEFAULT_LINK,
         rate=500.0,
         rate_help="queries answered per second at most",
+        disconnect_after=40,
+        disconnect_help="packets before hang-up",
     )
-    parser.add_argument(
-        "--port",
-        default=DEFAULT_LINK,
-        help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
-        "drivers/IBox_drv/example.jconf looks; '' for none)",
-    )
-    parser.add_argument("--disconnect-after", type=int, default=40, help="packets before hang-up")
     args = parser.parse_args(argv)
     emulator = IBoxEmulator(
         args.scenario, args.rate, disconnect_after=args.disconnect_after, link=args.port or None
     )
-
-    def announce() -> None:
-        where = str(emulator.link) if emulator.link is not None else emulator.address
-        print(f"IBox emulator ({args.scenario}) on {emulator.address}", flush=True)
-        print(f"point the ibox element at it: <port>{where}</port>", flush=True)
-
-    def check() -> int | None:
-        if emulator.disconnected.is_set():
-            print("scenario finished: the line was hung up", flush=True)
-            return 0
-        return None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run_pty(emulator, title="IBox", element="ibox", duration=args.duration)
 
 
 if __name__ == "__main__":

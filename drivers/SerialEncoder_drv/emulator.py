@@ -16,18 +16,15 @@ from __future__ import annotations
 
 import math
 import os
-import select
 import struct
 import sys
-import threading
 import time
-from pathlib import Path
 
-from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
+from gadgetctl.emulation.device import STANDARD_SCENARIOS, PtyDeviceEmulator, pty_parser, run_pty
 
 # The emulator keeps its own copy of the wire format so that a mistake in the driver cannot be
 # mirrored here and go unnoticed by the tests.
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 DEFAULT_LINK = "/tmp/gadgetctl-encoder"
 TILT, HEIGHT = 1, 2
 PRESETS = ((0.0, 30.0), (15.0, 36.0), (-20.0, 24.5))
@@ -52,9 +49,12 @@ def table_position(scenario: str, step: int) -> tuple[float, float]:
     return tuple(as_f32.unpack(as_f32.pack(v))[0] for v in (tilt, height))  # type: ignore[return-value]
 
 
-class SerialEncoderEmulator:
+class SerialEncoderEmulator(PtyDeviceEmulator):
     """The encoders' side of the bus on a pty pair. ``rate`` caps answers per second;
     ``sent`` lists every good answer as ``(address, position)``."""
+
+    DEVICE = "Encoder"
+    READ_SIZE = 256
 
     def __init__(
         self,
@@ -64,65 +64,23 @@ class SerialEncoderEmulator:
         disconnect_after: int = 10,
         link: str | os.PathLike[str] | None = None,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
-        self.scenario, self.rate, self.disconnect_after = scenario, rate, disconnect_after
-        self.link = Path(link) if link is not None else None
-        self.address = ""
+        super().__init__(scenario, rate, disconnect_after=disconnect_after, link=link)
         self.sent: list[tuple[int, float]] = []
-        self.commands: list[int] = []
-        self.dropped_bytes = 0
-        self.streaming = threading.Event()  # set at the first command: a driver is there
-        self.disconnected = threading.Event()
-        self._pty = PseudoTerminal(self.link)
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
+        self.commands: list[int] = []  # type: ignore[assignment]
         self._step = 0
         self._answers = 0
-        self._next_due = 0.0
-        self._lock = threading.Lock()
 
-    def start(self) -> SerialEncoderEmulator:
-        if self._thread is None:
-            self.address = self._pty.open().address
-            self._stop.clear()
-            self._thread = threading.Thread(target=self._run, name="encoder-emulator", daemon=True)
-            self._thread.start()
-        return self
+    def sending(self) -> bool:
+        return False  # nothing is sent unasked: answers go out as the commands come
 
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-            self._thread = None
-        self._pty.close()
-
-    def __enter__(self) -> SerialEncoderEmulator:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
-
-    def _run(self) -> None:
-        while not self._stop.is_set() and self._pty.master >= 0:
-            try:
-                ready, _, _ = select.select([self._pty.master], [], [], 0.05)
-                if ready:
-                    for value in os.read(self._pty.master, 256):
-                        self._on_command(value)
-            except OSError:
-                break
-
-    def _on_command(self, value: int) -> None:
+    def on_byte(self, value: int) -> None:
+        """A command: answered at once (at most ``rate`` answers a second)."""
         self.commands.append(value)
-        self.streaming.set()
+        self.streaming.set()  # a driver is there
         if value & 0xF0 != 0x10 or (value & 0x0F) not in (TILT, HEIGHT):
             return  # nobody at that address
         if self.scenario == "disconnect" and self._answers >= self.disconnect_after:
-            self.disconnected.set()
-            self._pty.hang_up()
+            self.hang_up()
             return
         wait = self._next_due - time.monotonic()
         if wait > 0:
@@ -137,57 +95,31 @@ class SerialEncoderEmulator:
         self._answers += 1
         n = self._answers
         if self.scenario == "garbage" and n % 4 == 0:
-            self._write(bytes([value]) + NAN)  # a corrupt position: not in ``sent``
+            self.write(bytes([value]) + NAN)  # a corrupt position: not in ``sent``
             return
         junk = JUNK[n % len(JUNK)] if self.scenario == "garbage" and n % 4 == 1 else b""
         self.sent.append((address, position))
-        self._write(junk + encode_reply(address, position))
+        self.write(junk + encode_reply(address, position))
         if self.scenario == "garbage" and n % 4 == 2:
-            self._write(b"\x00\x01")  # unasked bytes after an answer
-
-    def send_raw(self, data: bytes) -> None:
-        """Write bytes to the driver as they are (for tests)."""
-        self._write(data)
-
-    def _write(self, data: bytes) -> None:
-        with self._lock:
-            self.dropped_bytes += len(data) - self._pty.write(data)
+            self.write(b"\x00\x01")  # unasked bytes after an answer
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = emulator_parser(
+    parser = pty_parser(
         "SerialEncoder_drv.emulator",
         "Emulate two US Digital encoders (a table's tilt and height) on an SEI bus over a "
         "pseudo-terminal.",
-        scenarios=SCENARIOS,
-        default_scenario="motion",
+        default_link=DEFAULT_LINK,
         rate=500.0,
         rate_help="answers per second at most",
+        disconnect_after=10,
+        disconnect_help="answers before hang-up",
     )
-    parser.add_argument(
-        "--port",
-        default=DEFAULT_LINK,
-        help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
-        "drivers/SerialEncoder_drv/example.jconf looks; '' for none)",
-    )
-    parser.add_argument("--disconnect-after", type=int, default=10, help="answers before hang-up")
     args = parser.parse_args(argv)
     emulator = SerialEncoderEmulator(
         args.scenario, args.rate, disconnect_after=args.disconnect_after, link=args.port or None
     )
-
-    def announce() -> None:
-        where = str(emulator.link) if emulator.link is not None else emulator.address
-        print(f"SEI encoder emulator ({args.scenario}) on {emulator.address}", flush=True)
-        print(f"point the serial_encoder element at it: <port>{where}</port>", flush=True)
-
-    def check() -> int | None:
-        if emulator.disconnected.is_set():
-            print("scenario finished: the line was hung up", flush=True)
-            return 0
-        return None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run_pty(emulator, title="SEI encoder", element="serial_encoder", duration=args.duration)
 
 
 if __name__ == "__main__":

@@ -14,23 +14,17 @@ The emulator answers the start-up commands (version, mode, sensitivity, null rad
 
 from __future__ import annotations
 
-import fcntl
 import math
 import os
-import select
 import struct
 import sys
-import termios
-import threading
-import time
-from pathlib import Path
 
-from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
+from gadgetctl.emulation.device import STANDARD_SCENARIOS, PtyDeviceEmulator, pty_parser, run_pty
 
 # The emulator keeps its own copy of the wire format so that a mistake in the driver cannot be
 # mirrored here and go unnoticed by the tests.
 MODELS = ("SpaceMouse", "SpaceMouse Plus XT", "SpaceBall 2003B", "SpaceBall 4000 FLX")
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 DEFAULT_LINK = "/tmp/gadgetctl-spaceball"
 VERSION_MOUSE = b"v  MAGELLAN  Version 6.70  3Dconnexion GmbH 05/11/04"
 VERSION_BALL = (
@@ -133,12 +127,15 @@ def garbage(model: str, step: int) -> bytes:
     return b"\xff\xfe\x00\x0d"
 
 
-class SpaceBallEmulator:
+class SpaceBallEmulator(PtyDeviceEmulator):
     """The puck's side of the line on a pty pair.
 
     ``rate`` is records per second; ``sent`` lists every good record sent as
     ``("axes", values)`` or ``("buttons", values)``; ``commands`` every command line received.
     """
+
+    DEVICE = "SpaceBall"
+    CATCH_UP = 0.05  # catch up at most a few records, never a burst after a stall
 
     def __init__(
         self,
@@ -150,79 +147,17 @@ class SpaceBallEmulator:
         linger: float = 1.0,
         link: str | os.PathLike[str] | None = None,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
         if model not in MODELS:
             raise ValueError(f"unknown model {model!r}; choose from {', '.join(MODELS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
-        self.scenario, self.rate, self.model = scenario, rate, model
-        self.disconnect_after, self.linger = disconnect_after, linger
-        self.link = Path(link) if link is not None else None
-        self.address = ""
-        self.commands: list[bytes] = []
+        super().__init__(
+            scenario, rate, disconnect_after=disconnect_after, linger=linger, link=link, drain=0.5
+        )
+        self.model = model
         self.sent: list[tuple[str, tuple[int, ...]]] = []
-        self.dropped_bytes = 0
-        self.streaming = threading.Event()
-        self.disconnected = threading.Event()
-        self._pty = PseudoTerminal(self.link)
         self._line = bytearray()
-        self._stop = threading.Event()
-        self._quiet = threading.Event()
-        self.drain = 0.5
-        self._thread: threading.Thread | None = None
-        self._next_due = 0.0
         self._step = 0
-        self._hangup_due: float | None = None
-        self._lock = threading.Lock()
 
-    def start(self) -> SpaceBallEmulator:
-        if self._thread is None:
-            self.address = self._pty.open().address
-            self._stop.clear()
-            self._thread = threading.Thread(
-                target=self._run, name="spaceball-emulator", daemon=True
-            )
-            self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        """Stop sending, give a reading driver up to ``drain`` seconds to read what was sent
-        (a pty drops unread input when it closes), then close the pty and remove the link."""
-        self._quiet.set()
-        deadline = time.monotonic() + self.drain
-        while self.streaming.is_set() and self._unread() and time.monotonic() < deadline:
-            time.sleep(0.005)
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-            self._thread = None
-        self._pty.close()
-
-    def __enter__(self) -> SpaceBallEmulator:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
-
-    def _run(self) -> None:
-        while not self._stop.is_set() and self._pty.master >= 0:
-            wait = 0.05
-            if self.streaming.is_set():
-                wait = min(wait, max(0.0, self._next_due - time.monotonic()))
-            try:
-                ready, _, _ = select.select([self._pty.master], [], [], wait)
-                if ready:
-                    self._on_bytes(os.read(self._pty.master, 1024))
-                now = time.monotonic()
-                if self.streaming.is_set() and now >= self._next_due:
-                    # catch up at most a few records, never a burst after a stall
-                    self._next_due = max(self._next_due + 1.0 / self.rate, now - 0.05)
-                    self._emit()
-            except OSError:
-                break
-
-    def _on_bytes(self, data: bytes) -> None:
+    def on_bytes(self, data: bytes) -> None:
         self._line += data
         while b"\r" in self._line:
             line, _, rest = bytes(self._line).partition(b"\r")
@@ -235,37 +170,25 @@ class SpaceBallEmulator:
         code = line[:1]
         if is_mouse(self.model):
             if line == b"vQ":
-                self._write(VERSION_MOUSE + b"\r")
+                self.write(VERSION_MOUSE + b"\r")
             elif code in (b"m", b"c", b"q", b"n", b"z", b"b"):
-                self._write(line + b"\r")  # the puck echoes its settings
+                self.write(line + b"\r")  # the puck echoes its settings
                 if code in (b"m", b"c"):
-                    self._begin()
+                    self.begin_sending()
             else:
-                self._write(b"eA" + bytes([nibble(line[0] >> 4), nibble(line[0] & 0xF)]) + b"\r")
+                self.write(b"eA" + bytes([nibble(line[0] >> 4), nibble(line[0] & 0xF)]) + b"\r")
             return
         if code == b"@":
-            self._write(VERSION_BALL[0] + b"\r" + VERSION_BALL[1] + b"\r")
+            self.write(VERSION_BALL[0] + b"\r" + VERSION_BALL[1] + b"\r")
         elif code == b"M":
-            self._begin()
+            self.begin_sending()
 
-    def _begin(self) -> None:
-        if not self.streaming.is_set():
-            self._next_due = time.monotonic()
-            self.streaming.set()
-
-    def _emit(self) -> None:
+    def emit(self) -> None:
         step = self._step
-        if self._quiet.is_set():
-            return
         if self.scenario == "idle":
             return
         if self.scenario == "disconnect" and step >= self.disconnect_after:
-            if self._hangup_due is None:
-                self._hangup_due = time.monotonic() + self.linger
-            if self._unread() and time.monotonic() < self._hangup_due:
-                return  # a pty drops unread input on hang-up: let the driver read first
-            self.disconnected.set()
-            self._pty.hang_up()
+            self.hang_up_once_read()  # a pty drops unread input on hang-up
             return
         self._step += 1
         tapping = self.scenario in ("motion", "garbage") and step % 8 == 7
@@ -281,44 +204,19 @@ class SpaceBallEmulator:
             record = encode_axes(self.model, axes, timer=timer)
             self.sent.append(("axes", axes))
         junk = garbage(self.model, step) if self.scenario == "garbage" else b""
-        self._write(junk + record)
-
-    def _unread(self) -> int:
-        with self._lock:
-            if self._pty.slave < 0:
-                return 0
-            try:
-                raw = fcntl.ioctl(self._pty.slave, termios.FIONREAD, b"\0\0\0\0")
-            except OSError:
-                return 0
-        return struct.unpack("i", raw)[0]
-
-    def send_raw(self, data: bytes) -> None:
-        """Write bytes to the driver as they are (for tests)."""
-        self._write(data)
-
-    def _write(self, data: bytes) -> None:
-        with self._lock:
-            self.dropped_bytes += len(data) - self._pty.write(data)
+        self.write(junk + record)
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = emulator_parser(
+    parser = pty_parser(
         "SpaceBall_drv.emulator",
         "Emulate a 3Dconnexion SpaceMouse or SpaceBall on a pseudo-terminal.",
-        scenarios=SCENARIOS,
-        default_scenario="motion",
+        default_link=DEFAULT_LINK,
         rate=30.0,
         rate_help="records per second (9600 baud carries about 33 SpaceMouse motion records/s)",
+        disconnect_after=5,
     )
     parser.add_argument("--model", choices=MODELS, default="SpaceMouse", help="puck dialect")
-    parser.add_argument(
-        "--port",
-        default=DEFAULT_LINK,
-        help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
-        "drivers/SpaceBall_drv/example.jconf looks; '' for none)",
-    )
-    parser.add_argument("--disconnect-after", type=int, default=5, help="records before hang-up")
     args = parser.parse_args(argv)
     emulator = SpaceBallEmulator(
         args.scenario,
@@ -327,19 +225,7 @@ def main(argv: list[str] | None = None) -> int:
         disconnect_after=args.disconnect_after,
         link=args.port or None,
     )
-
-    def announce() -> None:
-        where = str(emulator.link) if emulator.link is not None else emulator.address
-        print(f"{args.model} emulator ({args.scenario}) on {emulator.address}", flush=True)
-        print(f"point the puck_device element at it: <port>{where}</port>", flush=True)
-
-    def check() -> int | None:
-        if emulator.disconnected.is_set():
-            print("scenario finished: the line was hung up", flush=True)
-            return 0
-        return None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run_pty(emulator, title=args.model, element="puck_device", duration=args.duration)
 
 
 if __name__ == "__main__":

@@ -16,20 +16,13 @@ driver can read. Scenarios:
 
 from __future__ import annotations
 
-import fcntl
 import math
 import os
-import struct
 import sys
-import termios
-import threading
-import time
-from pathlib import Path
-from types import TracebackType
 
-from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
+from gadgetctl.emulation.device import STANDARD_SCENARIOS, PtyDeviceEmulator, pty_parser, run_pty
 
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 DEFAULT_LINK = "/tmp/gadgetctl-wanda"
 #: Seconds after the last write before the line counts as drained (the kernel moves what the
 #: master wrote to the slave's input queue a moment later, and only then does FIONREAD count it).
@@ -67,9 +60,12 @@ def controls(scenario: str, step: int) -> Sample:
     return (0, 0, 0), (0, 0)
 
 
-class WandaEmulator:
+class WandaEmulator(PtyDeviceEmulator):
     """The Wanda side on a pty pair. ``sent`` records each packet written as ``(buttons,
     axes)``."""
+
+    DEVICE = "Wanda"
+    SETTLE = QUIET
 
     def __init__(
         self,
@@ -80,146 +76,65 @@ class WandaEmulator:
         linger: float = 1.0,
         link: str | os.PathLike[str] | None = None,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
-        self.scenario = scenario
-        self.rate = rate
-        self.disconnect_after = disconnect_after
-        self.linger = linger
-        self.link = Path(link) if link is not None else None
+        super().__init__(
+            scenario,
+            rate,
+            disconnect_after=disconnect_after,
+            linger=linger,
+            link=link,
+            drain=linger,
+        )
         self.sent: list[Sample] = []
-        self.paused = False
-        #: a driver has opened the line (packets flow from then on)
-        self.reader = False
-        self.dropped_bytes = 0
-        self.disconnected = threading.Event()
-        self.address = ""
-        self._pty = PseudoTerminal(self.link)
-        self._written_at = 0.0
-        self._hangup_due: float | None = None
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
 
-    def start(self) -> WandaEmulator:
-        if self._thread is None:
-            self.address = self._pty.open().address
-            self._write(b"M3")
-            self._stop.clear()
-            self._thread = threading.Thread(target=self._run, name="wanda-emulator", daemon=True)
-            self._thread.start()
-        return self
+    @property
+    def reader(self) -> bool:
+        """A driver has opened the line (packets flow from then on)."""
+        return self.streaming.is_set()
 
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-            self._thread = None
-        deadline = time.monotonic() + self.linger
-        while (self.unread() or time.monotonic() - self._written_at < QUIET) and (
-            time.monotonic() < deadline
-        ):
-            time.sleep(0.005)  # let a reading driver drain the line before it goes away
-        self._pty.close()
+    def on_open(self) -> None:
+        self.write(b"M3")  # the serial mouse's hello, at power-up
 
-    def __enter__(self) -> WandaEmulator:
-        return self.start()
+    def sending(self) -> bool:
+        # M3 waits in the line until a driver opens it (which discards it) or reads it
+        if not self.streaming.is_set() and self.probe_taken():
+            self.begin_sending()
+        return self.streaming.is_set()
 
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.stop()
+    def draining(self) -> bool:
+        return not self.all_read()  # let a reading driver drain the line before it goes away
 
-    def send_raw(self, data: bytes) -> None:
-        """Write bytes to the driver as they are (for tests)."""
-        self._write(data)
-
-    def _run(self) -> None:
-        due = time.monotonic()
-        while not self._stop.wait(max(0.0, due - time.monotonic())):
-            due = max(due + 1.0 / self.rate, time.monotonic() - 1.0 / self.rate)
-            if self._pty.master < 0:
-                break
-            if self.scenario == "disconnect" and len(self.sent) >= self.disconnect_after:
-                if self._hangup_due is None:
-                    self._hangup_due = time.monotonic() + self.linger
-                quiet = time.monotonic() - self._written_at >= QUIET
-                if (quiet and not self.unread()) or time.monotonic() >= self._hangup_due:
-                    self.disconnected.set()
-                    self._pty.hang_up()
-                    break
-                continue
-            if not self.reader:
-                # M3 waits in the line until a driver opens it (which discards it) or reads it
-                landed = time.monotonic() - self._written_at >= QUIET
-                self.reader = landed and not self.unread()
-                if not self.reader:
-                    continue
-            if self.paused or self.unread() > BACKLOG:
-                continue  # the reader fell behind: hold the packets back
-            step = len(self.sent)
-            buttons, axes = controls(self.scenario, step)
-            out = b""
-            if self.scenario == "garbage":
-                out += GARBAGE_CHUNKS[step % len(GARBAGE_CHUNKS)]
-            out += encode_packet(buttons, axes)
-            self.sent.append((buttons, axes))
-            self._write(out)
-
-    def unread(self) -> int:
-        """Bytes written that the driver has not read yet."""
-        slave = self._pty.slave
-        if slave < 0:
-            return 0
-        try:
-            raw = fcntl.ioctl(slave, termios.FIONREAD, b"\0\0\0\0")
-        except OSError:
-            return 0
-        return struct.unpack("i", raw)[0]
-
-    def _write(self, data: bytes) -> None:
-        self._written_at = time.monotonic()
-        self.dropped_bytes += len(data) - self._pty.write(data)
+    def emit(self) -> None:
+        if self.scenario == "disconnect" and len(self.sent) >= self.disconnect_after:
+            self.hang_up_once_read()
+            return
+        if self.unread() > BACKLOG:
+            return  # the reader fell behind: hold the packets back
+        step = len(self.sent)
+        buttons, axes = controls(self.scenario, step)
+        out = b""
+        if self.scenario == "garbage":
+            out += GARBAGE_CHUNKS[step % len(GARBAGE_CHUNKS)]
+        out += encode_packet(buttons, axes)
+        self.sent.append((buttons, axes))
+        self.write(out)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the emulator until Ctrl-C, SIGTERM, SIGHUP or ``--duration`` seconds."""
-    parser = emulator_parser(
+    parser = pty_parser(
         "Wanda_drv.emulator",
         "Emulate an Ascension Wanda (serial mouse protocol) on a pseudo-terminal.",
-        scenarios=SCENARIOS,
-        default_scenario="motion",
+        default_link=DEFAULT_LINK,
         rate=40.0,
         rate_help="packets per second (1200 baud 7N1 carries 44 three-byte packets)",
+        disconnect_after=20,
+        disconnect_help="packets before hang-up",
     )
-    parser.add_argument(
-        "--port",
-        default=DEFAULT_LINK,
-        help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
-        "drivers/Wanda_drv/example.jconf looks; '' for none)",
-    )
-    parser.add_argument("--disconnect-after", type=int, default=20, help="packets before hang-up")
     args = parser.parse_args(argv)
     emulator = WandaEmulator(
         args.scenario, args.rate, disconnect_after=args.disconnect_after, link=args.port or None
     )
-
-    def announce() -> None:
-        where = str(emulator.link) if emulator.link is not None else emulator.address
-        print(f"Wanda emulator ({args.scenario}) on {emulator.address}", flush=True)
-        print(f"point the wanda element at it: <port>{where}</port>", flush=True)
-
-    def check() -> int | None:
-        if emulator.disconnected.is_set():
-            print("scenario finished: the line was hung up", flush=True)
-            return 0
-        return None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run_pty(emulator, title="Wanda", element="wanda", duration=args.duration)
 
 
 if __name__ == "__main__":

@@ -124,7 +124,7 @@ class PtyDeviceEmulator:
         sent, then close the pty and remove the link."""
         self._quiet.set()
         deadline = time.monotonic() + self.drain
-        while not self.all_read() and time.monotonic() < deadline:
+        while self.draining() and time.monotonic() < deadline:
             time.sleep(0.005)
         self._stop.set()
         if self._thread is not None:
@@ -172,6 +172,16 @@ class PtyDeviceEmulator:
         return time.monotonic() - self._written_at >= self.SETTLE and not self.unread()
 
     # -- the scenario's end ---------------------------------------------------------------
+
+    def draining(self) -> bool:
+        """Whether stop() still waits: a driver has the records flowing and has not read
+        them all."""
+        return self.streaming.is_set() and not self.all_read()
+
+    def probe_taken(self) -> bool:
+        """For a device that talks without being asked: what :meth:`on_open` wrote is gone,
+        read by a driver or discarded by its open, so a driver is there."""
+        return self.all_read()
 
     def hang_up_once_read(self) -> bool:
         """Hang up once the driver has read what was sent, or ``linger`` seconds after the
@@ -311,13 +321,15 @@ def run_pty(
     element: str,
     duration: float | None,
     property_name: str = "port",
+    detail: str = "",
 ) -> int:
     """Run ``emulator`` (:func:`run`), printing where it is and how to point an ``element``
     at it; the ``disconnect`` scenario ends the run once the line is hung up."""
 
     def announce() -> None:
         where = str(emulator.link) if emulator.link is not None else emulator.address
-        print(f"{title} emulator ({emulator.scenario}) on {emulator.address}", flush=True)
+        what = f"{emulator.scenario}, {detail}" if detail else emulator.scenario
+        print(f"{title} emulator ({what}) on {emulator.address}", flush=True)
         tag = property_name
         print(f"point the {element} element at it: <{tag}>{where}</{tag}>", flush=True)
 
