@@ -135,9 +135,14 @@ def test_disconnect_scenario_hangs_up_once_everything_was_read(made) -> None:
         os.close(fd)
     assert records(data) == list(range(12))  # nothing lost to the hang-up
     assert emulator.disconnected.is_set()
-    lines = emulator.console.lines
-    assert "scenario stopped sending: hung up the line after 12 records" in lines
-    assert f"client disconnected: {emulator.address} (line hung up)" in lines
+    # the driver may see the line go before the emulator's thread has said it
+    gone = f"client disconnected: {emulator.address} (line hung up)"
+    assert wait_until(lambda: gone in emulator.console.lines)
+    assert emulator.console.lines == [
+        f"client connected: {emulator.address} opened",
+        "scenario stopped sending: hung up the line after 12 records",
+        gone,
+    ]
 
 
 def test_console_says_when_a_driver_opens_and_closes_the_line(made) -> None:

@@ -196,10 +196,10 @@ class PtyDeviceEmulator:
 
     def hang_up(self) -> None:
         """Close the line now (the driver sees it go) and say so."""
+        self.console.stopped_sending(f"hung up the line after {len(self.sent)} records")
         self.disconnected.set()
         self.streaming.clear()
         self._pty.hang_up()
-        self.console.stopped_sending(f"hung up the line after {len(self.sent)} records")
         if self.clients:
             self.clients = 0
             self.console.client_disconnected(self.address, "line hung up")
