@@ -106,6 +106,11 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
         key = int(_read(access, transport, "key", number=True) or 0)
         return [check_shm(key, identity=settings.identity, emulator=settings.emulator)
                 .with_prop(transport.props["key"])]
+    if kind == "sdl":
+        from gadgetctl.doctor.sdl import check_sdl
+
+        index = int(_read(access, transport, "index", number=True) or 0)
+        return [check_sdl(index, emulator=settings.emulator).with_prop(transport.props["index"])]
     return []
 
 

@@ -17,14 +17,15 @@ _EXPORTS = {
     "DeviceContext": "device",
     "Analog": "devicetypes", "Digital": "devicetypes", "Position": "devicetypes", "Glove": "devicetypes",
     "Gesture": "devicetypes", "Command": "devicetypes", "String": "devicetypes", "Hat": "devicetypes",
-    "KeyboardMouse": "devicetypes", "DigitalState": "devicetypes", "HatState": "devicetypes",
+    "Rumble": "devicetypes", "KeyboardMouse": "devicetypes", "DigitalState": "devicetypes", "HatState": "devicetypes",
     "DeviceKind": "kinds",
     # samples
     "Sample": "samples", "SampleBatch": "samples", "FrameSamples": "samples", "SampleStore": "samples",
     # proxies
     "Proxy": "proxies", "AnalogProxy": "proxies", "DigitalProxy": "proxies", "PositionProxy": "proxies",
     "GloveProxy": "proxies", "GestureProxy": "proxies", "CommandProxy": "proxies", "StringProxy": "proxies",
-    "HatProxy": "proxies", "KeyboardMouseProxy": "proxies", "LengthUnit": "proxies",
+    "HatProxy": "proxies", "KeyboardMouseProxy": "proxies", "RumbleProxy": "proxies",
+    "LengthUnit": "proxies",
     # manager
     "InputManager": "manager", "ManagerOptions": "manager", "RestartPolicy": "sampling",
     "PendingEntry": "pending", "PendingKind": "pending", "ElementStatus": "status",

@@ -229,6 +229,24 @@ class Hat(Input):
                              np.asarray(values, dtype=np.int8))
 
 
+class Rumble(Input):
+    """Force-feedback output (Gadgeteer's Rumble type), in a minimal form: no samples and no
+    effects objects; :meth:`rumble` runs the device's two motors (low and high frequency, 0
+    to 1) for a while, where the hardware offers it. A device class overrides both members."""
+
+    KIND = DeviceKind.RUMBLE
+
+    @property
+    def has_rumble(self) -> bool:
+        """Whether the device can rumble now (opened, and the hardware has motors)."""
+        return False
+
+    def rumble(self, low: float, high: float, duration: float) -> bool:
+        """Run the motors at ``low`` and ``high`` (0 to 1) for ``duration`` seconds (0, 0
+        stops them). False when the device cannot rumble now."""
+        return False
+
+
 _MODIFIERS = frozenset(int(k) for k in MODIFIER_KEYS)
 
 

@@ -20,10 +20,12 @@ class DeviceKind(StrEnum):
     STRING = "string"
     HAT = "hat"
     KEYBOARD_MOUSE = "keyboard_mouse"
+    RUMBLE = "rumble"  # force-feedback output: no samples, no base definition
 
 
 #: The definition an element type must derive from when its device class provides the kind.
-#: Gestures have no base definition of their own (simulated_glove_gesture is a glove_device).
+#: Gestures have no base definition of their own (simulated_glove_gesture is a glove_device);
+#: nor has rumble (Gadgeteer's rumble_proxy points at any input_device).
 BASE_DEFINITIONS: dict[DeviceKind, str] = {
     DeviceKind.ANALOG: "analog_device",
     DeviceKind.DIGITAL: "digital_device",
@@ -46,6 +48,7 @@ PROXY_TYPES: dict[str, DeviceKind] = {
     "string_proxy": DeviceKind.STRING,
     "hat_proxy": DeviceKind.HAT,
     "keyboard_mouse_proxy": DeviceKind.KEYBOARD_MOUSE,
+    "rumble_proxy": DeviceKind.RUMBLE,
 }
 
 INPUT_DEVICE = "input_device"
@@ -56,7 +59,6 @@ INPUT_MANAGER = "input_manager"
 #: Element types Gadgeteer's input manager handles that gadgetctl does not implement,
 #: with the reason shown for them.
 UNSUPPORTED_TYPES: dict[str, str] = {
-    "rumble_proxy": "force-feedback (rumble) output is not supported by gadgetctl",
     "gadget_logger": "the Gadgeteer input logger is not supported; use `gadgetctl monitor --record`",
     "event_emitter": "input event emission to applications is not supported by gadgetctl",
 }

@@ -26,6 +26,7 @@ from gadgetctl.input.devicetypes import (
     Glove,
     HatState,
     KeyboardMouse,
+    Rumble,
 )
 from gadgetctl.input.errors import DeviceConfigError
 from gadgetctl.input.filters import FILTERS_PROPERTY, FilterChain, build_chain
@@ -412,6 +413,30 @@ class KeyboardMouseProxy(Proxy):
         return device.held if isinstance(device, KeyboardMouse) else frozenset()
 
 
+class RumbleProxy(Proxy):
+    """Force feedback through a device that can rumble (Gadgeteer's rumble_proxy, minimal:
+    :meth:`rumble` passes a request on; there are no effect objects). It reads no data:
+    ``data`` is whether the device can rumble now, and it never has a sample time."""
+
+    ELEMENT_TYPE = "rumble_proxy"
+    KIND = DeviceKind.RUMBLE
+    HAS_UNIT = False
+
+    def update_data(self, device: Input) -> None:
+        self.reason = None
+
+    def rumble(self, low: float, high: float, duration: float) -> bool:
+        """Run the device's motors (0 to 1) for ``duration`` seconds; False when stupefied
+        or the device cannot rumble now."""
+        device = self.device
+        return isinstance(device, Rumble) and not self.stupefied and device.rumble(low, high, duration)
+
+    @property
+    def data(self) -> bool:
+        device = self.device
+        return isinstance(device, Rumble) and not self.stupefied and device.has_rumble
+
+
 PROXY_CLASSES: dict[str, type[Proxy]] = {cls.ELEMENT_TYPE: cls for cls in (
     AnalogProxy, DigitalProxy, PositionProxy, GloveProxy, GestureProxy, CommandProxy,
-    StringProxy, HatProxy, KeyboardMouseProxy)}
+    StringProxy, HatProxy, KeyboardMouseProxy, RumbleProxy)}

@@ -152,7 +152,7 @@ CODES += [
          "Resolve the target's own problem (its pending reason is quoted)."),
     Code("DRV036", C, W, "element type not supported by gadgetctl",
          "Gadgeteer's input manager handles this element type, but gadgetctl does not implement "
-         "it (rumble output, the input logger, the event emitter).",
+         "it (the input logger, the event emitter).",
          "<gadget_logger name=\"Logger\">",
          "Nothing to fix for VR Juggler; gadgetctl ignores this element's function."),
     Code("DRV037", C, E, "element version too old",

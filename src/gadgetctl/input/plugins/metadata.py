@@ -36,6 +36,7 @@ TRANSPORT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "tcp": (("host", "port"), ()),
     "vrpn": (("name",), ("count",)),  # a Device@host name; count: 0 means unused
     "shm": (("key",), ()),  # a System V shared-memory key (trackd)
+    "sdl": (("index",), ()),  # an index into the joysticks SDL sees
 }
 
 
