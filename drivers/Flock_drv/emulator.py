@@ -18,24 +18,18 @@ Scenarios:
 
 from __future__ import annotations
 
-import fcntl
 import math
 import os
-import select
 import struct
 import sys
-import termios
-import threading
 import time
-from pathlib import Path
-from types import TracebackType
 
-from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
+from gadgetctl.emulation.device import STANDARD_SCENARIOS, PtyDeviceEmulator, pty_parser, run_pty
 
 #: Seconds after the last write before the line counts as drained: the kernel moves what the
 #: master wrote to the slave's input queue a moment later, and only then does FIONREAD count it.
 QUIET = 0.1
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 DEFAULT_LINK = "/tmp/gadgetctl-flock"
 MODEL = b"6DFOB     "
 # The emulator keeps its own copy of the wire layout, so a mistake in the driver is not
@@ -115,10 +109,13 @@ def pose(scenario: str, bird: int, step: int) -> tuple[tuple[float, ...], tuple[
     )
 
 
-class FlockEmulator:
+class FlockEmulator(PtyDeviceEmulator):
     """The flock side on a pty pair. ``address`` is the slave's path once started; ``link``
     optionally a symlink to it. ``sent`` records each valid record as ``(bird, position in
     feet, angles)``, bird counted from 0 in address order."""
+
+    DEVICE = "Flock"
+    SETTLE = QUIET
 
     def __init__(
         self,
@@ -133,22 +130,23 @@ class FlockEmulator:
         linger: float = 1.0,
         link: str | os.PathLike[str] | None = None,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
         if master == 0 and (birds != 1 or extended_range):
             raise ValueError("a standalone bird (master 0) is one bird with its own transmitter")
-        self.scenario = scenario
-        self.rate = rate
+        # A streaming device's last frame may still be in the line: stop() lets the reader
+        # drain it (at most ``linger`` seconds) before the pty goes away with it.
+        super().__init__(
+            scenario,
+            rate,
+            disconnect_after=disconnect_after,
+            linger=linger,
+            link=link,
+            drain=linger,
+        )
         self.master = master
         self.birds = birds
         self.extended_range = extended_range
         self.scale_feet = 12.0 if extended_range else scale_inches / 12.0
         self.scale_inches = scale_inches
-        self.disconnect_after = disconnect_after
-        self.linger = linger
-        self.link = Path(link) if link is not None else None
         first = 2 if extended_range else 1
         #: FBB address of each bird with a sensor (0 for a standalone bird)
         self.bird_addresses = [0] if master == 0 else list(range(first, first + birds))
@@ -157,85 +155,24 @@ class FlockEmulator:
         self.group = False
         self.auto_configured = 0
         self.report_rate = "Q"
-        self.streaming = False
-        self.commands: list[bytes] = []
         #: (FBB address of the prefix before it or None, command) for every command
         self.addressed: list[tuple[int | None, bytes]] = []
         self.sent: list[Sample] = []
         self.frames = 0
-        #: while True, no frame is sent (a benchmark holds the count still)
-        self.paused = False
-        self.dropped_bytes = 0
-        self.disconnected = threading.Event()
-        self.address = ""
-        self._pty = PseudoTerminal(self.link)
         self._prefix: int | None = None
         self._pending: bytearray = bytearray()
         self._needed = 0
         self._points = 0
-        self._next_due = 0.0
-        self._hangup_due: float | None = None
-        self._written_at = 0.0
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
 
-    # -- life cycle ---------------------------------------------------------------------------
+    def draining(self) -> bool:
+        return not self.all_read()
 
-    def start(self) -> FlockEmulator:
-        if self._thread is None:
-            self.address = self._pty.open().address
-            self._stop.clear()
-            self._thread = threading.Thread(target=self._run, name="flock-emulator", daemon=True)
-            self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-            self._thread = None
-        # A streaming device's last frame may still be in the line: let the reader drain it
-        # (at most ``linger`` seconds) before the pty goes away with it.
-        deadline = time.monotonic() + self.linger
-        while (self.unread() or time.monotonic() - self._written_at < QUIET) and (
-            time.monotonic() < deadline
-        ):
-            time.sleep(0.005)
-        self._pty.close()
-
-    def __enter__(self) -> FlockEmulator:
-        return self.start()
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.stop()
-
-    def send_raw(self, data: bytes) -> None:
-        """Write bytes to the driver as they are (for tests)."""
-        self._write(data)
+    def sending(self) -> bool:
+        return self.streaming.is_set() or self._points > 0
 
     # -- device behaviour -----------------------------------------------------------------------
 
-    def _run(self) -> None:
-        while not self._stop.is_set() and self._pty.master >= 0:
-            wait = 0.05
-            if self.streaming or self._points:
-                wait = max(0.0, min(wait, self._next_due - time.monotonic()))
-            try:
-                ready, _, _ = select.select([self._pty.master], [], [], wait)
-                if ready:
-                    for value in os.read(self._pty.master, 4096):
-                        self._on_byte(value)
-                if (self.streaming or self._points) and time.monotonic() >= self._next_due:
-                    self._send_frame()
-            except OSError:
-                break
-
-    def _on_byte(self, value: int) -> None:
+    def on_byte(self, value: int) -> None:
         if self._needed:
             self._pending.append(value)
             self._needed -= 1
@@ -272,7 +209,7 @@ class FlockEmulator:
         self.addressed.append((target, command))
         op = command[0]
         if op == ord("O"):
-            self._write(self._examine(command[1], target))
+            self.write(self._examine(command[1], target))
         elif op == ord("P"):
             if command[1] == 0x23:
                 self.group = bool(command[2])
@@ -287,16 +224,13 @@ class FlockEmulator:
         elif chr(op) in "QRST":
             self.report_rate = chr(op)
         elif op == ord("@"):
-            if not self.streaming:
-                self._next_due = time.monotonic()
-            self.streaming = True
+            self.begin_sending()
         elif op == ord("?"):
-            self.streaming = False
+            self.streaming.clear()
         elif op == ord("B"):
             self._points += 1
-            self._next_due = (
-                min(self._next_due, time.monotonic()) if self.streaming else time.monotonic()
-            )
+            now = time.monotonic()
+            self._next_due = min(self._next_due, now) if self.streaming.is_set() else now
 
     def _targets(self, target: int | None) -> list[int]:
         return self.bird_addresses if target is None else [target]
@@ -330,23 +264,14 @@ class FlockEmulator:
             return bytes(status)
         return b"\x00"
 
-    def _send_frame(self) -> None:
-        if self._points and not self.streaming:
+    def emit(self) -> None:
+        """One frame: a record of every bird."""
+        if self._points and not self.streaming.is_set():
             self._points -= 1
         else:
             self._points = 0
-        self._next_due = max(self._next_due + 1.0 / self.rate, time.monotonic() - 1.0 / self.rate)
         if self.scenario == "disconnect" and self.frames >= self.disconnect_after:
-            if self._hangup_due is None:
-                self._hangup_due = time.monotonic() + self.linger
-            quiet = time.monotonic() - self._written_at >= QUIET
-            if not (quiet and not self.unread()) and time.monotonic() < self._hangup_due:
-                return  # hang up once the driver has read what was sent
-            self.disconnected.set()
-            self.streaming = False
-            self._pty.hang_up()
-            return
-        if self.paused:
+            self.hang_up_once_read()
             return
         step = self.frames
         self.frames += 1
@@ -359,39 +284,19 @@ class FlockEmulator:
             fmt = self.formats.get(address, ord("Y"))  # PosAngles at power-up
             out += encode_record(fmt, position, angles, self.scale_feet, address if group else None)
             self.sent.append((bird, position, angles))
-        self._write(bytes(out))
-
-    def unread(self) -> int:
-        """Bytes written that the driver has not read yet."""
-        slave = self._pty.slave
-        if slave < 0:
-            return 0
-        try:
-            raw = fcntl.ioctl(slave, termios.FIONREAD, b"\0\0\0\0")
-        except OSError:
-            return 0
-        return struct.unpack("i", raw)[0]
-
-    def _write(self, data: bytes) -> None:
-        self._written_at = time.monotonic()
-        self.dropped_bytes += len(data) - self._pty.write(data)
+        self.write(bytes(out))
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the emulator until Ctrl-C, SIGTERM, SIGHUP or ``--duration`` seconds."""
-    parser = emulator_parser(
+    parser = pty_parser(
         "Flock_drv.emulator",
         "Emulate an Ascension Flock of Birds on a pseudo-terminal.",
-        scenarios=SCENARIOS,
-        default_scenario="motion",
+        default_link=DEFAULT_LINK,
         rate=144.0,
         rate_help="frames (one record per bird) per second",
-    )
-    parser.add_argument(
-        "--port",
-        default=DEFAULT_LINK,
-        help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
-        "drivers/Flock_drv/example.jconf looks; '' for none)",
+        disconnect_after=40,
+        disconnect_help="frames before hang-up",
     )
     parser.add_argument("--birds", type=int, default=2, help="birds with a sensor (default 2)")
     parser.add_argument("--standalone", action="store_true", help="one bird, no FBB (master 0)")
@@ -400,7 +305,6 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="an extended range transmitter controller at address 1",
     )
-    parser.add_argument("--disconnect-after", type=int, default=40, help="frames before hang-up")
     args = parser.parse_args(argv)
     emulator = FlockEmulator(
         args.scenario,
@@ -411,23 +315,13 @@ def main(argv: list[str] | None = None) -> int:
         disconnect_after=args.disconnect_after,
         link=args.port or None,
     )
-
-    def announce() -> None:
-        where = str(emulator.link) if emulator.link is not None else emulator.address
-        print(
-            f"Flock of Birds emulator ({args.scenario}, {len(emulator.bird_addresses)} birds) "
-            f"on {emulator.address}",
-            flush=True,
-        )
-        print(f"point the flock element at it: <port>{where}</port>", flush=True)
-
-    def check() -> int | None:
-        if emulator.disconnected.is_set():
-            print("scenario finished: the line was hung up", flush=True)
-            return 0
-        return None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run_pty(
+        emulator,
+        title="Flock of Birds",
+        element="flock",
+        duration=args.duration,
+        detail=f"{len(emulator.bird_addresses)} birds",
+    )
 
 
 if __name__ == "__main__":

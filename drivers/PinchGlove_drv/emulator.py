@@ -16,20 +16,13 @@ it plays a scripted scenario of touch frames:
 
 from __future__ import annotations
 
-import fcntl
+import math
 import os
 import random
-import select
-import struct
 import sys
-import termios
-import threading
-import time
 from collections.abc import Iterator
-from pathlib import Path
-from types import TracebackType
 
-from gadgetctl.emulation import PseudoTerminal, emulator_parser, run
+from gadgetctl.emulation.device import PtyDeviceEmulator, pty_parser, run_pty
 
 # The emulator keeps its own copy of the wire constants so that a mistake in the
 # driver cannot be mirrored here and go unnoticed by the tests.
@@ -118,7 +111,7 @@ def touch_steps(scenario: str) -> Iterator[Groups]:
         yield from TOUCH_SEQUENCE
 
 
-class PinchGloveEmulator:
+class PinchGloveEmulator(PtyDeviceEmulator):
     """The glove box side of the protocol on a pty pair.
 
     ``address`` is the slave's path once started. ``rate`` is frames per second.
@@ -127,6 +120,11 @@ class PinchGloveEmulator:
     up, once the driver has read them (or ``linger`` seconds later).
     ``sent`` records every valid frame sent as ``(groups, timestamp)``.
     """
+
+    DEVICE = "PinchGlove"
+    SCENARIOS = SCENARIOS
+    CATCH_UP = math.inf  # every frame is sent, late ones at once
+    READ_SIZE = 1024
 
     def __init__(
         self,
@@ -139,87 +137,26 @@ class PinchGloveEmulator:
         info: dict[str, str] | None = None,
         seed: int = 7,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
+        super().__init__(
+            scenario, rate, disconnect_after=disconnect_after, linger=linger, link=link
+        )
         self.scenario = "touches" if scenario == "buttons" else scenario
-        self.rate = rate
-        self.disconnect_after = disconnect_after
-        self.linger = linger
-        self._hangup_due: float | None = None
-        self.link = Path(link) if link is not None else None
         self.info = dict(DEFAULT_INFO if info is None else info)
-        self.address = ""
-        self.commands: list[bytes] = []
         self.sent: list[tuple[Groups, int | None]] = []
         self.bytes_received = 0
-        self.dropped_bytes = 0
         self.timestamps = True
-        self.streaming = threading.Event()
-        self.disconnected = threading.Event()
         self._rng = random.Random(seed)
-        self._pty = PseudoTerminal(self.link)
         self._pending: int | None = None
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
         self._steps = touch_steps(self.scenario)
-        self._next_due = 0.0
         self._frame_index = 0
-        self._lock = threading.Lock()
-
-    # -- life cycle -------------------------------------------------------------------
-
-    def start(self) -> PinchGloveEmulator:
-        """Create the pty pair and start answering in a background thread."""
-        if self._thread is not None:
-            return self
-        self.address = self._pty.open().address  # with the link, if one was asked for
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name="pinchglove-emulator", daemon=True)
-        self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        """Stop the thread, close the pty and remove the link."""
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-            self._thread = None
-        self._pty.close()
-
-    def __enter__(self) -> PinchGloveEmulator:
-        return self.start()
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.stop()
 
     # -- device behaviour ---------------------------------------------------------------
 
-    def _run(self) -> None:
-        while not self._stop.is_set() and self._pty.master >= 0:
-            wait = 0.05
-            if self.streaming.is_set():
-                wait = min(wait, max(0.0, self._next_due - time.monotonic()))
-            try:
-                ready, _, _ = select.select([self._pty.master], [], [], wait)
-                if ready:
-                    data = os.read(self._pty.master, 1024)
-                    self.bytes_received += len(data)
-                    for value in data:
-                        self._on_byte(value)
-                if self.streaming.is_set() and time.monotonic() >= self._next_due:
-                    self._next_due += 1.0 / self.rate
-                    self._emit_step()
-            except OSError:
-                break
+    def on_bytes(self, data: bytes) -> None:
+        self.bytes_received += len(data)
+        super().on_bytes(data)
 
-    def _on_byte(self, value: int) -> None:
+    def on_byte(self, value: int) -> None:
         if self._pending is None:
             self._pending = value
             return
@@ -235,27 +172,20 @@ class PinchGloveEmulator:
         elif first == CMD_TIMESTAMPS and second in b"01":
             self.timestamps = second == ord("1")
             self._reply(bytes([second]))
-            if not self.streaming.is_set():
-                self._next_due = time.monotonic()
-                self.streaming.set()
+            self.begin_sending()
         elif first == CMD_FORMAT_VERSION and second in b"01":
             self._reply(bytes([second]))
         else:
             self._reply(CONFUSED)
 
     def _reply(self, text: bytes) -> None:
-        self._write(bytes([START_INFO]) + text + bytes([END]))
+        self.write(bytes([START_INFO]) + text + bytes([END]))
 
-    def _emit_step(self) -> None:
+    def emit(self) -> None:
         if self.scenario == "disconnect" and self._frame_index >= self.disconnect_after:
             # Hang up once the driver has read what was sent (a pty drops unread
             # input on hang-up), or after ``linger`` seconds at the latest.
-            if self._hangup_due is None:
-                self._hangup_due = time.monotonic() + self.linger
-            if self._unread() and time.monotonic() < self._hangup_due:
-                return
-            self.disconnected.set()
-            self._pty.hang_up()
+            self.hang_up_once_read()
             return
         groups = next(self._steps, None)
         if groups is None:
@@ -269,64 +199,27 @@ class PinchGloveEmulator:
             junk += bytes(self._rng.randrange(0x00, 0x7F) for _ in range(self._frame_index % 3))
         self._frame_index += 1
         self.sent.append((groups, timestamp))
-        self._write(junk + frame)
-
-    def _unread(self) -> int:
-        """Bytes waiting in the slave's input queue (not yet read by the driver)."""
-        with self._lock:
-            if self._pty.slave < 0:
-                return 0
-            try:
-                raw = fcntl.ioctl(self._pty.slave, termios.FIONREAD, b"\0\0\0\0")
-            except OSError:
-                return 0
-        return struct.unpack("i", raw)[0]
-
-    def send_raw(self, data: bytes) -> None:
-        """Write bytes to the driver as they are (for tests and experiments)."""
-        self._write(data)
-
-    def _write(self, data: bytes) -> None:
-        """Write to the driver; what does not fit (nobody reading) is dropped."""
-        with self._lock:
-            if self._pty.master >= 0:
-                self.dropped_bytes += len(data) - self._pty.write(data)
+        self.write(junk + frame)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the emulator until Ctrl-C, SIGTERM, SIGHUP or ``--duration`` seconds."""
-    parser = emulator_parser(
+    parser = pty_parser(
         "PinchGlove_drv.emulator",
         "Emulate a Fakespace PinchGlove box on a pseudo-terminal.",
-        scenarios=SCENARIOS,
-        default_scenario="touches",
+        default_link=DEFAULT_LINK,
         rate=2.0,
         rate_help="touch frames per second",
+        disconnect_after=5,
+        disconnect_help="frames before hang-up",
+        scenarios=SCENARIOS,
+        default_scenario="touches",
     )
-    parser.add_argument(
-        "--port",
-        default=DEFAULT_LINK,
-        help=f"symlink to create pointing at the pty (default {DEFAULT_LINK}, where "
-        "drivers/PinchGlove_drv/example.jconf looks; '' for none)",
-    )
-    parser.add_argument("--disconnect-after", type=int, default=5, help="frames before hang-up")
     args = parser.parse_args(argv)
     emulator = PinchGloveEmulator(
         args.scenario, args.rate, disconnect_after=args.disconnect_after, link=args.port or None
     )
-
-    def announce() -> None:
-        where = str(emulator.link) if emulator.link is not None else emulator.address
-        print(f"PinchGlove emulator ({args.scenario}) on {emulator.address}", flush=True)
-        print(f"point the pinch_glove element at it: <port>{where}</port>", flush=True)
-
-    def check() -> int | None:
-        if emulator.disconnected.is_set():
-            print("scenario finished: the line was hung up", flush=True)
-            return 0
-        return None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run_pty(emulator, title="PinchGlove", element="pinch_glove", duration=args.duration)
 
 
 if __name__ == "__main__":
