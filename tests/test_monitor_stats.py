@@ -238,7 +238,8 @@ def test_summarize_recording(tmp_path):
     head = devices["Head"].units[0]
     assert head.translation_min == pytest.approx((0.0, 1.5, -0.5))
     assert head.translation_max == pytest.approx((1.0, 1.5, 0.0))
-    assert head.minimum is None and len(head.sparkline) == 20
+    assert head.minimum is None and head.sparkline is None
+    assert set(head.sparklines) == {"x", "y", "z"} and all(len(line) == 20 for line in head.sparklines.values())
     assert devices["Head"].gaps.count == 0 and devices["Head"].mean_rate == pytest.approx(50)
 
     glove = devices["Glove"].units[0]

@@ -8,7 +8,7 @@ from pathlib import Path
 import typer
 
 from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION, TRUST_OPTION
-from gadgetctl.cli.monitor_format import OutputFormat
+from gadgetctl.cli.monitor_format import OutputFormat, PoseFormat
 from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION
 
 
@@ -21,13 +21,17 @@ class LengthUnits(StrEnum):
 
 RATE_OPTION = typer.Option(60.0, "--rate", metavar="HZ", help="Frames per second (the view refreshes once per frame).")
 DURATION_OPTION = typer.Option(None, "--duration", metavar="SECONDS", help="Stop after this many seconds (default: until q, Ctrl-C or SIGTERM).")
-FORMAT_OPTION = typer.Option(None, "--format", "-f", help="live: the dashboard (needs a terminal); table: a plain-text table every --interval seconds; ndjson: one JSON record per sample on stdout. Default: live on a terminal, table otherwise.", show_default=False)
+FORMAT_OPTION = typer.Option(None, "--format", "-f", help="live: the dashboard (needs a terminal); table: a plain-text table every --interval seconds; ndjson: one JSON record per sample on stdout; events: one line per change (button pressed or released, an axis beyond --dead-band, a pose beyond --pose-threshold or --angle-threshold). Default: live on a terminal, table otherwise.", show_default=False)
 PER_FRAME_OPTION = typer.Option(False, "--per-frame", help="With --format ndjson: one frame record per frame instead of one record per sample.")
 RECORD_OPTION = typer.Option(None, "--record", metavar="FILE", help="Write every sample, status change and marker to FILE (the recording format); complete even after Ctrl-C or SIGTERM.")
 OVERWRITE_OPTION = typer.Option(False, "--overwrite", help="Replace an existing --record file.")
 STATS_OPTION = typer.Option(False, "--stats", help="Print end-of-run statistics per device (always written as a stats record in ndjson).")
 UNITS_OPTION = typer.Option(LengthUnits.meters, "--units", help="Length unit of displayed positions (records stay in meters).")
 QUATERNION_OPTION = typer.Option(False, "--quaternion", help="Also show orientations as quaternions (w x y z).")
+POSE_OPTION = typer.Option(None, "--pose", help="How positions are written in ndjson, the table and events: matrix (4x4; the default of ndjson), quaternion (position + w x y z) or euler (position + X-Y-Z angles in degrees, gmtl's EulerAngleXYZ as VR Juggler's position filters use; the default of the table and events).", show_default=False)
+DEAD_BAND_OPTION = typer.Option(0.02, "--dead-band", metavar="SHARE", help="--format events: report an analog unit when it moved more than this share of its device's range (min..max) since it was last reported.")
+POSE_THRESHOLD_OPTION = typer.Option(0.01, "--pose-threshold", metavar="METERS", help="--format events: report a position when it moved more than this distance since it was last reported.")
+ANGLE_THRESHOLD_OPTION = typer.Option(1.0, "--angle-threshold", metavar="DEGREES", help="--format events: report a position (or glove joint) when it turned more than this angle since it was last reported.")
 INTERVAL_OPTION = typer.Option(1.0, "--interval", metavar="SECONDS", help="Seconds between two tables of --format table.")
 MOUSE_OPTION = typer.Option(True, "--mouse/--no-mouse", help="Live view: report mouse buttons, motion and wheel to the keyboard_mouse_device.")
 CHECK_OPTION = typer.Option(True, "--check/--no-check", help="Check the configurations first and print their errors and warnings as validate does (--no-check skips it).")
@@ -50,6 +54,10 @@ def monitor(
     stats: bool = STATS_OPTION,
     units: LengthUnits = UNITS_OPTION,
     quaternion: bool = QUATERNION_OPTION,
+    pose: PoseFormat | None = POSE_OPTION,
+    dead_band: float = DEAD_BAND_OPTION,
+    pose_threshold: float = POSE_THRESHOLD_OPTION,
+    angle_threshold: float = ANGLE_THRESHOLD_OPTION,
     interval: float = INTERVAL_OPTION,
     mouse: bool = MOUSE_OPTION,
     keyboard: str | None = KEYBOARD_OPTION,
@@ -91,7 +99,9 @@ def monitor(
         code = run_monitor(configs, selectors, rate=rate, duration=duration, fmt=fmt, per_frame=per_frame,
                            record=record, overwrite=overwrite, stats=stats, units=units.value,
                            quaternion=quaternion, interval=interval, mouse=mouse, keyboard=keyboard, driver_paths=driver_paths,
-                           definitions=definitions, bundled=bundled)
+                           definitions=definitions, bundled=bundled,
+                           pose=pose.value if pose else None,
+                           thresholds=event_thresholds(dead_band, pose_threshold, angle_threshold))
     raise typer.Exit(code)
 
 
@@ -146,6 +156,17 @@ def check_options(rate: float, duration: float | None, interval: float) -> None:
         raise GadgetctlError(f"--interval must be positive, not {interval:g}")
 
 
+def event_thresholds(dead_band: float, distance: float, angle: float):
+    """The ``--dead-band``, ``--pose-threshold`` and ``--angle-threshold`` of ``--format events``."""
+    from gadgetctl.errors import GadgetctlError
+    from gadgetctl.monitor.events import Thresholds
+
+    for option, value in (("--dead-band", dead_band), ("--pose-threshold", distance), ("--angle-threshold", angle)):
+        if not (value >= 0 and value < float("inf")):
+            raise GadgetctlError(f"{option} must be a finite number >= 0, not {value:g}")
+    return Thresholds(dead_band, distance, angle)
+
+
 def check_keyboard(name: str | None, keyboards: list[str]) -> None:
     """``--keyboard NAME`` must name a keyboard_mouse_device of the configuration."""
     from gadgetctl.errors import GadgetctlError
@@ -164,7 +185,8 @@ def run_monitor(configs: list[Path], selectors: list[str], *, rate: float = 60.0
                 fmt: OutputFormat | None = None, per_frame: bool = False, record: Path | None = None,
                 overwrite: bool = False, stats: bool = False, units: str = "meters", quaternion: bool = False,
                 interval: float = 1.0, mouse: bool = True, keyboard: str | None = None, driver_paths: list[Path] | None = None,
-                definitions: list[Path] | None = None, bundled: bool = True, heading: str = "gadgetctl monitor") -> int:
+                definitions: list[Path] | None = None, bundled: bool = True, heading: str = "gadgetctl monitor",
+                pose: str | None = None, thresholds=None) -> int:
     from gadgetctl.cli.monitor_run import RunOptions, check_record_path, choose_format, run
     from gadgetctl.input.manager import InputManager, ManagerOptions
     from gadgetctl.monitor.session import MonitorSession
@@ -193,4 +215,4 @@ def run_monitor(configs: list[Path], selectors: list[str], *, rate: float = 60.0
     return run(session, RunOptions(format=mode, duration=duration, per_frame=per_frame, stats=stats,
                                    record=record, overwrite=overwrite, interval=interval, length_unit=units,
                                    quaternion=quaternion, mouse=mouse, keyboard=keyboard, title=title, heading=heading,
-                                   notes=notes))
+                                   notes=notes, pose=pose, thresholds=thresholds))

@@ -28,6 +28,7 @@ from gadgetctl.cli.monitor_text import (
     unit_value_text,
 )
 from gadgetctl.input.clock import now
+from gadgetctl.monitor.events import number_text
 from gadgetctl.monitor.session import ElementView, MonitorSession, UnitView
 from gadgetctl.monitor.sparkline import sparkline
 from gadgetctl.safetext import printable
@@ -386,7 +387,7 @@ class LiveView:
             value = float(unit.value)
             line.add(bar(value), "blue", 3).add(f" {value:6.3f}")
             if unit.raw is not None:
-                line.add(f" raw {unit.raw:<9.4g}", "dim", 2)
+                line.add(f" raw {number_text(unit.raw):<9}", "dim", 2)
             if unit.history:
                 line.add(" " + self._spark(unit.history, now()), "magenta", 4)
         elif kind == "digital":

@@ -1,6 +1,6 @@
-"""Running a monitor session to the end in one of the three views, shared by `monitor`,
-`replay` and `demo`: live (rich, keys), table (plain text, periodic) or ndjson (records on
-stdout). Signals, the terminal and the writers are handled here, so that Ctrl-C, SIGTERM
+"""Running a monitor session to the end in one of its views, shared by `monitor`, `replay`
+and `demo`: live (rich, keys), table (plain text, periodic), ndjson (records on stdout) or
+events (one line per change on stdout). Signals, the terminal and the writers are handled here, so that Ctrl-C, SIGTERM
 or an error always restore the terminal and leave complete recordings.
 """
 
@@ -11,10 +11,12 @@ import os
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from gadgetctl.cli.monitor_format import OutputFormat
 from gadgetctl.errors import GadgetctlError
 from gadgetctl.input.clock import now
+from gadgetctl.monitor.poses import EULER, MATRIX
 from gadgetctl.monitor.recording import Recorder, RecordingError, Terminated, raise_on_stop_signals
 from gadgetctl.monitor.session import MonitorSession
 from gadgetctl.safetext import printable
@@ -36,6 +38,8 @@ class RunOptions:
     title: str = ""
     heading: str = "gadgetctl monitor"
     notes: list[str] = field(default_factory=list)
+    pose: str | None = None  # matrix, quaternion, euler (None: matrix in ndjson, euler in views)
+    thresholds: Any = None  # gadgetctl.monitor.events.Thresholds of --format events (None: defaults)
 
 
 #: ``--record -``: the recording goes to standard output, the human output to stderr.
@@ -69,8 +73,8 @@ def check_record_path(path: Path | None, overwrite: bool, mode: OutputFormat | N
     if path is None:
         return
     if records_to_stdout(path):
-        if mode is OutputFormat.ndjson:
-            raise GadgetctlError("--record - and --format ndjson both write records to standard output; "
+        if mode in (OutputFormat.ndjson, OutputFormat.events):
+            raise GadgetctlError(f"--record - and --format {mode.value} both write to standard output; "
                                  "use one of them")
         if sys.stdout.isatty():
             raise GadgetctlError("--record -: standard output is a terminal; redirect it to a file or a "
@@ -98,7 +102,14 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
         session.add_sink(lambda info: Recorder(path, info, overwrite=overwrite, clock=now))
     if mode is OutputFormat.ndjson:
         stream = sys.stdout.buffer
-        session.add_sink(lambda info: Recorder.to_stream(stream, info, clock=now), per_frame=options.per_frame)
+        pose = options.pose or MATRIX
+
+        def open_stream(info):
+            return Recorder.to_stream(stream, info if pose == MATRIX else {**info, "pose": pose}, clock=now)
+
+        session.add_sink(open_stream, per_frame=options.per_frame, pose=pose)
+    elif mode is OutputFormat.events:
+        session.add_consumer(EventPrinter(sys.stdout, options))
     for note in options.notes:
         print(f"gadgetctl: note: {note}", file=sys.stderr)
     reason = "closed"
@@ -113,7 +124,7 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
                     _live(session, options, human)
                 elif mode is OutputFormat.table:
                     _table(session, options, human)
-                else:
+                else:  # ndjson, events: written by the session's sinks and consumers
                     notice = RateNotice(session)
                     for _ in session.frames(duration=options.duration):
                         notice.check()
@@ -122,6 +133,10 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
                 reason = "interrupted"
             except Terminated:
                 reason = "terminated"
+            except BrokenPipeError:
+                if mode is not OutputFormat.events:
+                    raise
+                broken_pipe = True  # `--format events | head`: the reader has what it wanted
             except RecordingError as err:
                 if (mode is OutputFormat.ndjson or records_to_stdout(options.record)) and "Broken pipe" in str(err):
                     broken_pipe = True  # the reader went away (`| head`): not an error
@@ -147,6 +162,31 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
     if broken_pipe:
         return 0
     return _finish(session, mode, options, *outcome, human=human)
+
+
+class EventPrinter:
+    """``--format events``: each frame's changes (:mod:`gadgetctl.monitor.events`), one line
+    each, flushed every frame so that a pipe sees them at once."""
+
+    def __init__(self, stream, options: RunOptions) -> None:
+        from gadgetctl.monitor.events import ChangeDetector, Thresholds
+
+        self.stream = stream
+        self.detector = ChangeDetector(options.thresholds or Thresholds())
+        self.pose = options.pose or EULER
+        self.length_unit = options.length_unit
+        self.origin: float | None = None
+
+    def __call__(self, session: MonitorSession, moment: float) -> None:
+        from gadgetctl.monitor.events import event_line
+
+        events = self.detector.frame(session, moment)
+        if self.origin is None:  # the session's start, or the first sample if it came earlier
+            self.origin = min([session.started_at or moment, *(e.timestamp for e in events[:1])])
+        if events:
+            self.stream.write("".join(event_line(e, self.origin, pose=self.pose, length_unit=self.length_unit) + "\n"
+                                      for e in events))
+            self.stream.flush()
 
 
 class RateNotice:
@@ -200,8 +240,8 @@ def _finish(session: MonitorSession, mode: OutputFormat, options: RunOptions, fi
         markers = len(session.markers)
         human.write(f"recording: {where}: {session.samples_written} samples, "
                     f"{markers} marker{'' if markers == 1 else 's'}\n")
-    if session.finished and mode is not OutputFormat.ndjson:
-        human.write("replay finished\n")
+    if session.finished and mode is not OutputFormat.ndjson:  # events: stdout holds only event lines
+        (sys.stderr if mode is OutputFormat.events else human).write("replay finished\n")
     human.flush()
     for line in problems:
         print(f"gadgetctl: problem: {printable(line)}", file=sys.stderr)
@@ -212,7 +252,7 @@ def _table(session: MonitorSession, options: RunOptions, human) -> None:
     from gadgetctl.cli.monitor_text import TableView
 
     table = TableView(session, human, interval=options.interval, length_unit=options.length_unit,
-                      quaternion=options.quaternion)
+                      quaternion=options.quaternion, pose=options.pose)
     notice = RateNotice(session)
     for frame in session.frames(duration=options.duration):
         notice.check()

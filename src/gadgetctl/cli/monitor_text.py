@@ -11,14 +11,13 @@ from typing import Any, TextIO
 
 import numpy as np
 
+from gadgetctl.monitor.events import FINGERS, HAT_NAMES, UNIT_SYMBOLS, number_text, pose_text
 from gadgetctl.monitor.session import ElementView, MonitorSession, Snapshot, UnitView
 from gadgetctl.monitor.units import euler_xyz_degrees, from_meters, quaternion_wxyz
 from gadgetctl.safetext import printable
 
-UNIT_SYMBOLS = {"meters": "m", "feet": "ft", "inches": "in", "centimeters": "cm"}
 TOGGLES = {0: "off", 1: "on", 2: "toggle on", 3: "toggle off"}
-FINGERS = ("thumb", "index", "middle", "ring", "pinky", "wrist")
-HAT = {0: "centered", 1: "up", 2: "right", 4: "down", 8: "left"}
+HAT = HAT_NAMES
 BAD_STATES = {"faulted", "reconnecting", "pending", "stupefied", "removed", "stopped"}
 
 
@@ -45,7 +44,11 @@ def number(value: float, digits: int = 3) -> str:
     return f"{value:.{digits}f}" if math.isfinite(value) else str(value)
 
 
-def position_text(matrix: Any, length_unit: str = "meters", quaternion: bool = False) -> str:
+def position_text(matrix: Any, length_unit: str = "meters", quaternion: bool = False, pose: str | None = None) -> str:
+    """The translation and the rotation as Euler angles (``quaternion`` adds w x y z); with
+    ``pose`` (``--pose``) exactly that form (:func:`gadgetctl.monitor.events.pose_text`)."""
+    if pose is not None:
+        return pose_text(matrix, pose, length_unit)
     m = np.asarray(matrix, dtype=np.float64).reshape(4, 4)
     x, y, z = (float(from_meters(v, length_unit)) for v in m[:3, 3])
     symbol = UNIT_SYMBOLS.get(length_unit, length_unit)
@@ -67,11 +70,11 @@ def glove_text(angles: Any) -> str:
 
 
 def unit_value_text(view: UnitView, *, element: str = "device", length_unit: str = "meters",
-                    quaternion: bool = False) -> str:
+                    quaternion: bool = False, pose: str | None = None) -> str:
     """One unit's value as text (no bar, no sparkline)."""
     kind, value = view.kind, view.value
     if kind == "analog":
-        raw = "" if view.raw is None else f" (raw {view.raw:.4g})"
+        raw = "" if view.raw is None else f" (raw {number_text(view.raw)})"
         return f"{number(float(value))}{raw}"
     if kind == "digital":
         if element == "device":
@@ -80,7 +83,7 @@ def unit_value_text(view: UnitView, *, element: str = "device", length_unit: str
             return f"{state}{mark}" + (f" x{view.presses}" if view.presses else "")
         return TOGGLES.get(int(value), str(value)) + (f" x{view.presses}" if view.presses else "")
     if kind == "position":
-        return position_text(value, length_unit, quaternion)
+        return position_text(value, length_unit, quaternion, pose)
     if kind == "glove":
         return glove_text(value)
     if kind == "hat":
@@ -92,11 +95,13 @@ def unit_value_text(view: UnitView, *, element: str = "device", length_unit: str
     return str(value)
 
 
-def values_text(element: ElementView, *, length_unit: str = "meters", quaternion: bool = False) -> str:
+def values_text(element: ElementView, *, length_unit: str = "meters", quaternion: bool = False,
+                pose: str | None = None) -> str:
     """Every unit of an element on one line, grouped by kind."""
     groups: dict[str, list[str]] = {}
     for unit in element.values:
-        text = unit_value_text(unit, element=element.element, length_unit=length_unit, quaternion=quaternion)
+        text = unit_value_text(unit, element=element.element, length_unit=length_unit, quaternion=quaternion,
+                               pose=pose)
         if element.element == "device":
             text = f"{unit.unit}: {text}"
         groups.setdefault(unit.kind, []).append(text)
@@ -142,7 +147,8 @@ def health_text(health: Mapping[str, Any]) -> str:
     return ", ".join(parts)
 
 
-def table_rows(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: bool = False) -> list[list[str]]:
+def table_rows(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: bool = False,
+               pose: str | None = None) -> list[list[str]]:
     rows = []
     for element in snapshot.elements:
         stats = element.stats
@@ -160,7 +166,7 @@ def table_rows(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: b
             str(stats.dropped) if stats and own else ("-" if own else ""),
             ms_text(element.age) if element.age is not None else "-",
             ms_text(stats.jitter) if stats and own else ("-" if own else ""),
-            values_text(element, length_unit=length_unit, quaternion=quaternion)
+            values_text(element, length_unit=length_unit, quaternion=quaternion, pose=pose)
             + (f"  [{element.reason}]" if element.reason else "")
             + (f"  health: {health}" if (health := health_text(element.health)) else ""),
         ])
@@ -180,10 +186,11 @@ def format_table(header: Sequence[str], rows: Sequence[Sequence[str]], *, last_f
     return "\n".join(lines)
 
 
-def snapshot_table(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: bool = False) -> str:
+def snapshot_table(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: bool = False,
+                   pose: str | None = None) -> str:
     head = (f"[{snapshot.elapsed:7.2f} s] frame {snapshot.frame}, {snapshot.frame_rate:.1f} frames/s"
             + (f", {snapshot.samples_written} samples written" if snapshot.samples_written else ""))
-    body = format_table(COLUMNS, table_rows(snapshot, length_unit=length_unit, quaternion=quaternion))
+    body = format_table(COLUMNS, table_rows(snapshot, length_unit=length_unit, quaternion=quaternion, pose=pose))
     notes = "".join(f"{line}\n" for line in difference_lines(snapshot))
     return head + "\n" + body + "\n" + notes
 
@@ -192,8 +199,9 @@ class TableView:
     """Prints a plain-text table of every selected element every ``interval`` seconds."""
 
     def __init__(self, session: MonitorSession, stream: TextIO, *, interval: float = 1.0,
-                 length_unit: str = "meters", quaternion: bool = False) -> None:
+                 length_unit: str = "meters", quaternion: bool = False, pose: str | None = None) -> None:
         self.session = session
+        self.pose = pose
         self.stream = stream
         self.interval = interval
         self.length_unit = length_unit
@@ -209,7 +217,8 @@ class TableView:
 
     def print(self) -> None:
         snapshot = self.session.snapshot()
-        self.stream.write(snapshot_table(snapshot, length_unit=self.length_unit, quaternion=self.quaternion) + "\n")
+        self.stream.write(snapshot_table(snapshot, length_unit=self.length_unit, quaternion=self.quaternion,
+                                         pose=self.pose) + "\n")
         self.stream.flush()
 
 
@@ -269,18 +278,37 @@ def summary_text(summary: Any) -> str:
                      f"{device.mean_rate:.1f} Hz over {device.duration:.3f} s, interval median {median} ms, "
                      f"max {largest} ms, {gap_text}")
         for unit in device.units:
-            if unit.translation_min is not None and unit.translation_max is not None:
-                lo, hi = unit.translation_min, unit.translation_max
-                span = f"x {lo[0]:+.3f}..{hi[0]:+.3f} y {lo[1]:+.3f}..{hi[1]:+.3f} z {lo[2]:+.3f}..{hi[2]:+.3f} m"
-            elif unit.minimum is not None and unit.maximum is not None:
-                span = f"{unit.minimum:.4g}..{unit.maximum:.4g}"
-            else:
-                span = "-"
-            spark = f"  {unit.sparkline}" if unit.sparkline else ""
-            lines.append(f"    {printable(str(unit.kind))} {unit.unit}: {unit.samples} samples, range {span}{spark}")
+            lines.extend(_unit_summary_lines(unit))
     for problem in summary.problems:
         lines.append(printable(f"{problem}"))
     return "\n".join(lines) + "\n"
+
+
+def _unit_summary_lines(unit: Any) -> list[str]:
+    """One unit of a recording summary: its range and sparkline; positions one line per
+    axis (range and sparkline) and a line of rotation ranges."""
+    head = f"    {printable(str(unit.kind))} {unit.unit}: {unit.samples} samples"
+    if unit.kind == "position":
+        if unit.translation_min is None or unit.translation_max is None:
+            return [head + ", range -"]
+        lines = [head]
+        sparks = unit.sparklines or {}
+        for axis, (lo, hi) in enumerate(zip(unit.translation_min, unit.translation_max, strict=True)):
+            name = "xyz"[axis]
+            spark = f"  {sparks[name]}" if sparks.get(name) else ""
+            lines.append(f"      {name} {lo:+.3f}..{hi:+.3f} m{spark}")
+        if unit.rotation_min is not None and unit.rotation_max is not None:
+            turns = " ".join(f"{'xyz'[i]} {lo:+.1f}..{hi:+.1f}"
+                             for i, (lo, hi) in enumerate(zip(unit.rotation_min, unit.rotation_max, strict=True)))
+            turn = f", turned up to {unit.turn:.1f} from the first" if unit.turn is not None else ""
+            lines.append(f"      rotation (Euler XYZ, degrees) {turns}{turn}")
+        return lines
+    if unit.minimum is not None and unit.maximum is not None:
+        span = f"{unit.minimum:.4g}..{unit.maximum:.4g}"
+    else:
+        span = "-"
+    spark = f"  {unit.sparkline}" if unit.sparkline else ""
+    return [f"{head}, range {span}{spark}"]
 
 
 def problem_elements(snapshot: Snapshot) -> list[ElementView]:

@@ -8,13 +8,17 @@ import typer
 
 from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION, TRUST_OPTION
 from gadgetctl.cli.monitor_cmd import (
+    ANGLE_THRESHOLD_OPTION,
     CHECK_OPTION,
+    DEAD_BAND_OPTION,
     DURATION_OPTION,
     FORMAT_OPTION,
     INTERVAL_OPTION,
     MOUSE_OPTION,
     OVERWRITE_OPTION,
     PER_FRAME_OPTION,
+    POSE_OPTION,
+    POSE_THRESHOLD_OPTION,
     QUATERNION_OPTION,
     RATE_OPTION,
     STATS_OPTION,
@@ -22,6 +26,8 @@ from gadgetctl.cli.monitor_cmd import (
     UNITS_OPTION,
     LengthUnits,
     OutputFormat,
+    PoseFormat,
+    event_thresholds,
 )
 from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION, emit
 
@@ -47,6 +53,10 @@ def replay(
     stats: bool = STATS_OPTION,
     units: LengthUnits = UNITS_OPTION,
     quaternion: bool = QUATERNION_OPTION,
+    pose: PoseFormat | None = POSE_OPTION,
+    dead_band: float = DEAD_BAND_OPTION,
+    pose_threshold: float = POSE_THRESHOLD_OPTION,
+    angle_threshold: float = ANGLE_THRESHOLD_OPTION,
     interval: float = INTERVAL_OPTION,
     mouse: bool = MOUSE_OPTION,
     check: bool = CHECK_OPTION,
@@ -75,7 +85,8 @@ def replay(
                       rate=rate, duration=duration, fmt=fmt, per_frame=per_frame, record=record,
                       overwrite=overwrite, stats=stats, units=units.value, quaternion=quaternion,
                       interval=interval, mouse=mouse, driver_paths=driver_paths, definitions=definitions,
-                      bundled=bundled)
+                      bundled=bundled, pose=pose.value if pose else None,
+                      thresholds=event_thresholds(dead_band, pose_threshold, angle_threshold))
     raise typer.Exit(code)
 
 
@@ -141,7 +152,7 @@ def run_replay(recording: Path, names: list[str], *, speed: float = 1.0, loop: b
                record: Path | None = None, overwrite: bool = False, stats: bool = False,
                units: str = "meters", quaternion: bool = False, interval: float = 1.0, mouse: bool = True,
                driver_paths: list[Path] | None = None, definitions: list[Path] | None = None,
-               bundled: bool = True) -> int:
+               bundled: bool = True, pose: str | None = None, thresholds=None) -> int:
     import math
 
     from gadgetctl.cli.monitor_cmd import check_options, fatal_load_errors
@@ -215,4 +226,4 @@ def run_replay(recording: Path, names: list[str], *, speed: float = 1.0, loop: b
     return run(session, RunOptions(format=mode, duration=duration, per_frame=per_frame, stats=stats,
                                    record=record, overwrite=overwrite, interval=interval, length_unit=units,
                                    quaternion=quaternion, mouse=mouse, title=title, heading="gadgetctl replay",
-                                   notes=notes), feeder=feeder)
+                                   notes=notes, pose=pose, thresholds=thresholds), feeder=feeder)

@@ -47,6 +47,7 @@ from gadgetctl.input.samples import SampleStore
 from gadgetctl.jccl.access import ElementAccess
 from gadgetctl.jccl.configuration import ConfigElement, Configuration, PropertyValue
 from gadgetctl.jccl.definitions import Location
+from gadgetctl.monitor.poses import matrix_from_pose
 from gadgetctl.monitor.records import MAX_UNITS, HeaderRecord, MarkerRecord, SampleRecord
 from gadgetctl.monitor.replay import ReplaySchedule
 
@@ -304,7 +305,7 @@ def _datum(kind: str, record: SampleRecord) -> Any:
         if kind == "analog":
             return float(raw)
         if kind == "position":
-            return np.asarray(record.value, dtype=np.float64).reshape(4, 4)
+            return matrix_from_pose(record.value)  # a matrix, or written with --pose
         if kind == "glove":
             return np.asarray(record.value, dtype=np.float64).reshape(GLOVE_SHAPE)
         if kind == "string":

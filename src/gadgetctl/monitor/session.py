@@ -45,6 +45,7 @@ from gadgetctl.input.proxies import (
 from gadgetctl.input.samples import FrameSamples, Sample
 from gadgetctl.input.status import UNKNOWN_TYPE, ElementKind, ElementStatus
 from gadgetctl.jccl.configuration import Configuration
+from gadgetctl.monitor.poses import MATRIX, pose_values
 from gadgetctl.monitor.recording import Recorder
 from gadgetctl.monitor.records import (
     FrameDevice,
@@ -375,11 +376,15 @@ def _json_value(kind: DeviceKind, value: Any) -> Any:
     return tolist() if tolist is not None else value
 
 
-def encode_frame(name: str, kind: DeviceKind, frame: FrameSamples, device: Input) -> tuple[str, int]:
-    """Sample records (NDJSON text, count) of every sample of one kind in one frame."""
+def encode_frame(name: str, kind: DeviceKind, frame: FrameSamples, device: Input,
+                 pose: str = MATRIX) -> tuple[str, int]:
+    """Sample records (NDJSON text, count) of every sample of one kind in one frame;
+    positions in the ``pose`` format (:mod:`gadgetctl.monitor.poses`)."""
     parts: list[str] = []
     count = 0
     label = kind.value
+    if kind is DeviceKind.POSITION and pose != MATRIX:
+        return _encode_poses(name, frame, pose)
     analog = kind is DeviceKind.ANALOG and isinstance(device, Analog)
     low, high = (device.analog_min, device.analog_max) if analog else (0.0, 1.0)
     for chunk in frame.chunks:
@@ -408,6 +413,26 @@ def encode_frame(name: str, kind: DeviceKind, frame: FrameSamples, device: Input
             parts.append(encode_rows(name, label, stamps, normalised.tolist(), values.tolist()))
         else:
             parts.append(encode_rows(name, label, stamps, values.tolist()))
+    return "".join(parts), count
+
+
+def _encode_poses(name: str, frame: FrameSamples, pose: str) -> tuple[str, int]:
+    parts: list[str] = []
+    count = 0
+    for chunk in frame.chunks:
+        if type(chunk) is Sample:
+            stamps, matrices = [chunk.timestamp], np.asarray(chunk.values, dtype=np.float64)[None]
+        else:
+            stamps = np.asarray(chunk.timestamps, dtype=np.float64).tolist()
+            matrices = np.asarray(chunk.values, dtype=np.float64)
+        if not len(stamps):
+            continue
+        matrices = matrices.reshape(len(stamps), -1, 4, 4)
+        units = matrices.shape[1]
+        flat = pose_values(matrices, pose)
+        rows = [flat[i * units:(i + 1) * units] for i in range(len(stamps))]
+        parts.append(encode_rows(name, "position", stamps, rows))
+        count += len(stamps) * units
     return "".join(parts), count
 
 
@@ -446,6 +471,7 @@ class _Sink:
     open: Callable[[Mapping[str, object]], Recorder]
     per_frame: bool
     recorder: Recorder | None = None
+    pose: str = MATRIX  # how positions are written (gadgetctl.monitor.poses)
 
 
 #: A run that reaches less than this share of the requested frame rate says so (once),
@@ -585,13 +611,15 @@ class MonitorSession:
             return {}
         return track.frames
 
-    def add_sink(self, opener: Callable[[Mapping[str, object]], Recorder], *, per_frame: bool = False) -> None:
+    def add_sink(self, opener: Callable[[Mapping[str, object]], Recorder], *, per_frame: bool = False,
+                 pose: str = MATRIX) -> None:
         """Add a writer: ``opener(header_info)`` makes the :class:`Recorder` once the header is
         known (after the first samples, at most :data:`SINK_WARMUP` seconds in). With
-        ``per_frame`` it gets frame records instead of sample records."""
+        ``per_frame`` it gets frame records instead of sample records; ``pose`` chooses how
+        its positions are written (recordings keep matrices, which replay reads)."""
         if not self._sinks:
             self.add_consumer(MonitorSession._write_frame)
-        self._sinks.append(_Sink(opener, per_frame))
+        self._sinks.append(_Sink(opener, per_frame, pose=pose))
 
     def add_consumer(self, consumer: FrameConsumer) -> None:
         """Call ``consumer(session, moment)`` once per frame, after the frame's samples were
@@ -747,12 +775,17 @@ class MonitorSession:
 
     def _write_frame(self, moment: float) -> None:
         self._check_statuses(moment)
-        if any(not s.per_frame for s in self._sinks):
-            text, count = self.encode_samples()
+        poses = {s.pose for s in self._sinks if not s.per_frame}
+        if poses:
+            texts: dict[str, str] = {}
+            count = 0
+            for pose in sorted(poses):
+                texts[pose], count = self.encode_samples(pose)
             if count:
-                self._emit("samples", text, count, per_frame=False)
-        if any(s.per_frame for s in self._sinks):
-            self._emit("frame", self.frame_record(), 0, per_frame=True)
+                self._emit("samples", texts, count)
+        poses = {s.pose for s in self._sinks if s.per_frame}
+        if poses:
+            self._emit("frame", {pose: self.frame_record(pose) for pose in sorted(poses)}, 0)
         if not self._sinks_open and (self._warm() or moment - (self.started_at or moment) >= SINK_WARMUP):
             self._open_sinks()
 
@@ -786,7 +819,7 @@ class MonitorSession:
         if not self._sinks_open:
             self._open_sinks()
 
-    def _emit(self, what: str, payload: object, count: int, *, per_frame: bool | None = None) -> None:
+    def _emit(self, what: str, payload: object, count: int) -> None:
         if not self._sinks_open:
             self._buffer.append((what, payload, count))
             return
@@ -799,10 +832,10 @@ class MonitorSession:
                 continue
             if what == "samples":
                 if not sink.per_frame:
-                    recorder.write_encoded(payload, count)  # type: ignore[arg-type]
+                    recorder.write_encoded(payload[sink.pose], count)  # type: ignore[index]
             elif what == "frame":
                 if sink.per_frame:
-                    recorder.write_frame(payload)  # type: ignore[arg-type]
+                    recorder.write_frame(payload[sink.pose])  # type: ignore[index]
             elif what == "status":
                 recorder.write_status(payload)  # type: ignore[arg-type]
             elif what == "marker":
@@ -811,9 +844,9 @@ class MonitorSession:
         if what == "samples":
             self._samples_written += count
 
-    def encode_samples(self) -> tuple[str, int]:
+    def encode_samples(self, pose: str = MATRIX) -> tuple[str, int]:
         """This frame's sample records of the selected devices (and of proxies and aliases
-        named by the selectors), as NDJSON text and count."""
+        named by the selectors), as NDJSON text and count; positions in ``pose``."""
         manager = self.manager
         parts: list[str] = []
         count = 0
@@ -822,7 +855,7 @@ class MonitorSession:
             track = self._tracks.get(name)
             if track is not None and manager.device(name) is track.device:
                 for kind, samples in track.frames.items():
-                    text, n = encode_frame(name, kind, samples, track.device)
+                    text, n = encode_frame(name, kind, samples, track.device, pose)
                     parts.append(text)
                     count += n
                 continue
@@ -834,7 +867,7 @@ class MonitorSession:
                     continue
                 self._proxy_stamps[name] = proxy.timestamp
                 value, raw = proxy_value(proxy)
-                value = _plain_json(value)
+                value = pose_values(value, pose)[0] if isinstance(proxy, PositionProxy) else _plain_json(value)
                 raw = value if raw is None else raw
                 unit = proxy.unit if proxy.HAS_UNIT else 0
                 parts.append(encode_samples([SampleRecord(name, proxy.KIND.value, unit, proxy.timestamp,
@@ -842,8 +875,9 @@ class MonitorSession:
                 count += 1
         return "".join(parts), count
 
-    def frame_record(self) -> FrameRecord:
-        """What every selected element delivered this frame, with its newest values."""
+    def frame_record(self, pose: str = MATRIX) -> FrameRecord:
+        """What every selected element delivered this frame, with its newest values
+        (positions in ``pose``)."""
         manager = self.manager
         devices: dict[str, FrameDevice] = {}
         for name in self._selected:
@@ -857,6 +891,8 @@ class MonitorSession:
                         continue
                     if kind is DeviceKind.ANALOG and isinstance(track.device, Analog):
                         values[kind.value] = {u: track.device.normalize(float(v)) for u, v in enumerate(latest.values)}
+                    elif kind is DeviceKind.POSITION:
+                        values[kind.value] = dict(enumerate(pose_values(latest.values, pose)))
                     else:
                         values[kind.value] = {u: _json_value(kind, v) for u, v in enumerate(latest.values)}
                 devices[name] = FrameDevice(track.count, values)
@@ -868,7 +904,8 @@ class MonitorSession:
             fresh = proxy.timestamp is not None and self._proxy_stamps.get("frame:" + name) != proxy.timestamp
             self._proxy_stamps["frame:" + name] = proxy.timestamp
             unit = proxy.unit if proxy.HAS_UNIT else 0
-            devices[name] = FrameDevice(1 if fresh else 0, {proxy.KIND.value: {unit: _plain_json(value)}})
+            value = pose_values(value, pose)[0] if isinstance(proxy, PositionProxy) else _plain_json(value)
+            devices[name] = FrameDevice(1 if fresh else 0, {proxy.KIND.value: {unit: value}})
         return FrameRecord(self.frame, self.frame_timestamp, devices)
 
     def _check_statuses(self, moment: float) -> None:

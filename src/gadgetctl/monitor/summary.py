@@ -10,11 +10,17 @@ from pathlib import Path
 
 import numpy as np
 
+from gadgetctl.monitor.poses import euler_xyz_degrees_batch, matrix_from_pose, quaternions_wxyz
 from gadgetctl.monitor.recording import Recording, RecordingProblem, read_recording
 from gadgetctl.monitor.records import EndRecord, FrameRecord, MarkerRecord, SampleRecord
 from gadgetctl.monitor.sparkline import sparkline
 
 GAP_FACTOR = 3.0
+AXES = ("x", "y", "z")
+#: A translation axis moving less than this (meters) is drawn flat: float noise and a
+#: resting tracker's jitter are not shown as motion.
+MIN_SPARK_SPAN = 1e-3
+_POSE_BATCH = 4096  # positions whose angles are computed together
 NUMERIC_KINDS = ("analog", "digital", "gesture", "command", "hat")
 
 
@@ -35,8 +41,10 @@ class UnitSummary:
     """One unit of one kind of a device.
 
     ``minimum``/``maximum`` cover numeric kinds (gloves: every angle); positions have the
-    translation ranges (meters) instead. The sparkline shows the value over time (positions:
-    the translation's distance from the origin; gloves: the mean angle); strings have none.
+    translation ranges (meters), the rotation ranges (Euler XYZ angles in degrees, as
+    :mod:`gadgetctl.monitor.poses` defines them) and one sparkline per axis (``sparklines``:
+    x, y, z) instead. The sparkline shows the value over time (gloves: the mean angle);
+    strings have none.
     """
 
     kind: str
@@ -47,13 +55,24 @@ class UnitSummary:
     translation_min: tuple[float, float, float] | None = None
     translation_max: tuple[float, float, float] | None = None
     sparkline: str | None = None
+    rotation_min: tuple[float, float, float] | None = None
+    rotation_max: tuple[float, float, float] | None = None
+    sparklines: dict[str, str] | None = None
+    turn: float | None = None  # positions: the largest angle (degrees) away from the first orientation
 
     def to_dict(self) -> dict[str, object]:
-        return {"kind": self.kind, "unit": self.unit, "samples": self.samples,
-                "minimum": self.minimum, "maximum": self.maximum,
-                "translation_min": list(self.translation_min) if self.translation_min else None,
-                "translation_max": list(self.translation_max) if self.translation_max else None,
-                "sparkline": self.sparkline}
+        result: dict[str, object] = {
+            "kind": self.kind, "unit": self.unit, "samples": self.samples,
+            "minimum": self.minimum, "maximum": self.maximum,
+            "translation_min": list(self.translation_min) if self.translation_min else None,
+            "translation_max": list(self.translation_max) if self.translation_max else None,
+            "sparkline": self.sparkline}
+        if self.kind == "position":
+            result["rotation_min_degrees"] = list(self.rotation_min) if self.rotation_min else None
+            result["rotation_max_degrees"] = list(self.rotation_max) if self.rotation_max else None
+            result["sparklines"] = dict(self.sparklines) if self.sparklines else None
+            result["turn_degrees"] = self.turn
+        return result
 
 
 @dataclass(frozen=True, slots=True)
@@ -126,12 +145,12 @@ def _number(value: object) -> float:
         return math.nan
 
 
-def _translation(value: object) -> tuple[float, float, float] | None:
+def _matrix(value: object) -> np.ndarray | None:
+    """The 4x4 transform of a position value (a matrix, or a position with a quaternion or
+    Euler angles), None when it is none of them."""
     try:
-        if len(value) == 16:  # type: ignore[arg-type]
-            return (_number(value[3]), _number(value[7]), _number(value[11]))  # type: ignore[index]
-        return (_number(value[0][3]), _number(value[1][3]), _number(value[2][3]))  # type: ignore[index]
-    except (TypeError, IndexError, KeyError):
+        return matrix_from_pose(value)
+    except (TypeError, ValueError, KeyError, IndexError, OverflowError):
         return None
 
 
@@ -147,12 +166,17 @@ def _angles(value: object) -> list[float]:
 
 
 class _UnitAccumulator:
-    __slots__ = ("high", "kind", "low", "samples", "series", "translations", "unit")
+    __slots__ = ("angles", "first", "high", "kind", "low", "pending", "samples", "series", "translations", "turn",
+                 "unit")
 
     def __init__(self, kind: str, unit: int) -> None:
         self.kind, self.unit, self.samples = kind, unit, 0
         self.series = array("d")
-        self.translations = array("d")
+        self.translations = array("d")  # x, y, z per position sample (NaN when unreadable)
+        self.angles = array("d")  # Euler XYZ degrees per readable position sample
+        self.pending: list[np.ndarray] = []  # rotations waiting for a batch
+        self.first: np.ndarray | None = None  # the first orientation's quaternion
+        self.turn = 0.0
         self.low: float | None = None
         self.high: float | None = None
 
@@ -160,12 +184,14 @@ class _UnitAccumulator:
         self.samples += 1
         kind = self.kind
         if kind == "position":
-            t = _translation(value)
-            if t is None:
-                self.series.append(math.nan)
+            m = _matrix(value)
+            if m is None or not np.isfinite(m).all():
+                self.translations.extend((math.nan, math.nan, math.nan))
                 return
-            self.translations.extend(t)
-            self.series.append(math.sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]))
+            self.translations.extend(m[:3, 3].tolist())
+            self.pending.append(m)
+            if len(self.pending) >= _POSE_BATCH:
+                self._flush_angles()
         elif kind == "glove":
             angles = [a for a in _angles(value) if math.isfinite(a)]
             if angles:
@@ -178,21 +204,46 @@ class _UnitAccumulator:
         elif kind != "string":
             self.series.append(_number(value) if not isinstance(value, str) else math.nan)
 
+    def _flush_angles(self) -> None:
+        if self.pending:
+            batch = np.stack(self.pending)
+            self.angles.extend(euler_xyz_degrees_batch(batch).ravel().tolist())
+            quaternions = quaternions_wxyz(batch)
+            if self.first is None:
+                self.first = quaternions[0]
+            cosines = np.clip(np.abs(quaternions @ self.first), 0.0, 1.0)
+            self.turn = max(self.turn, float(np.degrees(2.0 * np.arccos(cosines.min()))))
+            self.pending = []
+
+    def _position_summary(self, width: int) -> UnitSummary:
+        self._flush_angles()
+        xyz = np.frombuffer(self.translations, dtype=np.float64).reshape(-1, 3) if self.translations else None
+        if xyz is None or not np.isfinite(xyz).all(axis=1).any():
+            return UnitSummary(self.kind, self.unit, self.samples)
+        readable = xyz[np.isfinite(xyz).all(axis=1)]
+        lo, hi = readable.min(axis=0), readable.max(axis=0)
+        lines = {}
+        for axis, name in enumerate(AXES):  # each axis on its own scale, time kept (NaN: a gap)
+            column = xyz[:, axis]
+            if hi[axis] - lo[axis] < MIN_SPARK_SPAN:  # at rest: a row of middle bars
+                column = np.where(np.isfinite(column), 0.0, np.nan)
+            lines[name] = sparkline(column, width)
+        angles = np.frombuffer(self.angles, dtype=np.float64).reshape(-1, 3)
+        a_lo, a_hi = angles.min(axis=0), angles.max(axis=0)
+        return UnitSummary(self.kind, self.unit, self.samples,
+                           translation_min=(float(lo[0]), float(lo[1]), float(lo[2])),
+                           translation_max=(float(hi[0]), float(hi[1]), float(hi[2])),
+                           rotation_min=(float(a_lo[0]), float(a_lo[1]), float(a_lo[2])),
+                           rotation_max=(float(a_hi[0]), float(a_hi[1]), float(a_hi[2])),
+                           sparklines=lines, turn=self.turn)
+
     def summary(self, width: int) -> UnitSummary:
         if self.kind == "string":
             return UnitSummary(self.kind, self.unit, self.samples)
+        if self.kind == "position":
+            return self._position_summary(width)
         series = np.frombuffer(self.series, dtype=np.float64) if self.series else np.empty(0)
         line = sparkline(series, width)
-        if self.kind == "position":
-            xyz = np.frombuffer(self.translations, dtype=np.float64).reshape(-1, 3) if self.translations else None
-            if xyz is None or not np.isfinite(xyz).all(axis=1).any():
-                return UnitSummary(self.kind, self.unit, self.samples, sparkline=line)
-            xyz = xyz[np.isfinite(xyz).all(axis=1)]
-            lo, hi = xyz.min(axis=0), xyz.max(axis=0)
-            return UnitSummary(self.kind, self.unit, self.samples,
-                               translation_min=(float(lo[0]), float(lo[1]), float(lo[2])),
-                               translation_max=(float(hi[0]), float(hi[1]), float(hi[2])),
-                               sparkline=line)
         if self.kind == "glove":
             return UnitSummary(self.kind, self.unit, self.samples, self.low, self.high,
                                sparkline=line)

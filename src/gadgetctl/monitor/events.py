@@ -1,0 +1,284 @@
+"""Changes only, one line each: the data side of ``--format events`` (evtest-style).
+
+:class:`ChangeDetector` looks at every sample a session gathered in a frame, in order, and
+keeps what it last reported per device, kind and unit; it reports
+
+* a button pressed or released (every change between two samples, also within one frame);
+* an analog unit moving more than the dead band (a share of the device's range) away from
+  the value last reported, with the raw reading (an integer where the device gives one);
+* a position moving more than a distance (meters) or turning more than an angle (degrees)
+  from the pose last reported;
+* a glove joint turning more than the angle; a hat, gesture, command or string value that
+  differs from the previous one (commands, gestures and strings from the first one on);
+* keyboard and mouse events; a device's status when it is not running or changes; markers.
+
+:func:`event_line` writes one :class:`ChangeEvent` as a line,
+``TIME  NAME[UNIT]  KIND  VALUE...`` (fields separated by two spaces; see docs/monitor.md).
+Nothing here prints or imports typer or rich.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from gadgetctl.input.device import DeviceState
+from gadgetctl.input.devicetypes import Analog
+from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.monitor.poses import (
+    EULER,
+    MATRIX,
+    QUATERNION,
+    euler_xyz_degrees_batch,
+    quaternions_wxyz,
+)
+from gadgetctl.monitor.units import from_meters
+from gadgetctl.safetext import printable
+
+DEFAULT_DEAD_BAND = 0.02  # of an analog device's range (min..max)
+DEFAULT_DISTANCE = 0.01  # meters
+DEFAULT_ANGLE = 1.0  # degrees
+UNIT_SYMBOLS = {"meters": "m", "feet": "ft", "inches": "in", "centimeters": "cm"}
+HAT_NAMES = {0: "centered", 1: "up", 2: "right", 4: "down", 8: "left"}
+FINGERS = ("thumb", "index", "middle", "ring", "pinky", "wrist")
+DISCRETE = (DeviceKind.COMMAND, DeviceKind.STRING, DeviceKind.GESTURE)
+
+
+@dataclass(frozen=True, slots=True)
+class Thresholds:
+    """How far a value must move before it is reported again."""
+
+    dead_band: float = DEFAULT_DEAD_BAND
+    distance: float = DEFAULT_DISTANCE
+    angle: float = DEFAULT_ANGLE
+
+    def __post_init__(self) -> None:
+        for name in ("dead_band", "distance", "angle"):
+            value = getattr(self, name)
+            if not (value >= 0 and math.isfinite(value)):
+                raise ValueError(
+                    f"{name.replace('_', ' ')} must be a finite number >= 0, not {value!r}"
+                )
+
+
+@dataclass(frozen=True, slots=True)
+class ChangeEvent:
+    """One change: ``kind`` is a data kind (digital, analog, position, glove, hat, gesture,
+    command, string), ``key`` (keyboard/mouse), ``status`` or ``marker``."""
+
+    timestamp: float
+    name: str
+    kind: str
+    unit: int | None = None
+    value: Any = None
+    raw: Any = None
+
+
+@dataclass(slots=True)
+class _DeviceMemory:
+    last: dict[tuple[DeviceKind, int], Any] = field(default_factory=dict)
+    state: str | None = None
+    error: str | None = None
+
+
+class ChangeDetector:
+    """Turns a session's frames into :class:`ChangeEvent` lists (see the module doc)."""
+
+    def __init__(self, thresholds: Thresholds | None = None) -> None:
+        self.thresholds = thresholds or Thresholds()
+        self._devices: dict[str, _DeviceMemory] = {}
+        self._markers_seen = 0
+
+    def frame(self, session: Any, moment: float) -> list[ChangeEvent]:
+        """The changes of the session's current frame, in time order per device."""
+        events: list[ChangeEvent] = []
+        manager = session.manager
+        for name in session.watched:
+            device = manager.device(name)
+            if device is None:
+                continue
+            memory = self._devices.setdefault(name, _DeviceMemory())
+            self._status(events, name, device, memory, moment)
+            for kind, samples in session.frame_samples(name).items():
+                for sample in samples:
+                    self._sample(
+                        events, name, device, memory, kind, sample.timestamp, sample.values
+                    )
+        markers = session.markers
+        for marker in markers[self._markers_seen :]:
+            events.append(ChangeEvent(marker.timestamp, "-", "marker", value=marker.name))
+        self._markers_seen = len(markers)
+        events.sort(key=lambda event: event.timestamp)
+        return events
+
+    def _status(
+        self,
+        events: list[ChangeEvent],
+        name: str,
+        device: Any,
+        memory: _DeviceMemory,
+        moment: float,
+    ) -> None:
+        state = device.state.value if isinstance(device.state, DeviceState) else str(device.state)
+        error = device.error if state in ("faulted", "reconnecting") else None
+        if (state, error) == (memory.state, memory.error):
+            return
+        first = memory.state is None
+        memory.state, memory.error = state, error
+        if first and state == DeviceState.RUNNING.value:
+            return  # running from the start is the normal case: nothing to say
+        events.append(ChangeEvent(moment, name, "status", value=state, raw=error))
+
+    def _sample(
+        self,
+        events: list[ChangeEvent],
+        name: str,
+        device: Any,
+        memory: _DeviceMemory,
+        kind: DeviceKind,
+        stamp: float,
+        values: Any,
+    ) -> None:
+        last = memory.last
+        if kind is DeviceKind.KEYBOARD_MOUSE:
+            for value in values:
+                events.append(ChangeEvent(stamp, name, "key", value=value))
+            return
+        for unit, value in enumerate(values):
+            key = (kind, unit)
+            previous = last.get(key)
+            if kind is DeviceKind.DIGITAL:
+                state = 1 if value else 0
+                if previous is not None and state != previous:
+                    events.append(ChangeEvent(stamp, name, kind.value, unit, state, value))
+                last[key] = state
+            elif kind is DeviceKind.ANALOG:
+                raw = float(value)
+                normal = device.normalize(raw) if isinstance(device, Analog) else raw
+                if previous is None:
+                    last[key] = normal
+                elif abs(normal - previous) > self.thresholds.dead_band:
+                    events.append(ChangeEvent(stamp, name, kind.value, unit, normal, value))
+                    last[key] = normal
+            elif kind is DeviceKind.POSITION:
+                matrix = np.asarray(value, dtype=np.float64).reshape(4, 4)
+                if previous is None:
+                    last[key] = matrix
+                elif self._pose_moved(previous, matrix):
+                    events.append(ChangeEvent(stamp, name, kind.value, unit, matrix))
+                    last[key] = matrix
+            elif kind is DeviceKind.GLOVE:
+                angles = np.asarray(value, dtype=np.float64)
+                if previous is None:
+                    last[key] = angles
+                elif (
+                    previous.shape != angles.shape
+                    or np.degrees(np.abs(angles - previous)).max() > self.thresholds.angle
+                ):
+                    events.append(ChangeEvent(stamp, name, kind.value, unit, angles))
+                    last[key] = angles
+            else:  # hat, gesture, command, string: every change
+                plain = str(value) if kind is DeviceKind.STRING else _integer(value)
+                if plain != previous and (previous is not None or kind in DISCRETE):
+                    events.append(ChangeEvent(stamp, name, kind.value, unit, plain, value))
+                last[key] = plain
+
+    def _pose_moved(self, before: np.ndarray, after: np.ndarray) -> bool:
+        if float(np.linalg.norm(after[:3, 3] - before[:3, 3])) > self.thresholds.distance:
+            return True
+        relative = before[:3, :3].T @ after[:3, :3]
+        cosine = float(np.clip((np.trace(relative) - 1.0) / 2.0, -1.0, 1.0))
+        return math.degrees(math.acos(cosine)) > self.thresholds.angle
+
+
+def _integer(value: Any) -> Any:
+    try:
+        return int(value)
+    except (TypeError, ValueError):
+        return value
+
+
+# --------------------------------------------------------------------------- the line
+
+
+def number_text(value: Any) -> str:
+    """A reading as text: integers (and floats holding one, as a joystick's -15450.0) as
+    integers, never ``-1.545e+04``; other numbers with 6 significant digits."""
+    if isinstance(value, (bool, np.bool_, int, np.integer)):
+        return str(int(value))
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return printable(str(value))
+    if math.isfinite(number) and number.is_integer() and abs(number) < 1e15:
+        return str(int(number))
+    return f"{number:.6g}"
+
+
+def pose_text(matrix: Any, pose: str = EULER, length_unit: str = "meters") -> str:
+    """A transform as ``x X y Y z Z UNIT`` followed by ``rot X Y Z deg`` (Euler XYZ),
+    ``q W X Y Z`` (quaternion) or the matrix's 16 values row by row (``m ...``)."""
+    m = np.asarray(matrix, dtype=np.float64).reshape(4, 4)
+    if pose == MATRIX:
+        return "m " + " ".join(f"{v:+.4f}" for v in m.ravel().tolist())
+    x, y, z = (float(from_meters(v, length_unit)) for v in m[:3, 3])
+    text = f"x {x:+.4f} y {y:+.4f} z {z:+.4f} {UNIT_SYMBOLS.get(length_unit, length_unit)}"
+    if pose == QUATERNION:
+        w, qx, qy, qz = quaternions_wxyz(m[None])[0].tolist()
+        return text + f"  q {w:+.4f} {qx:+.4f} {qy:+.4f} {qz:+.4f}"
+    ax, ay, az = euler_xyz_degrees_batch(m[None])[0].tolist()
+    return text + f"  rot {ax:+.1f} {ay:+.1f} {az:+.1f} deg"
+
+
+def _value_text(event: ChangeEvent, pose: str, length_unit: str) -> str:
+    kind, value = event.kind, event.value
+    if kind == "digital":
+        return "pressed" if value else "released"
+    if kind == "analog":
+        return f"{value:.4f} raw {number_text(event.raw)}"
+    if kind == "position":
+        return pose_text(value, pose, length_unit)
+    if kind == "glove":
+        angles = np.degrees(np.asarray(value, dtype=np.float64)).reshape(-1, 4)
+        return " ".join(
+            f"{finger} {'/'.join(f'{a:.0f}' for a in row)}"
+            for finger, row in zip(FINGERS, angles.tolist(), strict=False)
+        )
+    if kind == "hat":
+        return (
+            HAT_NAMES.get(value, number_text(value))
+            if isinstance(value, int)
+            else number_text(value)
+        )
+    if kind in ("string", "marker"):
+        return json.dumps(str(value), ensure_ascii=False)
+    if kind == "status":
+        return f"{value}: {printable(str(event.raw))}" if event.raw else str(value)
+    if kind == "key":
+        return _key_text(value)
+    return number_text(value)
+
+
+def _key_text(event: Any) -> str:
+    key = getattr(event, "key", None)
+    if key is not None and hasattr(event, "pressed"):
+        return f"{key.name} {'pressed' if event.pressed else 'released'}"
+    if hasattr(event, "dx"):
+        return f"move {number_text(event.dx)} {number_text(event.dy)}"
+    if hasattr(event, "direction"):
+        return f"scroll {event.direction}"
+    return printable(str(event))
+
+
+def event_line(
+    event: ChangeEvent, origin: float, *, pose: str = EULER, length_unit: str = "meters"
+) -> str:
+    """``TIME  NAME[UNIT]  KIND  VALUE...``: TIME in seconds since ``origin`` (6 decimals),
+    the unit in brackets for data of a unit, fields separated by two spaces."""
+    where = printable(event.name) + (f"[{event.unit}]" if event.unit is not None else "")
+    text = _value_text(event, pose, length_unit)
+    return f"{event.timestamp - origin:.6f}  {where}  {event.kind}  {printable(text)}"
