@@ -7,7 +7,9 @@ emulator's one-process demonstration, and a one-line DRV003 without PySDL2."""
 from __future__ import annotations
 
 import json
+import os
 import re
+import signal
 import subprocess
 import sys
 from collections.abc import Callable, Iterator
@@ -17,7 +19,7 @@ import pytest
 from SdlJoystick_drv.emulator import IMPOSSIBLE_HATS, SdlJoystickEmulator, main, normalised
 from SdlJoystick_drv.standalone import SdlJoystickReader
 
-from gadgetctl.doctor import Status
+from gadgetctl.doctor import DoctorOptions, Status, diagnose, render_text
 from gadgetctl.doctor.sdl import check_sdl
 from gadgetctl.input import DeviceKind, DigitalState, HatState, InputManager, ManagerOptions
 from gadgetctl.input.testing import frames_until, wait_until
@@ -192,6 +194,25 @@ def test_a_joystick_that_goes_away_faults_and_returns(build) -> None:
     assert dev.restarts >= 1 and dev.faults >= 1
 
 
+def test_the_disconnect_scenario_comes_back_by_itself(build) -> None:
+    with SdlJoystickEmulator(
+        scenario="disconnect",
+        rate=100.0,
+        axes=1,
+        buttons=1,
+        hats=0,
+        disconnect_after=30,
+        down_time=0.3,
+    ) as emu:
+        manager = build(joystick("Pad", emu.index) + proxy("analog", "X", "Pad", 0))
+        dev = manager.device("Pad")
+        frames_until(manager, lambda: emu.detaches >= 1 and dev.faults >= 1, timeout=20.0)
+        frames_until(manager, lambda: emu.attaches >= 2 and dev.restarts >= 1, timeout=20.0)
+        count = dev.store.total()
+        frames_until(manager, lambda: dev.store.total() > count + 5, timeout=20.0)
+    assert emu.error is None and "SDL joystick" in (dev.error or "")  # gone, or not back yet
+
+
 def test_a_missing_index_leaves_the_device_pending_with_the_reason(tmp_path: Path) -> None:
     path = tmp_path / "missing.jconf"
     path.write_text(HEAD + joystick("Pad", 7) + "</elements>\n</configuration>\n")
@@ -319,13 +340,28 @@ def test_our_example_delivers_through_its_alias(tmp_path: Path, capsys) -> None:
     assert {int(DigitalState.TOGGLE_ON), int(DigitalState.TOGGLE_OFF)} <= values, out[-2000:]
 
 
-def test_doctor_checks_the_sdl_index() -> None:
+def test_doctor_checks_the_sdl_index(tmp_path: Path) -> None:
     with SdlJoystickEmulator(scenario="idle", axes=1, buttons=1, hats=0, name="doctor pad") as emu:
         found = check_sdl(emu.index)
         assert found.status is Status.OK and "doctor pad" in found.detail
         missing = check_sdl(emu.index + 5, emulator="SdlJoystick_drv")
         assert missing.status is Status.PROBLEM and missing.code == "DRV100"
         assert "doctor pad" in (missing.hint or "")
+        path = tmp_path / "doctor.jconf"
+        path.write_text(
+            HEAD
+            + joystick("Pad", emu.index)
+            + joystick("Far", emu.index + 5)
+            + "</elements>\n</configuration>\n"
+        )
+        report = diagnose([path], DoctorOptions())
+        checks = {d.name: d.checks for d in report.devices}
+        assert [c.status for c in checks["Pad"]] == [Status.OK]
+        assert [(c.code, c.prop) for c in checks["Far"]] == [("DRV100", "device")]
+        assert report.exit_code == 1
+        overview = diagnose([], DoctorOptions())
+        assert (emu.index, "doctor pad") in overview.sdl_joysticks
+        assert "doctor pad" in render_text(overview)
     assert check_sdl(-1).code == "DRV106"
 
 
@@ -335,6 +371,33 @@ def test_the_emulator_command_is_a_one_process_demonstration(capsys) -> None:
     assert "exists only in this process" in out
     lines = [line for line in out.splitlines() if line.startswith("axes ")]
     assert lines and "buttons 000" in lines[-1]
+
+
+@pytest.mark.parametrize("how", [signal.SIGTERM, signal.SIGINT])
+def test_the_demonstration_stops_cleanly_on_a_signal(how) -> None:
+    """SDL is told to leave SIGINT and SIGTERM alone, so the emulator's own handling stops it."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "gadgetctl", "emulate", "SdlJoystick_drv", "--scenario", "buttons"],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
+    try:
+        seen = ""
+        while "axes " not in seen:
+            line = proc.stdout.readline()
+            assert line, f"the demonstration ended early: {seen!r} {proc.stderr.read()!r}"
+            seen += line
+        proc.send_signal(how)
+        _out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err
 
 
 def test_without_pysdl2_the_plugin_fails_with_one_line() -> None:

@@ -93,6 +93,8 @@ class DoctorReport:
     devices: list[DeviceReport] = field(default_factory=list)
     serial_ports: list[SerialPort] | None = None  # None: pyserial cannot list them
     joysticks: list[PortCheck] = field(default_factory=list)
+    # the overview's SDL joysticks, (index, name); a string says why SDL could not be asked
+    sdl_joysticks: list[tuple[int, str]] | str | None = None
     diagnostics: list[Diagnostic] = field(default_factory=list)
     serve_port: PortCheck | None = None  # --serve-port: whether `gadgetctl serve` could bind it
 
@@ -107,6 +109,11 @@ class DoctorReport:
 
     def to_dict(self) -> dict[str, object]:
         serve = {} if self.serve_port is None else {"serve_port": self.serve_port.to_dict()}
+        if self.sdl_joysticks is not None:
+            sdl = self.sdl_joysticks
+            serve["sdl_joysticks"] = (
+                {"error": sdl} if isinstance(sdl, str) else [{"index": i, "name": n} for i, n in sdl]
+            )
         return {
             "configurations": self.configurations,
             "definition_path": self.definition_path,

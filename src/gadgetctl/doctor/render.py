@@ -70,6 +70,14 @@ def _system(report: DoctorReport) -> list[str]:
     lines.extend(f"    {_MARK[c.status.value]:<8} {c.target}: {c.detail}" for c in report.joysticks)
     if not report.joysticks:
         lines.append("    none found (no /dev/input/js*; is the joydev kernel module loaded?)")
+    sdl = report.sdl_joysticks
+    if isinstance(sdl, str):
+        lines.append(f"SDL joysticks: cannot ask SDL: {sdl}")
+    elif sdl is not None:
+        lines.append("SDL joysticks (the device index of sdl_joystick elements):")
+        lines.extend(f"    {index}: {name}" for index, name in sdl)
+        if not sdl:
+            lines.append("    none found")
     return lines
 
 

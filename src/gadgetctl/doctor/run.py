@@ -64,6 +64,9 @@ def diagnose(configs: Sequence[Path] = (), options: DoctorOptions | None = None)
     report.joysticks = list_joysticks(options.joystick_glob, options.identity)
     if configuration is None:
         report.plugins, found = _plugins(search, repo, None)
+        from gadgetctl.doctor.sdl import sdl_joysticks
+
+        report.sdl_joysticks = sdl_joysticks()
         found += [_diagnostic(c, f"joystick {c.target} {c.detail}") for c in report.joysticks if c.code]
     else:
         found, used = _configured(configuration, repo, search, options, report)

@@ -263,7 +263,9 @@ class SdlHub:
             thread, self._thread = self._thread, None
             self._stop = True
             self._wake.set()
-        thread.join(timeout=5.0)
+            # joined under the lock, so a new first user waits until SDL is really quit
+            # (the thread never takes the lock)
+            thread.join(timeout=5.0)
 
     def call(self, fn: Callable[..., Any], *args: Any, timeout: float = 5.0) -> Any:
         """Run ``fn(*args)`` on the hub's thread and return its result (or raise its error)."""
@@ -351,6 +353,7 @@ class SdlHub:
         next_poll = time.monotonic()
         try:
             while not self._stop:
+                self._wake.clear()  # before the requests: a later call() wakes the wait below
                 self._run_requests()
                 if self._open:
                     now = time.monotonic()
@@ -362,7 +365,6 @@ class SdlHub:
                 else:
                     self._wake.wait(0.05)
                     next_poll = time.monotonic()
-                self._wake.clear()
         finally:
             self._run_requests()
             for joystick in list(self._open):
