@@ -28,16 +28,15 @@ import random
 import select
 import socket
 import sys
-import threading
 import time
 from collections.abc import Sequence
 
 import numpy as np
 
 from gadgetctl.emulation import emulator_parser, run
+from gadgetctl.emulation.network import LOOPBACK, STANDARD_SCENARIOS, Peers, UdpFrameSender, ended
 
-LOOPBACK = "127.0.0.1"
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 FLYSTICK_FORMATS = ("6df2", "6df")
 FINGERS = 3
 
@@ -227,7 +226,7 @@ class FrameWriter:
 # -- the emulator ----------------------------------------------------------------------------
 
 
-class DTrackEmulator:
+class DTrackEmulator(UdpFrameSender):
     """Sends DTrack frames to ``127.0.0.1:port`` at ``rate`` frames per second.
 
     ``address`` is where the frames go (the receiver's ``receive_port``). With ``command_port``
@@ -236,6 +235,8 @@ class DTrackEmulator:
     and ``bad_lines_sent`` count what the garbage scenario added. With ``max_frames`` the
     emulator stops sending after that many frames (and sets ``finished``) but keeps its socket.
     """
+
+    NAME = "dtrack"
 
     def __init__(
         self,
@@ -256,20 +257,17 @@ class DTrackEmulator:
         first_frame: int = 1,
         seed: int = 0,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
-        if not 0 < port < 65536:
-            raise ValueError("port must be between 1 and 65535")
-        self.port = port
-        self.scenario = scenario
-        self.rate = rate
+        super().__init__(
+            port,
+            scenario=scenario,
+            rate=rate,
+            disconnect_after=disconnect_after,
+            max_frames=max_frames,
+            first_frame=first_frame,
+        )
         self.writer = FrameWriter(
             scenario, rate, bodies, flysticks, flystick_buttons, flystick_format, markers, gloves
         )
-        self.disconnect_after = disconnect_after
-        self.max_frames = max_frames
         self.command_port = command_port
         self.wait_for_start = wait_for_start and command_port is not None
         self.commands: list[str] = []
@@ -277,22 +275,11 @@ class DTrackEmulator:
         self.frames_sent: list[int] = []
         self.garbage_sent = 0
         self.bad_lines_sent = 0
-        self.error: BaseException | None = None
-        self.finished = threading.Event()
-        self._next_frame = first_frame
         self._rng = random.Random(seed)
-        self._sender: socket.socket | None = None
         self._command_sock: socket.socket | None = None
+        self._peers = Peers(self.console)
         self._sending = not self.wait_for_start
         self._frames_to_send: int | None = None  # set by "dtrack 33 n"
-        self._stop = threading.Event()
-        self._lock = threading.Lock()
-        self._threads: list[threading.Thread] = []
-
-    @property
-    def address(self) -> str:
-        """Where the frames are sent: give this port as ``receive_port``."""
-        return f"{LOOPBACK}:{self.port}"
 
     @property
     def command_address(self) -> str | None:
@@ -303,50 +290,18 @@ class DTrackEmulator:
 
     # -- life cycle -------------------------------------------------------------------------
 
-    def start(self) -> DTrackEmulator:
-        if self._threads:
-            return self
-        self._stop.clear()
-        self.finished.clear()
-        self._sender = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self._sender.bind((LOOPBACK, 0))
+    def open(self) -> None:
         if self.command_port is not None:
             self._command_sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
             self._command_sock.bind((LOOPBACK, self.command_port))
-            self._threads.append(
-                threading.Thread(target=self._listen, name="dtrack-commands", daemon=True)
-            )
-        self._threads.append(
-            threading.Thread(target=self._send_loop, name="dtrack-emulator", daemon=True)
-        )
-        for thread in self._threads:
-            thread.start()
-        return self
 
-    def stop(self, timeout: float = 2.0) -> None:
-        self._stop.set()
-        for thread in self._threads:
-            thread.join(timeout)
-        self._threads.clear()
-        for sock in (self._sender, self._command_sock):
-            if sock is not None:
-                sock.close()
-        self._sender = self._command_sock = None
+    def close(self) -> None:
+        if self._command_sock is not None:
+            self._command_sock.close()
+        self._command_sock = None
 
-    def __enter__(self) -> DTrackEmulator:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
-
-    def send_raw(self, data: bytes | str) -> None:
-        """Send one datagram of your own (for hand-made test data)."""
-        payload = data.encode("ascii") if isinstance(data, str) else data
-        with self._lock:
-            sock = self._sender
-            if sock is None:
-                raise RuntimeError("the emulator is not running")
-            sock.sendto(payload, (LOOPBACK, self.port))
+    def services(self) -> list:
+        return [] if self._command_sock is None else [(self._listen, "dtrack-commands")]
 
     def wait_for_command(self, command: str, timeout: float = 1.0) -> bool:
         """Wait until ``command`` has been received."""
@@ -360,33 +315,7 @@ class DTrackEmulator:
 
     # -- threads ------------------------------------------------------------------------------
 
-    def _send_loop(self) -> None:
-        try:
-            deadline = time.monotonic()
-            sent = 0
-            while not self._stop.is_set():
-                deadline += 1.0 / self.rate
-                delay = deadline - time.monotonic()
-                if delay > 0 and self._stop.wait(delay):
-                    return
-                if not self._may_send():
-                    continue
-                self._send_frame()
-                sent += 1
-                if self.scenario == "disconnect" and sent >= self.disconnect_after:
-                    with self._lock:
-                        if self._sender is not None:
-                            self._sender.close()
-                        self._sender = None
-                    return
-                if self.max_frames is not None and sent >= self.max_frames:
-                    return
-        except BaseException as exc:  # reported through .error
-            self.error = exc
-        finally:
-            self.finished.set()
-
-    def _may_send(self) -> bool:
+    def may_send(self) -> bool:
         with self._lock:
             if not self._sending:
                 return False
@@ -397,9 +326,7 @@ class DTrackEmulator:
                 self._frames_to_send -= 1
             return True
 
-    def _send_frame(self) -> None:
-        n = self._next_frame
-        self._next_frame += 1
+    def send_frame(self, n: int) -> None:
         text = self.writer.frame(n)
         if self.scenario == "garbage" and n % 4 == 3:
             text += "3d 2 [1 1.000][10.000 20\r\n"  # a malformed line inside a valid frame
@@ -431,7 +358,8 @@ class DTrackEmulator:
                 ready, _, _ = select.select([sock], [], [], 0.01)
                 if not ready:
                     continue
-                data, _addr = sock.recvfrom(4096)
+                data, peer = sock.recvfrom(4096)
+                self._peers.heard(peer, "first command")
                 with self._lock:
                     self.raw_commands.append(data)
                 self._command(data.decode("ascii", "replace").strip("\0 \r\n"))
@@ -508,13 +436,7 @@ def main(argv: list[str] | None = None) -> int:
             )
         print("Press Ctrl-C to stop.", flush=True)
 
-    def check() -> int | None:
-        if emulator.error is not None:
-            print(f"emulator failed: {emulator.error}", file=sys.stderr)
-            return 1
-        return 0 if emulator.finished.is_set() else None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run(emulator, duration=args.duration, announce=announce, check=ended(emulator))
 
 
 if __name__ == "__main__":

@@ -22,10 +22,10 @@ import sys
 import threading
 import time
 
-from gadgetctl.emulation import emulator_parser, run
+from gadgetctl.emulation import Console, emulator_parser, run
+from gadgetctl.emulation.network import LOOPBACK, STANDARD_SCENARIOS, Peers, ended
 
-LOOPBACK = "127.0.0.1"
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 IDLE_PATTERN = (0xA5, 0x0F, 0x81)
 MAC = bytes([0x00, 0x0A, 0xBC, 0x12, 0x34, 0x56])
 
@@ -66,6 +66,8 @@ class Ether24Emulator:
         self.garbage_sent = 0
         self.error: BaseException | None = None
         self.finished = threading.Event()
+        self.console = Console()
+        self._peers = Peers(self.console)
         self._sock: socket.socket | None = None
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -114,10 +116,12 @@ class Ether24Emulator:
             while not self._stop.is_set():
                 step = self.step()
                 if self.scenario == "disconnect" and step >= self.disconnect_after:
+                    self.console.stopped_sending(f"stopped answering after {step} steps")
                     return
                 if not select.select([sock], [], [], 0.01)[0]:
                     continue
                 data, peer = sock.recvfrom(64)
+                self._peers.heard(peer)
                 self._answer(sock, data, peer, step)
         except OSError as exc:
             if not self._stop.is_set():
@@ -178,13 +182,7 @@ def main(argv: list[str] | None = None) -> int:
         )
         print("Press Ctrl-C to stop.", flush=True)
 
-    def check() -> int | None:
-        if emulator.error is not None:
-            print(f"emulator failed: {emulator.error}", file=sys.stderr)
-            return 1
-        return 0 if emulator.finished.is_set() else None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run(emulator, duration=args.duration, announce=announce, check=ended(emulator))
 
 
 if __name__ == "__main__":

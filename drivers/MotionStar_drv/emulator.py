@@ -30,7 +30,7 @@ from collections import deque
 from dataclasses import dataclass, field
 from types import TracebackType
 
-from gadgetctl.emulation import emulator_parser, run
+from gadgetctl.emulation import Console, emulator_parser, run
 
 # The emulator keeps its own copy of the wire constants so that a mistake in the
 # driver cannot be mirrored here and go unnoticed by the tests.
@@ -223,6 +223,7 @@ class MotionStarEmulator:
         ] = {}
         self._sent_order: deque[int] = deque()
         self.connections = 0
+        self.console = Console()
         self.disconnected = threading.Event()
         self.client_left = threading.Event()
         self._rng = random.Random(seed)
@@ -286,14 +287,24 @@ class MotionStarEmulator:
             ready, _, _ = select.select([self._listener], [], [], 0.05)
             if not ready:
                 continue
-            conn, _peer = self._listener.accept()
+            conn, peer = self._listener.accept()
+            who = f"{peer[0]}:{peer[1]}"
             self.connections += 1
             self.client_left.clear()
+            self.console.client_connected(who)
+            why = "closed by the client"
             with conn:
                 conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
                 conn.settimeout(1.0)  # a client that stops reading ends the session
-                with contextlib.suppress(OSError):
+                try:
                     _Session(self, conn).run()
+                except OSError as exc:
+                    why = f"connection lost: {exc.strerror or exc}"
+            if self.disconnected.is_set():
+                why = "closed by the disconnect scenario"
+            elif self._stop.is_set():
+                why = "emulator stopping"
+            self.console.client_disconnected(who, why)
             self.client_left.set()
 
     def inject(self, data: bytes) -> None:
@@ -432,6 +443,7 @@ class _Session:
         """Send the next continuous packet (plus scenario junk); False to hang up."""
         emu = self.emu
         if emu.scenario == "disconnect" and self.k >= emu.disconnect_after:
+            emu.console.stopped_sending(f"closed the connection after {self.k} data packets")
             self.conn.shutdown(socket.SHUT_RDWR)
             emu.disconnected.set()
             return False

@@ -20,16 +20,13 @@ from __future__ import annotations
 
 import math
 import random
-import socket
 import struct
 import sys
-import threading
-import time
 
 from gadgetctl.emulation import emulator_parser, run
+from gadgetctl.emulation.network import STANDARD_SCENARIOS, UdpFrameSender, ended
 
-LOOPBACK = "127.0.0.1"
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 NAT_FRAMEOFDATA = 7
 
 
@@ -118,11 +115,13 @@ class FrameWriter:
 # -- the emulator ----------------------------------------------------------------------------
 
 
-class OptiTrackEmulator:
+class OptiTrackEmulator(UdpFrameSender):
     """Sends NatNet frames to ``127.0.0.1:port`` (or multicast ``group`` via loopback) at
     ``rate`` frames per second. ``frames_sent`` counts the valid frames, ``garbage_sent`` the
     bad datagrams of the garbage scenario. With ``max_frames`` it stops sending after that
     many frames (and sets ``finished``)."""
+
+    NAME = "natnet"
 
     def __init__(
         self,
@@ -138,105 +137,28 @@ class OptiTrackEmulator:
         group: str | None = None,
         seed: int = 0,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
-        if not 0 < port < 65536:
-            raise ValueError("port must be between 1 and 65535")
         if bodies < 0 or markers < 0:
             raise ValueError("the counts must not be negative")
-        self.port = port
-        self.scenario = scenario
-        self.rate = rate
-        self.group = group
+        super().__init__(
+            port,
+            scenario=scenario,
+            rate=rate,
+            disconnect_after=disconnect_after,
+            max_frames=max_frames,
+            first_frame=first_frame,
+            group=group,
+        )
         self.writer = FrameWriter(scenario, bodies, markers)
-        self.disconnect_after = disconnect_after
-        self.max_frames = max_frames
         self.frames_sent = 0
         self.garbage_sent = 0
-        self.error: BaseException | None = None
-        self.finished = threading.Event()
-        self._next_frame = first_frame
         self._rng = random.Random(seed)
-        self._sender: socket.socket | None = None
-        self._stop = threading.Event()
-        self._lock = threading.Lock()
-        self._thread: threading.Thread | None = None
 
-    @property
-    def address(self) -> str:
-        return f"{self.group or LOOPBACK}:{self.port}"
-
-    def start(self) -> OptiTrackEmulator:
-        if self._thread is not None:
-            return self
-        self._stop.clear()
-        self.finished.clear()
-        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 4 * 1024 * 1024)
-        if self.group:  # multicast stays on the loopback interface
-            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_IF, socket.inet_aton(LOOPBACK))
-            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_LOOP, 1)
-            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_TTL, 0)
-        sock.bind((LOOPBACK, 0))
-        self._sender = sock
-        self._thread = threading.Thread(target=self._send_loop, name="natnet-emulator", daemon=True)
-        self._thread.start()
-        return self
-
-    def stop(self, timeout: float = 2.0) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout)
-            self._thread = None
-        with self._lock:
-            if self._sender is not None:
-                self._sender.close()
-            self._sender = None
-
-    def __enter__(self) -> OptiTrackEmulator:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
-
-    def send_raw(self, data: bytes) -> None:
-        """Send one datagram of your own."""
-        with self._lock:
-            if self._sender is None:
-                raise RuntimeError("the emulator is not running")
-            self._sender.sendto(data, (self.group or LOOPBACK, self.port))
-
-    def _send_loop(self) -> None:
-        try:
-            deadline = time.monotonic()
-            sent = 0
-            while not self._stop.is_set():
-                deadline += 1.0 / self.rate
-                delay = deadline - time.monotonic()
-                if delay > 0 and self._stop.wait(delay):
-                    return
-                n = self._next_frame
-                self._next_frame += 1
-                self.send_raw(self.writer.frame(n))
-                self.frames_sent += 1
-                sent += 1
-                if self.scenario == "garbage":
-                    self.send_raw(self._garbage(n))
-                    self.garbage_sent += 1
-                if self.scenario == "disconnect" and sent >= self.disconnect_after:
-                    with self._lock:
-                        if self._sender is not None:
-                            self._sender.close()
-                        self._sender = None
-                    return
-                if self.max_frames is not None and sent >= self.max_frames:
-                    return
-        except BaseException as exc:  # reported through .error
-            self.error = exc
-        finally:
-            self.finished.set()
+    def send_frame(self, n: int) -> None:
+        self.send_raw(self.writer.frame(n))
+        self.frames_sent += 1
+        if self.scenario == "garbage":
+            self.send_raw(self._garbage(n))
+            self.garbage_sent += 1
 
     def _garbage(self, n: int) -> bytes:
         """A datagram a receiver must count as bad."""
@@ -297,13 +219,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"Point the optitrack element at it: <port>{args.port}</port>")
         print("Press Ctrl-C to stop.", flush=True)
 
-    def check() -> int | None:
-        if emulator.error is not None:
-            print(f"emulator failed: {emulator.error}", file=sys.stderr)
-            return 1
-        return 0 if emulator.finished.is_set() else None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run(emulator, duration=args.duration, announce=announce, check=ended(emulator))
 
 
 if __name__ == "__main__":

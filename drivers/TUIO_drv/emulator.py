@@ -18,18 +18,15 @@ from __future__ import annotations
 
 import math
 import random
-import socket
 import sys
-import threading
-import time
 
 from pythonosc.osc_bundle_builder import IMMEDIATELY, OscBundleBuilder
 from pythonosc.osc_message_builder import OscMessageBuilder
 
 from gadgetctl.emulation import emulator_parser, run
+from gadgetctl.emulation.network import STANDARD_SCENARIOS, UdpFrameSender, ended
 
-LOOPBACK = "127.0.0.1"
-SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
+SCENARIOS = STANDARD_SCENARIOS
 ADDRESS = "/tuio/2Dcur"
 PHASE = 20  # frames a finger stays down or up in the buttons scenario
 
@@ -70,9 +67,11 @@ def frame_bundle(frame: int, cursors: int, scenario: str) -> bytes:
     return bundle.build().dgram
 
 
-class TuioEmulator:
+class TuioEmulator(UdpFrameSender):
     """Sends TUIO frames to ``127.0.0.1:port`` at ``rate`` frames per second. ``frames_sent``
     counts the frames; the garbage scenario counts its extras in ``garbage``."""
+
+    NAME = "tuio"
 
     def __init__(
         self,
@@ -86,96 +85,26 @@ class TuioEmulator:
         first_frame: int = 1,
         seed: int = 0,
     ) -> None:
-        if scenario not in SCENARIOS:
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(SCENARIOS)}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
-        if not 0 < port < 65536:
-            raise ValueError("port must be between 1 and 65535")
         if cursors < 0:
             raise ValueError("cursors must not be negative")
-        self.port = port
-        self.scenario = scenario
-        self.rate = rate
+        super().__init__(
+            port,
+            scenario=scenario,
+            rate=rate,
+            disconnect_after=disconnect_after,
+            max_frames=max_frames,
+            first_frame=first_frame,
+        )
         self.cursors = cursors
-        self.disconnect_after = disconnect_after
-        self.max_frames = max_frames
         self.frames_sent = 0
         self.garbage = {"bad_datagrams": 0, "unknown_sessions": 0, "bare_messages": 0}
-        self.error: BaseException | None = None
-        self.finished = threading.Event()
-        self._next_frame = first_frame
         self._rng = random.Random(seed)
-        self._sender: socket.socket | None = None
-        self._stop = threading.Event()
-        self._lock = threading.Lock()
-        self._thread: threading.Thread | None = None
 
-    @property
-    def address(self) -> str:
-        return f"{LOOPBACK}:{self.port}"
-
-    def start(self) -> TuioEmulator:
-        if self._thread is not None:
-            return self
-        self._stop.clear()
-        self.finished.clear()
-        self._sender = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self._sender.bind((LOOPBACK, 0))
-        self._thread = threading.Thread(target=self._send_loop, name="tuio-emulator", daemon=True)
-        self._thread.start()
-        return self
-
-    def stop(self, timeout: float = 2.0) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout)
-            self._thread = None
-        with self._lock:
-            if self._sender is not None:
-                self._sender.close()
-            self._sender = None
-
-    def __enter__(self) -> TuioEmulator:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
-
-    def send_raw(self, data: bytes) -> None:
-        with self._lock:
-            if self._sender is None:
-                raise RuntimeError("the emulator is not running")
-            self._sender.sendto(data, (LOOPBACK, self.port))
-
-    def _send_loop(self) -> None:
-        try:
-            deadline = time.monotonic()
-            sent = 0
-            while not self._stop.is_set():
-                deadline += 1.0 / self.rate
-                delay = deadline - time.monotonic()
-                if delay > 0 and self._stop.wait(delay):
-                    return
-                n = self._next_frame
-                self._next_frame += 1
-                self.send_raw(frame_bundle(n, self.cursors, self.scenario))
-                self.frames_sent += 1
-                sent += 1
-                if self.scenario == "garbage":
-                    self.send_raw(self._garbage(n))
-                if self.scenario == "disconnect" and sent >= self.disconnect_after:
-                    with self._lock:
-                        if self._sender is not None:
-                            self._sender.close()
-                        self._sender = None
-                    return
-                if self.max_frames is not None and sent >= self.max_frames:
-                    return
-        except BaseException as exc:  # reported through .error
-            self.error = exc
-        finally:
-            self.finished.set()
+    def send_frame(self, n: int) -> None:
+        self.send_raw(frame_bundle(n, self.cursors, self.scenario))
+        self.frames_sent += 1
+        if self.scenario == "garbage":
+            self.send_raw(self._garbage(n))
 
     def _garbage(self, n: int) -> bytes:
         kind = n % 4
@@ -231,13 +160,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"Point the TUIO_drv element at it: <port>{args.port}</port>")
         print("Press Ctrl-C to stop.", flush=True)
 
-    def check() -> int | None:
-        if emulator.error is not None:
-            print(f"emulator failed: {emulator.error}", file=sys.stderr)
-            return 1
-        return 0 if emulator.finished.is_set() else None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run(emulator, duration=args.duration, announce=announce, check=ended(emulator))
 
 
 if __name__ == "__main__":

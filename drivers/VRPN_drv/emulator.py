@@ -26,6 +26,7 @@ import sys
 import threading
 import time
 
+from gadgetctl.emulation import Console
 from gadgetctl.vrpn import VrpnServer, codecs
 
 SCENARIOS = ("idle", "motion", "buttons")
@@ -94,13 +95,15 @@ class VrpnEmulator:
         self._change_type = s.register_type(codecs.BUTTON_CHANGE)
         self._states_type = s.register_type(codecs.BUTTON_STATES)
         self._analog_type = s.register_type(codecs.ANALOG_CHANNEL)
-        s.on_connect = self._send_states
+        s.on_connect = self._connected
+        s.on_disconnect = self._disconnected
         s.on_ping = lambda client, name: self._send_states(client) if name == button else None
         self.frame = 0
         self._states = button_states(0, buttons, scenario)
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
         self.error: BaseException | None = None
+        self.console = Console()
 
     @property
     def port(self) -> int:
@@ -138,6 +141,13 @@ class VrpnEmulator:
             self.server.serve_forever(self._stop, 0.02)
         except BaseException as exc:  # reported by main()
             self.error = exc
+
+    def _connected(self, client) -> None:
+        self.console.client_connected(f"{client.address[0]}:{client.address[1]}")
+        self._send_states(client)
+
+    def _disconnected(self, client, reason: str) -> None:
+        self.console.client_disconnected(f"{client.address[0]}:{client.address[1]}", reason)
 
     def _send_states(self, client) -> None:
         if self._button is not None:
@@ -204,37 +214,67 @@ WAVEFORM_PATHS = ("circle", "figure_eight", "spin")
 WAVEFORM_SHAPES = ("sine", "triangle", "square")
 
 
-def waveform_configuration(*, sensors: int, buttons: int, channels: int, rate: float,
-                           tracker: str = "Tracker0", button: str = "Button0",
-                           analog: str = "Analog0") -> str:
+def waveform_configuration(
+    *,
+    sensors: int,
+    buttons: int,
+    channels: int,
+    rate: float,
+    tracker: str = "Tracker0",
+    button: str = "Button0",
+    analog: str = "Analog0",
+) -> str:
     """A configuration of gadgetctl waveform devices named as VRPN devices: ``tracker``
     with ``sensors`` positions, ``button`` with ``buttons`` buttons, ``analog`` with
     ``channels`` channels in [-1, 1] (a device with a count of 0 is left out)."""
 
     def device(name: str, body: list[str]) -> str:
         lines = [f"<rate>{rate:g}</rate>", "<event_period>0.0</event_period>", *body]
-        return (f'      <waveform_device name="{name}" version="1">\n'
-                + "".join(f"         {line}\n" for line in lines) + "      </waveform_device>\n")
+        return (
+            f'      <waveform_device name="{name}" version="1">\n'
+            + "".join(f"         {line}\n" for line in lines)
+            + "      </waveform_device>\n"
+        )
 
     parts = []
     if sensors:
-        parts.append(device(tracker, [f"<position_path>{WAVEFORM_PATHS[i % 3]}</position_path>"
-                                      for i in range(sensors)]
-                            + [f"<position_period>{4.0 + i:g}</position_period>" for i in range(sensors)]))
+        parts.append(
+            device(
+                tracker,
+                [f"<position_path>{WAVEFORM_PATHS[i % 3]}</position_path>" for i in range(sensors)]
+                + [f"<position_period>{4.0 + i:g}</position_period>" for i in range(sensors)],
+            )
+        )
     if buttons:
-        parts.append(device(button, [f"<button_period>{1.0 + 0.5 * i:g}</button_period>"
-                                     for i in range(buttons)]))
+        parts.append(
+            device(
+                button,
+                [f"<button_period>{1.0 + 0.5 * i:g}</button_period>" for i in range(buttons)],
+            )
+        )
     if channels:
-        parts.append(device(analog, [f"<analog_waveform>{WAVEFORM_SHAPES[i % 3]}</analog_waveform>"
-                                     for i in range(channels)]
-                            + [f"<analog_frequency>{0.5 / (i + 1):g}</analog_frequency>"
-                               for i in range(channels)]
-                            + ["<min>-1.0</min>", "<max>1.0</max>"]))
-    return ('<?xml version="1.0" encoding="UTF-8"?>\n'
-            '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-            '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" '
-            'name="VRPN_drv emulator">\n   <elements>\n' + "".join(parts)
-            + "   </elements>\n</configuration>\n")
+        parts.append(
+            device(
+                analog,
+                [
+                    f"<analog_waveform>{WAVEFORM_SHAPES[i % 3]}</analog_waveform>"
+                    for i in range(channels)
+                ]
+                + [
+                    f"<analog_frequency>{0.5 / (i + 1):g}</analog_frequency>"
+                    for i in range(channels)
+                ]
+                + ["<min>-1.0</min>", "<max>1.0</max>"],
+            )
+        )
+    return (
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" '
+        'name="VRPN_drv emulator">\n   <elements>\n'
+        + "".join(parts)
+        + "   </elements>\n</configuration>\n"
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -246,34 +286,58 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="gadgetctl emulate VRPN_drv",
         description="Serve waveform devices over VRPN with gadgetctl serve: Tracker0 (circles, "
-                    "figure-eights, spins), Button0 (square-wave buttons), Analog0 (sine, "
-                    "triangle and square channels in [-1, 1]).",
+        "figure-eights, spins), Button0 (square-wave buttons), Analog0 (sine, "
+        "triangle and square channels in [-1, 1]).",
     )
-    parser.add_argument("--port", type=int, default=3883, help="TCP and UDP port (default 3883; 0 = any)")
-    parser.add_argument("--bind", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
-    parser.add_argument("--rate", type=float, default=100.0, help="samples per second of every device (default 100)")
+    parser.add_argument(
+        "--port", type=int, default=3883, help="TCP and UDP port (default 3883; 0 = any)"
+    )
+    parser.add_argument(
+        "--bind", default="127.0.0.1", help="address to listen on (default 127.0.0.1)"
+    )
+    parser.add_argument(
+        "--rate", type=float, default=100.0, help="samples per second of every device (default 100)"
+    )
     parser.add_argument("--duration", type=float, help="stop after this many seconds")
     parser.add_argument("--sensors", type=int, default=2, help="tracker sensors (default 2)")
     parser.add_argument("--buttons", type=int, default=4, help="buttons (default 4)")
     parser.add_argument("--channels", type=int, default=2, help="analog channels (default 2)")
-    parser.add_argument("--format", choices=("text", "json"), default="text", help="output of serve")
+    parser.add_argument(
+        "--format", choices=("text", "json"), default="text", help="output of serve"
+    )
     args = parser.parse_args(argv)
     if not 0 < args.rate <= 100_000:
         parser.error("--rate must be between 0 and 100000 samples per second")
-    if min(args.sensors, args.buttons, args.channels) < 0 or args.buttons > codecs.MAX_BUTTONS \
-            or args.channels > codecs.MAX_CHANNELS:
-        parser.error(f"counts are 0 or more, at most {codecs.MAX_BUTTONS} buttons and "
-                     f"{codecs.MAX_CHANNELS} channels")
+    if (
+        min(args.sensors, args.buttons, args.channels) < 0
+        or args.buttons > codecs.MAX_BUTTONS
+        or args.channels > codecs.MAX_CHANNELS
+    ):
+        parser.error(
+            f"counts are 0 or more, at most {codecs.MAX_BUTTONS} buttons and "
+            f"{codecs.MAX_CHANNELS} channels"
+        )
     if not (args.sensors or args.buttons or args.channels):
         parser.error("nothing to serve: give a sensor, button or channel count above 0")
     from gadgetctl.cli.main import main as gadgetctl
 
     with tempfile.TemporaryDirectory(prefix="gadgetctl-vrpn-emulator-") as tmp:
         config = Path(tmp) / "vrpn-emulator.jconf"
-        config.write_text(waveform_configuration(sensors=args.sensors, buttons=args.buttons,
-                                                 channels=args.channels, rate=args.rate))
-        command = ["serve", str(config), "--port", str(args.port), "--bind", args.bind,
-                   "--format", args.format]
+        config.write_text(
+            waveform_configuration(
+                sensors=args.sensors, buttons=args.buttons, channels=args.channels, rate=args.rate
+            )
+        )
+        command = [
+            "serve",
+            str(config),
+            "--port",
+            str(args.port),
+            "--bind",
+            args.bind,
+            "--format",
+            args.format,
+        ]
         if args.duration is not None:
             command += ["--duration", str(args.duration)]
         try:

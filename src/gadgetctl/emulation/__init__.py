@@ -17,7 +17,10 @@ manager, as Gadgeteer drivers depend on VPR only:
 * :mod:`~gadgetctl.emulation.clients`: who opens and closes a device file (:class:`OpenWatch`);
 * :mod:`~gadgetctl.emulation.device`: a serial device on a pty (:class:`PtyDeviceEmulator`:
   life cycle, commands, records at a rate, pause, hang-up) and its command line
-  (:func:`pty_parser`, :func:`run_pty`).
+  (:func:`pty_parser`, :func:`run_pty`);
+* :mod:`~gadgetctl.emulation.network`: frames sent over loopback UDP at a rate
+  (:class:`UdpFrameSender`), UDP peers heard from (:class:`Peers`) and the run loop's end
+  of a network emulator (:func:`ended`).
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ from gadgetctl.emulation.device import (
     run_pty,
 )
 from gadgetctl.emulation.endpoints import Fifo, PseudoTerminal, UnixSocket
+from gadgetctl.emulation.network import Peers, UdpFrameSender, ended
 from gadgetctl.emulation.signals import StopRequested, stop_on_signals
 
 __all__ = [
@@ -41,12 +45,15 @@ __all__ = [
     "Console",
     "Fifo",
     "OpenWatch",
+    "Peers",
     "PseudoTerminal",
     "PtyDeviceEmulator",
     "StopRequested",
+    "UdpFrameSender",
     "UnixSocket",
     "duration_seconds",
     "emulator_parser",
+    "ended",
     "is_held",
     "pty_parser",
     "run",
