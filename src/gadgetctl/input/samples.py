@@ -192,7 +192,11 @@ class SampleStore:
         self.cap = cap
         self._lock = threading.Lock()
         self._channels: dict[DeviceKind, _Channel] = {DeviceKind(k): _Channel() for k in kinds}
+        self._pairs = tuple(self._channels.items())
         self.swapped_at: float | None = None  # when the current frame's samples were taken over
+        #: The current frame's samples of each kind that has any (read-only; replaced, never
+        #: changed, by each swap): what a consumer of every sample reads without asking per kind.
+        self.current: Mapping[DeviceKind, FrameSamples] = {}
 
     @property
     def kinds(self) -> tuple[DeviceKind, ...]:
@@ -268,21 +272,23 @@ class SampleStore:
 
     def swap(self) -> None:
         """Make everything added since the previous swap the current frame's samples."""
-        taken: list[tuple[_Channel, deque[Chunk], int]] = []
+        taken: list[tuple[DeviceKind, _Channel, deque[Chunk], int]] = []
         self.swapped_at = now()
         with self._lock:
-            for channel in self._channels.values():
+            for kind, channel in self._pairs:
                 if channel.count:
-                    taken.append((channel, channel.ready, channel.count))
+                    taken.append((kind, channel, channel.ready, channel.count))
                     channel.ready = deque()
                     channel.count = 0
                 elif channel.frame.count:
                     if channel.latest is None:
                         channel.latest = channel.frame.newest  # keep it latched
                     channel.frame = EMPTY_FRAME
-        for channel, chunks, count in taken:
-            channel.frame = FrameSamples(chunks, count)
+        current = {}
+        for kind, channel, chunks, count in taken:
+            channel.frame = current[kind] = FrameSamples(chunks, count)
             channel.latest = None  # the frame's newest, computed when asked
+        self.current = current
 
     def frame(self, kind: DeviceKind) -> FrameSamples:
         return self._channel(kind).frame

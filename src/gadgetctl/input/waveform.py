@@ -7,14 +7,19 @@ period. Sample k is taken at ``start + k / rate`` exactly, and its values depend
 k and the configuration (noise is a seeded stream that can be entered at any k), so a
 device is deterministic for a given seed.
 
-The shared scheduler wakes the device at most every ``sample_interval``; each wake-up
-publishes every sample that has come due since the previous one, as numpy batches cut
-from a block computed ahead (never a sample whose time has not come).
+Samples are published as numpy batches cut from a block computed ahead (never a sample
+whose time has not come), by whichever comes first: each frame publishes, just before its
+swap, every sample that has come due (so a frame carries samples up to its own instant,
+however fast frames run), and the shared scheduler publishes what is due when no frame did
+for ``FRAME_GRACE`` seconds (so a stalled frame loop still finds every sample, or the
+store's count of those dropped over its cap). While frames run, the scheduler thus wakes a
+device about every ``FRAME_GRACE`` rather than every ``sample_interval``.
 """
 
 from __future__ import annotations
 
 import math
+import threading
 import zlib
 from dataclasses import dataclass
 from enum import StrEnum
@@ -22,7 +27,7 @@ from enum import StrEnum
 import numpy as np
 
 from gadgetctl.input.clock import now
-from gadgetctl.input.device import SamplingMode
+from gadgetctl.input.device import DeviceState, SamplingMode
 from gadgetctl.input.devicetypes import Analog, Command, Digital, Hat, HatState, Position, String
 from gadgetctl.input.errors import DeviceConfigError
 from gadgetctl.input.kinds import DeviceKind
@@ -30,6 +35,8 @@ from gadgetctl.jccl.access import ElementAccess, read_float
 
 MAX_RATE = 100_000.0
 BLOCK_SECONDS = 0.5
+#: Seconds without a frame after which the scheduler publishes again (frames publish first).
+FRAME_GRACE = 0.02
 HAT_SEQUENCE = (HatState.CENTERED, HatState.UP, HatState.RIGHT, HatState.DOWN, HatState.LEFT)
 
 
@@ -110,6 +117,9 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         self.next_index = 0
         self._block: Block | None = None
         self._noise_streams: dict[int, tuple[np.random.Generator, int]] = {}
+        # the scheduler's sample() and the frame's update_data() publish one at a time
+        self._publishing = threading.Lock()
+        self._frame_published = -math.inf  # when a frame last published (input-manager clock)
 
     # -- configuration ------------------------------------------------------------------
 
@@ -136,15 +146,31 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
     # -- sampling -----------------------------------------------------------------------
 
     def start_sampling(self) -> None:
-        self.t0 = now()
-        self.next_index = 0
-        self._block = None
+        with self._publishing:
+            self.t0 = now()
+            self.next_index = 0
+            self._block = None
+            self._frame_published = -math.inf
 
     def next_sample_due(self) -> float:
-        return self.t0 + self.next_index / self.rate
+        # while frames publish, the scheduler only stands in when they stop
+        return max(self.t0 + self.next_index / self.rate, self._frame_published + FRAME_GRACE)
 
     def sample(self) -> None:
-        end = int((now() - self.t0) * self.rate) + 1  # samples whose time has come
+        with self._publishing:
+            self._publish_due(now())
+
+    def update_data(self) -> None:
+        """Publish what has come due, then swap: the frame gets samples up to its instant."""
+        if self.state is DeviceState.RUNNING:
+            moment = now()
+            with self._publishing:
+                self._publish_due(moment)
+                self._frame_published = moment
+        super().update_data()
+
+    def _publish_due(self, moment: float) -> None:
+        end = int((moment - self.t0) * self.rate) + 1  # samples whose time has come
         while self.next_index < end:
             block = self._block
             if block is None or not block.start <= self.next_index < block.end:

@@ -231,16 +231,18 @@ class DeviceTrack:
     def update(self) -> int:
         device = self.device
         store = device.store
-        frames = {}
-        fresh = store.swapped_at != self._swapped_at  # a failed update_data leaves the old frame
-        self._swapped_at = store.swapped_at
-        for kind in store.kinds:
-            samples = store.frame(kind)
-            if samples.count and fresh:
-                frames[kind] = samples
-        self.frames = frames
+        swapped_at = store.swapped_at
+        fresh = swapped_at != self._swapped_at  # a failed update_data leaves the old frame
+        self._swapped_at = swapped_at
+        # the kinds with samples this frame, as the swap found them (a read-only mapping)
+        self.frames = frames = store.current if fresh else {}
         if not self.statistics:  # gathering only (serve): no rates, presses or histories
-            self.count = max((f.count for f in frames.values()), default=0)
+            if not frames:
+                self.count = 0
+            elif len(frames) == 1:
+                self.count = next(iter(frames.values())).count
+            else:
+                self.count = max(f.count for f in frames.values())
             return self.count
         dropped = self._dropped_now()
         stamps = frame_timestamps(frames) if frames else ()
