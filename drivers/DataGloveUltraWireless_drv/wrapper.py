@@ -141,5 +141,10 @@ class UltraGloveDevice(Analog, Command):
         """Bytes of those runs."""
         return self._count("skipped_bytes")
 
+    @property
+    def counters(self) -> dict[str, int]:
+        """The driver's health counters, reconnections included."""
+        return {key: self._count(key) for key in self._counts}
+
 
 __all__ = ["PORT_B", "UltraGloveDevice"]

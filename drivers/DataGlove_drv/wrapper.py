@@ -114,5 +114,10 @@ class DataGloveDevice(Glove, Analog):
         """Bytes of those runs."""
         return self._count("skipped_bytes")
 
+    @property
+    def counters(self) -> dict[str, int]:
+        """The driver's health counters, reconnections included."""
+        return {key: self._count(key) for key in self._counts}
+
 
 __all__ = ["FINGERS", "DataGloveDevice", "glove_angles"]

@@ -133,10 +133,14 @@ class PinchGloveDevice(Glove, Digital):
         """Bytes outside any frame."""
         return self._count("skipped_bytes")
 
+    @property
+    def counters(self) -> dict[str, int]:
+        """The driver's health counters, reconnections included."""
+        return {key: self._count(key) for key in self._counts}
+
     # -- internals ------------------------------------------------------------------------
 
     def _add(self, sample: PinchSample) -> None:
         stamp = self.now()
         self.add_digital_sample(sample.digital, stamp)
         self.add_glove_sample(glove_angles(sample), stamp)
-

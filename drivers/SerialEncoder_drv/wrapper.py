@@ -112,3 +112,8 @@ class SerialEncoderDevice(Position):
     def timeouts(self) -> int:
         """Reads no encoder answered in time."""
         return self._count("timeouts")
+
+    @property
+    def counters(self) -> dict[str, int]:
+        """The driver's health counters, reconnections included."""
+        return {key: self._count(key) for key in self._counts}

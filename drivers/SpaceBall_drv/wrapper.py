@@ -117,3 +117,8 @@ class PuckDevice(Analog, Digital):
     def skipped_bytes(self) -> int:
         """Bytes of the records skipped."""
         return self._count("skipped_bytes")
+
+    @property
+    def counters(self) -> dict[str, int]:
+        """The driver's health counters, reconnections included."""
+        return {key: self._count(key) for key in self._counts}

@@ -127,7 +127,8 @@ COLUMNS = ("NAME", "KIND", "TYPE", "STATUS", "RATE Hz", "/FRAME", "DROPPED", "AG
 
 
 #: Driver counters of traffic, not of trouble: left out of the health summary.
-THROUGHPUT = frozenset({"datagrams", "packets", "frames", "records", "polls", "other_messages"})
+THROUGHPUT = frozenset({"datagrams", "packets", "frames", "records", "polls", "other_messages",
+                        "requests", "replies", "messages", "lobs_sent", "connects"})
 #: Health fields shown elsewhere (the dropped and faults columns) or formatted with another.
 _SHOWN_ELSEWHERE = frozenset({"dropped", "faults", "last_fault", "last_fault_at"})
 
