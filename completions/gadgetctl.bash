@@ -181,16 +181,55 @@ declare -gA _gadgetctl_valueopts=(
   ['validate --max-size']=1
   ['validate -d']=1
 )
+declare -gA _gadgetctl_dynopts=(
+  ['config show --element']='elements'
+  ['config show -e']='elements'
+  ['defs list --base']='definitions'
+  ['monitor --keyboard']='keyboards'
+)
+declare -gA _gadgetctl_dynargs=(
+  ['defs show']='definitions 1 nofiles'
+  ['defs tree']='definitions 1 nofiles'
+  ['drivers load']='drivers 0 nofiles'
+  ['emulate']='emulators 1 nofiles'
+  ['explain']='codes 1 nofiles'
+  ['monitor']='inputs 0 files'
+  ['serve']='inputs 0 files'
+)
+
+# Candidates of KIND from `gadgetctl __complete KIND WORDS...` (the words before the cursor),
+# those starting with the current word; a tab and a description may follow each name.
+_gadgetctl_dynamic() {
+  local line name prefix=${cur//\\/}
+  prefix=${prefix#[\"\']}
+  while IFS= read -r line; do
+    name=${line%%$'\t'*}
+    [[ $name == "$prefix"* ]] && COMPREPLY+=("$name")
+  done < <("${COMP_WORDS[0]/#\~/$HOME}" __complete "$1" "${COMP_WORDS[@]:1:COMP_CWORD-1}" 2>/dev/null)
+}
 
 _gadgetctl() {
-  local cur=${COMP_WORDS[COMP_CWORD]} prev=${COMP_WORDS[COMP_CWORD-1]} path=. i w
+  local cur=${COMP_WORDS[COMP_CWORD]} prev=${COMP_WORDS[COMP_CWORD-1]} path=. i w skip= npos=0
+  local kind max files
+  COMPREPLY=()
   for ((i = 1; i < COMP_CWORD; i++)); do
     w=${COMP_WORDS[i]}
-    [[ $w == -* ]] && continue
+    if [[ -n $skip ]]; then skip=; continue; fi
+    if [[ $w == -* ]]; then
+      if [[ $w != *=* && ( -n ${_gadgetctl_valueopts["$path $w"]+x} || -n ${_gadgetctl_choices["$path $w"]+x} ) ]]; then
+        skip=1
+      fi
+      continue
+    fi
     if [[ " ${_gadgetctl_subs[$path]} " == *" $w "* ]]; then
       if [[ $path == . ]]; then path=$w; else path="$path $w"; fi
+    else
+      ((npos++))
     fi
   done
+  if [[ -n ${_gadgetctl_dynopts["$path $prev"]+x} ]]; then
+    _gadgetctl_dynamic "${_gadgetctl_dynopts["$path $prev"]}"; return
+  fi
   if [[ -n ${_gadgetctl_choices["$path $prev"]+x} ]]; then
     COMPREPLY=($(compgen -W "${_gadgetctl_choices["$path $prev"]}" -- "$cur")); return
   fi
@@ -202,6 +241,14 @@ _gadgetctl() {
   fi
   if [[ -n ${_gadgetctl_subs[$path]} ]]; then
     COMPREPLY=($(compgen -W "${_gadgetctl_subs[$path]}" -- "$cur")); return
+  fi
+  if [[ -n ${_gadgetctl_dynargs[$path]+x} ]]; then
+    read -r kind max files <<< "${_gadgetctl_dynargs[$path]}"
+    if (( max == 0 || npos < max )); then
+      _gadgetctl_dynamic "$kind"
+      [[ $files == files ]] && COMPREPLY+=($(compgen -f -- "$cur"))
+      return
+    fi
   fi
   COMPREPLY=($(compgen -f -- "$cur"))
 }

@@ -13,6 +13,10 @@ def main(argv: list[str] | None = None) -> None:
 
         print(f"gadgetctl {__version__}")
         return
+    if args[:1] == ["__complete"]:  # the shell's Tab: answered without the CLI framework either
+        from gadgetctl.cli.candidates import main as complete
+
+        sys.exit(complete(args[1:]))
     from gadgetctl.cli.app import build_app
     from gadgetctl.errors import GadgetctlError
 
@@ -30,6 +34,9 @@ def main(argv: list[str] | None = None) -> None:
     except Exception as err:  # a bug of ours: one line unless debugging
         if os.environ.get("GADGETCTL_DEBUG"):
             raise
-        print(f"gadgetctl: internal error: {type(err).__name__}: {err} "
-              "(set GADGETCTL_DEBUG=1 for a traceback)", file=sys.stderr)
+        print(
+            f"gadgetctl: internal error: {type(err).__name__}: {err} "
+            "(set GADGETCTL_DEBUG=1 for a traceback)",
+            file=sys.stderr,
+        )
         sys.exit(2)
