@@ -98,6 +98,7 @@ class SdlJoystickEmulator:
         self.max_ticks = max_ticks
         self.offers_rumble = rumble
         self.tick = 0
+        self.ticks_attached = 0  # ticks since the joystick was last attached
         self.attaches = 0
         self.detaches = 0
         self.garbage_sent = 0
@@ -269,7 +270,9 @@ class SdlJoystickEmulator:
                 self.tick += 1
                 if self.scenario == "idle":
                     continue
-                if self.scenario == "disconnect" and self.tick % self.disconnect_after == 0:
+                self.ticks_attached += 1
+                if self.scenario == "disconnect" and self.ticks_attached >= self.disconnect_after:
+                    self.ticks_attached = 0
                     self.detach()
                     if self._stop.wait(self.down_time):
                         break

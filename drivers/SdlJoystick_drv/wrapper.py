@@ -16,6 +16,19 @@ Rumble: :meth:`SdlJoystickDevice.rumble` (and a ``rumble_proxy`` pointing at the
 runs the two motors through ``SDL_JoystickRumble`` when SDL offers rumble for the joystick
 (``has_rumble``). Gadgeteer used SDL's haptic effects (constant, periodic, ramp) instead;
 gadgetctl's rumble is the minimal form: two strengths and a duration.
+
+Where this differs from Gadgeteer's SdlJoystick on purpose (upstream defects fixed):
+
+* each upstream device called ``SDL_Quit`` when its thread ended, pulling SDL from under every
+  other SDL device of the application; here one SDL thread per process is shared, and SDL's
+  joystick subsystem is quit when its last user closes (``gadgetctl.transport.sdl``);
+* upstream never noticed a joystick going away (its last values stayed for ever); here the
+  device faults and opens the joystick again when SDL sees one at the index;
+* upstream named the joystick with ``SDL_JoystickName(index)``, SDL 1.2's call (SDL 2 takes a
+  joystick there); here ``SDL_JoystickNameForIndex``;
+* upstream cast any hat value into a HatState; here values no hat can give are counted
+  (``bad_hats``) and read as centred;
+* SDL's own SIGINT/SIGTERM handlers are turned off, so Ctrl-C still stops gadgetctl.
 """
 
 from __future__ import annotations
