@@ -26,6 +26,7 @@ from gadgetctl.transport.sdl import (
 __all__ = [
     "AXIS_RANGE",
     "VALID_HATS",
+    "HatChecker",
     "JoystickSample",
     "SdlError",
     "SdlJoystickLost",
@@ -55,6 +56,35 @@ class JoystickSample:
     hats: tuple[int, ...]
 
 
+class HatChecker:
+    """Hat values as polled, made ones a hat can give: an impossible value reads centred and
+    is counted in ``bad`` once when it appears (not again on every poll that still sees it)."""
+
+    def __init__(self) -> None:
+        self.bad = 0
+        self._raw: tuple[int, ...] | None = None
+        self._checked: tuple[int, ...] = ()
+
+    def reset(self) -> None:
+        """Forget the previous poll (the joystick was opened again)."""
+        self._raw = None
+
+    def check(self, hats: tuple[int, ...]) -> tuple[int, ...]:
+        if hats == self._raw:
+            return self._checked
+        last = self._raw
+        checked = []
+        for unit, value in enumerate(hats):
+            good = check_hat(value)
+            if good is None:
+                if last is None or unit >= len(last) or last[unit] != value:
+                    self.bad += 1
+                good = 0
+            checked.append(good)
+        self._raw, self._checked = hats, tuple(checked)
+        return self._checked
+
+
 class SdlJoystickReader:
     """One joystick, from :meth:`open` to :meth:`close`; counters add up over reopenings."""
 
@@ -62,14 +92,11 @@ class SdlJoystickReader:
         self.index = index
         self.rate = rate
         self.polls = 0
-        self.bad_hats = 0
         self.overflowed = 0
         self.name = ""
         self.counts = (0, 0, 0)  # buttons, axes, hats
         self._joystick: OpenJoystick | None = None
-        self._holding = False
-        self._last_hats: tuple[int, ...] | None = None  # raw, as last polled
-        self._checked_hats: tuple[int, ...] = ()
+        self._hats = HatChecker()
 
     def open(self) -> None:
         """Open the joystick; raises :class:`SdlJoystickMissing` when SDL has no joystick
@@ -86,7 +113,7 @@ class SdlJoystickReader:
         self._joystick = joystick
         self.name = joystick.name
         self.counts = (joystick.num_buttons, joystick.num_axes, joystick.num_hats)
-        self._last_hats = None
+        self._hats.reset()
 
     @property
     def has_rumble(self) -> bool:
@@ -104,21 +131,12 @@ class SdlJoystickReader:
 
     def _decode(self, reading: JoystickReading) -> JoystickSample:
         self.polls += 1
-        hats = reading.hats
-        if hats != self._last_hats:
-            checked = []
-            for unit, value in enumerate(hats):
-                good = check_hat(value)
-                if good is None:
-                    last = self._last_hats
-                    before = last[unit] if last is not None and unit < len(last) else None
-                    if value != before:
-                        self.bad_hats += 1
-                    good = 0
-                checked.append(good)
-            self._last_hats = hats
-            self._checked_hats = tuple(checked)
-        return JoystickSample(reading.timestamp, reading.buttons, reading.axes, self._checked_hats)
+        hats = self._hats.check(reading.hats)
+        return JoystickSample(reading.timestamp, reading.buttons, reading.axes, hats)
+
+    @property
+    def bad_hats(self) -> int:
+        return self._hats.bad
 
     def rumble(self, low: float, high: float, duration: float) -> bool:
         """Rumble (motor strengths 0 to 1, ``duration`` seconds; 0 strengths stop it).

@@ -808,6 +808,39 @@ def _trackd(data: bytes) -> None:
         assert sum(len(u) for u in units) * 4 <= len(data)
 
 
+# -- SDL joystick hats --------------------------------------------------------------------------
+
+
+def _sdl_hat_seeds() -> list[bytes]:
+    from SdlJoystick_drv.emulator import HAT_STEPS, IMPOSSIBLE_HATS
+
+    return [
+        bytes([2, *HAT_STEPS, 0]),
+        bytes([1, *IMPOSSIBLE_HATS, 4, 4, 5]),
+        bytes([4, 255, 0, 3, 12]),
+    ]
+
+
+@target("sdl_joystick.hats", seeds=_sdl_hat_seeds, examples=100, driver="SdlJoystick_drv")
+def _sdl_hats(data: bytes) -> None:
+    """What SDL hands the driver is polled state, not bytes; its one check of hostile values
+    is of hat bits (SDL passes any byte a virtual or broken device reports). The first byte
+    is the number of hats, the rest successive polls of them."""
+    from SdlJoystick_drv.standalone import VALID_HATS, HatChecker
+
+    if not data:
+        return
+    width = data[0] % 17
+    checker, impossible = HatChecker(), 0
+    polls = [tuple(data[i : i + width]) for i in range(1, len(data) - width + 1, max(width, 1))]
+    for poll in polls if width else [()] * len(data):
+        checked = checker.check(poll)
+        assert len(checked) == len(poll) and set(checked) <= VALID_HATS
+        assert all(c == p for c, p in zip(checked, poll, strict=True) if p in VALID_HATS)
+        impossible += sum(p not in VALID_HATS for p in poll)
+    assert checker.bad <= impossible
+
+
 # -- JCCL files -----------------------------------------------------------------------------------
 
 
