@@ -180,9 +180,9 @@ class EventPrinter:
     def __call__(self, session: MonitorSession, moment: float) -> None:
         from gadgetctl.monitor.events import event_line
 
+        if self.origin is None:  # when the session started its devices: no sample is older
+            self.origin = session.configured_at or session.started_at or moment
         events = self.detector.frame(session, moment)
-        if self.origin is None:  # the session's start, or the first sample if it came earlier
-            self.origin = min([session.started_at or moment, *(e.timestamp for e in events[:1])])
         if events:
             self.stream.write("".join(event_line(e, self.origin, pose=self.pose, length_unit=self.length_unit) + "\n"
                                       for e in events))

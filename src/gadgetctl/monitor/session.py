@@ -508,6 +508,8 @@ class MonitorSession:
         self.statistics = statistics  # False: gather samples only (no statistics, presses, histories)
         self.frame = 0
         self.started_at: float | None = None
+        #: When :meth:`start` began configuring (no sample of the session is older).
+        self.configured_at: float | None = None
         self.frame_timestamp = 0.0
         self.markers: list[MarkerRecord] = []
         self.finished = False
@@ -536,6 +538,7 @@ class MonitorSession:
     def start(self) -> list[str]:
         """Configure the manager (when a configuration was given) and resolve the selection.
         Raises :class:`SelectionError` when a pattern matches nothing. Returns the names."""
+        self.configured_at = now()  # before any device of the session starts
         if self.configuration is not None:
             self.manager.configure(self.configuration)
             for index, element in enumerate(self.configuration.elements):
