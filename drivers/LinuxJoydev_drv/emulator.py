@@ -31,7 +31,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from gadgetctl.emulation import Fifo, emulator_parser, run
+from gadgetctl.emulation import Console, Fifo, emulator_parser, run
 
 EVENT_FORMAT = "=IhBB"  # native byte order, standard sizes, no padding
 JS_EVENT_BUTTON = 0x01
@@ -111,6 +111,7 @@ class JoydevEmulator:
         self.connections = 0
         self.dropped_ticks = 0
         self.error: BaseException | None = None
+        self.console = Console()
         self._rng = random.Random(seed)
         self._tick = 0
         self._stop = threading.Event()
@@ -176,12 +177,16 @@ class JoydevEmulator:
                 fd = self._wait_for_reader()
                 if fd is None:
                     return
+                self.console.client_connected(f"{self.address} opened for reading")
+                why = "emulator stopping"
                 try:
-                    self._serve_reader(fd, ticks)
+                    if self._serve_reader(fd, ticks):
+                        why = "unplugged by the disconnect scenario"
                 except BrokenPipeError:
-                    pass  # the reader closed the file: wait for the next one
+                    why = "closed by the reader"  # wait for the next one
                 finally:
                     os.close(fd)
+                self.console.client_disconnected(self.address, why)
         except BaseException as exc:  # reported through .error, the thread must not die silently
             self.error = exc
 
@@ -190,7 +195,9 @@ class JoydevEmulator:
         assert self._fifo is not None
         return self._fifo.open_writer(self._stop, self.poll_interval)
 
-    def _serve_reader(self, fd: int, ticks: Iterator[list[Item]]) -> None:
+    def _serve_reader(self, fd: int, ticks: Iterator[list[Item]]) -> bool:
+        """Serve one reader until it goes (raises BrokenPipeError), the emulator stops
+        (False) or the disconnect scenario unplugs the device (True)."""
         self.connections += 1
         now = self._time_ms()
         burst = [(JS_EVENT_BUTTON | JS_EVENT_INIT, i, v) for i, v in enumerate(self.buttons)]
@@ -202,15 +209,17 @@ class JoydevEmulator:
             deadline += 1.0 / self.rate
             delay = deadline - time.monotonic()
             if delay > 0 and self._stop.wait(delay):
-                return
+                return False
             self._tick += 1
             items = next(ticks)
             if self.scenario == "disconnect":
                 items = items[: self.disconnect_after - live]  # stop after exactly N records
             live += self._write(fd, items, self._time_ms())
             if self.scenario == "disconnect" and live >= self.disconnect_after:
+                self.console.stopped_sending(f"unplugged after {live} events")
                 self._unplug()
-                return
+                return True
+        return False
 
     def _write(self, fd: int, items: list[Item], time_ms: int) -> int:
         """Write one tick in a single write (atomic on a pipe); returns the records sent."""

@@ -33,7 +33,7 @@ import threading
 import time
 from typing import Any
 
-from gadgetctl.emulation import emulator_parser, run
+from gadgetctl.emulation import Console, emulator_parser, run
 from gadgetctl.transport.sdl import SdlError, hub
 
 from .standalone import AXIS_RANGE, SdlJoystickReader
@@ -105,6 +105,7 @@ class SdlJoystickEmulator:
         self.rumbles: list[tuple[int, int]] = []
         self.error: BaseException | None = None
         self.finished = threading.Event()
+        self.console = Console()
         self.index: int | None = None
         self._instance: int | None = None
         self._handle: Any = None
@@ -273,10 +274,13 @@ class SdlJoystickEmulator:
                 self.ticks_attached += 1
                 if self.scenario == "disconnect" and self.ticks_attached >= self.disconnect_after:
                     self.ticks_attached = 0
+                    self.console.stopped_sending(f"detached the joystick at tick {self.tick}")
                     self.detach()
                     if self._stop.wait(self.down_time):
                         break
                     self.attach()
+                    self.console.say("attached the joystick again: sending")
+                    self.console.resumed()
                     due = time.monotonic()
                 self.apply_tick(self.tick)
         except BaseException as err:
@@ -341,6 +345,7 @@ class _Demo:
 
     def __init__(self, emulator: SdlJoystickEmulator) -> None:
         self.emulator = emulator
+        self.console = emulator.console  # run() prints its lines
         self.reader: SdlJoystickReader | None = None
         self._next = 0.0
 

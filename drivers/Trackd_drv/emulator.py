@@ -9,8 +9,8 @@ Scenarios:
 * ``buttons``: one button at a time pressed, then released;
 * ``garbage``: motion, with every other tick a header that claims more sensors and buttons
   than the segments hold (a bad record for the reader, never a fault);
-* ``disconnect``: motion, removing both segments after ``disconnect_after`` ticks and making
-  them again ``down_time`` seconds later.
+* ``disconnect``: motion, removing both segments after ``disconnect_after`` ticks with a
+  reader attached and making them again ``down_time`` seconds later.
 
 The keys default to the ones in ``example.jconf`` (4148 for the sensors, 4147 for the
 controller, as in VR Juggler's ``sim.trackd.jconf``).
@@ -22,7 +22,7 @@ import math
 import sys
 import threading
 
-from gadgetctl.emulation import emulator_parser, run
+from gadgetctl.emulation import Console, emulator_parser, run
 
 from .standalone import _sysv_ipc, encode_controller, encode_tracker
 
@@ -90,6 +90,8 @@ class TrackdEmulator:
         self.error: BaseException | None = None
         self._segments: list = []
         self._stop = threading.Event()
+        self.console = Console()
+        self._attached = False  # a reader has the sensor segment attached
         self._thread: threading.Thread | None = None
         self._lock = threading.Lock()
 
@@ -177,23 +179,45 @@ class TrackdEmulator:
             if self.scenario == "garbage" and self.tick % 2 == 1:
                 self.bad_writes += 1
 
+    def _watch_readers(self) -> None:
+        """Say when a reader attaches a segment and when the last one detaches."""
+        with self._lock:
+            try:
+                others = max((m.number_attached - 1 for m in self._segments), default=0)
+            except self._ipc.Error:
+                others = 0
+        where = f"shared memory keys {self.sensor_key}, {self.controller_key}"
+        if others > 0 and not self._attached:
+            self._attached = True
+            self.console.client_connected(f"{where} attached")
+        elif others <= 0 and self._attached:
+            self._attached = False
+            self.console.client_disconnected(where, "detached or removed")
+
     def _serve(self) -> None:
         try:
             live = 0
             while not self._stop.wait(1.0 / self.rate):
+                self._watch_readers()
                 if self.scenario == "idle":
                     continue
                 self.tick += 1
                 self._write()
-                live += 1
+                # the disconnect scenario counts what a reader had the chance to see: the
+                # segments go only after ``disconnect_after`` writes with a reader attached
+                live += self._attached
                 if self.scenario == "disconnect" and live >= self.disconnect_after:
+                    self.console.stopped_sending(f"removed the segments after {live} writes")
                     with self._lock:
                         self._remove()
                         self.removals += 1
+                    self._watch_readers()
                     if self._stop.wait(self.down_time):
                         return
                     with self._lock:
                         self._create()
+                    self.console.say("segments made again: sending")
+                    self.console.resumed()
                     live = 0
         except BaseException as exc:  # reported through .error, the thread must not die silently
             self.error = exc
@@ -219,7 +243,7 @@ def main(argv: list[str] | None = None) -> int:
         type=int,
         default=20,
         metavar="N",
-        help="ticks between removals in the disconnect scenario",
+        help="ticks with a reader attached between removals in the disconnect scenario",
     )
     args = parser.parse_args(argv)
     if args.rate <= 0 or min(args.sensors, args.buttons, args.valuators) < 0:
