@@ -10,7 +10,9 @@ Each case points the driver's own ``example.jconf`` at a fresh emulator and
   in-process session until the device's ``health:`` shows the garbage counted;
 * runs ``gadgetctl monitor --format table --record FILE`` until a table row shows them, stops
   it with SIGINT as a user would, and reads the counters again from the recording's final
-  ``stats`` record (the ndjson statistics).
+  ``stats`` record (the ndjson statistics). SDL's virtual joysticks exist only in the process
+  that attaches them, so SdlJoystick_drv's monitor runs in this process, through the same
+  ``run`` the command calls, stopped once the device has counted the garbage.
 
 VRPN_drv is not here: its emulator serves well-formed VRPN only (no garbage scenario).
 """
@@ -27,6 +29,7 @@ import socket
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -87,6 +90,7 @@ class Case:
     counters: tuple[str, ...]  # each must be non-zero for every device
     emulator: Callable[[Path], Any]  # tmp directory -> emulator (not started)
     point: Callable[[str, Any, Path], str]  # example text, started emulator, tmp -> text
+    in_process: bool = False  # the emulator is seen only by its own process (SDL)
 
 
 def emulator_class(driver: str, name: str) -> type:
@@ -169,7 +173,13 @@ CASES = [
         trackd,
         point_trackd,
     ),
-    serial("PinchGlove_drv", "PinchGloveEmulator", "PinchGlove", ("skipped_bytes",), rate=20.0),
+    serial(
+        "PinchGlove_drv",
+        "PinchGloveEmulator",
+        "PinchGlove",
+        ("bad_frames", "skipped_bytes"),
+        rate=20.0,
+    ),
     serial("Fastrak_drv", "FastrakEmulator", "Fastrak"),
     serial("Flock_drv", "FlockEmulator", "Flock"),
     serial("IBox_drv", "IBoxEmulator", "IBox"),
@@ -180,18 +190,24 @@ CASES = [
     serial("DataGlove_drv", "DataGloveEmulator", "DataGlove"),
     serial("DataGloveUltraWireless_drv", "UltraGloveEmulator", "Ultra Gloves"),
     serial("Wanda_drv", "WandaEmulator", "Wanda"),
+    Case(
+        "SdlJoystick_drv",
+        ("Gamepad",),
+        ("bad_hats",),
+        lambda tmp: emulator_class("SdlJoystick_drv", "SdlJoystickEmulator")(scenario="garbage"),
+        lambda text, emu, tmp: set_property(text, "device", str(emu.index), old="0"),
+        in_process=True,
+    ),
 ]
 
 
 def test_every_bundled_driver_with_a_garbage_scenario_is_a_case() -> None:
     """A new driver whose emulator has a garbage scenario must join the cases."""
-    being_written = {"SdlJoystick_drv"}  # joins when its emulator and example land
     drivers = sorted(path.parent.name for path in DRIVERS.glob("*_drv/emulator.py"))
     with_garbage = {
         driver
         for driver in drivers
-        if driver not in being_written
-        and "garbage" in __import__(f"{driver}.emulator", fromlist=["SCENARIOS"]).SCENARIOS
+        if "garbage" in __import__(f"{driver}.emulator", fromlist=["SCENARIOS"]).SCENARIOS
     }
     assert with_garbage == {case.driver for case in CASES}
     assert "VRPN_drv" in drivers and "VRPN_drv" not in with_garbage  # see the module's docstring
@@ -281,52 +297,100 @@ class Lines:
         self._thread.join(timeout=WAIT)
 
 
+def device_rows(lines: list[str], case: Case) -> dict[str, str]:
+    """The newest table row of each of the case's devices."""
+    rows: dict[str, str] = {}
+    for line in lines:
+        for name in case.devices:
+            if re.match(rf"{re.escape(name)}\s+device\s", line):
+                rows[name] = line
+    return rows
+
+
+def shown_in(rows: dict[str, str], case: Case) -> bool:
+    return len(rows) == len(case.devices) and all(
+        shows_all(counted(row), case) for row in rows.values()
+    )
+
+
+def monitor_child(case: Case, config: Path, record: Path) -> list[str]:
+    """``gadgetctl monitor`` until its table shows the counters, then Ctrl-C; the table lines."""
+    command = [
+        sys.executable,
+        "-m",
+        "gadgetctl",
+        "monitor",
+        str(config),
+        *case.devices,
+        "--format",
+        "table",
+        "--interval",
+        "0.2",
+        "--record",
+        str(record),
+        "--no-check",
+    ]
+    child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    out, err = Lines(child.stdout), Lines(child.stderr)
+    try:
+        shown = wait_until(
+            lambda: shown_in(device_rows(out.lines[-60:], case), case) or child.poll() is not None,
+            timeout=WAIT,
+            pause=0.05,
+        )
+        assert shown and child.poll() is None, (out.lines[-5:], err.lines[-20:])
+        child.send_signal(signal.SIGINT)  # Ctrl-C: the statistics are still written
+        assert child.wait(timeout=WAIT) == 0, err.lines[-20:]
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.wait()
+        out.join()
+        err.join()
+    return out.lines
+
+
+def monitor_here(case: Case, config: Path, record: Path, capsys) -> list[str]:
+    """The command's own ``run`` in this process, stopped once the devices counted the
+    garbage (the table printed at the end then shows it); the table lines."""
+    from gadgetctl.cli.monitor_run import OutputFormat, RunOptions, run
+    from gadgetctl.input.manager import InputManager
+    from gadgetctl.monitor.session import MonitorSession
+
+    manager, configuration = InputManager.from_files([config])
+    session = MonitorSession(
+        manager, configuration, selectors=list(case.devices), info={"config": [str(config)]}
+    )
+    session.start()
+    deadline = time.monotonic() + WAIT
+
+    def stop_when_counted(session: MonitorSession, moment: float) -> None:
+        devices = [manager.device(name) for name in case.devices]
+        if time.monotonic() > deadline or all(
+            d is not None and shows_all(d.health(), case) for d in devices
+        ):
+            session.stop()
+
+    session.add_consumer(stop_when_counted)
+    capsys.readouterr()
+    status = run(session, RunOptions(format=OutputFormat.table, record=record, interval=0.2))
+    assert status == 0
+    return capsys.readouterr().out.splitlines()
+
+
 def test_the_table_and_the_ndjson_statistics_show_the_garbage_counted(
-    case: Case, tmp_path: Path
+    case: Case, tmp_path: Path, capsys
 ) -> None:
     record = tmp_path / "run.ndjson"
     with case.emulator(tmp_path) as emu:
-        command = [
-            sys.executable,
-            "-m",
-            "gadgetctl",
-            "monitor",
-            str(example(case, emu, tmp_path)),
-            *case.devices,
-            "--format",
-            "table",
-            "--interval",
-            "0.2",
-            "--record",
-            str(record),
-            "--no-check",
-        ]
-        child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        out, err = Lines(child.stdout), Lines(child.stderr)
-        rows: dict[str, str] = {}
-
-        def tabled() -> bool:
-            for line in out.lines[-60:]:
-                for name in case.devices:
-                    if re.match(rf"{re.escape(name)}\s+device\s", line):
-                        rows[name] = line
-            return len(rows) == len(case.devices) and all(
-                shows_all(counted(row), case) for row in rows.values()
-            )
-
-        try:
-            shown = wait_until(
-                lambda: tabled() or child.poll() is not None, timeout=WAIT, pause=0.05
-            )
-            assert shown and child.poll() is None, (rows, err.lines[-20:])
-            child.send_signal(signal.SIGINT)  # Ctrl-C: the statistics are still written
-            assert child.wait(timeout=WAIT) == 0, err.lines[-20:]
-        finally:
-            if child.poll() is None:
-                child.kill()
-                child.wait()
-            out.join()
-            err.join()
+        config = example(case, emu, tmp_path)
+        lines = (
+            monitor_here(case, config, record, capsys)
+            if case.in_process
+            else monitor_child(case, config, record)
+        )
+    rows = device_rows(lines, case)
+    assert shown_in(rows, case), rows
     stats = [
         json.loads(line) for line in record.read_text().splitlines() if '"type":"stats"' in line
     ]
