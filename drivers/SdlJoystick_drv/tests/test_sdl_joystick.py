@@ -6,7 +6,6 @@ emulator's one-process demonstration, and a one-line DRV003 without PySDL2."""
 
 from __future__ import annotations
 
-import io
 import json
 import os
 import re
@@ -337,63 +336,6 @@ def test_our_example_delivers_through_its_alias(tmp_path: Path, capsys) -> None:
     }
     # TOGGLE_ON (2) and TOGGLE_OFF (3): pressed and released, read through the alias
     assert {int(DigitalState.TOGGLE_ON), int(DigitalState.TOGGLE_OFF)} <= values, out[-2000:]
-
-
-def test_the_view_the_table_and_the_statistics_show_the_bad_hats(tmp_path: Path, capsys) -> None:
-    """Driver health (issue 16 item 3) in process: the live view, the table and the ndjson
-    statistics of a monitor run over the garbage scenario count the impossible hats."""
-    from rich.console import Console
-
-    from gadgetctl.cli.monitor_live import LiveView
-    from gadgetctl.monitor.session import MonitorSession
-
-    text = (ROOT / "drivers" / "SdlJoystick_drv" / "example.jconf").read_text()
-    with SdlJoystickEmulator(scenario="garbage", rate=100.0, axes=2, buttons=2, hats=1) as emu:
-        path = tmp_path / "example.jconf"
-        path.write_text(text.replace("<device>0</device>", f"<device>{emu.index}</device>"))
-        manager, configuration = InputManager.from_files([path])
-        try:
-            session = MonitorSession(manager, configuration, selectors=["Gamepad"])
-            session.start()
-            view = LiveView(session, Console(file=io.StringIO(), width=250, height=60))
-            found: list[str] = []
-
-            def shown() -> bool:
-                session.step()
-                found[:] = [
-                    line
-                    for line in view.text(250, 60).splitlines()
-                    if line.startswith("Gamepad ") and re.search(r"bad_hats [1-9]", line)
-                ]
-                return bool(found)
-
-            assert wait_until(shown, timeout=30.0, pause=0.02)
-            assert re.match(r"Gamepad\s+\S+\s+running\b", found[0]), found[0]
-        finally:
-            manager.shutdown()
-        record = tmp_path / "run.ndjson"
-        code, out, err = run_cli(
-            capsys,
-            "monitor",
-            str(path),
-            "Gamepad",
-            "--format",
-            "table",
-            "--interval",
-            "0.2",
-            "--duration",
-            "2",
-            "--record",
-            str(record),
-            "--no-check",
-        )
-    assert code == 0, err[-2000:]
-    assert re.search(r"Gamepad\s+device\s.*bad_hats [1-9]", out), out[-2000:]
-    stats = [
-        json.loads(line) for line in record.read_text().splitlines() if '"type":"stats"' in line
-    ]
-    health = stats[-1]["devices"]["Gamepad"]["health"]
-    assert health["bad_hats"] > 0 and health["faults"] == 0, health
 
 
 def test_doctor_checks_the_sdl_index(tmp_path: Path) -> None:
