@@ -256,6 +256,96 @@ def test_events_of_a_replay_are_exact_with_raw_integers(tmp_path):
     assert times[2] - times[0] == pytest.approx(0.15 / 4, abs=1e-6)  # recorded spacing, at 4x speed
 
 
+def test_events_of_a_replayed_tracker_and_voice_are_exact(tmp_path):
+    """Moves below the thresholds are left out; commands and strings are reported from the
+    first one on, and only when they change."""
+    path = tmp_path / "head.ndjson"
+    poses = [
+        ((0.0, 1.5, 0.0), 0.0),
+        ((0.005, 1.5, 0.0), 0.0),
+        ((0.02, 1.5, 0.0), 0.0),
+        ((0.02, 1.5, 0.0), 0.5),
+        ((0.02, 1.5, 0.0), 2.0),
+    ]
+    records = []
+    for i, (where, turn) in enumerate(poses):
+        m = np.eye(4)
+        m[:3, :3] = rotation_from_euler_xyz_degrees(0.0, 0.0, turn)
+        m[:3, 3] = where
+        records.append(SampleRecord("Head", "position", 0, 10.0 + i * 0.05, m.tolist(), None))
+    for i, (text, number) in enumerate([("hello", 3), ("hello", 3), ("bye", 4)]):
+        records.append(SampleRecord("Voice", "string", 0, 10.01 + i * 0.05, text, text))
+        records.append(SampleRecord("Voice", "command", 0, 10.01 + i * 0.05, number, number))
+    with Recorder(path, {"devices": ["Head", "Voice"]}) as recorder:
+        recorder.write_samples(records)
+    result = gadgetctl("replay", path, "--format", "events", "--speed", "4")
+    assert result.returncode == 0, result.stderr
+    lines = parse(result.stdout)
+    head = [
+        value
+        for _, name, unit, kind, value in lines
+        if (name, unit, kind) == ("Head", 0, "position")
+    ]
+    assert head == [
+        "x +0.0200 y +1.5000 z +0.0000 m  rot +0.0 +0.0 +0.0 deg",
+        "x +0.0200 y +1.5000 z +0.0000 m  rot +0.0 +0.0 +2.0 deg",
+    ]
+    voice = [(kind, value) for _, name, _, kind, value in lines if name == "Voice"]
+    assert [v for v in voice if v[0] == "string"] == [("string", '"hello"'), ("string", '"bye"')]
+    assert [v for v in voice if v[0] == "command"] == [("command", "3"), ("command", "4")]
+    assert len(lines) == 6
+    quaternion = gadgetctl(
+        "replay", path, "Head", "--format", "events", "--speed", "4", "--pose", "quaternion"
+    )
+    assert [value for *_, value in parse(quaternion.stdout)][-1] == (
+        "x +0.0200 y +1.5000 z +0.0000 m  q +0.9998 +0.0000 +0.0000 +0.0175"
+    )
+
+
+def test_events_say_when_a_device_faults_and_comes_back(tmp_path):
+    with JoydevEmulator(
+        directory=tmp_path,
+        scenario="disconnect",
+        rate=100.0,
+        buttons=2,
+        axes=2,
+        disconnect_after=20,
+    ) as emulator:
+        config = write(
+            tmp_path / "stick.jconf",
+            f"""<?xml version="1.0" encoding="UTF-8"?>
+<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
+<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="stick">
+<elements>
+<input_manager name="IM" version="2"><driver>LinuxJoydev_drv</driver></input_manager>
+<linux_joydev name="Stick" version="1"><port_name>{emulator.address}</port_name></linux_joydev>
+</elements>
+</configuration>
+""",
+        )
+        process = popen("monitor", config, "--format", "events", "--no-check")
+        try:
+            states = []
+            for line in process.stdout:  # until the device was lost and is running again
+                _, name, unit, kind, value = parse(line)[0]
+                if kind == "status":
+                    assert name == "Stick" and unit is None
+                    states.append(value.split(":")[0])
+                    lost = [
+                        i for i, state in enumerate(states) if state in ("faulted", "reconnecting")
+                    ]
+                    if lost and "running" in states[lost[0] :]:
+                        break
+            process.send_signal(signal.SIGINT)
+            _, err = process.communicate(timeout=30)
+        finally:
+            if process.poll() is None:
+                process.kill()
+                process.communicate()
+    assert "faulted" in states and states[-1] == "running", states  # a fault between frames too
+    assert process.returncode in (0, 1) and "Traceback" not in err
+
+
 def test_events_and_table_show_a_joysticks_raw_integers(tmp_path):
     with JoydevEmulator(
         directory=tmp_path, scenario="motion", rate=100.0, buttons=2, axes=2

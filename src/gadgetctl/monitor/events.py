@@ -9,7 +9,7 @@ keeps what it last reported per device, kind and unit; it reports
 * a position moving more than a distance (meters) or turning more than an angle (degrees)
   from the pose last reported;
 * a glove joint turning more than the angle; a hat, gesture, command or string value that
-  differs from the previous one (commands, gestures and strings from the first one on);
+  differs from the previous one (commands and strings from the first one on);
 * keyboard and mouse events; a device's status when it is not running or changes; markers.
 
 :func:`event_line` writes one :class:`ChangeEvent` as a line,
@@ -45,7 +45,7 @@ DEFAULT_ANGLE = 1.0  # degrees
 UNIT_SYMBOLS = {"meters": "m", "feet": "ft", "inches": "in", "centimeters": "cm"}
 HAT_NAMES = {0: "centered", 1: "up", 2: "right", 4: "down", 8: "left"}
 FINGERS = ("thumb", "index", "middle", "ring", "pinky", "wrist")
-DISCRETE = (DeviceKind.COMMAND, DeviceKind.STRING, DeviceKind.GESTURE)
+DISCRETE = (DeviceKind.COMMAND, DeviceKind.STRING)  # events, not states: the first one counts too
 
 
 @dataclass(frozen=True, slots=True)
@@ -83,6 +83,7 @@ class _DeviceMemory:
     last: dict[tuple[DeviceKind, int], Any] = field(default_factory=dict)
     state: str | None = None
     error: str | None = None
+    faults: int = 0
 
 
 class ChangeDetector:
@@ -125,9 +126,15 @@ class ChangeDetector:
     ) -> None:
         state = device.state.value if isinstance(device.state, DeviceState) else str(device.state)
         error = device.error if state in ("faulted", "reconnecting") else None
+        faults = getattr(device, "faults", 0)
+        first = memory.state is None
+        missed = not first and faults > memory.faults and state != "faulted" and memory.state != "faulted"
+        memory.faults = faults
+        if missed:  # it faulted and restarted between two frames: say so all the same
+            events.append(ChangeEvent(moment, name, "status", value="faulted", raw=device.error))
+            memory.state, memory.error = "faulted", device.error
         if (state, error) == (memory.state, memory.error):
             return
-        first = memory.state is None
         memory.state, memory.error = state, error
         if first and state == DeviceState.RUNNING.value:
             return  # running from the start is the normal case: nothing to say
