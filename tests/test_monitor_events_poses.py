@@ -180,6 +180,51 @@ def test_events_report_changes_only_beyond_the_thresholds():
     assert times[0] >= 0
 
 
+def test_events_are_the_recorded_samples_by_the_documented_rule(tmp_path):
+    """The events of a run follow, sample for sample, from its recording: a 1 kHz noise
+    channel and a square wave against the dead band, buttons at every change."""
+    path = tmp_path / "run.ndjson"
+    result = gadgetctl(
+        "monitor",
+        WAVEFORM,
+        "Waveform Noise",
+        "Waveform Sticks",
+        "--duration",
+        "1.5",
+        "--format",
+        "events",
+        "--record",
+        path,
+        "--dead-band",
+        "0.05",
+    )
+    assert result.returncode == 0, result.stderr
+    seen: dict[tuple[str, int, str], list[str]] = {}
+    for _, name, unit, kind, value in parse(result.stdout):
+        seen.setdefault((name, unit, kind), []).append(value)
+    expected: dict[tuple[str, int, str], list[str]] = {}
+    last: dict[tuple[str, int, str], float] = {}
+    samples = sorted(
+        (r for r in read_recording(path).records if isinstance(r, SampleRecord)),
+        key=lambda r: r.timestamp,
+    )
+    for record in samples:
+        key = (record.device, record.unit, record.kind)
+        if key not in last:
+            last[key] = record.value
+            continue
+        if record.kind == "digital" and record.value != last[key]:
+            expected.setdefault(key, []).append("pressed" if record.value else "released")
+            last[key] = record.value
+        elif record.kind == "analog" and abs(record.value - last[key]) > 0.05:
+            raw = record.raw
+            text = str(int(raw)) if float(raw).is_integer() else f"{raw:.6g}"
+            expected.setdefault(key, []).append(f"{record.value:.4f} raw {text}")
+            last[key] = record.value
+    assert len(expected[("Waveform Noise", 0, "analog")]) > 500
+    assert seen == expected
+
+
 def test_events_thresholds_are_options():
     result = gadgetctl(
         "monitor",

@@ -29,6 +29,7 @@ import numpy as np
 from gadgetctl.input.device import DeviceState
 from gadgetctl.input.devicetypes import Analog
 from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.samples import Sample
 from gadgetctl.monitor.poses import (
     EULER,
     MATRIX,
@@ -105,6 +106,12 @@ class ChangeDetector:
             memory = self._devices.setdefault(name, _DeviceMemory())
             self._status(events, name, device, memory, moment)
             for kind, samples in session.frame_samples(name).items():
+                if kind in (DeviceKind.DIGITAL, DeviceKind.ANALOG):
+                    arrays = _arrays(samples)
+                    if arrays is not None:  # the hot path: whole columns at a time
+                        scan = self._digital if kind is DeviceKind.DIGITAL else self._analog
+                        scan(events, name, device, memory, *arrays)
+                        continue
                 for sample in samples:
                     self._sample(
                         events, name, device, memory, kind, sample.timestamp, sample.values
@@ -128,7 +135,12 @@ class ChangeDetector:
         error = device.error if state in ("faulted", "reconnecting") else None
         faults = getattr(device, "faults", 0)
         first = memory.state is None
-        missed = not first and faults > memory.faults and state != "faulted" and memory.state != "faulted"
+        missed = (
+            not first
+            and faults > memory.faults
+            and state != "faulted"
+            and memory.state != "faulted"
+        )
         memory.faults = faults
         if missed:  # it faulted and restarted between two frames: say so all the same
             events.append(ChangeEvent(moment, name, "status", value="faulted", raw=device.error))
@@ -194,12 +206,114 @@ class ChangeDetector:
                     events.append(ChangeEvent(stamp, name, kind.value, unit, plain, value))
                 last[key] = plain
 
+    def _digital(
+        self,
+        events: list[ChangeEvent],
+        name: str,
+        device: Any,
+        memory: _DeviceMemory,
+        stamps: np.ndarray,
+        values: np.ndarray,
+    ) -> None:
+        """Every change of every button of a frame (the same as :meth:`_sample`, by column)."""
+        states = values != 0
+        for unit in range(states.shape[1]):
+            key = (DeviceKind.DIGITAL, unit)
+            column = states[:, unit]
+            previous = memory.last.get(key)
+            before = np.concatenate(
+                ([column[0] if previous is None else bool(previous)], column[:-1])
+            )
+            for index in np.flatnonzero(column != before).tolist():
+                state = int(column[index])
+                events.append(
+                    ChangeEvent(
+                        float(stamps[index]), name, "digital", unit, state, values[index, unit]
+                    )
+                )
+            memory.last[key] = int(column[-1])
+
+    def _analog(
+        self,
+        events: list[ChangeEvent],
+        name: str,
+        device: Any,
+        memory: _DeviceMemory,
+        stamps: np.ndarray,
+        values: np.ndarray,
+    ) -> None:
+        """Each unit's moves beyond the dead band from the value last reported (the same as
+        :meth:`_sample`), looked for a block of samples at a time."""
+        if isinstance(device, Analog):
+            low, high = device.analog_min, device.analog_max
+            normal = (
+                np.zeros(values.shape)
+                if high <= low
+                else (np.clip(values, low, high) - low) / (high - low)
+            )
+        else:
+            normal = values
+        band = self.thresholds.dead_band
+        count = len(stamps)
+        for unit in range(values.shape[1]):
+            key = (DeviceKind.ANALOG, unit)
+            column = normal[:, unit]
+            last = memory.last.get(key)
+            start = 0
+            if last is None:
+                last, start = float(column[0]), 1
+            block = _BLOCK
+            while start < count:
+                window = column[start : start + block]
+                beyond = np.abs(window - last) > band
+                if not beyond.any():
+                    start += block
+                    block = min(block * 2, _MAX_BLOCK)  # quiet: look further ahead
+                    continue
+                index = start + int(np.argmax(beyond))
+                last = float(column[index])
+                events.append(
+                    ChangeEvent(
+                        float(stamps[index]), name, "analog", unit, last, values[index, unit]
+                    )
+                )
+                start, block = index + 1, _BLOCK
+            memory.last[key] = last
+
     def _pose_moved(self, before: np.ndarray, after: np.ndarray) -> bool:
         if float(np.linalg.norm(after[:3, 3] - before[:3, 3])) > self.thresholds.distance:
             return True
         relative = before[:3, :3].T @ after[:3, :3]
         cosine = float(np.clip((np.trace(relative) - 1.0) / 2.0, -1.0, 1.0))
         return math.degrees(math.acos(cosine)) > self.thresholds.angle
+
+
+_BLOCK = 16  # samples an analog scan looks at first after an event
+_MAX_BLOCK = 4096
+
+
+def _arrays(frame: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    """(timestamps (n,), values (n, units)) of a frame's samples of one kind, or None when
+    the number of units changed within the frame."""
+    stamps: list[np.ndarray] = []
+    rows: list[np.ndarray] = []
+    for chunk in frame.chunks:
+        if type(chunk) is Sample:
+            stamps.append(np.asarray([chunk.timestamp], dtype=np.float64))
+            rows.append(np.asarray([chunk.values], dtype=np.float64))
+        else:
+            values = np.asarray(chunk.values, dtype=np.float64)
+            stamps.append(np.asarray(chunk.timestamps, dtype=np.float64))
+            rows.append(values.reshape(len(values), -1))
+    if not rows:
+        return None
+    try:
+        values = np.concatenate(rows) if len(rows) > 1 else rows[0]
+    except ValueError:
+        return None
+    if not len(values) or values.ndim != 2:
+        return None
+    return (np.concatenate(stamps) if len(stamps) > 1 else stamps[0]), values
 
 
 def _integer(value: Any) -> Any:
