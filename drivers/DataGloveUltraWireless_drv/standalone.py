@@ -20,8 +20,9 @@ the next ``<`` are skipped as one run, and the buffer never holds more than one 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
+from gadgetctl.transport.records import ResyncScanner
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 START, END = 0x3C, 0x3E
@@ -62,49 +63,15 @@ def decode_record(record: bytes) -> GloveRecord | None:
 
 
 @dataclass
-class RecordScanner:
+class RecordScanner(ResyncScanner[GloveRecord]):
     """Finds records in a byte stream, bounded: ``records`` decoded, ``bad_records`` runs of
     junk (broken records included), ``skipped_bytes`` their bytes."""
 
-    records: int = 0
-    bad_records: int = 0
-    skipped_bytes: int = 0
-    buffer: bytearray = field(default_factory=bytearray)
-    _in_junk: bool = False
+    HEAD = START
+    SIZE = RECORD_SIZE
 
-    def feed(self, data: bytes) -> list[GloveRecord]:
-        buf = self.buffer
-        buf += data
-        out: list[GloveRecord] = []
-        pos, end = 0, len(buf)
-        while True:
-            start = buf.find(START, pos)
-            if start < 0:
-                self._skip(end - pos)
-                pos = end
-                break
-            self._skip(start - pos)
-            if end - start < RECORD_SIZE:
-                pos = start
-                break
-            record = decode_record(bytes(buf[start : start + RECORD_SIZE]))
-            if record is None:
-                self._skip(1)
-                pos = start + 1
-                continue
-            self._in_junk = False
-            self.records += 1
-            out.append(record)
-            pos = start + RECORD_SIZE
-        del buf[:pos]
-        return out
-
-    def _skip(self, count: int) -> None:
-        if count > 0:
-            if not self._in_junk:
-                self.bad_records += 1
-                self._in_junk = True
-            self.skipped_bytes += count
+    def decode(self, record: bytes) -> GloveRecord | None:
+        return decode_record(record)
 
 
 class AutoRange:

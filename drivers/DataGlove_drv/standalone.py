@@ -14,8 +14,9 @@ junk costs one count per run, never a fault, and the buffer never holds more tha
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
+from gadgetctl.transport.records import ResyncScanner
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 HEADER = 0x80
@@ -115,52 +116,15 @@ def decode_packet(packet: bytes) -> GloveSample | None:
 
 
 @dataclass
-class PacketScanner:
+class PacketScanner(ResyncScanner[GloveSample]):
     """Finds packets in a byte stream, bounded: ``records`` decoded, ``bad_records`` runs of
     junk between them, ``skipped_bytes`` the bytes of those runs."""
 
-    records: int = 0
-    bad_records: int = 0
-    skipped_bytes: int = 0
-    buffer: bytearray = field(default_factory=bytearray)
-    _in_junk: bool = False
+    HEAD = HEADER
+    SIZE = PACKET_SIZE
 
-    def feed(self, data: bytes) -> list[GloveSample]:
-        buf = self.buffer
-        buf += data
-        out: list[GloveSample] = []
-        pos = 0
-        end = len(buf)
-        while True:
-            start = buf.find(HEADER, pos)
-            if start < 0:
-                self._skip(end - pos)
-                pos = end
-                break
-            if start > pos:
-                self._skip(start - pos)
-            if end - start < PACKET_SIZE:
-                pos = start
-                break
-            sample = decode_packet(bytes(buf[start : start + PACKET_SIZE]))
-            if sample is None:
-                self._skip(1)  # not a header after all: look for the next one
-                pos = start + 1
-                continue
-            self._in_junk = False
-            self.records += 1
-            out.append(sample)
-            pos = start + PACKET_SIZE
-        del buf[:pos]
-        return out
-
-    def _skip(self, count: int) -> None:
-        if count <= 0:
-            return
-        if not self._in_junk:
-            self.bad_records += 1
-            self._in_junk = True
-        self.skipped_bytes += count
+    def decode(self, record: bytes) -> GloveSample | None:
+        return decode_packet(record)
 
 
 class DataGlove:

@@ -25,12 +25,13 @@ from __future__ import annotations
 import math
 import struct
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import TracebackType
 
 import numpy as np
 import serial
 
+from gadgetctl.transport.records import ResyncScanner
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 STATIONS = 4
@@ -130,50 +131,17 @@ def decode_record(record: bytes, scale: float) -> FastrakRecord | None:
 
 
 @dataclass
-class RecordScanner:
+class RecordScanner(ResyncScanner[FastrakRecord]):
     """Finds records in the stream; junk is skipped a whole run at a time (one ``find`` to the
     next candidate), counted once per run in ``bad_records`` and per byte in ``skipped_bytes``."""
 
+    HEAD = b"0"
+    SIZE = RECORD_SIZE
+
     scale: float = INCH
-    buffer: bytearray = field(default_factory=bytearray)
-    records: int = 0
-    bad_records: int = 0
-    skipped_bytes: int = 0
-    _in_junk: bool = False
 
-    def feed(self, data: bytes) -> list[FastrakRecord]:
-        buf = self.buffer
-        buf += data
-        out: list[FastrakRecord] = []
-        pos = 0
-        while True:
-            head = buf.find(b"0", pos)
-            if head < 0:
-                self._skip(len(buf) - pos)
-                pos = len(buf)
-                break
-            self._skip(head - pos)
-            pos = head
-            if len(buf) - pos < RECORD_SIZE:
-                break
-            record = decode_record(bytes(buf[pos : pos + RECORD_SIZE]), self.scale)
-            if record is None:
-                self._skip(1)
-                pos += 1
-                continue
-            out.append(record)
-            self.records += 1
-            self._in_junk = False
-            pos += RECORD_SIZE
-        del buf[:pos]
-        return out
-
-    def _skip(self, count: int) -> None:
-        if count > 0:
-            self.skipped_bytes += count
-            if not self._in_junk:
-                self.bad_records += 1
-                self._in_junk = True
+    def decode(self, record: bytes) -> FastrakRecord | None:
+        return decode_record(record, self.scale)
 
 
 class Fastrak:

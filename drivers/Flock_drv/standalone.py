@@ -28,12 +28,13 @@ from __future__ import annotations
 import math
 import re
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import TracebackType
 
 import numpy as np
 import serial
 
+from gadgetctl.transport.records import ResyncScanner
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 # -- commands and parameters ------------------------------------------------------------------
@@ -207,7 +208,7 @@ def decode_record(
 
 
 @dataclass
-class RecordScanner:
+class RecordScanner(ResyncScanner[BirdRecord]):
     """Finds sensor records in the byte stream by their phasing bit. Junk is skipped a whole
     run at a time (one search to the next byte with bit 7 set), counted once per run in
     ``bad_records`` and byte by byte in ``skipped_bytes``; a framed record with a wrong
@@ -217,45 +218,16 @@ class RecordScanner:
     scale_feet: float = 3.0
     group: bool = False
     addresses: frozenset[int] = frozenset({0})
-    buffer: bytearray = field(default_factory=bytearray)
-    records: int = 0
-    bad_records: int = 0
-    skipped_bytes: int = 0
-    _in_junk: bool = False
 
-    def feed(self, data: bytes) -> list[BirdRecord]:
-        buf = self.buffer
-        buf += data
-        size = record_size(self.fmt, self.group)
-        out: list[BirdRecord] = []
-        pos = 0
-        while True:
-            found = PHASING.search(buf, pos)
-            head = found.start() if found else len(buf)
-            if head > pos:
-                self._skip(head - pos)
-                pos = head
-            if found is None or len(buf) - pos < size:
-                break
-            record = decode_record(
-                bytes(buf[pos : pos + size]), self.fmt, self.scale_feet, self.group, self.addresses
-            )
-            if record is None:
-                self._skip(1)
-                pos += 1
-                continue
-            out.append(record)
-            self.records += 1
-            self._in_junk = False
-            pos += size
-        del buf[:pos]
-        return out
+    def find_head(self, buffer: bytearray, start: int) -> int:
+        found = PHASING.search(buffer, start)
+        return found.start() if found else -1
 
-    def _skip(self, count: int) -> None:
-        self.skipped_bytes += count
-        if not self._in_junk:
-            self.bad_records += 1
-            self._in_junk = True
+    def record_size(self) -> int:
+        return record_size(self.fmt, self.group)
+
+    def decode(self, record: bytes) -> BirdRecord | None:
+        return decode_record(record, self.fmt, self.scale_feet, self.group, self.addresses)
 
 
 @dataclass(frozen=True)

@@ -19,11 +19,12 @@ Only the standard library and pyserial (through :mod:`gadgetctl.transport.serial
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import TracebackType
 
 import serial
 
+from gadgetctl.transport.records import ResyncScanner
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 INFO_COMMANDS = {
@@ -114,50 +115,20 @@ def decode_packet(packet: bytes, query: int = QUERY) -> IBoxPacket | None:
 
 
 @dataclass
-class PacketScanner:
+class PacketScanner(ResyncScanner[IBoxPacket]):
     """Finds packets by their echoed query byte. Junk runs are skipped whole (one search to
     the next echo), counted once in ``bad_records`` and byte by byte in ``skipped_bytes``."""
 
     query: int = QUERY
-    buffer: bytearray = field(default_factory=bytearray)
-    records: int = 0
-    bad_records: int = 0
-    skipped_bytes: int = 0
-    _in_junk: bool = False
 
-    def feed(self, data: bytes) -> list[IBoxPacket]:
-        buf = self.buffer
-        buf += data
-        head_byte = bytes((self.query | 0x80,))
-        size = packet_size(self.query)
-        out: list[IBoxPacket] = []
-        pos = 0
-        while True:
-            head = buf.find(head_byte, pos)
-            if head < 0:
-                head = len(buf)
-            if head > pos:
-                self._skip(head - pos)
-                pos = head
-            if pos >= len(buf) or len(buf) - pos < size:
-                break
-            packet = decode_packet(bytes(buf[pos : pos + size]), self.query)
-            if packet is None:
-                self._skip(1)
-                pos += 1
-                continue
-            out.append(packet)
-            self.records += 1
-            self._in_junk = False
-            pos += size
-        del buf[:pos]
-        return out
+    def find_head(self, buffer: bytearray, start: int) -> int:
+        return buffer.find(self.query | 0x80, start)
 
-    def _skip(self, count: int) -> None:
-        self.skipped_bytes += count
-        if not self._in_junk:
-            self.bad_records += 1
-            self._in_junk = True
+    def record_size(self) -> int:
+        return packet_size(self.query)
+
+    def decode(self, record: bytes) -> IBoxPacket | None:
+        return decode_packet(record, self.query)
 
 
 class IBox:

@@ -26,12 +26,13 @@ from __future__ import annotations
 import math
 import struct
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import TracebackType
 
 import numpy as np
 import serial
 
+from gadgetctl.transport.records import ResyncScanner
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 RECORD_HEAD = ord("0")
@@ -149,58 +150,20 @@ def decode_record(
 
 
 @dataclass
-class RecordScanner:
+class RecordScanner(ResyncScanner[StationRecord]):
     """Finds records in a byte stream. Junk between records is skipped a whole run at a time
     (one ``bytes.find`` to the next candidate head), counted once per run in ``bad_records``
     and byte by byte in ``skipped_bytes``."""
 
+    HEAD = b"0"
+    SIZE = RECORD_SIZE
+    MAX_BUFFER = MAX_BUFFER  # cannot be reached with a record this short; a guard all the same
+
     scale: float = INCH
     stations: frozenset[int] | None = None
-    buffer: bytearray = field(default_factory=bytearray)
-    records: int = 0
-    bad_records: int = 0
-    skipped_bytes: int = 0
-    _in_junk: bool = False
 
-    def feed(self, data: bytes) -> list[StationRecord]:
-        """Add bytes; return every complete valid record they finish."""
-        buf = self.buffer
-        buf += data
-        out: list[StationRecord] = []
-        pos = 0
-        while True:
-            head = buf.find(b"0", pos)
-            if head < 0:
-                self._skip(len(buf) - pos)
-                pos = len(buf)
-                break
-            if head > pos:
-                self._skip(head - pos)
-            pos = head
-            if len(buf) - pos < RECORD_SIZE:
-                break
-            record = decode_record(bytes(buf[pos : pos + RECORD_SIZE]), self.scale, self.stations)
-            if record is None:
-                self._skip(1)
-                pos += 1
-                continue
-            out.append(record)
-            self.records += 1
-            self._in_junk = False
-            pos += RECORD_SIZE
-        del buf[:pos]
-        if len(buf) > MAX_BUFFER:  # cannot happen with a record this short; a guard all the same
-            self._skip(len(buf))
-            buf.clear()
-        return out
-
-    def _skip(self, count: int) -> None:
-        if count <= 0:
-            return
-        self.skipped_bytes += count
-        if not self._in_junk:
-            self.bad_records += 1
-            self._in_junk = True
+    def decode(self, record: bytes) -> StationRecord | None:
+        return decode_record(record, self.scale, self.stations)
 
 
 @dataclass(frozen=True)

@@ -19,12 +19,13 @@ from __future__ import annotations
 import math
 import re
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import TracebackType
 
 import numpy as np
 import serial
 
+from gadgetctl.transport.records import ResyncScanner
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 REPORT_SIZE = 16
@@ -113,58 +114,24 @@ def decode_report(report: bytes) -> MouseReport | None:
 
 
 @dataclass
-class ReportScanner:
+class ReportScanner(ResyncScanner[MouseReport]):
     """Finds reports in the stream. A report starts at the only byte with bit 7 set, so junk is
     skipped a whole run at a time (to the next such byte), counted once per run in
     ``bad_records`` and per byte in ``skipped_bytes``."""
 
-    buffer: bytearray = field(default_factory=bytearray)
-    records: int = 0
-    bad_records: int = 0
-    skipped_bytes: int = 0
-    _in_junk: bool = False
+    SIZE = REPORT_SIZE
 
-    def feed(self, data: bytes) -> list[MouseReport]:
-        buf = self.buffer
-        buf += data
-        out: list[MouseReport] = []
-        pos = 0
-        while True:
-            found = _FLAG_BYTE.search(buf, pos)
-            head = found.start() if found else -1
-            if head < 0:
-                self._skip(len(buf) - pos)
-                pos = len(buf)
-                break
-            self._skip(head - pos)
-            pos = head
-            if len(buf) - pos < REPORT_SIZE:
-                # a flag byte inside the partial report: what comes before it is a cut report
-                found = _FLAG_BYTE.search(buf, pos + 1)
-                if found is None:
-                    break
-                cut = found.start()
-                self._skip(cut - pos)
-                pos = cut
-                continue
-            report = decode_report(bytes(buf[pos : pos + REPORT_SIZE]))
-            if report is None:
-                self._skip(1)
-                pos += 1
-                continue
-            out.append(report)
-            self.records += 1
-            self._in_junk = False
-            pos += REPORT_SIZE
-        del buf[:pos]
-        return out
+    def find_head(self, buffer: bytearray, start: int) -> int:
+        found = _FLAG_BYTE.search(buffer, start)
+        return found.start() if found else -1
 
-    def _skip(self, count: int) -> None:
-        if count > 0:
-            self.skipped_bytes += count
-            if not self._in_junk:
-                self.bad_records += 1
-                self._in_junk = True
+    def restart_within(self, buffer: bytearray, start: int) -> int | None:
+        # a flag byte inside the partial report: what comes before it is a cut report
+        found = _FLAG_BYTE.search(buffer, start + 1)
+        return None if found is None else found.start()
+
+    def decode(self, record: bytes) -> MouseReport | None:
+        return decode_report(record)
 
 
 class ThreeDMouse:

@@ -21,11 +21,12 @@ used.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import TracebackType
 
 import serial
 
+from gadgetctl.transport.records import ResyncScanner
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 SYNC = 0x40
@@ -81,17 +82,12 @@ def decode_packet(packet: bytes) -> WandaPacket | None:
 
 
 @dataclass
-class PacketScanner:
+class PacketScanner(ResyncScanner[WandaPacket]):
     """Resynchronises on the sync bit: bytes before a sync byte (or with bit 7 set, which a
     7-bit line cannot carry) are skipped a whole run at a time, counted once in
     ``bad_records`` and byte by byte in ``skipped_bytes``. A 3-byte packet is held until the
-    next byte says whether a 4th follows, or until :meth:`flush` (the line went quiet)."""
-
-    buffer: bytearray = field(default_factory=bytearray)
-    records: int = 0
-    bad_records: int = 0
-    skipped_bytes: int = 0
-    _in_junk: bool = False
+    next byte says whether a 4th follows, or until the line goes quiet (``quiet``): packets
+    of two sizes, so the search is the Wanda's own, the counting the shared one."""
 
     def feed(self, data: bytes, *, quiet: bool = False) -> list[WandaPacket]:
         """Add bytes; ``quiet`` says no more are coming now (a held packet is complete)."""
@@ -104,14 +100,14 @@ class PacketScanner:
                 start = pos
                 while pos < len(buf) and (buf[pos] & 0x80 or not buf[pos] & SYNC):
                     pos += 1
-                self._skip(pos - start)
+                self.skip(pos - start)
                 continue
             if len(buf) - pos < 3 or (len(buf) - pos == 3 and not quiet):
                 break  # wait for the rest (or the byte after a 3-byte packet)
             size = 4 if len(buf) - pos > 3 and not buf[pos + 3] & (SYNC | 0x80) else 3
             packet = decode_packet(bytes(buf[pos : pos + size]))
             if packet is None:
-                self._skip(1)
+                self.skip(1)
                 pos += 1
                 continue
             out.append(packet)
@@ -120,12 +116,6 @@ class PacketScanner:
             pos += size
         del buf[:pos]
         return out
-
-    def _skip(self, count: int) -> None:
-        self.skipped_bytes += count
-        if not self._in_junk:
-            self.bad_records += 1
-            self._in_junk = True
 
 
 class Wanda:

@@ -1,0 +1,116 @@
+"""The shared resynchronising record scanner and the counters carried across reconnections
+(`gadgetctl.transport.records`), on a toy protocol: ``#`` and three digits."""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+
+from gadgetctl.transport.records import CarriedCounts, ResyncScanner
+
+
+@dataclass
+class Digits(ResyncScanner[int]):
+    HEAD = b"#"
+    SIZE = 4
+
+    def decode(self, record: bytes) -> int | None:
+        body = record[1:]
+        return int(body) if body.isdigit() else None
+
+
+@dataclass
+class Bounded(Digits):
+    MAX_BUFFER = 2
+
+    def restart_within(self, buffer: bytearray, start: int) -> int | None:
+        cut = buffer.find(b"#", start + 1)
+        return None if cut < 0 else cut
+
+
+def test_records_come_whole_across_feeds_and_junk_runs_count_once() -> None:
+    scanner = Digits()
+    assert scanner.feed(b"#12") == []  # cut short: kept for later
+    assert scanner.feed(b"3#456") == [123, 456]
+    assert scanner.feed(b"xyzzy#789junk#0") == [789]
+    # one junk run before 789 (5 bytes), one after (4 bytes); "#0" waits
+    assert (scanner.records, scanner.bad_records, scanner.skipped_bytes) == (3, 2, 9)
+    assert bytes(scanner.buffer) == b"#0"
+    assert scanner.feed(b"01") == [1]
+
+
+def test_a_head_that_does_not_decode_is_junk_and_the_search_goes_on() -> None:
+    scanner = Digits()
+    assert scanner.feed(b"#ab#123##99#555") == [123, 555]
+    # "#ab" (3 bytes) is a run; "#" before "#99#" and "#99" are one more run of 4
+    assert (scanner.records, scanner.bad_records, scanner.skipped_bytes) == (2, 2, 7)
+
+
+def test_fields_of_a_driver_come_first_and_counters_are_keywords() -> None:
+    @dataclass
+    class Scaled(Digits):
+        scale: int = 1
+
+        def decode(self, record: bytes) -> int | None:
+            value = super().decode(record)
+            return None if value is None else value * self.scale
+
+    assert Scaled(10).feed(b"#004") == [40]
+    assert Scaled(scale=2, records=5).records == 5
+
+
+def test_a_head_inside_a_cut_record_ends_it_and_the_buffer_is_bounded() -> None:
+    scanner = Bounded()
+    assert scanner.feed(b"#1#") == []  # "#1" was cut off by the next head: junk at once
+    assert (scanner.bad_records, scanner.skipped_bytes) == (1, 2)
+    assert scanner.feed(b"234") == [234]
+    assert Digits().feed(b"#1#") == []  # without restart_within it waits
+    assert scanner.feed(b"#12") == []  # three bytes wait: more than MAX_BUFFER
+    assert bytes(scanner.buffer) == b"" and scanner.skipped_bytes == 5
+
+
+class Source:
+    def __init__(self) -> None:
+        self.records = 0
+        self.bad_records = 0
+
+
+def test_carried_counts_add_closed_connections_to_the_open_one() -> None:
+    counts = CarriedCounts(("records", "bad_records"))
+    first = Source()
+    counts.attach(first)
+    first.records, first.bad_records = 10, 1
+    assert counts.snapshot() == {"records": 10, "bad_records": 1}
+    assert counts.detach() is first
+    first.records = 99  # what a closed connection counts later is not added
+    second = Source()
+    counts.attach(second)
+    second.records = 5
+    assert counts.get("records") == 15 and counts.get("bad_records") == 1
+    assert counts.detach() is second and counts.detach() is None
+    assert counts.snapshot() == {"records": 15, "bad_records": 1}
+    assert counts.names == ("records", "bad_records")
+
+
+def test_carried_counts_never_lose_or_double_a_count_while_read() -> None:
+    counts = CarriedCounts(("records",))
+    seen: list[int] = []
+    stop = threading.Event()
+
+    def read() -> None:
+        while not stop.is_set():
+            seen.append(counts.get("records"))
+
+    reader = threading.Thread(target=read)
+    reader.start()
+    try:
+        for _ in range(200):
+            source = Source()
+            source.records = 1
+            counts.attach(source)
+            counts.detach()
+    finally:
+        stop.set()
+        reader.join(10)
+    assert counts.get("records") == 200
+    assert seen == sorted(seen)  # never a count that goes back (lost between detach and keep)
