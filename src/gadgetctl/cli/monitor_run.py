@@ -176,6 +176,7 @@ class EventPrinter:
         self.pose = options.pose or EULER
         self.length_unit = options.length_unit
         self.origin: float | None = None
+        self.lines = 0  # written so far
 
     def __call__(self, session: MonitorSession, moment: float) -> None:
         from gadgetctl.monitor.events import event_line
@@ -184,6 +185,7 @@ class EventPrinter:
             self.origin = session.configured_at or session.started_at or moment
         events = self.detector.frame(session, moment)
         if events:
+            self.lines += len(events)
             self.stream.write("".join(event_line(e, self.origin, pose=self.pose, length_unit=self.length_unit) + "\n"
                                       for e in events))
             self.stream.flush()
