@@ -77,6 +77,22 @@ def parse(text: str) -> list[tuple[float, str, int | None, str, str]]:
     return lines
 
 
+def joystick_config(directory: Path, port: str, extra: str = "") -> Path:
+    """A configuration of one linux_joydev device, Stick, reading ``port``."""
+    return write(
+        directory / "stick.jconf",
+        f"""<?xml version="1.0" encoding="UTF-8"?>
+<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
+<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="stick">
+<elements>
+<input_manager name="IM" version="2"><driver>LinuxJoydev_drv</driver></input_manager>
+<linux_joydev name="Stick" version="1"><port_name>{port}</port_name>{extra}</linux_joydev>
+</elements>
+</configuration>
+""",
+    )
+
+
 def position_of(value: str) -> tuple[np.ndarray, np.ndarray]:
     """(x y z, rot x y z) of an events line's position text (Euler form)."""
     numbers = re.fullmatch(r"x (\S+) y (\S+) z (\S+) m  rot (\S+) (\S+) (\S+) deg", value)
@@ -356,18 +372,7 @@ def test_events_say_when_a_device_faults_and_comes_back(tmp_path):
         axes=2,
         disconnect_after=20,
     ) as emulator:
-        config = write(
-            tmp_path / "stick.jconf",
-            f"""<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="stick">
-<elements>
-<input_manager name="IM" version="2"><driver>LinuxJoydev_drv</driver></input_manager>
-<linux_joydev name="Stick" version="1"><port_name>{emulator.address}</port_name></linux_joydev>
-</elements>
-</configuration>
-""",
-        )
+        config = joystick_config(tmp_path, emulator.address)
         process = popen("monitor", config, "--format", "events", "--no-check")
         try:
             states = []
@@ -395,18 +400,8 @@ def test_events_and_table_show_a_joysticks_raw_integers(tmp_path):
     with JoydevEmulator(
         directory=tmp_path, scenario="motion", rate=100.0, buttons=2, axes=2
     ) as emulator:
-        config = write(
-            tmp_path / "stick.jconf",
-            f"""<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="stick">
-<elements>
-<input_manager name="IM" version="2"><driver>LinuxJoydev_drv</driver></input_manager>
-<linux_joydev name="Stick" version="1"><port_name>{emulator.address}</port_name>
-<min>-32767.0</min><max>32767.0</max></linux_joydev>
-</elements>
-</configuration>
-""",
+        config = joystick_config(
+            tmp_path, emulator.address, "<min>-32767.0</min><max>32767.0</max>"
         )
         events = gadgetctl(
             "monitor", config, "--format", "events", "--duration", "1.5", "--dead-band", "0"
