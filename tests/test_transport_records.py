@@ -6,7 +6,7 @@ from __future__ import annotations
 import threading
 from dataclasses import dataclass
 
-from gadgetctl.transport.records import CarriedCounts, ResyncScanner
+from gadgetctl.transport.records import CarriedCounts, ResyncScanner, ScannedDevice
 
 
 @dataclass
@@ -114,3 +114,22 @@ def test_carried_counts_never_lose_or_double_a_count_while_read() -> None:
         reader.join(10)
     assert counts.get("records") == 200
     assert seen == sorted(seen)  # never a count that goes back (lost between detach and keep)
+
+
+def test_a_scanned_device_opens_closes_and_shows_its_scanners_counters() -> None:
+    class Device(ScannedDevice):
+        def __init__(self) -> None:
+            self.scanner = Digits()
+            self.opened = self.closed = 0
+
+        def open(self) -> None:
+            self.opened += 1
+
+        def close(self) -> None:
+            self.closed += 1
+
+    with Device() as device:
+        assert device.opened == 1 and device.closed == 0
+        device.scanner.feed(b"??#001#002")
+    assert device.closed == 1
+    assert (device.records, device.bad_records, device.skipped_bytes) == (2, 1, 2)

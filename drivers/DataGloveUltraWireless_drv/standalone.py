@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from gadgetctl.transport.records import ResyncScanner
+from gadgetctl.transport.records import ResyncScanner, ScannedDevice
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 START, END = 0x3C, 0x3E
@@ -110,7 +110,7 @@ def gesture(scaled: tuple[float, ...], lower: float = 0.35, upper: float = 0.65)
     return number
 
 
-class UltraGlove:
+class UltraGlove(ScannedDevice):
     """The wireless receiver on a serial line. ``sample_timeout`` bounds one :meth:`poll`."""
 
     def __init__(
@@ -140,10 +140,3 @@ class UltraGlove:
 
     def close(self) -> None:
         self.line.close()
-
-    def __enter__(self) -> UltraGlove:
-        self.open()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from gadgetctl.transport.records import ResyncScanner
+from gadgetctl.transport.records import ResyncScanner, ScannedDevice
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 HEADER = 0x80
@@ -127,7 +127,7 @@ class PacketScanner(ResyncScanner[GloveSample]):
         return decode_packet(record)
 
 
-class DataGlove:
+class DataGlove(ScannedDevice):
     """A 5DT DataGlove on a serial line. ``sample_timeout`` bounds one :meth:`poll`."""
 
     def __init__(
@@ -157,10 +157,3 @@ class DataGlove:
 
     def close(self) -> None:
         self.line.close()
-
-    def __enter__(self) -> DataGlove:
-        self.open()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()

@@ -26,12 +26,11 @@ import math
 import struct
 import time
 from dataclasses import dataclass
-from types import TracebackType
 
 import numpy as np
 import serial
 
-from gadgetctl.transport.records import ResyncScanner
+from gadgetctl.transport.records import ResyncScanner, ScannedDevice
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 STATIONS = 4
@@ -144,7 +143,7 @@ class RecordScanner(ResyncScanner[FastrakRecord]):
         return decode_record(record, self.scale)
 
 
-class Fastrak:
+class Fastrak(ScannedDevice):
     """A Polhemus Fastrak on a serial line, streaming.
 
     ``port`` is a device path, a pyserial URL or an open ``serial.Serial``-like object (used,
@@ -210,30 +209,6 @@ class Fastrak:
     @property
     def is_open(self) -> bool:
         return self._line is not None
-
-    def __enter__(self) -> Fastrak:
-        self.open()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
-
-    @property
-    def records(self) -> int:
-        return self.scanner.records
-
-    @property
-    def bad_records(self) -> int:
-        return self.scanner.bad_records
-
-    @property
-    def skipped_bytes(self) -> int:
-        return self.scanner.skipped_bytes
 
     # -- data ---------------------------------------------------------------------------
 

@@ -29,12 +29,11 @@ import math
 import re
 import time
 from dataclasses import dataclass
-from types import TracebackType
 
 import numpy as np
 import serial
 
-from gadgetctl.transport.records import ResyncScanner
+from gadgetctl.transport.records import ResyncScanner, ScannedDevice
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 # -- commands and parameters ------------------------------------------------------------------
@@ -253,7 +252,7 @@ class BusUnit:
 # -- the device -----------------------------------------------------------------------------------
 
 
-class Flock:
+class Flock(ScannedDevice):
     """A Flock of Birds on a serial line, streaming PosQuaternion (or PosAngles) records.
 
     ``port`` is a device path, a pyserial URL or an open ``serial.Serial``-like object.
@@ -347,31 +346,7 @@ class Flock:
                 pass
         self.line.close()
 
-    def __enter__(self) -> Flock:
-        self.open()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
-
     # -- counters ---------------------------------------------------------------------------
-
-    @property
-    def records(self) -> int:
-        return self.scanner.records
-
-    @property
-    def bad_records(self) -> int:
-        return self.scanner.bad_records
-
-    @property
-    def skipped_bytes(self) -> int:
-        return self.scanner.skipped_bytes
 
     # -- data -------------------------------------------------------------------------------
 

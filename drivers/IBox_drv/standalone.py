@@ -20,11 +20,10 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from types import TracebackType
 
 import serial
 
-from gadgetctl.transport.records import ResyncScanner
+from gadgetctl.transport.records import ResyncScanner, ScannedDevice
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 INFO_COMMANDS = {
@@ -131,7 +130,7 @@ class PacketScanner(ResyncScanner[IBoxPacket]):
         return decode_packet(record, self.query)
 
 
-class IBox:
+class IBox(ScannedDevice):
     """An Immersion Interface Box on a serial line, polled with :data:`QUERY`.
 
     ``settle`` is the pause after ``END`` (0.1 s upstream); ``read_timeout`` the wait for an
@@ -187,30 +186,6 @@ class IBox:
             except SerialLineLost:
                 pass
         self.line.close()
-
-    def __enter__(self) -> IBox:
-        self.open()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
-
-    @property
-    def records(self) -> int:
-        return self.scanner.records
-
-    @property
-    def bad_records(self) -> int:
-        return self.scanner.bad_records
-
-    @property
-    def skipped_bytes(self) -> int:
-        return self.scanner.skipped_bytes
 
     # -- data -------------------------------------------------------------------------------
 

@@ -27,12 +27,11 @@ import math
 import struct
 import time
 from dataclasses import dataclass
-from types import TracebackType
 
 import numpy as np
 import serial
 
-from gadgetctl.transport.records import ResyncScanner
+from gadgetctl.transport.records import ResyncScanner, ScannedDevice
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 RECORD_HEAD = ord("0")
@@ -174,7 +173,7 @@ class StationSetup:
     enabled: bool = True
 
 
-class IS900:
+class IS900(ScannedDevice):
     """An InterSense IS-900 on a serial line, polled.
 
     ``port`` is a device path, a pyserial URL or an open ``serial.Serial``-like object (used,
@@ -241,31 +240,7 @@ class IS900:
     def is_open(self) -> bool:
         return self._line is not None
 
-    def __enter__(self) -> IS900:
-        self.open()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
-
     # -- counters -----------------------------------------------------------------------
-
-    @property
-    def records(self) -> int:
-        return self.scanner.records
-
-    @property
-    def bad_records(self) -> int:
-        return self.scanner.bad_records
-
-    @property
-    def skipped_bytes(self) -> int:
-        return self.scanner.skipped_bytes
 
     # -- data ---------------------------------------------------------------------------
 

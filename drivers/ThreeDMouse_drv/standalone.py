@@ -20,12 +20,11 @@ import math
 import re
 import time
 from dataclasses import dataclass
-from types import TracebackType
 
 import numpy as np
 import serial
 
-from gadgetctl.transport.records import ResyncScanner
+from gadgetctl.transport.records import ResyncScanner, ScannedDevice
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 REPORT_SIZE = 16
@@ -134,7 +133,7 @@ class ReportScanner(ResyncScanner[MouseReport]):
         return decode_report(record)
 
 
-class ThreeDMouse:
+class ThreeDMouse(ScannedDevice):
     """A Logitech 3D mouse / head tracker on a serial line, polled with ``*d``.
 
     ``port`` is a device path, a pyserial URL or an open ``serial.Serial``-like object (used,
@@ -201,30 +200,6 @@ class ThreeDMouse:
     @property
     def is_open(self) -> bool:
         return self._line is not None
-
-    def __enter__(self) -> ThreeDMouse:
-        self.open()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
-
-    @property
-    def records(self) -> int:
-        return self.scanner.records
-
-    @property
-    def bad_records(self) -> int:
-        return self.scanner.bad_records
-
-    @property
-    def skipped_bytes(self) -> int:
-        return self.scanner.skipped_bytes
 
     def read(self) -> list[MouseReport]:
         """Poll when the last poll was answered (or ``poll_timeout`` passed) and return the

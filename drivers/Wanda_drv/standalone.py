@@ -22,11 +22,10 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from types import TracebackType
 
 import serial
 
-from gadgetctl.transport.records import ResyncScanner
+from gadgetctl.transport.records import ResyncScanner, ScannedDevice
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 SYNC = 0x40
@@ -118,7 +117,7 @@ class PacketScanner(ResyncScanner[WandaPacket]):
         return out
 
 
-class Wanda:
+class Wanda(ScannedDevice):
     """An Ascension Wanda on a serial line.
 
     ``read_timeout`` (seconds; the element's ``read_timeout`` is in ms) bounds one read;
@@ -167,33 +166,9 @@ class Wanda:
     def close(self) -> None:
         self.line.close()
 
-    def __enter__(self) -> Wanda:
-        self.open()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
-
     @property
     def degraded(self) -> list[str]:
         return self.line.degraded
-
-    @property
-    def records(self) -> int:
-        return self.scanner.records
-
-    @property
-    def bad_records(self) -> int:
-        return self.scanner.bad_records
-
-    @property
-    def skipped_bytes(self) -> int:
-        return self.scanner.skipped_bytes
 
     def read(self) -> list[WandaPacket]:
         """The packets that arrived within ``read_timeout`` (possibly none). Raises

@@ -145,3 +145,39 @@ class CarriedCounts:
                 name: kept + (int(getattr(source, name, 0)) if source is not None else 0)
                 for name, kept in self._kept.items()
             }
+
+
+class ScannedDevice:
+    """A standalone driver whose records come through ``self.scanner`` (a
+    :class:`ResyncScanner`): a context manager (``open()`` on entry, ``close()`` on exit) with
+    the scanner's counters as its own."""
+
+    scanner: ResyncScanner
+
+    def open(self) -> object:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        raise NotImplementedError
+
+    def __enter__(self: D) -> D:
+        self.open()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    @property
+    def records(self) -> int:
+        return self.scanner.records
+
+    @property
+    def bad_records(self) -> int:
+        return self.scanner.bad_records
+
+    @property
+    def skipped_bytes(self) -> int:
+        return self.scanner.skipped_bytes
+
+
+D = TypeVar("D", bound=ScannedDevice)
