@@ -6,7 +6,11 @@ from __future__ import annotations
 import threading
 from dataclasses import dataclass
 
+import pytest
+
+from gadgetctl.input.testing import wait_until
 from gadgetctl.transport.records import CarriedCounts, ResyncScanner, ScannedDevice
+from gadgetctl.transport.serialline import LineDriver, SerialLine
 
 
 @dataclass
@@ -133,3 +137,37 @@ def test_a_scanned_device_opens_closes_and_shows_its_scanners_counters() -> None
         device.scanner.feed(b"??#001#002")
     assert device.closed == 1
     assert (device.records, device.bad_records, device.skipped_bytes) == (2, 1, 2)
+
+
+def test_a_line_driver_turns_a_closed_or_lost_line_into_its_own_errors() -> None:
+    class Gone(Exception):
+        pass
+
+    class Closed(Exception):
+        pass
+
+    class Driver(LineDriver):
+        LOST, CLOSED, CLOSED_TEXT = Gone, Closed, "the toy is not open"
+
+    driver = Driver()
+    with pytest.raises(Closed, match="the toy is not open"):
+        driver._read_some()
+    line = SerialLine("loop://", poll_interval=0.05).open()
+    driver._line = line
+    got = bytearray()
+
+    def gather() -> None:
+        got.extend(driver._read_some())
+
+    driver._write(b"#123")
+    assert wait_until(lambda: bytes(got) == b"#123", step=gather, timeout=5)
+    driver._write(b"junk")
+    assert wait_until(lambda: line._port.in_waiting == 4, timeout=5)
+    driver._flush_input()
+    driver._write(b"#456")
+    got.clear()
+    assert wait_until(lambda: bytes(got) == b"#456", step=gather, timeout=5)
+    line._port.close()  # the adapter goes away under the driver
+    for action in (driver._read_some, driver._flush_input, lambda: driver._write(b"x")):
+        with pytest.raises(Gone):
+            action()

@@ -31,7 +31,7 @@ import numpy as np
 import serial
 
 from gadgetctl.transport.records import ResyncScanner, ScannedDevice
-from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
+from gadgetctl.transport.serialline import LineDriver, LineSettings, SerialLine, SerialLineLost
 
 STATIONS = 4
 OUTPUT_LIST = "2,11,16,1"
@@ -143,13 +143,17 @@ class RecordScanner(ResyncScanner[FastrakRecord]):
         return decode_record(record, self.scale)
 
 
-class Fastrak(ScannedDevice):
+class Fastrak(ScannedDevice, LineDriver):
     """A Polhemus Fastrak on a serial line, streaming.
 
     ``port`` is a device path, a pyserial URL or an open ``serial.Serial``-like object (used,
     never closed). ``hemisphere`` is the definition's enumeration value (3, left, by default).
     ``read_timeout`` bounds a reply during the start, ``silence_timeout`` the time without a
     record after which the tracker counts as gone."""
+
+    LOST = FastrakDisconnected
+    CLOSED = FastrakError
+    CLOSED_TEXT = "the tracker is not open"
 
     def __init__(
         self,
@@ -283,28 +287,3 @@ class Fastrak(ScannedDevice):
                     return bytes(line[:-2])
                 if len(line) > MAX_LINE:
                     raise FastrakProtocolError(f"a reply longer than {MAX_LINE} bytes")
-
-    def _line_or_fail(self) -> SerialLine:
-        if self._line is None:
-            raise FastrakError("the tracker is not open")
-        return self._line
-
-    def _read_some(self) -> bytes:
-        """What has arrived, waiting up to ``poll_interval`` for it."""
-        try:
-            return self._line_or_fail().read(self.poll_interval)
-        except SerialLineLost as exc:
-            raise FastrakDisconnected(str(exc)) from exc
-
-    def _write(self, data: bytes) -> None:
-        try:
-            self._line_or_fail().write(data)
-        except SerialLineLost as exc:
-            raise FastrakDisconnected(str(exc)) from exc
-
-    def _flush_input(self) -> None:
-        """Drop what came before (only ever before a command, never right after one)."""
-        try:
-            self._line_or_fail().discard_input()
-        except SerialLineLost as exc:
-            raise FastrakDisconnected(str(exc)) from exc

@@ -32,7 +32,7 @@ import numpy as np
 import serial
 
 from gadgetctl.transport.records import ResyncScanner, ScannedDevice
-from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
+from gadgetctl.transport.serialline import LineDriver, LineSettings, SerialLine, SerialLineLost
 
 RECORD_HEAD = ord("0")
 CRLF = b"\r\n"
@@ -173,7 +173,7 @@ class StationSetup:
     enabled: bool = True
 
 
-class IS900(ScannedDevice):
+class IS900(ScannedDevice, LineDriver):
     """An InterSense IS-900 on a serial line, polled.
 
     ``port`` is a device path, a pyserial URL or an open ``serial.Serial``-like object (used,
@@ -182,6 +182,10 @@ class IS900(ScannedDevice):
     ``poll_timeout`` before a poll is repeated when not every station answered (0.1 s
     upstream), ``silence_timeout`` of no data at all after which the tracker counts as gone.
     """
+
+    LOST = IS900Disconnected
+    CLOSED = IS900Error
+    CLOSED_TEXT = "the tracker is not open"
 
     def __init__(
         self,
@@ -323,28 +327,3 @@ class IS900(ScannedDevice):
                     return bytes(line[:-2])
                 if len(line) > MAX_LINE:
                     raise IS900ProtocolError(f"a reply longer than {MAX_LINE} bytes")
-
-    def _line_or_fail(self) -> SerialLine:
-        if self._line is None:
-            raise IS900Error("the tracker is not open")
-        return self._line
-
-    def _read_some(self) -> bytes:
-        """What has arrived, waiting up to ``poll_interval`` for it."""
-        try:
-            return self._line_or_fail().read(self.poll_interval)
-        except SerialLineLost as exc:
-            raise IS900Disconnected(str(exc)) from exc
-
-    def _write(self, data: bytes) -> None:
-        try:
-            self._line_or_fail().write(data)
-        except SerialLineLost as exc:
-            raise IS900Disconnected(str(exc)) from exc
-
-    def _flush_input(self) -> None:
-        """Drop what came before (only ever before a command, never right after one)."""
-        try:
-            self._line_or_fail().discard_input()
-        except SerialLineLost as exc:
-            raise IS900Disconnected(str(exc)) from exc

@@ -25,7 +25,7 @@ import numpy as np
 import serial
 
 from gadgetctl.transport.records import ResyncScanner, ScannedDevice
-from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
+from gadgetctl.transport.serialline import LineDriver, LineSettings, SerialLine, SerialLineLost
 
 REPORT_SIZE = 16
 FLAG = 0x80
@@ -133,7 +133,7 @@ class ReportScanner(ResyncScanner[MouseReport]):
         return decode_report(record)
 
 
-class ThreeDMouse(ScannedDevice):
+class ThreeDMouse(ScannedDevice, LineDriver):
     """A Logitech 3D mouse / head tracker on a serial line, polled with ``*d``.
 
     ``port`` is a device path, a pyserial URL or an open ``serial.Serial``-like object (used,
@@ -141,6 +141,10 @@ class ThreeDMouse(ScannedDevice):
     ``*R`` and ``*\\x05`` (``demand_wait`` the 100 ms after ``*D``); ``poll_timeout`` repeats a
     poll not answered in time; ``silence_timeout`` without a report means the line is gone.
     """
+
+    LOST = ThreeDMouseDisconnected
+    CLOSED = ThreeDMouseError
+    CLOSED_TEXT = "the mouse is not open"
 
     def __init__(
         self,
@@ -248,28 +252,3 @@ class ThreeDMouse(ScannedDevice):
             if len(got) < count and time.monotonic() >= deadline:
                 raise ThreeDMouseTimeout("no answer from the 3D mouse")
         return bytes(got[:count])
-
-    def _line_or_fail(self) -> SerialLine:
-        if self._line is None:
-            raise ThreeDMouseError("the mouse is not open")
-        return self._line
-
-    def _read_some(self) -> bytes:
-        """What has arrived, waiting up to ``poll_interval`` for it."""
-        try:
-            return self._line_or_fail().read(self.poll_interval)
-        except SerialLineLost as exc:
-            raise ThreeDMouseDisconnected(str(exc)) from exc
-
-    def _write(self, data: bytes) -> None:
-        try:
-            self._line_or_fail().write(data)
-        except SerialLineLost as exc:
-            raise ThreeDMouseDisconnected(str(exc)) from exc
-
-    def _flush_input(self) -> None:
-        """Drop what came before (only ever before a command, never right after one)."""
-        try:
-            self._line_or_fail().discard_input()
-        except SerialLineLost as exc:
-            raise ThreeDMouseDisconnected(str(exc)) from exc

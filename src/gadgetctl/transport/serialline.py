@@ -193,3 +193,41 @@ class SerialLine:
         if self._port is None:
             raise SerialLineLost("the serial line is not open")
         return self._port
+
+
+class LineDriver:
+    """For a standalone driver that holds its :class:`SerialLine` in ``_line`` (None while
+    closed): reads, writes and flushes that turn a lost line into the driver's own
+    :attr:`LOST` exception, and a closed one into :attr:`CLOSED` with :attr:`CLOSED_TEXT`."""
+
+    LOST: type[Exception] = SerialLineLost
+    CLOSED: type[Exception] = SerialLineLost
+    CLOSED_TEXT = "the device is not open"
+
+    _line: SerialLine | None = None
+    poll_interval: float = 0.01
+
+    def _line_or_fail(self) -> SerialLine:
+        if self._line is None:
+            raise self.CLOSED(self.CLOSED_TEXT)
+        return self._line
+
+    def _read_some(self) -> bytes:
+        """What has arrived, waiting up to ``poll_interval`` for it."""
+        try:
+            return self._line_or_fail().read(self.poll_interval)
+        except SerialLineLost as exc:
+            raise self.LOST(str(exc)) from exc
+
+    def _write(self, data: bytes) -> None:
+        try:
+            self._line_or_fail().write(data)
+        except SerialLineLost as exc:
+            raise self.LOST(str(exc)) from exc
+
+    def _flush_input(self) -> None:
+        """Drop what came before (only ever before a command, never right after one)."""
+        try:
+            self._line_or_fail().discard_input()
+        except SerialLineLost as exc:
+            raise self.LOST(str(exc)) from exc
