@@ -36,7 +36,7 @@ function __gadgetctl_positionals_below --argument-names max depth
 end
 
 complete -c gadgetctl -f
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a completion -d 'Print a completion script: e.g. `gadgetctl completion bash > ~/.local/share/bash-completion/completions/gadgetctl`.'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a completion -d 'Print the completion script for bash, zsh or fish.'
 complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a config -d 'Inspect configurations (.jconf): resolved values and wiring.'
 complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a defs -d 'Inspect the definition repository: list, show, tree and search path.'
 complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a demo -d 'Monitor the bundled waveform example (examples/waveform.jconf) for a few seconds: the'

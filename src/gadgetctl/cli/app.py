@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import typer
+from typer.core import TyperArgument, TyperGroup
 
 from gadgetctl import __version__
 
@@ -11,6 +12,30 @@ HELP = (
     "validate JCCL .jdef/.jconf files, inspect definitions and configurations, load driver "
     "plug-ins and monitor live devices."
 )
+
+
+class _UsageArgument(TyperArgument):
+    """An argument shown in usage lines by its metavar alone (`PATHS...`, `[CODE]`), where
+    typer would wrap a required one in braces (`{PATHS...}`)."""
+
+    def make_metavar(self, ctx, *, usage: bool = False) -> str:  # noqa: ANN001
+        if usage and self.required and self.metavar is not None:
+            return self.metavar
+        return super().make_metavar(ctx, usage=usage)
+
+
+class RootGroup(TyperGroup):
+    """The root command: every argument below it gets the plain usage form."""
+
+    def __init__(self, **attrs) -> None:  # noqa: ANN003
+        super().__init__(**attrs)
+        pending = list(self.commands.values())
+        while pending:
+            command = pending.pop()
+            pending.extend(getattr(command, "commands", {}).values())
+            for param in command.params:
+                if type(param) is TyperArgument:
+                    param.__class__ = _UsageArgument
 
 
 def _version(value: bool) -> None:
@@ -22,6 +47,7 @@ def _version(value: bool) -> None:
 def build_app() -> typer.Typer:
     app = typer.Typer(
         name="gadgetctl",
+        cls=RootGroup,
         help=HELP,
         no_args_is_help=True,
         add_completion=False,

@@ -18,7 +18,7 @@ from gadgetctl.cli.options import (
     use_color,
 )
 
-FILES_ARGUMENT = typer.Argument(..., help="Configuration files, loaded together as one configuration "
+FILES_ARGUMENT = typer.Argument(..., metavar="FILES...", help="Configuration files, loaded together as one configuration "
                                 "(their includes too).", show_default=False)
 
 

@@ -73,7 +73,9 @@ def list_(
     emit(_table(["NAME", "VERSION", "ABSTRACT", "PARENTS", "CATEGORY", "SOURCE"], [
         [r["name"], str(r["version"]), "yes" if r["abstract"] else "", ", ".join(r["parents"]),
          ", ".join(r["categories"]), f"{r['source']} ({r['origin']})"] for r in rows]))
-    emit(f"{len(rows)} definitions")
+    from gadgetctl.wording import counted
+
+    emit(counted(len(rows), "definition"))
 
 
 @defs_app.command("show")

@@ -14,7 +14,7 @@ def register(app: typer.Typer) -> None:
 
 
 def explain(
-    code: str = typer.Argument(None, help="A diagnostic code such as XML002; all codes when left out.", show_default=False),
+    code: str = typer.Argument(None, metavar="CODE", help="A diagnostic code such as XML002; all codes when left out.", show_default=False),
     fmt: DataFormat = typer.Option(DataFormat.text, "--format", "-f", help="Output format."),
 ) -> None:
     """Describe a diagnostic code, with an example and how to fix it."""

@@ -20,6 +20,7 @@ from gadgetctl.monitor.poses import EULER, MATRIX
 from gadgetctl.monitor.recording import Recorder, RecordingError, Terminated, raise_on_stop_signals
 from gadgetctl.monitor.session import MonitorSession
 from gadgetctl.safetext import printable
+from gadgetctl.wording import counted
 
 
 @dataclass
@@ -224,7 +225,7 @@ def _evaluate(session: MonitorSession) -> tuple[dict, list[str]]:
     final = session.final_stats()
     snapshot = session.snapshot()
     problems = [f"{e.name}: {status_text(e)}" for e in problem_elements(snapshot)]
-    problems += [f"{name}: {s['faults']} fault(s), last error: {s.get('error') or '-'}"
+    problems += [f"{name}: {counted(s['faults'], 'fault')}, last error: {s.get('error') or '-'}"
                  for name, s in final.items() if s.get("faults") and s.get("state") == "running"]
     return final, problems
 
@@ -240,8 +241,8 @@ def _finish(session: MonitorSession, mode: OutputFormat, options: RunOptions, fi
     if mode is OutputFormat.live and options.record is not None:
         where = "standard output" if records_to_stdout(options.record) else printable(str(options.record))
         markers = len(session.markers)
-        human.write(f"recording: {where}: {session.samples_written} samples, "
-                    f"{markers} marker{'' if markers == 1 else 's'}\n")
+        human.write(f"recording: {where}: {counted(session.samples_written, 'sample')}, "
+                    f"{counted(markers, 'marker')}\n")
     if session.finished and mode is not OutputFormat.ndjson:  # events: stdout holds only event lines
         (sys.stderr if mode is OutputFormat.events else human).write("replay finished\n")
     human.flush()

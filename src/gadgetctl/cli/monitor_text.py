@@ -15,6 +15,7 @@ from gadgetctl.monitor.events import FINGERS, HAT_NAMES, UNIT_SYMBOLS, number_te
 from gadgetctl.monitor.session import ElementView, MonitorSession, Snapshot, UnitView
 from gadgetctl.monitor.units import euler_xyz_degrees, from_meters, quaternion_wxyz
 from gadgetctl.safetext import printable
+from gadgetctl.wording import counted
 
 TOGGLES = {0: "off", 1: "on", 2: "toggle on", 3: "toggle off"}
 HAT = HAT_NAMES
@@ -190,7 +191,7 @@ def format_table(header: Sequence[str], rows: Sequence[Sequence[str]], *, last_f
 def snapshot_table(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: bool = False,
                    pose: str | None = None) -> str:
     head = (f"[{snapshot.elapsed:7.2f} s] frame {snapshot.frame}, {snapshot.frame_rate:.1f} frames/s"
-            + (f", {snapshot.samples_written} samples written" if snapshot.samples_written else ""))
+            + (f", {counted(snapshot.samples_written, 'sample')} written" if snapshot.samples_written else ""))
     body = format_table(COLUMNS, table_rows(snapshot, length_unit=length_unit, quaternion=quaternion, pose=pose))
     notes = "".join(f"{line}\n" for line in difference_lines(snapshot))
     return head + "\n" + body + "\n" + notes
@@ -253,15 +254,16 @@ def stats_text(stats: Mapping[str, Mapping[str, Any]]) -> str:
             lines.append(f"{name}: arrival minus the source's timestamp: least {clock['offset'] * 1000:+.3f} ms "
                          f"(clock offset plus the least transport latency), on average "
                          f"{ms_text(clock.get('latency'))} ms more (transport and queueing), "
-                         f"over {clock.get('samples')} timestamps")
+                         f"over {counted(clock.get('samples') or 0, 'timestamp')}")
     extra = "".join(line + "\n" for line in lines)
     return "statistics:\n" + format_table(STATS_COLUMNS, rows, last_free=False) + "\n" + extra
 
 
 def summary_text(summary: Any) -> str:
     """A recording summary (``gadgetctl replay --summary``)."""
-    lines = [f"{printable(str(summary.path))}: {summary.samples} samples from {len(summary.devices)} device(s) over "
-             f"{summary.duration:.3f} s" + (f", {summary.frames} frames" if summary.frames else "")
+    lines = [f"{printable(str(summary.path))}: {counted(summary.samples, 'sample')} from "
+             f"{counted(len(summary.devices), 'device')} over "
+             f"{summary.duration:.3f} s" + (f", {counted(summary.frames, 'frame')}" if summary.frames else "")
              + f"; ended: {summary.end_reason or 'cut off (no end record)'}"]
     if summary.created:
         lines.append(f"created {printable(str(summary.created))}")
@@ -273,9 +275,9 @@ def summary_text(summary: Any) -> str:
         median = ms_text(device.median_interval)
         largest = ms_text(device.max_interval)
         gaps = device.gaps
-        gap_text = (f"{gaps.count} gap(s) > {ms_text(gaps.threshold)} ms, largest {ms_text(gaps.largest)} ms"
+        gap_text = (f"{counted(gaps.count, 'gap')} > {ms_text(gaps.threshold)} ms, largest {ms_text(gaps.largest)} ms"
                     if gaps.count else "no gaps")
-        lines.append(f"{printable(device.name)}: {device.updates} updates, {device.samples} samples, "
+        lines.append(f"{printable(device.name)}: {counted(device.updates, 'update')}, {counted(device.samples, 'sample')}, "
                      f"{device.mean_rate:.1f} Hz over {device.duration:.3f} s, interval median {median} ms, "
                      f"max {largest} ms, {gap_text}")
         for unit in device.units:
@@ -288,7 +290,7 @@ def summary_text(summary: Any) -> str:
 def _unit_summary_lines(unit: Any) -> list[str]:
     """One unit of a recording summary: its range and sparkline; positions one line per
     axis (range and sparkline) and a line of rotation ranges."""
-    head = f"    {printable(str(unit.kind))} {unit.unit}: {unit.samples} samples"
+    head = f"    {printable(str(unit.kind))} {unit.unit}: {counted(unit.samples, 'sample')}"
     if unit.kind == "position":
         if unit.translation_min is None or unit.translation_max is None:
             return [head + ", range -"]

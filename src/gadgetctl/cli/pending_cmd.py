@@ -15,7 +15,7 @@ from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION, DataFormat
 
 
 def pending(
-    files: list[Path] = typer.Argument(..., help="Configuration files, loaded together as one configuration.", show_default=False),
+    files: list[Path] = typer.Argument(..., metavar="FILES...", help="Configuration files, loaded together as one configuration.", show_default=False),
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
     fmt: DataFormat = typer.Option(DataFormat.text, "--format", "-f", help="Output format."),

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from gadgetctl.errors import GadgetctlError
+from gadgetctl.wording import counted
 
 #: Findings printed in full; the rest are counted in one summary line.
 MOST_SHOWN = 10
@@ -46,8 +47,8 @@ def check_before_running(
         body = [line for line in text.splitlines() if not line.startswith(tuple("0123456789"))]
         errors = sum(d.severity is Severity.ERROR for d in found)
         text = "\n".join(body) + (
-            f"\n… and {len(found) - len(shown)} more: {errors} error(s), "
-            f"{len(found) - errors} warning(s) in all (gadgetctl validate --together "
+            f"\n… and {len(found) - len(shown)} more: {counted(errors, 'error')}, "
+            f"{counted(len(found) - errors, 'warning')} in all (gadgetctl validate --together "
             + " ".join(str(p) for p in configs)
             + " shows them)"
         )

@@ -11,6 +11,7 @@ import typer
 from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION, TRUST_OPTION
 from gadgetctl.cli.monitor_cmd import CHECK_OPTION, STRICT_OPTION
 from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION, DataFormat, emit
+from gadgetctl.wording import counted
 
 
 def register(app: typer.Typer) -> None:
@@ -266,7 +267,7 @@ def _run(service, duration: float | None, fmt: DataFormat) -> int:
             "devices": len(served),
             "names": [e.vrpn_name for e in served],
         },
-        f"gadgetctl serve: {len(served)} VRPN device(s) on {where} (TCP and UDP): "
+        f"gadgetctl serve: {counted(len(served), 'VRPN device')} on {where} (TCP and UDP): "
         + ", ".join(e.vrpn_name for e in served[:8])
         + (" ..." if len(served) > 8 else ""),
     )
@@ -285,7 +286,7 @@ def _run(service, duration: float | None, fmt: DataFormat) -> int:
         text = f"gadgetctl serve: client {event.client} {event.kind}"
         if event.kind == "disconnected":
             record.update(sent=event.sent, dropped=event.dropped)
-            text += f": {event.sent} messages sent, {event.dropped} dropped"
+            text += f": {counted(event.sent, 'message')} sent, {event.dropped} dropped"
         if event.detail:
             text += f" ({event.detail})"
         _say(fmt, record, text)
@@ -314,8 +315,8 @@ def _run(service, duration: float | None, fmt: DataFormat) -> int:
     _say(
         fmt,
         {"event": "stopped", "reason": reason, **totals},
-        f"gadgetctl serve: stopped ({reason}): {totals['messages']} messages to {totals['clients']} "
-        f"client(s), {totals['dropped']} dropped"
+        f"gadgetctl serve: stopped ({reason}): {counted(totals['messages'], 'message')} to "
+        f"{counted(totals['clients'], 'client')}, {totals['dropped']} dropped"
         + ("; " + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in noted.items()) if noted else ""),
     )
     return 0

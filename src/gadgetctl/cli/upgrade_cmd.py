@@ -9,6 +9,7 @@ from pathlib import Path
 import typer
 
 from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION, DataFormat, emit
+from gadgetctl.wording import counted
 
 
 def register(app: typer.Typer) -> None:
@@ -16,7 +17,7 @@ def register(app: typer.Typer) -> None:
 
 
 def upgrade(
-    paths: list[Path] = typer.Argument(..., help="Files or directories (searched for *.jconf and *.jdef).",
+    paths: list[Path] = typer.Argument(..., metavar="PATHS...", help="Files or directories (searched for *.jconf and *.jdef).",
                                        show_default=False),
     check: bool = typer.Option(False, "--check", help="Change nothing; list what would change and exit 1 "
                                "if anything would (for CI)."),
@@ -117,10 +118,10 @@ def _listing(results, fmt: DataFormat) -> None:
     elements = sum(len(r.elements) for r in results if r.changed)
     failed = sum(r.failed for r in results)
     if failed:
-        lines.append(f"{failed} of {len(results)} files could not be upgraded (see above)")
-    lines.append(f"{count} of {len(results)} files would change ({elements} elements upgraded)"
-                 if count else f"{len(results)} files checked: all up to date" if not failed
-                 else f"{len(results) - failed} other files up to date")
+        lines.append(f"{failed} of {counted(len(results), 'file')} could not be upgraded (see above)")
+    lines.append(f"{count} of {counted(len(results), 'file')} would change ({counted(elements, 'element')} upgraded)"
+                 if count else f"{counted(len(results), 'file')} checked: all up to date" if not failed
+                 else f"{counted(len(results) - failed, 'other file')} up to date")
     emit("\n".join(lines))
 
 
@@ -152,7 +153,7 @@ def _write_in_place(results, backup: bool) -> None:
             refused = err
             continue
         what = f"{done.target} (through the symbolic link {r.display})" if done.via_link else r.display
-        emit(f"upgraded {what} ({len(r.elements)} elements"
+        emit(f"upgraded {what} ({counted(len(r.elements), 'element')}"
              + (f"; {'; '.join(r.format_notes)})" if r.format_notes else ")"))
     if refused is not None:
         raise typer.Exit(refused.exit_code)

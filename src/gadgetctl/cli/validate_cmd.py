@@ -23,7 +23,7 @@ def register(app: typer.Typer) -> None:
 
 
 def validate(
-    paths: list[Path] = typer.Argument(..., help="Files or directories (searched for *.jdef and *.jconf).", show_default=False),
+    paths: list[Path] = typer.Argument(..., metavar="PATHS...", help="Files or directories (searched for *.jdef and *.jconf).", show_default=False),
     fmt: DiagnosticFormat = typer.Option(DiagnosticFormat.text, "--format", "-f", help="Output format."),
     strict: bool = typer.Option(False, "--strict", help="Exit 1 on warnings too."),
     definitions: list[Path] = DEFINITIONS_OPTION,

@@ -5,6 +5,7 @@ from __future__ import annotations
 from gadgetctl.diagnostics.model import sort_key
 from gadgetctl.doctor.model import DoctorReport, PortCheck
 from gadgetctl.safetext import printable
+from gadgetctl.wording import counted
 
 _MARK = {"ok": "ok", "warning": "warn", "problem": "PROBLEM", "unchecked": "-"}
 
@@ -19,7 +20,7 @@ def _check_line(check: PortCheck) -> str:
 def _definitions(report: DoctorReport) -> list[str]:
     lines = ["Definition search path:"]
     for entry in report.definition_path:
-        state = f"{entry['definitions']} definitions" if entry["exists"] else "missing"
+        state = counted(entry["definitions"], "definition") if entry["exists"] else "missing"
         lines.append(f"    {entry['origin']}: {entry['path']} ({state})")
     return lines
 

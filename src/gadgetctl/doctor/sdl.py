@@ -5,6 +5,7 @@ and stopped again; no joystick is opened."""
 from __future__ import annotations
 
 from gadgetctl.doctor.model import PortCheck, Status
+from gadgetctl.wording import counted
 
 
 def sdl_joysticks() -> list[tuple[int, str]] | str:
@@ -41,7 +42,7 @@ def check_sdl(index: int, *, emulator: str | None = None) -> PortCheck:
             target,
             Status.OK,
             f"SDL sees {names[index] or 'an unnamed joystick'}"
-            f" at index {index} ({len(found)} joystick(s) in all)",
+            f" at index {index} ({counted(len(found), 'joystick')} in all)",
         )
     seen = ", ".join(f"{i}: {n}" for i, n in found)
     hint = (
@@ -58,7 +59,7 @@ def check_sdl(index: int, *, emulator: str | None = None) -> PortCheck:
         "sdl",
         target,
         Status.PROBLEM,
-        f"SDL sees {len(found)} joystick(s), none at index {index}",
+        f"SDL sees {counted(len(found), 'joystick')}, none at index {index}",
         "DRV100",
         hint,
     )

@@ -467,7 +467,8 @@ class InputManager:
         hints = []
         missing = sorted(self._missing_drivers)
         if missing:
-            hints.append(f"input_manager names driver(s) {', '.join(missing)}, which were not found")
+            hints.append(f"input_manager names {'driver' if len(missing) == 1 else 'drivers'} {', '.join(missing)}, "
+                         "which were not found")
         loaded = {r.name for r in self.loader.results.values()}
         for info in providers:
             if info.name not in loaded:

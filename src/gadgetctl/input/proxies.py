@@ -34,6 +34,7 @@ from gadgetctl.input.keys import Key, Modifier
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.samples import EMPTY_FRAME, FrameSamples, Sample
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.wording import counted
 
 
 class ProxyState(StrEnum):
@@ -130,7 +131,7 @@ class Proxy:
             if self.reason is not None:
                 self.reason = None
             return values[self.unit]
-        self.reason = f"unit {self.unit} is out of range: {self.device_name!r} has {len(values)} {self.KIND} unit(s)"
+        self.reason = f"unit {self.unit} is out of range: {self.device_name!r} has {counted(len(values), f'{self.KIND} unit')}"
         self.reset()
         return None
 

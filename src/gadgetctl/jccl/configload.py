@@ -238,5 +238,5 @@ def require_loadable(configuration: Configuration) -> None:
     errors = [d for d in configuration.diagnostics if d.severity is Severity.ERROR]
     if errors:
         first = errors[0]
-        more = f" (and {len(errors) - 1} more error(s): gadgetctl validate shows them)" if len(errors) > 1 else ""
+        more = f" (and {len(errors) - 1} more {'error' if len(errors) == 2 else 'errors'}: gadgetctl validate shows them)" if len(errors) > 1 else ""
         raise GadgetctlError(f"{first.location}: cannot load the configuration: {first.message}{more}")

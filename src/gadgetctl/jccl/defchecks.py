@@ -14,6 +14,7 @@ from gadgetctl.jccl.definitions import (
 )
 from gadgetctl.jccl.repository import DefinitionRepository
 from gadgetctl.suggest import close_names
+from gadgetctl.wording import counted
 
 _TYPED = (ValueType.INTEGER, ValueType.FLOAT, ValueType.BOOLEAN)
 
@@ -133,7 +134,7 @@ def check_cycles(definitions: Iterable[Definition], repo: DefinitionRepository) 
                 steps, cut = _cycle_path(name, members, repo)
                 path = " -> ".join([name, *steps])
                 if cut:
-                    path += f" -> ... (a cycle of {len(cycle)} definitions)"
+                    path += f" -> ... (a cycle of {counted(len(cycle), 'definition')})"
                 found.append(_at("DEF006", f"{name} inherits from itself: {path}", mine[name].newest.location))
     return found
 

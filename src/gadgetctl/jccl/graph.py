@@ -18,6 +18,7 @@ from gadgetctl.jccl.definitions import ValueType
 from gadgetctl.jccl.resolve import judged_view
 from gadgetctl.jccl.typeindex import TypeIndex
 from gadgetctl.safetext import printable
+from gadgetctl.wording import counted
 
 POINTER, CONTAINS, DRIVER, HANDLED_BY = "pointer", "contains", "driver", "handled_by"
 MAX_TEXT_DEPTH = 64  # levels of a text tree before a chain goes on as a tree of its own
@@ -278,7 +279,7 @@ def _grouped(graph: WiringGraph, edges: list[Edge]) -> list[Edge | str]:
         if group and len(group) > 1:
             if key not in done:
                 done.add(key)
-                items.append(f"{edge.label} contains {len(group)} {key[1]} elements")
+                items.append(f"{edge.label} contains {counted(len(group), key[1] + ' element')}")
         else:
             items.append(edge)
     return items

@@ -6,6 +6,7 @@ from collections.abc import Sequence
 
 from gadgetctl.diagnostics import Diagnostic
 from gadgetctl.safetext import printable
+from gadgetctl.wording import counted
 
 _COLORS = {"error": "\x1b[1;31m", "warning": "\x1b[1;33m", "info": "\x1b[1;36m"}
 _DIM, _BOLD, _RESET = "\x1b[2m", "\x1b[1m", "\x1b[0m"
@@ -25,14 +26,13 @@ def summary_line(diagnostics: Sequence[Diagnostic], files_checked: int) -> str:
     for d in diagnostics:
         counts[d.severity.value] += 1
     affected = len({d.path for d in diagnostics})
-    plural = lambda n, word: f"{n} {word}{'' if n == 1 else 's'}"  # noqa: E731
-    head = plural(files_checked, "file") + " checked"
+    head = counted(files_checked, "file") + " checked"
     if not diagnostics:
         return f"{head}: no problems found"
-    parts = [plural(counts["error"], "error"), plural(counts["warning"], "warning")]
+    parts = [counted(counts["error"], "error"), counted(counts["warning"], "warning")]
     if counts["info"]:
-        parts.append(plural(counts["info"], "note"))
-    return f"{head}: {', '.join(parts)} in {plural(affected, 'file')}"
+        parts.append(counted(counts["info"], "note"))
+    return f"{head}: {', '.join(parts)} in {counted(affected, 'file')}"
 
 
 def render_text(diagnostics: Sequence[Diagnostic], *, files_checked: int = 0,
