@@ -138,7 +138,7 @@ def test_metadata_problems_are_listed():
     meta = parse_metadata("VERSION = 1\nGADGETCTL_API_VERSION = compute()\nELEMENT_TYPES = {'x': ('digital', 'sound')}\n")
     problems = " ".join(meta.problems)
     assert "GADGETCTL_API_VERSION is not a literal" in problems
-    assert "unknown device type(s) 'sound'" in problems
+    assert "unknown device type 'sound'" in problems
     assert "no register(registry) function" in problems
     assert parse_metadata("def broken(:\n").problems[0].startswith("syntax error at line 1")
 

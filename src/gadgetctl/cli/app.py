@@ -18,7 +18,7 @@ class _UsageArgument(TyperArgument):
     """An argument shown in usage lines by its metavar alone (`PATHS...`, `[CODE]`), where
     typer would wrap a required one in braces (`{PATHS...}`)."""
 
-    def make_metavar(self, ctx, *, usage: bool = False) -> str:  # noqa: ANN001
+    def make_metavar(self, ctx, *, usage: bool = False) -> str:
         if usage and self.required and self.metavar is not None:
             return self.metavar
         return super().make_metavar(ctx, usage=usage)
@@ -27,7 +27,7 @@ class _UsageArgument(TyperArgument):
 class RootGroup(TyperGroup):
     """The root command: every argument below it gets the plain usage form."""
 
-    def __init__(self, **attrs) -> None:  # noqa: ANN003
+    def __init__(self, **attrs) -> None:
         super().__init__(**attrs)
         pending = list(self.commands.values())
         while pending:

@@ -46,8 +46,8 @@ def _table(headers: list[str], rows: list[list[str]]) -> str:
 
 @defs_app.command("list")
 def list_(
-    category: str = typer.Option(None, "--category", help="Only definitions in this category (e.g. /Devices)."),
-    base: str = typer.Option(None, "--base", help="Only definitions that are, or inherit from, this type."),
+    category: str = typer.Option(None, "--category", metavar="CATEGORY", help="Only definitions in this category (e.g. /Devices)."),
+    base: str = typer.Option(None, "--base", metavar="TYPE", help="Only definitions that are, or inherit from, this type."),
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
     fmt: DataFormat = FORMAT_OPTION,
@@ -81,7 +81,7 @@ def list_(
 @defs_app.command("show")
 def show(
     type_name: str = typer.Argument(..., metavar="TYPE", help="Definition name, e.g. dtrack."),
-    version: int = typer.Option(None, "--version", help="A specific version (default: the newest)."),
+    version: int = typer.Option(None, "--version", metavar="N", help="A specific version (default: the newest)."),
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
     fmt: DataFormat = FORMAT_OPTION,

@@ -149,7 +149,7 @@ def check_options(rate: float, duration: float | None, interval: float) -> None:
     from gadgetctl.errors import GadgetctlError
 
     if not rate > 0 or rate > 10_000:
-        raise GadgetctlError(f"--rate must be between 0 and 10000 frames per second, not {rate:g}")
+        raise GadgetctlError(f"--rate must be more than 0 and at most 10000 frames per second, not {rate:g}")
     if duration is not None and not duration >= 0:
         raise GadgetctlError(f"--duration must not be negative, not {duration:g}")
     if not interval > 0:

@@ -326,7 +326,9 @@ class LiveView:
             head.add(f"{view.reason}  ", STATE_STYLES.get(view.state, "red"), 1)
         stats = view.stats
         if stats is not None:
-            spf = stats.mean_samples_per_frame
+            spf = stats.window_samples_per_frame  # over the window of the rate beside it
+            if spf is None:
+                spf = stats.mean_samples_per_frame
             head.add(f" {rate_text(stats.window_rate):>8} Hz")
             head.add(f"  {'-' if spf is None else f'{spf:.1f}':>5}/frame", "", 3)
             head.add(

@@ -13,6 +13,7 @@ import numpy as np
 
 from gadgetctl.monitor.events import FINGERS, HAT_NAMES, UNIT_SYMBOLS, number_text, pose_text
 from gadgetctl.monitor.session import ElementView, MonitorSession, Snapshot, UnitView
+from gadgetctl.monitor.stats import DeviceSnapshot
 from gadgetctl.monitor.units import euler_xyz_degrees, from_meters, quaternion_wxyz
 from gadgetctl.safetext import printable
 from gadgetctl.wording import counted
@@ -24,6 +25,16 @@ BAD_STATES = {"faulted", "reconnecting", "pending", "stupefied", "removed", "sto
 
 def rate_text(rate: float | None) -> str:
     return "-" if rate is None else f"{rate:.1f}"
+
+
+def per_frame_text(stats: DeviceSnapshot | None) -> str:
+    """Samples per frame over the window RATE covers (the run's mean before timed frames)."""
+    if stats is None:
+        return "-"
+    value = stats.window_samples_per_frame
+    if value is None:
+        value = stats.mean_samples_per_frame
+    return "-" if value is None else f"{value:.2f}"
 
 
 def ms_text(seconds: float | None) -> str:
@@ -164,7 +175,7 @@ def table_rows(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: b
             element.type + target,
             element.state,
             rate_text(stats.window_rate) if stats else "-",
-            (f"{stats.mean_samples_per_frame:.2f}" if stats and stats.mean_samples_per_frame is not None else "-") if own else "",
+            per_frame_text(stats) if own else "",
             str(stats.dropped) if stats and own else ("-" if own else ""),
             ms_text(element.age) if element.age is not None else "-",
             ms_text(stats.jitter) if stats and own else ("-" if own else ""),

@@ -37,7 +37,7 @@ def driver(
         help="How the driver reaches the device: serial (pyserial, port and baud), udp (a port it "
              "receives on), tcp (host and port it connects to), file (a device file; a FIFO works) "
              "or none (the driver makes its own data)."),
-    vendor: str = typer.Option("", "--vendor", help="The maker's name, for labels and documentation."),
+    vendor: str = typer.Option("", "--vendor", metavar="NAME", help="The maker's name, for labels and documentation."),
     directory: Path = typer.Option(
         Path("."), "--dir", metavar="DIR",
         help="Where to create the plug-in folder (or the project, with --package)."),

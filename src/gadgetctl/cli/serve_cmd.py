@@ -168,7 +168,7 @@ def _check_rate(rate: float) -> float:
     from gadgetctl.errors import GadgetctlError
 
     if not 0 < rate <= 10_000:
-        raise GadgetctlError(f"--rate must be between 0 and 10000 frames per second, not {rate:g}")
+        raise GadgetctlError(f"--rate must be more than 0 and at most 10000 frames per second, not {rate:g}")
     return rate
 
 

@@ -24,7 +24,7 @@ def upgrade(
     diff: bool = typer.Option(False, "--diff", help="Print a unified diff of the changes instead of the files."),
     in_place: bool = typer.Option(False, "--in-place", "-i", help="Rewrite the files (atomically)."),
     backup: bool = typer.Option(True, "--backup/--no-backup", help="With --in-place, keep the old file as FILE.bak."),
-    output: Path = typer.Option(None, "--output", "-o", help="Write the upgraded file here (one input file only).",
+    output: Path = typer.Option(None, "--output", "-o", metavar="FILE", help="Write the upgraded file here (one input file only).",
                                 show_default=False),
     drop_removed: bool = typer.Option(False, "--drop-removed", help="Also remove properties the element's "
                                       "newest definition no longer has (validate's CFG021, e.g. device_host)."),

@@ -13,8 +13,8 @@ from __future__ import annotations
 import argparse
 import math
 import time
-from collections.abc import Callable, Sequence
-from typing import Protocol
+from collections.abc import Callable, Mapping, Sequence
+from typing import NoReturn, Protocol
 
 from gadgetctl.emulation.console import attach
 from gadgetctl.emulation.signals import StopRequested, stop_on_signals
@@ -37,6 +37,43 @@ def duration_seconds(text: str) -> float:
     return value
 
 
+def rate_per_second(text: str) -> float:
+    """An argparse type: a finite rate above 0 per second."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number per second: {text!r}") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"must be more than 0 per second, not {text!r}")
+    return value
+
+
+# What the standard scenarios send; an emulator describes its own others (or differences).
+SCENARIO_MEANINGS = {
+    "idle": "the device is there, at rest",
+    "motion": "values and poses move",
+    "buttons": "buttons pressed and released in turn",
+    "garbage": "motion with junk and broken records between, which a driver must skip and count",
+    "disconnect": "motion, then the device goes away",
+    "touches": "contacts made and broken in a fixed sequence",
+    "hats": "each hat steps through its directions",
+}
+
+
+class EmulatorArgumentParser(argparse.ArgumentParser):
+    """Usage errors in one line (``gadgetctl emulate X: error: ...``), exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} ({self.prog} --help shows the options)\n")
+
+
+def command_name(prog: str) -> str:
+    """The command a user types for the emulator ``prog`` names: ``DTrack_drv.emulator`` (the
+    module) is run as ``gadgetctl emulate DTrack_drv``."""
+    plugin, _, rest = prog.partition(".")
+    return f"gadgetctl emulate {plugin}" if rest == "emulator" else prog
+
+
 def emulator_parser(
     prog: str,
     description: str,
@@ -45,11 +82,21 @@ def emulator_parser(
     default_scenario: str,
     rate: float,
     rate_help: str,
+    scenario_meanings: Mapping[str, str] | None = None,
 ) -> argparse.ArgumentParser:
-    """A parser with the options every emulator has; add the emulator's own to it."""
-    parser = argparse.ArgumentParser(prog=prog, description=description)
-    parser.add_argument("--scenario", choices=list(scenarios), default=default_scenario)
-    parser.add_argument("--rate", type=float, default=rate, help=rate_help)
+    """A parser with the options every emulator has; add the emulator's own to it. ``prog``
+    is the emulator's module (``DTrack_drv.emulator``); usage names the command typed."""
+    parser = EmulatorArgumentParser(prog=command_name(prog), description=description)
+    meanings = {**SCENARIO_MEANINGS, **(scenario_meanings or {})}
+    described = "; ".join(f"{name}: {meanings[name]}" if name in meanings else name for name in scenarios)
+    parser.add_argument(
+        "--scenario",
+        choices=list(scenarios),
+        default=default_scenario,
+        metavar="NAME",
+        help=f"what to send (default {default_scenario}): {described}",
+    )
+    parser.add_argument("--rate", type=rate_per_second, default=rate, metavar="HZ", help=rate_help)
     parser.add_argument(
         "--duration",
         type=duration_seconds,

@@ -250,7 +250,7 @@ class DeviceTrack:
         if count:
             self.stats.add_timestamps(stamps)
         self.count = count
-        self.stats.end_frame()
+        self.stats.end_frame(now())
         if dropped != self._dropped_seen:
             self.stats.add_dropped(max(0, dropped - self._dropped_seen))
             self._dropped_seen = dropped

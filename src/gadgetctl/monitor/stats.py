@@ -4,8 +4,9 @@ Feed each device the timestamps of its updates (one per sampling instant, whatev
 number of units), in non-decreasing order, in batches. Adding is a list append; the numpy
 work happens once per snapshot (or when ``history`` timestamps are pending), so 100 devices
 at 1 kHz cost little. Counts, mean rate and the largest gap cover the whole run; interval
-percentiles and jitter cover the ``history`` most recent intervals; the window rate covers
-the last ``window`` seconds.
+percentiles and jitter cover the ``history`` most recent intervals; the window rate and the
+window samples per frame cover the last ``window`` seconds (the live view and the table show
+these two side by side, so they must describe the same stretch of time).
 
 :func:`summarize_recording` (in :mod:`gadgetctl.monitor.summary`) summarizes a finished
 recording.
@@ -14,6 +15,7 @@ recording.
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import asdict, dataclass
 
@@ -50,6 +52,7 @@ class DeviceSnapshot:
     frames: int
     samples_per_frame: int | None
     mean_samples_per_frame: float | None
+    window_samples_per_frame: float | None = None
 
     def to_dict(self) -> dict[str, object]:
         return asdict(self)
@@ -85,6 +88,7 @@ class DeviceStats:
         self.samples_per_frame: int | None = None
         self._frame_start_count = 0
         self._frame_samples = 0
+        self._frame_ends: deque[tuple[float, int]] = deque()  # (time, count) of recent frame ends
         self._pending: list[float] = []
         self._ring_len = 0
         self._ring_pos = 0
@@ -127,12 +131,18 @@ class DeviceStats:
         """Device faults (read errors, reconnects) reported by the caller."""
         self.faults += count
 
-    def end_frame(self) -> None:
-        """A frame boundary: the samples added since the previous one belong to this frame."""
+    def end_frame(self, at: float | None = None) -> None:
+        """A frame boundary: the samples added since the previous one belong to this frame.
+        ``at`` (the timestamps' clock) places it in time, for the window figures."""
         self.samples_per_frame = self.count - self._frame_start_count
         self._frame_start_count = self.count
         self._frame_samples += self.samples_per_frame
         self.frames += 1
+        if at is not None:
+            ends = self._frame_ends
+            ends.append((float(at), self.count))
+            while len(ends) > 1 and ends[1][0] <= at - self.window:  # keep one frame before the window
+                ends.popleft()
 
     # ---------------------------------------------------------------- numpy side
 
@@ -201,6 +211,25 @@ class DeviceStats:
         span = end - float(inside[0])
         return (len(inside) - 1) / span if span > 0 else 0.0
 
+    def window_samples_per_frame(self, now: float | None = None) -> float | None:
+        """Samples per frame over the frames that ended in the last ``window`` seconds before
+        ``now`` (the window of :meth:`window_rate`); 0 when frames went on without samples,
+        None without timed frames in it."""
+        ends = self._frame_ends
+        if not ends:
+            return None
+        end = ends[-1][0] if now is None else max(now, ends[-1][0])
+        start = end - self.window
+        first = 0  # the first frame end inside the window (ends are pruned to about one before it)
+        while first < len(ends) and ends[first][0] <= start:
+            first += 1
+        frames = len(ends) - first
+        if frames == 0:
+            return None
+        if first == 0:  # no frame end before the window: count from the first one in it
+            return (ends[-1][1] - ends[0][1]) / (frames - 1) if frames > 1 else None
+        return (ends[-1][1] - ends[first - 1][1]) / frames
+
     def interval_stats(self) -> tuple[float | None, float | None, float | None]:
         """(p50, p99, jitter) of the recent intervals: nearest-rank percentiles and the
         population standard deviation, in seconds."""
@@ -228,7 +257,8 @@ class DeviceStats:
             max_gap=self.max_gap, jitter=jitter, dropped=self.dropped, faults=self.faults,
             age=None if now is None else self.age(now), frames=self.frames,
             samples_per_frame=self.samples_per_frame,
-            mean_samples_per_frame=self._frame_samples / self.frames if self.frames else None)
+            mean_samples_per_frame=self._frame_samples / self.frames if self.frames else None,
+            window_samples_per_frame=self.window_samples_per_frame(now))
 
 
 class MonitorStats:
@@ -257,10 +287,10 @@ class MonitorStats:
     def add_fault(self, name: str, count: int = 1) -> None:
         self.device(name).add_fault(count)
 
-    def end_frame(self, names: Iterable[str] | None = None) -> None:
-        """A frame boundary for every device (or the ``names`` given)."""
+    def end_frame(self, names: Iterable[str] | None = None, at: float | None = None) -> None:
+        """A frame boundary for every device (or the ``names`` given), at ``at``."""
         for stats in (self._devices.values() if names is None else map(self.device, names)):
-            stats.end_frame()
+            stats.end_frame(at)
 
     def snapshot(self, now: float | None = None) -> dict[str, DeviceSnapshot]:
         return {name: stats.snapshot(now) for name, stats in self._devices.items()}

@@ -522,7 +522,8 @@ def run_steps(spec: DriverSpec, plugin_dir: str, where: str) -> list[tuple[str, 
     emulated = spec.transport != "none"
     if spec.package:
         steps = [(f"gadgetctl validate {plugin_dir}", "the .jdef and example.jconf: clean"),
-                 (f"pip install --editable {where}", "gadgetctl finds it by its entry point"),
+                 (f"pip install --editable '{where}[test]'",
+                  "gadgetctl finds it by its entry point; [test] brings pytest"),
                  ("gadgetctl drivers list", f"shows {plugin}"),
                  (f"gadgetctl drivers load {plugin}", "imports and checks it")]
         if emulated:
@@ -536,8 +537,10 @@ def run_steps(spec: DriverSpec, plugin_dir: str, where: str) -> list[tuple[str, 
             steps.append((f"gadgetctl emulate --driver-path {where} {plugin}",
                            "the device, in a second terminal"))
         tests = f"cd {plugin_dir} && python -m pytest"
-    steps += [(f"gadgetctl monitor {plugin_dir}/example.jconf", "live samples"),
-              (tests, "the generated tests")]
+    steps.append((f"gadgetctl monitor {plugin_dir}/example.jconf", "live samples"))
+    if not spec.package:  # a package's [test] extra brings pytest
+        steps.append(("python -m pip install pytest", "the test runner, unless you have it"))
+    steps.append((tests, "the generated tests"))
     return steps
 
 
