@@ -47,6 +47,15 @@ class Outlet(Protocol):
         """One text message; ``level`` is the unit number."""
 
 
+class BatchOutlet(Outlet, Protocol):
+    """An outlet that also takes a whole frame's tracker batches at once."""
+
+    def trackers(self, batches: list[tuple[str, np.ndarray, np.ndarray]], offset: float) -> None:
+        """Every (sender, times, matrices) of a frame, as :meth:`Outlet.tracker` takes them
+        except that the times are on the input manager's clock: ``offset`` makes them Unix
+        time (added once for the whole frame, not per batch)."""
+
+
 def wall_clock_offset() -> float:
     """Seconds to add to an input-manager timestamp to get Unix time."""
     return time.time() - now()
@@ -97,16 +106,27 @@ class ServeFeed:
         self.devices = [e for e in catalog if e.kind == "device" and e.roles]
         self.proxies = [e for e in catalog if e.kind != "device" and e.roles]
         self._buttons: dict[str, _ButtonState] = {}
+        self._batched = callable(getattr(outlet, "trackers", None))
+        self._poses: list[tuple[str, np.ndarray, np.ndarray]] = []  # this frame's tracker batches
         self._proxy_stamps: dict[str, float | None] = {}
         self.reports = (
             0  # reports handed to the outlet (one per sensor, button change, analog row, text)
         )
 
     def __call__(self, session: Any, moment: float) -> None:
+        frame_samples = session.frame_samples
         for entry in self.devices:
-            frames = session.frame_samples(entry.element)
+            frames = frame_samples(entry.element)
             if frames:
                 self._device(entry, frames)
+        poses, self._poses = self._poses, []
+        if poses:
+            if self._batched:
+                self.outlet.trackers(poses, self.offset)
+            else:
+                offset = self.offset
+                for sender, stamps, matrices in poses:
+                    self.outlet.tracker(sender, np.add(stamps, offset, dtype=np.float64), matrices)
         manager = session.manager
         for entry in self.proxies:
             target = manager.aliases.get(entry.element) if entry.kind == "alias" else entry.element
@@ -122,17 +142,21 @@ class ServeFeed:
         offset = self.offset
         for kind, frame in frames.items():
             if kind is DeviceKind.POSITION:
+                # kept for the end of the frame (times on the manager's clock): the offset is
+                # added and every tracker framed once for all devices
+                poses = self._poses
                 for chunk in frame.chunks:
                     if type(chunk) is Sample:
-                        stamps = np.array([chunk.timestamp + offset])
+                        stamps = np.array([chunk.timestamp])
                         matrices = np.asarray([chunk.values], dtype=np.float64)
                     else:  # a batch's arrays as they are (no copy when already float64)
-                        stamps = np.add(chunk.timestamps, offset, dtype=np.float64)
+                        stamps = chunk.timestamps
                         matrices = np.asarray(chunk.values, dtype=np.float64)
-                    if matrices.ndim != 4 or not matrices.shape[1]:
+                    shape = matrices.shape
+                    if len(shape) != 4 or not shape[1]:
                         continue
-                    outlet.tracker(sender, stamps, matrices)
-                    self.reports += matrices.shape[0] * matrices.shape[1]
+                    poses.append((sender, stamps, matrices))
+                    self.reports += shape[0] * shape[1]
             elif kind is DeviceKind.DIGITAL:
                 state = self._buttons.setdefault(sender, _ButtonState())
                 changes: list[tuple[float, int, int]] = []

@@ -52,7 +52,10 @@ class VrpnOutlet:
         self._text = self.types[codecs.TEXT_MESSAGE]
         self.button_states: dict[str, np.ndarray] = {}
         self.messages = 0
-        self._poses: list[tuple[int, np.ndarray, np.ndarray]] = []
+        self._poses: list[tuple[int, np.ndarray, np.ndarray]] = []  # times: Unix seconds
+        # batches whose times are on the input manager's clock, and the offset to Unix time
+        self._clock_poses: list[tuple[int, np.ndarray, np.ndarray]] = []
+        self._clock_offset = 0.0
         # whether a client is connected (refreshed every frame and on connection): with
         # nobody to send to, reports are not framed at all
         self.audience = False
@@ -63,6 +66,15 @@ class VrpnOutlet:
         # kept until the end of the frame: every tracker of a frame is framed in one go
         if self.audience:
             self._poses.append((self.senders[sender], times, matrices))
+
+    def trackers(self, batches: list[tuple[str, np.ndarray, np.ndarray]], offset: float) -> None:
+        """A frame's tracker batches, times on the input manager's clock plus ``offset``."""
+        if self.audience:
+            senders = self.senders
+            self._clock_poses.extend(
+                (senders[name], times, matrices) for name, times, matrices in batches
+            )
+            self._clock_offset = offset
 
     def buttons(
         self, sender: str, changes: Sequence[tuple[float, int, int]], states: np.ndarray
@@ -105,12 +117,21 @@ class VrpnOutlet:
     def end_frame(self) -> None:
         """Frame and queue the frame's tracker reports: one conversion to quaternions and
         one framing for all of them, however many devices and sensors."""
-        if self._poses:
+        if self._poses or self._clock_poses:
             self._frame_poses()
         self.audience = any(client.state == OPEN for client in self.server.clients)
 
     def _frame_poses(self) -> None:
-        pending, self._poses = self._poses, []
+        clock, self._clock_poses = self._clock_poses, []
+        wall, self._poses = self._poses, []
+        pending = (clock + wall if wall else clock) if clock else wall
+        # every batch's times in one array (a new one: the offset is added in place, once)
+        stamps = np.concatenate([times for _, times, _ in pending])
+        if clock:
+            if wall:
+                stamps[: sum(len(times) for _, times, _ in clock)] += self._clock_offset
+            else:
+                stamps += self._clock_offset
         # (samples, sensors) of each batch read as Python ints: one small array per list,
         # not an array built from a hundred tuples
         ids: list[int] = []
@@ -123,17 +144,14 @@ class VrpnOutlet:
         if len(set(widths)) == 1 and len(set(counts)) == 1:  # the usual frame: alike batches
             samples, sensors = counts[0], widths[0]
             senders = np.repeat(np.array(ids, dtype=np.int32), samples * sensors)
-            times = np.repeat(np.concatenate([stamps for _, stamps, _ in pending]), sensors)
+            times = np.repeat(stamps, sensors) if sensors > 1 else stamps
             sensor_numbers = np.tile(np.arange(sensors), len(pending) * samples)
         else:
             samples_of = np.array(counts)
             sensors_of = np.array(widths)
             sizes = samples_of * sensors_of
             senders = np.repeat(np.array(ids, dtype=np.int32), sizes)
-            times = np.repeat(
-                np.concatenate([stamps for _, stamps, _ in pending]),
-                np.repeat(sensors_of, samples_of),
-            )
+            times = np.repeat(stamps, np.repeat(sensors_of, samples_of))
             # sensor number of each row: its place in its batch, modulo its sensor count
             starts = np.repeat(np.cumsum(sizes) - sizes, sizes)
             sensor_numbers = (np.arange(len(senders)) - starts) % np.repeat(sensors_of, sizes)
