@@ -37,6 +37,7 @@ MAX_RATE = 100_000.0
 BLOCK_SECONDS = 0.5
 #: Seconds without a frame after which the scheduler publishes again (frames publish first).
 FRAME_GRACE = 0.02
+_RUNNING = DeviceState.RUNNING
 HAT_SEQUENCE = (HatState.CENTERED, HatState.UP, HatState.RIGHT, HatState.DOWN, HatState.LEFT)
 
 
@@ -162,12 +163,24 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
 
     def update_data(self) -> None:
         """Publish what has come due, then swap: the frame gets samples up to its instant."""
-        if self.state is DeviceState.RUNNING:
+        if self.state is _RUNNING:
             moment = now()
             with self._publishing:
-                self._publish_due(moment)
+                end = int((moment - self.t0) * self.rate) + 1  # samples whose time has come
+                first = self.next_index
+                block = self._block
+                if first >= end:
+                    pass
+                elif block is not None and block.start <= first and end <= block.end and not block.events:
+                    # the usual frame: one more window of the current block
+                    self.store.add_slices(
+                        block.timestamps, block.items, first - block.start, end - block.start
+                    )
+                    self.next_index = end
+                else:
+                    self._publish_due(moment)
                 self._frame_published = moment
-        super().update_data()
+        self.store.swap()
 
     def _publish_due(self, moment: float) -> None:
         end = int((moment - self.t0) * self.rate) + 1  # samples whose time has come

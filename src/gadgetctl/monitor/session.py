@@ -761,8 +761,9 @@ class MonitorSession:
             self._watch = self._names_with_targets()
         samples = 0
         tracks = self._tracks
+        device_named = manager.devices.get
         for name in self._watch:
-            device = manager.device(name)
+            device = device_named(name)
             if device is None:
                 continue
             track = tracks.get(name)
