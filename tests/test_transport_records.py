@@ -9,7 +9,13 @@ from dataclasses import dataclass
 import pytest
 
 from gadgetctl.input.testing import wait_until
-from gadgetctl.transport.records import CarriedCounts, ResyncScanner, ScannedDevice
+from gadgetctl.transport.records import (
+    SCANNER_COUNTERS,
+    CarriedCounters,
+    CarriedCounts,
+    ResyncScanner,
+    ScannedDevice,
+)
 from gadgetctl.transport.serialline import LineDriver, SerialLine
 
 
@@ -171,3 +177,18 @@ def test_a_line_driver_turns_a_closed_or_lost_line_into_its_own_errors() -> None
     for action in (driver._read_some, driver._flush_input, lambda: driver._write(b"x")):
         with pytest.raises(Gone):
             action()
+
+
+def test_carried_counters_give_a_wrapper_its_counters_over_every_connection() -> None:
+    class Wrapper(CarriedCounters):
+        def __init__(self) -> None:
+            self.counts = CarriedCounts(SCANNER_COUNTERS)
+
+    wrapper = Wrapper()
+    for fed in (b"#001", b"xx#002#003"):
+        device = Digits()
+        wrapper.counts.attach(device)
+        device.feed(fed)
+        wrapper.counts.detach()
+    assert (wrapper.records, wrapper.bad_records, wrapper.skipped_bytes) == (3, 1, 2)
+    assert wrapper.counters == {"records": 3, "bad_records": 1, "skipped_bytes": 2}

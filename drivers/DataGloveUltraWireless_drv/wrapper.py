@@ -16,10 +16,9 @@ input manager restarts the device.
 
 from __future__ import annotations
 
-import threading
-
 from gadgetctl.input import Analog, Command, DeviceConfigError
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.records import SCANNER_COUNTERS, CarriedCounters, CarriedCounts
 
 from .standalone import (
     NO_GESTURE,
@@ -33,7 +32,7 @@ from .standalone import (
 )
 
 
-class UltraGloveDevice(Analog, Command):
+class UltraGloveDevice(Analog, Command, CarriedCounters):
     """Two gloves' sensors and gestures from a 5DT wireless receiver on a serial port."""
 
     ELEMENT_TYPE = "data_glove_ultra_wireless"
@@ -54,8 +53,7 @@ class UltraGloveDevice(Analog, Command):
         self.ignored = 0
         self._analog = [0.0] * (2 * SENSORS)
         self._gestures = [NO_GESTURE, NO_GESTURE]
-        self._count_lock = threading.Lock()
-        self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
+        self.counts = CarriedCounts(SCANNER_COUNTERS)  # over every connection
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)
@@ -90,6 +88,7 @@ class UltraGloveDevice(Analog, Command):
         if self.reset_range:
             self.range.reset()
         self.receiver = receiver
+        self.counts.attach(receiver)
 
     def sample(self) -> None:
         receiver = self.receiver
@@ -111,40 +110,10 @@ class UltraGloveDevice(Analog, Command):
             self.add_command_sample(self._gestures, stamp)
 
     def stop_sampling(self) -> None:
-        with self._count_lock:  # readers never see the receiver gone and its counts not yet kept
-            receiver, self.receiver = self.receiver, None
-            if receiver is not None:
-                for key in self._counts:
-                    self._counts[key] += getattr(receiver.scanner, key)
+        receiver, self.receiver = self.receiver, None
+        self.counts.detach()  # what it counted is kept
         if receiver is not None:
             receiver.close()
-
-    def _count(self, key: str) -> int:
-        with self._count_lock:
-            receiver = self.receiver
-            return self._counts[key] + (
-                getattr(receiver.scanner, key) if receiver is not None else 0
-            )
-
-    @property
-    def records(self) -> int:
-        """Records decoded (from either port)."""
-        return self._count("records")
-
-    @property
-    def bad_records(self) -> int:
-        """Runs of junk and broken records skipped."""
-        return self._count("bad_records")
-
-    @property
-    def skipped_bytes(self) -> int:
-        """Bytes of those runs."""
-        return self._count("skipped_bytes")
-
-    @property
-    def counters(self) -> dict[str, int]:
-        """The driver's health counters, reconnections included."""
-        return {key: self._count(key) for key in self._counts}
 
 
 __all__ = ["PORT_B", "UltraGloveDevice"]

@@ -17,12 +17,12 @@ every packet read is added; a lost line raises so the input manager restarts the
 from __future__ import annotations
 
 import math
-import threading
 
 import numpy as np
 
 from gadgetctl.input import Analog, DeviceConfigError, Glove
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.records import SCANNER_COUNTERS, CarriedCounters, CarriedCounts
 
 from .standalone import FINGERS, DataGlove, DataGloveError, GloveSample
 
@@ -37,7 +37,7 @@ def glove_angles(sample: GloveSample) -> np.ndarray:
     return angles
 
 
-class DataGloveDevice(Glove, Analog):
+class DataGloveDevice(Glove, Analog, CarriedCounters):
     """Nine analog values and one glove from a 5DT DataGlove on a serial port."""
 
     ELEMENT_TYPE = "data_glove"
@@ -51,8 +51,7 @@ class DataGloveDevice(Glove, Analog):
         self.port = ""
         self.baud = 38400
         self.glove: DataGlove | None = None
-        self._count_lock = threading.Lock()
-        self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
+        self.counts = CarriedCounts(SCANNER_COUNTERS)  # over every connection
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)
@@ -72,6 +71,7 @@ class DataGloveDevice(Glove, Analog):
         )
         glove.open()
         self.glove = glove
+        self.counts.attach(glove)
 
     def sample(self) -> None:
         glove = self.glove
@@ -86,38 +86,10 @@ class DataGloveDevice(Glove, Analog):
             self.add_glove_sample(glove_angles(packet), stamp)
 
     def stop_sampling(self) -> None:
-        with self._count_lock:  # readers never see the glove gone and its counts not yet kept
-            glove, self.glove = self.glove, None
-            if glove is not None:
-                for key in self._counts:
-                    self._counts[key] += getattr(glove.scanner, key)
+        glove, self.glove = self.glove, None
+        self.counts.detach()  # what it counted is kept
         if glove is not None:
             glove.close()
-
-    def _count(self, key: str) -> int:
-        with self._count_lock:
-            glove = self.glove
-            return self._counts[key] + (getattr(glove.scanner, key) if glove is not None else 0)
-
-    @property
-    def records(self) -> int:
-        """Packets decoded."""
-        return self._count("records")
-
-    @property
-    def bad_records(self) -> int:
-        """Runs of junk (bad checksums, impossible bytes, cut packets) skipped."""
-        return self._count("bad_records")
-
-    @property
-    def skipped_bytes(self) -> int:
-        """Bytes of those runs."""
-        return self._count("skipped_bytes")
-
-    @property
-    def counters(self) -> dict[str, int]:
-        """The driver's health counters, reconnections included."""
-        return {key: self._count(key) for key in self._counts}
 
 
 __all__ = ["FINGERS", "DataGloveDevice", "glove_angles"]

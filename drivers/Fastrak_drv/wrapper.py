@@ -18,17 +18,16 @@ Differences from the C++, on purpose:
 
 from __future__ import annotations
 
-import threading
-
 import numpy as np
 
 from gadgetctl.input import DeviceConfigError, Digital, Position
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.records import SCANNER_COUNTERS, CarriedCounters, CarriedCounts
 
 from .standalone import HEMISPHERES, STATIONS, Fastrak, FastrakError, FastrakRecord
 
 
-class FastrakDevice(Position, Digital):
+class FastrakDevice(Position, Digital, CarriedCounters):
     """Four stations and a stylus switch of a Polhemus Fastrak on a serial port."""
 
     ELEMENT_TYPE = "fastrak"
@@ -44,8 +43,7 @@ class FastrakDevice(Position, Digital):
         self.baud = 115200
         self.hemisphere = 3
         self.tracker: Fastrak | None = None
-        self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
-        self._counts_lock = threading.Lock()
+        self.counts = CarriedCounts(SCANNER_COUNTERS)  # over every connection
         self._matrices = np.tile(np.eye(4), (STATIONS, 1, 1))
         self._stylus = 0
 
@@ -72,6 +70,7 @@ class FastrakDevice(Position, Digital):
         )
         tracker.open()
         self.tracker = tracker
+        self.counts.attach(tracker)
 
     def sample(self) -> None:
         tracker = self.tracker
@@ -82,38 +81,10 @@ class FastrakDevice(Position, Digital):
             self._add(records)
 
     def stop_sampling(self) -> None:
-        # Under the lock, so a reader never sees the tracker gone and its counts not yet kept.
-        with self._counts_lock:
-            tracker, self.tracker = self.tracker, None
-            if tracker is not None:
-                for key in self._counts:
-                    self._counts[key] += getattr(tracker, key)
+        tracker, self.tracker = self.tracker, None
+        self.counts.detach()  # what it counted is kept
         if tracker is not None:
             tracker.close()
-
-    def _count(self, key: str) -> int:
-        with self._counts_lock:
-            tracker = self.tracker
-            return self._counts[key] + (getattr(tracker, key) if tracker is not None else 0)
-
-    @property
-    def records(self) -> int:
-        """Records decoded."""
-        return self._count("records")
-
-    @property
-    def bad_records(self) -> int:
-        """Runs of junk and malformed records skipped."""
-        return self._count("bad_records")
-
-    @property
-    def skipped_bytes(self) -> int:
-        return self._count("skipped_bytes")
-
-    @property
-    def counters(self) -> dict[str, int]:
-        """The driver's health counters, reconnections included."""
-        return {key: self._count(key) for key in self._counts}
 
     def _add(self, records: list[FastrakRecord]) -> None:
         for record in records:

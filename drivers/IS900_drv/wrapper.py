@@ -24,13 +24,13 @@ Differences from the C++, on purpose:
 
 from __future__ import annotations
 
-import threading
 from dataclasses import dataclass
 
 import numpy as np
 
 from gadgetctl.input import Analog, DeviceConfigError, Digital, Position
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.records import SCANNER_COUNTERS, CarriedCounters, CarriedCounts
 
 from .standalone import (
     ANALOG_PER_STATION,
@@ -88,7 +88,7 @@ def _station(access: ElementAccess, child: ElementAccess) -> StationConfig:
     return config
 
 
-class IntersenseDevice(Position, Digital, Analog):
+class IntersenseDevice(Position, Digital, Analog, CarriedCounters):
     """Position, buttons and joysticks of an InterSense IS-900 on a serial port."""
 
     ELEMENT_TYPE = "intersense"
@@ -107,8 +107,7 @@ class IntersenseDevice(Position, Digital, Analog):
         self.baud = 115200
         self.stations: list[StationConfig] = []
         self.tracker: IS900 | None = None
-        self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
-        self._counts_lock = threading.Lock()
+        self.counts = CarriedCounts(SCANNER_COUNTERS)  # over every connection
         self._matrices = np.zeros((0, 4, 4))
         self._digital = np.zeros(0, dtype=np.int8)
         self._analog = np.zeros(0)
@@ -152,6 +151,7 @@ class IntersenseDevice(Position, Digital, Analog):
         )
         tracker.open()
         self.tracker = tracker
+        self.counts.attach(tracker)
 
     def sample(self) -> None:
         tracker = self.tracker
@@ -162,41 +162,10 @@ class IntersenseDevice(Position, Digital, Analog):
             self._add(records)
 
     def stop_sampling(self) -> None:
-        # Under the lock, so a reader never sees the tracker gone and its counts not yet kept.
-        with self._counts_lock:
-            tracker, self.tracker = self.tracker, None
-            if tracker is not None:
-                for key in self._counts:
-                    self._counts[key] += getattr(tracker, key)
+        tracker, self.tracker = self.tracker, None
+        self.counts.detach()  # what it counted is kept
         if tracker is not None:
             tracker.close()
-
-    # -- counters over every start, for monitors and tests ------------------------------
-
-    def _count(self, key: str) -> int:
-        with self._counts_lock:
-            tracker = self.tracker
-            return self._counts[key] + (getattr(tracker, key) if tracker is not None else 0)
-
-    @property
-    def records(self) -> int:
-        """Data records decoded."""
-        return self._count("records")
-
-    @property
-    def bad_records(self) -> int:
-        """Runs of junk and malformed records skipped."""
-        return self._count("bad_records")
-
-    @property
-    def skipped_bytes(self) -> int:
-        """Bytes outside any valid record."""
-        return self._count("skipped_bytes")
-
-    @property
-    def counters(self) -> dict[str, int]:
-        """The driver's health counters, reconnections included."""
-        return {key: self._count(key) for key in self._counts}
 
     # -- internals ------------------------------------------------------------------------
 

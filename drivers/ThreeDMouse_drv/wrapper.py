@@ -19,10 +19,9 @@ Differences from the C++, on purpose:
 
 from __future__ import annotations
 
-import threading
-
 from gadgetctl.input import DeviceConfigError, Digital, Position
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.records import SCANNER_COUNTERS, CarriedCounters, CarriedCounts
 
 from .standalone import BAUD, MouseReport, ThreeDMouse, ThreeDMouseError
 
@@ -30,7 +29,7 @@ from .standalone import BAUD, MouseReport, ThreeDMouse, ThreeDMouseError
 MISTYPED_19200 = 12900
 
 
-class ThreeDMouseDevice(Position, Digital):
+class ThreeDMouseDevice(Position, Digital, CarriedCounters):
     """Position and buttons of a Logitech 3D mouse on a serial port."""
 
     ELEMENT_TYPE = "three_d_mouse"
@@ -50,8 +49,7 @@ class ThreeDMouseDevice(Position, Digital):
         self.port = ""
         self.baud = BAUD
         self.mouse: ThreeDMouse | None = None
-        self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
-        self._counts_lock = threading.Lock()
+        self.counts = CarriedCounts(SCANNER_COUNTERS)  # over every connection
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)  # name, position filters
@@ -77,6 +75,7 @@ class ThreeDMouseDevice(Position, Digital):
         )
         mouse.open()
         self.mouse = mouse
+        self.counts.attach(mouse)
 
     def sample(self) -> None:
         mouse = self.mouse
@@ -86,38 +85,10 @@ class ThreeDMouseDevice(Position, Digital):
             self._add(report)
 
     def stop_sampling(self) -> None:
-        # Under the lock, so a reader never sees the mouse gone and its counts not yet kept.
-        with self._counts_lock:
-            mouse, self.mouse = self.mouse, None
-            if mouse is not None:
-                for key in self._counts:
-                    self._counts[key] += getattr(mouse, key)
+        mouse, self.mouse = self.mouse, None
+        self.counts.detach()  # what it counted is kept
         if mouse is not None:
             mouse.close()
-
-    def _count(self, key: str) -> int:
-        with self._counts_lock:
-            mouse = self.mouse
-            return self._counts[key] + (getattr(mouse, key) if mouse is not None else 0)
-
-    @property
-    def records(self) -> int:
-        """Reports decoded."""
-        return self._count("records")
-
-    @property
-    def bad_records(self) -> int:
-        """Runs of junk and malformed reports skipped."""
-        return self._count("bad_records")
-
-    @property
-    def skipped_bytes(self) -> int:
-        return self._count("skipped_bytes")
-
-    @property
-    def counters(self) -> dict[str, int]:
-        """The driver's health counters, reconnections included."""
-        return {key: self._count(key) for key in self._counts}
 
     def _add(self, report: MouseReport) -> None:
         stamp = self.now()

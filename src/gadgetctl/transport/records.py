@@ -181,3 +181,34 @@ class ScannedDevice:
 
 
 D = TypeVar("D", bound=ScannedDevice)
+
+
+class CarriedCounters:
+    """For a driver's wrapper whose standalone driver comes and goes: ``records``,
+    ``bad_records``, ``skipped_bytes`` and ``counters`` over every connection, from
+    ``self.counts`` (a :class:`CarriedCounts` the open driver is attached to)."""
+
+    counts: CarriedCounts
+
+    @property
+    def records(self) -> int:
+        """Records decoded."""
+        return self.counts.get("records")
+
+    @property
+    def bad_records(self) -> int:
+        """Runs of junk and malformed records skipped."""
+        return self.counts.get("bad_records")
+
+    @property
+    def skipped_bytes(self) -> int:
+        return self.counts.get("skipped_bytes")
+
+    @property
+    def counters(self) -> dict[str, int]:
+        """The driver's health counters, reconnections included."""
+        return self.counts.snapshot()
+
+
+#: The counters of a scanning serial driver.
+SCANNER_COUNTERS = ("records", "bad_records", "skipped_bytes")
