@@ -2,7 +2,8 @@
 
 Every Tab on a word the scripts cannot know (driver, emulator, code, definition and element
 names) starts a fresh `gadgetctl __complete KIND WORDS...` process. Measured here, each in a
-fresh process, median of several runs: the baselines `python -c pass` and
+fresh process, median of several rounds (round robin, so that the load of a shared machine
+falls alike on all): the baselines `python -c pass` and
 `gadgetctl --version` (the cheapest gadgetctl start), each kind of completion, and bash
 running its completion function end to end (sourcing the script included) for an element
 name of the corpus's simulator configurations. Prints milliseconds and the ratio to
@@ -16,6 +17,7 @@ from __future__ import annotations
 import argparse
 import shlex
 import shutil
+import statistics
 import subprocess
 import sys
 from pathlib import Path
@@ -59,28 +61,36 @@ def main() -> int:
 
     for case in CASES.values():  # each answers something (and warms the file cache)
         run([*COMMAND, "__complete", *case])
-    python = command_time([sys.executable, "-c", "pass"], repeat) * 1000
-    version = command_time([*COMMAND, "--version"], repeat) * 1000
-    print(f"fresh process per call, median of {repeat}; command: {shlex.join(COMMAND)}")
-    report.figure("baseline: python -c pass", python, "ms")
-    report.figure("baseline: gadgetctl --version", version, "ms")
-    report.ratio("gadgetctl --version / python -c pass", version, python)
-    for label, case in CASES.items():
-        ms = command_time([*COMMAND, "__complete", *case], repeat) * 1000
-        report.figure(label, ms, "ms", target=TARGET_MS)
-        report.ratio("  ratio to python -c pass", ms, python)
+    commands: dict[str, list[str]] = {
+        "baseline: python -c pass": [sys.executable, "-c", "pass"],
+        "baseline: gadgetctl --version": [*COMMAND, "--version"],
+    }
+    commands.update({label: [*COMMAND, "__complete", *case] for label, case in CASES.items()})
     bash = shutil.which("bash")
     if bash and len(COMMAND) == 1:
         script = REPO / "completions" / "gadgetctl.bash"
         words = " ".join(shlex.quote(w) for w in (COMMAND[0], "monitor", *SIM, "Wand"))
         line = (
-            f"source {shlex.quote(str(script))}; COMP_WORDS=({words}); COMP_CWORD={len(SIM) + 2}; _gadgetctl; "
-            "[[ ${#COMPREPLY[@]} -gt 0 ]]"
+            f"source {shlex.quote(str(script))}; COMP_WORDS=({words}); COMP_CWORD={len(SIM) + 2}; "
+            "_gadgetctl; [[ ${#COMPREPLY[@]} -gt 0 ]]"
         )
         run([bash, "-c", line + " && echo ok"])
-        ms = command_time([bash, "-c", line], repeat) * 1000
-        report.figure("bash Tab end to end (monitor CONFIG... Wand)", ms, "ms", target=TARGET_MS)
-        report.ratio("  ratio to python -c pass", ms, python)
+        commands["bash Tab end to end (monitor CONFIG... Wand)"] = [bash, "-c", line]
+    # Round robin, so that the machine's load falls alike on the baselines and the completions.
+    times: dict[str, list[float]] = {label: [] for label in commands}
+    for _ in range(repeat):
+        for label, argv in commands.items():
+            times[label].append(command_time(argv, 1))
+    ms = {label: statistics.median(values) * 1000 for label, values in times.items()}
+    print(
+        f"fresh process per call, median of {repeat} (round robin); command: {shlex.join(COMMAND)}"
+    )
+    python = ms["baseline: python -c pass"]
+    for label, value in ms.items():
+        baseline = label.startswith("baseline")
+        report.figure(label, value, "ms", target=None if baseline else TARGET_MS)
+        if label != "baseline: python -c pass":
+            report.ratio("  ratio to python -c pass", value, python)
     report.exit()
     return 0
 

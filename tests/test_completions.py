@@ -154,7 +154,10 @@ def test_driver_emulator_code_and_definition_candidates(tmp_path):
 
     from gadgetctl.diagnostics import all_codes
 
-    assert _names(_complete("codes", "explain")) == sorted(all_codes())
+    codes = _complete("codes", "explain")
+    assert codes == [
+        f"{c.code}\t{c.title}" for c in sorted(all_codes().values(), key=lambda c: c.code)
+    ]
 
     defs = tmp_path / "defs"
     defs.mkdir()

@@ -124,6 +124,15 @@ def test_emulator_rate_zero_is_one_clear_line(cli, rate):
     assert f"must be more than 0 per second, not '{rate}'" in lines[0]
 
 
+def test_vrpn_emulator_rate_zero_is_one_clear_line(cli):
+    result = cli("emulate", "VRPN_drv", "--rate", "0")
+    assert result.exit_code == 2
+    assert result.stderr.strip().splitlines() == [
+        "gadgetctl emulate VRPN_drv: error: --rate must be more than 0 and at most 100000 samples "
+        "per second, not 0 (gadgetctl emulate VRPN_drv --help shows the options)"
+    ]
+
+
 @pytest.mark.parametrize("command", ["monitor", "serve"])
 def test_rate_zero_of_monitor_and_serve(cli, command):
     result = cli(command, REPO / "examples" / "waveform.jconf", "--rate", "0", "--duration", "0.1")

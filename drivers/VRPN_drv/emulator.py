@@ -20,13 +20,13 @@ Run ``python emulator.py --help`` (or ``gadgetctl emulate VRPN_drv``) for the co
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import threading
 import time
 
 from gadgetctl.emulation import Console
+from gadgetctl.emulation.command import EmulatorArgumentParser
 from gadgetctl.vrpn import VrpnServer, codecs
 
 SCENARIOS = ("idle", "motion", "buttons")
@@ -283,7 +283,7 @@ def main(argv: list[str] | None = None) -> int:
     import tempfile
     from pathlib import Path
 
-    parser = argparse.ArgumentParser(
+    parser = EmulatorArgumentParser(
         prog="gadgetctl emulate VRPN_drv",
         description="Serve waveform devices over VRPN with gadgetctl serve: Tracker0 (circles, "
         "figure-eights, spins), Button0 (square-wave buttons), Analog0 (sine, "
@@ -307,7 +307,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     if not 0 < args.rate <= 100_000:
-        parser.error("--rate must be between 0 and 100000 samples per second")
+        parser.error(
+            f"--rate must be more than 0 and at most 100000 samples per second, not {args.rate:g}"
+        )
     if (
         min(args.sensors, args.buttons, args.channels) < 0
         or args.buttons > codecs.MAX_BUTTONS
