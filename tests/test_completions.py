@@ -259,6 +259,13 @@ def test_bash_completes_dynamic_words(friends):
     ]
     assert _bash("config", "show", str(friends), "--element", "Wave\\ &") == ["Wave & Sticks"]
     assert _bash("config", "show", "-e", "Only") == []  # no configuration on the line
+    plugins = friends.parent / "plugins"
+    (plugins / "Acme_drv").mkdir(parents=True)
+    (plugins / "Acme_drv" / "__init__.py").write_text("")
+    (plugins / "Acme_drv" / "emulator.py").write_text("")
+    # bash splits --driver-path=DIR at the `=` (COMP_WORDBREAKS)
+    assert _bash("emulate", "--driver-path", "=", str(plugins), "Acm") == ["Acme_drv"]
+    assert _bash("monitor", *SIM, "--keyboard", "=", "Wa") == ["Wand Keyboard"]
 
 
 def _fish(line: str) -> list[str]:

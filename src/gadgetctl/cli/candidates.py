@@ -92,6 +92,8 @@ def option_values(words: list[str], *names: str) -> list[str]:
         if option in names:
             if equals:
                 found.append(_unquote(value))
+            elif i + 2 < len(words) and words[i + 1] == "=":  # bash splits `--opt=VALUE` at the =
+                found.append(_unquote(words[i + 2]))
             elif i + 1 < len(words):
                 found.append(_unquote(words[i + 1]))
     return found

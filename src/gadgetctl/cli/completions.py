@@ -178,9 +178,12 @@ _gadgetctl() {
   local cur=${COMP_WORDS[COMP_CWORD]} prev=${COMP_WORDS[COMP_CWORD-1]} path=. i w skip= npos=0
   local kind max files
   COMPREPLY=()
+  # bash splits `--opt=VALUE` into `--opt`, `=`, `VALUE` (COMP_WORDBREAKS)
+  [[ $prev == = && COMP_CWORD -gt 2 ]] && prev=${COMP_WORDS[COMP_CWORD-2]}
+  [[ $cur == = ]] && cur=
   for ((i = 1; i < COMP_CWORD; i++)); do
     w=${COMP_WORDS[i]}
-    if [[ -n $skip ]]; then skip=; continue; fi
+    if [[ -n $skip ]]; then [[ $w == = ]] || skip=; continue; fi
     if [[ $w == -* ]]; then
       if [[ $w != *=* && ( -n ${_gadgetctl_valueopts["$path $w"]+x} || -n ${_gadgetctl_choices["$path $w"]+x} ) ]]; then
         skip=1
