@@ -22,12 +22,11 @@ Differences from the C++ wrapper, on purpose:
 
 from __future__ import annotations
 
-import threading
-
 import numpy as np
 
 from gadgetctl.input import DeviceConfigError, Digital, Glove
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.records import CarriedCounts
 
 from .standalone import FINGERS, HANDS, PinchGlove, PinchGloveError, PinchSample
 
@@ -61,8 +60,8 @@ class PinchGloveDevice(Glove, Digital):
         self.baud = 9600
         self.info: dict[str, str] = {}
         self.glove: PinchGlove | None = None
-        self._counts = {"frames": 0, "bad_frames": 0, "skipped_bytes": 0}
-        self._counts_lock = threading.Lock()
+        # counted over every connection
+        self.counts = CarriedCounts(("frames", "bad_frames", "skipped_bytes"))
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)  # name, and the glove_position proxy (Glove)
@@ -90,6 +89,7 @@ class PinchGloveDevice(Glove, Digital):
         opened = glove.open()
         self.info = glove.info or self.info
         self.glove = glove
+        self.counts.attach(glove)
         # The box is silent until a contact changes: start from open hands, as the C++ does.
         self._add(opened)
 
@@ -102,41 +102,30 @@ class PinchGloveDevice(Glove, Digital):
             self._add(frame)
 
     def stop_sampling(self) -> None:
-        # Under the lock, so a reader never sees the glove gone and its counts not yet kept.
-        with self._counts_lock:
-            glove, self.glove = self.glove, None
-            if glove is not None:
-                for key in self._counts:
-                    self._counts[key] += getattr(glove, key)
+        glove, self.glove = self.glove, None
+        self.counts.detach()  # what it counted is kept
         if glove is not None:
             glove.close()
-
-    # -- counters over every start, for monitors and tests ------------------------------
-
-    def _count(self, key: str) -> int:
-        with self._counts_lock:
-            glove = self.glove
-            return self._counts[key] + (getattr(glove, key) if glove is not None else 0)
 
     @property
     def frames(self) -> int:
         """Touch frames decoded."""
-        return self._count("frames")
+        return self.counts.get("frames")
 
     @property
     def bad_frames(self) -> int:
         """Malformed or truncated frames dropped."""
-        return self._count("bad_frames")
+        return self.counts.get("bad_frames")
 
     @property
     def skipped_bytes(self) -> int:
         """Bytes outside any frame."""
-        return self._count("skipped_bytes")
+        return self.counts.get("skipped_bytes")
 
     @property
     def counters(self) -> dict[str, int]:
         """The driver's health counters, reconnections included."""
-        return {key: self._count(key) for key in self._counts}
+        return self.counts.snapshot()
 
     # -- internals ------------------------------------------------------------------------
 

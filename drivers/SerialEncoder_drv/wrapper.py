@@ -19,16 +19,16 @@ Differences from the C++, on purpose:
 
 from __future__ import annotations
 
-import threading
 import time
 
 from gadgetctl.input import DeviceConfigError, Position
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.records import CarriedCounters, CarriedCounts
 
 from .standalone import BAUD, SerialEncoderBus, SerialEncoderError, table_matrix
 
 
-class SerialEncoderDevice(Position):
+class SerialEncoderDevice(Position, CarriedCounters):
     """A table's tilt and height from two SEI encoders on a serial port."""
 
     ELEMENT_TYPE = "serial_encoder"
@@ -44,8 +44,8 @@ class SerialEncoderDevice(Position):
         self.baud = BAUD
         self.bus: SerialEncoderBus | None = None
         self._next_poll = 0.0
-        self._count_lock = threading.Lock()
-        self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0, "timeouts": 0}
+        # counted over every connection
+        self.counts = CarriedCounts(("records", "bad_records", "skipped_bytes", "timeouts"))
 
     def config(self, access: ElementAccess) -> None:
         # Upstream quirk fixed: the C++ config() returned the bus set-up's status (0 on
@@ -65,6 +65,7 @@ class SerialEncoderDevice(Position):
         )
         bus.open()
         self.bus = bus
+        self.counts.attach(bus.counters)
         self._next_poll = time.monotonic()
 
     def sample(self) -> None:
@@ -80,40 +81,12 @@ class SerialEncoderDevice(Position):
             self.add_position_sample([table_matrix(tilt, height)])
 
     def stop_sampling(self) -> None:
-        with self._count_lock:  # readers never see the bus gone and its counts not yet kept
-            bus, self.bus = self.bus, None
-            if bus is not None:
-                for key in self._counts:
-                    self._counts[key] += getattr(bus.counters, key)
+        bus, self.bus = self.bus, None
+        self.counts.detach()  # what it counted is kept
         if bus is not None:
             bus.close()
-
-    def _count(self, key: str) -> int:
-        with self._count_lock:
-            bus = self.bus
-            return self._counts[key] + (getattr(bus.counters, key) if bus is not None else 0)
-
-    @property
-    def records(self) -> int:
-        """Positions read."""
-        return self._count("records")
-
-    @property
-    def bad_records(self) -> int:
-        """Corrupt answers and runs of junk."""
-        return self._count("bad_records")
-
-    @property
-    def skipped_bytes(self) -> int:
-        """Bytes of the junk runs."""
-        return self._count("skipped_bytes")
 
     @property
     def timeouts(self) -> int:
         """Reads no encoder answered in time."""
-        return self._count("timeouts")
-
-    @property
-    def counters(self) -> dict[str, int]:
-        """The driver's health counters, reconnections included."""
-        return {key: self._count(key) for key in self._counts}
+        return self.counts.get("timeouts")

@@ -14,15 +14,14 @@ buttons 1..12. Differences from the C++ ``PuckDevice``, on purpose:
 
 from __future__ import annotations
 
-import threading
-
 from gadgetctl.input import Analog, DeviceConfigError, Digital
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.records import SCANNER_COUNTERS, CarriedCounters, CarriedCounts
 
 from .standalone import AXES, AXIS_RANGE, BAUD, BUTTONS, MODELS, SpaceBall, SpaceBallError
 
 
-class PuckDevice(Analog, Digital):
+class PuckDevice(Analog, Digital, CarriedCounters):
     """Six axes and twelve buttons from a SpaceMouse or SpaceBall on a serial port."""
 
     ELEMENT_TYPE = "puck_device"
@@ -38,8 +37,7 @@ class PuckDevice(Analog, Digital):
         self.model = MODELS[0]
         self.puck: SpaceBall | None = None
         self.version = ""
-        self._count_lock = threading.Lock()
-        self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
+        self.counts = CarriedCounts(SCANNER_COUNTERS)  # over every connection
         self._axes = (0,) * AXES
         self._buttons = (0,) * BUTTONS
 
@@ -73,6 +71,7 @@ class PuckDevice(Analog, Digital):
         puck.open()
         self.version = puck.version or self.version
         self.puck = puck
+        self.counts.attach(puck.decoder)
         stamp = self.now()  # centred axes and released buttons until the puck reports
         self._axes, self._buttons = (0,) * AXES, (0,) * BUTTONS
         self.add_analog_sample(self._axes, stamp)
@@ -90,35 +89,7 @@ class PuckDevice(Analog, Digital):
                 self.add_digital_sample(record.buttons, stamp)
 
     def stop_sampling(self) -> None:
-        with self._count_lock:  # readers never see the puck gone and its counts not yet kept
-            puck, self.puck = self.puck, None
-            if puck is not None:
-                for key in self._counts:
-                    self._counts[key] += getattr(puck.decoder, key)
+        puck, self.puck = self.puck, None
+        self.counts.detach()  # what it counted is kept
         if puck is not None:
             puck.close()
-
-    def _count(self, key: str) -> int:
-        with self._count_lock:
-            puck = self.puck
-            return self._counts[key] + (getattr(puck.decoder, key) if puck is not None else 0)
-
-    @property
-    def records(self) -> int:
-        """Analog and button records decoded."""
-        return self._count("records")
-
-    @property
-    def bad_records(self) -> int:
-        """Malformed, impossible or overlong records skipped."""
-        return self._count("bad_records")
-
-    @property
-    def skipped_bytes(self) -> int:
-        """Bytes of the records skipped."""
-        return self._count("skipped_bytes")
-
-    @property
-    def counters(self) -> dict[str, int]:
-        """The driver's health counters, reconnections included."""
-        return {key: self._count(key) for key in self._counts}
