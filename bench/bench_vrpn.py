@@ -10,7 +10,13 @@ fanning out to many clients. Both run `gadgetctl serve` as a separate process on
    <= 2 ms. Printed: latency p50/p99 (sample time in the message header to the client's
    receipt), the CPU of serve, messages per second per client.
 
-Run: python bench/bench_vrpn.py [--seconds 5] [--part ingest|fanout] [--devices 100] [--clients 8]
+3. Breakdown (``--part breakdown``, not part of ``all``): the fan-out with serve's service run
+   in this process, to say where a sample's time goes: per frame, its age when the frame
+   began (the oldest and the newest sample), the frame's update and gathering, the rest of
+   the frame (feeding, framing, queueing, the first write to every client), the frame period,
+   and the clients' latency as in 2; with the CPU of the frame thread and of the clients.
+
+Run: python bench/bench_vrpn.py [--seconds 5] [--part ingest|fanout|breakdown] [--devices 100] [--clients 8]
 Exit status 1 when a target is missed.
 """
 
@@ -366,10 +372,110 @@ def fanout(report: Report, seconds: float, tmp: Path, devices: int = 100, client
     )
 
 
+def breakdown(
+    report: Report, seconds: float, tmp: Path, devices: int = 100, clients: int = 8
+) -> None:
+    """The fan-out of 2 with the service in this process, timed stage by stage."""
+    import resource
+
+    from gadgetctl.input.clock import now
+    from gadgetctl.input.kinds import DeviceKind
+    from gadgetctl.input.manager import InputManager
+    from gadgetctl.serve.service import ServeOptions, ServeService
+
+    rate = 1000.0
+    config = tmp / "fanout.jconf"
+    config.write_text(fanout_config(devices, rate))
+    manager, configuration = InputManager.from_files([config])
+    service = ServeService(manager, configuration, ServeOptions(port=0))
+    service.prepare()
+    rows: list[list[float]] = []  # frame start, gathered, oldest and newest sample, frame end
+    feed_devices: list[str] = []
+
+    def gathered(session, moment: float) -> None:  # runs first: after update and gathering
+        done = now()
+        oldest = newest = None
+        for name in feed_devices:
+            frame = session.frame_samples(name).get(DeviceKind.POSITION)
+            if frame:
+                first, last = frame.chunks[0], frame.chunks[-1]
+                t0 = first.timestamp if hasattr(first, "timestamp") else float(first.timestamps[0])
+                t1 = last.timestamp if hasattr(last, "timestamp") else float(last.timestamps[-1])
+                oldest = t0 if oldest is None else min(oldest, t0)
+                newest = t1 if newest is None else max(newest, t1)
+        if oldest is not None:
+            rows.append([moment, done, oldest, newest])
+
+    service.session.add_consumer(gathered)
+    port = service.listen()
+    feed_devices.extend(e.element for e in service.catalog if e.kind == "device")
+    context = multiprocessing.get_context("fork")
+    results = context.Queue()
+    procs = [
+        context.Process(target=_client, args=(port, seconds, rate, results)) for _ in range(clients)
+    ]
+    for p in procs:
+        p.start()
+    frames = 0
+    try:
+        time.sleep(0.3)
+        cpu0, wall0 = time.thread_time(), time.perf_counter()
+        for frame in service.frames(max(0.5, seconds - 0.5)):
+            frames += 1
+            if rows and rows[-1][0] == frame.timestamp:
+                rows[-1].append(now())
+        frame_cpu, wall = time.thread_time() - cpu0, time.perf_counter() - wall0
+        outcomes = [results.get(timeout=seconds + 60) for _ in procs]
+        for p in procs:
+            p.join(30)
+        dropped = service.server.dropped
+    finally:
+        service.close()
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    table = np.array([row for row in rows[len(rows) // 10 :] if len(row) == 5])
+    start, done, oldest, newest, end = table.T
+    latency = np.concatenate([o["latency"] for o in outcomes]) * 1000
+
+    def ms(values, label: str) -> None:
+        values = np.asarray(values) * 1000
+        print(
+            f"  {label:<48} p50 {np.percentile(values, 50):7.3f}  "
+            f"p99 {np.percentile(values, 99):7.3f} ms"
+        )
+
+    print(
+        f"  {devices} waveform devices at {rate:g} Hz to {clients} TCP clients, serve in this "
+        f"process: {frames / wall:.0f} frames/s, {np.mean(newest - oldest) * rate + 1:.1f} "
+        "samples per device and frame"
+    )
+    ms(done - oldest, "age of a frame's oldest sample once gathered")
+    ms(done - newest, "age of a frame's newest sample once gathered")
+    ms(done - start, "update + gathering (publish, swap, tracks)")
+    ms(end - done, "feed + framing + queueing + first write")
+    ms(np.diff(start), "frame period")
+    report.figure(
+        "breakdown: sample-to-client latency p50", float(np.percentile(latency, 50)), "ms"
+    )
+    report.figure(
+        "breakdown: sample-to-client latency p99", float(np.percentile(latency, 99)), "ms"
+    )
+    report.figure(
+        "breakdown: reports missing at the clients", sum(o["lost"] for o in outcomes), "reports"
+    )
+    report.figure("breakdown: reports serve dropped (full client buffers)", dropped, "reports")
+    report.figure("breakdown: frame thread CPU", frame_cpu / wall * 100, "% of a core")
+    report.figure("breakdown: frame thread CPU per frame", frame_cpu / max(1, frames) * 1000, "ms")
+    report.figure(
+        f"breakdown: the {clients} clients' CPU together",
+        (usage.ru_utime + usage.ru_stime) / seconds * 100,
+        "% of a core",
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--seconds", type=float, default=5.0)
-    parser.add_argument("--part", choices=("ingest", "fanout", "all"), default="all")
+    parser.add_argument("--part", choices=("ingest", "fanout", "breakdown", "all"), default="all")
     parser.add_argument(
         "--devices", type=int, default=100, help="fan-out: waveform devices at 1 kHz"
     )
@@ -387,6 +493,9 @@ def main() -> None:
         if args.part in ("fanout", "all"):
             print("serve fan-out")
             fanout(report, args.seconds, Path(tmp), args.devices, args.clients)
+        if args.part == "breakdown":
+            print("serve fan-out, where the time goes (serve in this process)")
+            breakdown(report, args.seconds, Path(tmp), args.devices, args.clients)
     report.exit()
 
 

@@ -36,7 +36,9 @@ from gadgetctl.jccl.access import ElementAccess, read_float
 MAX_RATE = 100_000.0
 BLOCK_SECONDS = 0.5
 #: Seconds without a frame after which the scheduler publishes again (frames publish first).
-FRAME_GRACE = 0.02
+#: Long enough that a frame loop falling behind under load is not also fighting the
+#: scheduler thread for the GIL; a frame publishes, and counts over the cap, what came due.
+FRAME_GRACE = 0.25
 _RUNNING = DeviceState.RUNNING
 HAT_SEQUENCE = (HatState.CENTERED, HatState.UP, HatState.RIGHT, HatState.DOWN, HatState.LEFT)
 

@@ -11,6 +11,7 @@ manager go on.
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -27,6 +28,7 @@ WARMUP = 0.5  # seconds of frames before the catalog is read (so unit counts are
 SOCKET_BUFFER = (
     256 * 1024
 )  # kernel send buffer per client: a stalled client's backlog shows as drops
+SWITCH_INTERVAL = 0.0005  # seconds: how long another thread may keep the GIL while frames run
 DEFAULT_RATE = 1000.0  # frames per second: a sample waits at most a millisecond to be sent
 
 
@@ -174,8 +176,17 @@ class ServeService:
         }
 
     def frames(self, duration: float | None = None) -> Iterator[object]:
-        """Run until ``duration`` seconds or :meth:`stop`; the server works between frames."""
-        yield from self.session.frames(duration=duration, sleep=self._wait)
+        """Run until ``duration`` seconds or :meth:`stop`; the server works between frames.
+
+        Meanwhile the interpreter's thread switch interval is at most :data:`SWITCH_INTERVAL`:
+        the frame thread lets go of the GIL at each write to a client, and must not then wait
+        the default 5 ms for a busy sampling or driver thread to hand it back."""
+        previous = sys.getswitchinterval()
+        sys.setswitchinterval(min(previous, SWITCH_INTERVAL))
+        try:
+            yield from self.session.frames(duration=duration, sleep=self._wait)
+        finally:
+            sys.setswitchinterval(previous)
 
     def stop(self) -> None:
         self.session.stop()
