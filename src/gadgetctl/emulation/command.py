@@ -26,6 +26,18 @@ class Emulator(Protocol):
     def stop(self) -> None: ...
 
 
+#: The scenarios every bundled emulator offers.
+STANDARD_SCENARIOS: tuple[str, ...] = ("idle", "motion", "buttons", "garbage", "disconnect")
+
+
+def check_settings(scenario: str, scenarios: Sequence[str], rate: float) -> None:
+    """Refuse (ValueError) a scenario the emulator does not have, or a rate not above 0."""
+    if scenario not in scenarios:
+        raise ValueError(f"unknown scenario {scenario!r}; choose from {', '.join(scenarios)}")
+    if rate <= 0:
+        raise ValueError("rate must be positive")
+
+
 def duration_seconds(text: str) -> float:
     """An argparse type: a finite number of seconds, 0 or more."""
     try:
@@ -88,7 +100,9 @@ def emulator_parser(
     is the emulator's module (``DTrack_drv.emulator``); usage names the command typed."""
     parser = EmulatorArgumentParser(prog=command_name(prog), description=description)
     meanings = {**SCENARIO_MEANINGS, **(scenario_meanings or {})}
-    described = "; ".join(f"{name}: {meanings[name]}" if name in meanings else name for name in scenarios)
+    described = "; ".join(
+        f"{name}: {meanings[name]}" if name in meanings else name for name in scenarios
+    )
     parser.add_argument(
         "--scenario",
         choices=list(scenarios),

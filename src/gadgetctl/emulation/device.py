@@ -28,12 +28,14 @@ from types import TracebackType
 from typing import ClassVar, TypeVar
 
 from gadgetctl.emulation.clients import OpenWatch, openers
-from gadgetctl.emulation.command import emulator_parser, run
+from gadgetctl.emulation.command import (
+    STANDARD_SCENARIOS,
+    check_settings,
+    emulator_parser,
+    run,
+)
 from gadgetctl.emulation.console import Console
 from gadgetctl.emulation.endpoints import PseudoTerminal
-
-#: The scenarios every bundled emulator offers.
-STANDARD_SCENARIOS: tuple[str, ...] = ("idle", "motion", "buttons", "garbage", "disconnect")
 
 Self = TypeVar("Self", bound="PtyDeviceEmulator")
 
@@ -70,11 +72,7 @@ class PtyDeviceEmulator:
         link: str | os.PathLike[str] | None = None,
         drain: float = 0.0,
     ) -> None:
-        if scenario not in self.SCENARIOS:
-            choices = ", ".join(self.SCENARIOS)
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {choices}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
+        check_settings(scenario, self.SCENARIOS, rate)
         self.scenario = scenario
         self.rate = rate
         self.disconnect_after = disconnect_after

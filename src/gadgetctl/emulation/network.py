@@ -18,10 +18,10 @@ import time
 from collections.abc import Callable
 from typing import ClassVar, Protocol, TypeVar
 
+from gadgetctl.emulation.command import STANDARD_SCENARIOS, check_settings
 from gadgetctl.emulation.console import Console
 
 LOOPBACK = "127.0.0.1"
-STANDARD_SCENARIOS: tuple[str, ...] = ("idle", "motion", "buttons", "garbage", "disconnect")
 
 Self = TypeVar("Self", bound="UdpFrameSender")
 
@@ -62,11 +62,7 @@ class UdpFrameSender:
         first_frame: int = 1,
         group: str | None = None,
     ) -> None:
-        if scenario not in self.SCENARIOS:
-            choices = ", ".join(self.SCENARIOS)
-            raise ValueError(f"unknown scenario {scenario!r}; choose from {choices}")
-        if rate <= 0:
-            raise ValueError("rate must be positive")
+        check_settings(scenario, self.SCENARIOS, rate)
         if not 0 < port < 65536:
             raise ValueError("port must be between 1 and 65535")
         self.port = port
