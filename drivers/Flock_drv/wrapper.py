@@ -21,11 +21,12 @@ import numpy as np
 
 from gadgetctl.input import DeviceConfigError, Position
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.records import SCANNER_COUNTERS, CarriedCounters, CarriedCounts
 
 from .standalone import ADDRESSING_FROM_CONFIG, HEMISPHERES, BirdRecord, Flock, FlockError
 
 
-class FlockDevice(Position):
+class FlockDevice(Position, CarriedCounters):
     """Positions of the birds of an Ascension Flock of Birds on a serial port."""
 
     ELEMENT_TYPE = "flock"
@@ -47,7 +48,7 @@ class FlockDevice(Position):
         self.master_address = 1
         self.addressing_mode = 0
         self.flock: Flock | None = None
-        self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
+        self.counts = CarriedCounts(SCANNER_COUNTERS)  # over every connection
         self._matrices = np.zeros((0, 4, 4))
         self._unit_of: dict[int, int] = {}
 
@@ -86,6 +87,7 @@ class FlockDevice(Position):
         )
         flock.open()
         self.flock = flock
+        self.counts.attach(flock)
         self._unit_of = {address: unit for unit, address in enumerate(flock.sensors)}
         if len(self._matrices) != len(flock.sensors):
             self._matrices = np.tile(np.eye(4), (len(flock.sensors), 1, 1))
@@ -100,36 +102,9 @@ class FlockDevice(Position):
 
     def stop_sampling(self) -> None:
         flock, self.flock = self.flock, None
+        self.counts.detach()
         if flock is not None:
-            for key in self._counts:
-                self._counts[key] += getattr(flock, key)
             flock.close()
-
-    # -- counters over every start, for monitors and tests ----------------------------------
-
-    def _count(self, key: str) -> int:
-        flock = self.flock
-        return self._counts[key] + (getattr(flock, key) if flock is not None else 0)
-
-    @property
-    def records(self) -> int:
-        """Sensor records decoded."""
-        return self._count("records")
-
-    @property
-    def bad_records(self) -> int:
-        """Runs of junk and malformed records skipped."""
-        return self._count("bad_records")
-
-    @property
-    def skipped_bytes(self) -> int:
-        """Bytes outside any valid record."""
-        return self._count("skipped_bytes")
-
-    @property
-    def counters(self) -> dict[str, int]:
-        """The driver's health counters, reconnections included."""
-        return {key: self._count(key) for key in self._counts}
 
     def _add(self, records: list[BirdRecord]) -> None:
         for record in records:

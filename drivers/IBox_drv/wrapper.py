@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from gadgetctl.input import Analog, DeviceConfigError, Digital
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.records import SCANNER_COUNTERS, CarriedCounters, CarriedCounts
 
 from .standalone import IBox, IBoxError, IBoxPacket
 
@@ -19,7 +20,7 @@ DIGITAL_UNITS = 4
 ANALOG_UNITS = 4
 
 
-class IBoxDevice(Digital, Analog):
+class IBoxDevice(Digital, Analog, CarriedCounters):
     """Buttons and analog inputs of an Immersion Interface Box on a serial port."""
 
     ELEMENT_TYPE = "ibox"
@@ -37,7 +38,7 @@ class IBoxDevice(Digital, Analog):
         self.port = ""
         self.baud = 38400
         self.box: IBox | None = None
-        self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
+        self.counts = CarriedCounts(SCANNER_COUNTERS)  # over every connection
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)  # name, min and max
@@ -60,6 +61,7 @@ class IBoxDevice(Digital, Analog):
         )
         box.open()
         self.box = box
+        self.counts.attach(box)
 
     def sample(self) -> None:
         box = self.box
@@ -70,34 +72,9 @@ class IBoxDevice(Digital, Analog):
 
     def stop_sampling(self) -> None:
         box, self.box = self.box, None
+        self.counts.detach()
         if box is not None:
-            for key in self._counts:
-                self._counts[key] += getattr(box, key)
             box.close()
-
-    def _count(self, key: str) -> int:
-        box = self.box
-        return self._counts[key] + (getattr(box, key) if box is not None else 0)
-
-    @property
-    def records(self) -> int:
-        """Packets decoded."""
-        return self._count("records")
-
-    @property
-    def bad_records(self) -> int:
-        """Runs of junk and broken packets skipped."""
-        return self._count("bad_records")
-
-    @property
-    def skipped_bytes(self) -> int:
-        """Bytes outside any valid packet."""
-        return self._count("skipped_bytes")
-
-    @property
-    def counters(self) -> dict[str, int]:
-        """The driver's health counters, reconnections included."""
-        return {key: self._count(key) for key in self._counts}
 
     def _add(self, packet: IBoxPacket) -> None:
         stamp = self.now()

@@ -41,6 +41,7 @@ import numpy as np
 from gadgetctl.input import DeviceConfigError, ElementVersionError, Position
 from gadgetctl.input.filters import FILTERS_PROPERTY, TRANSFORM_FILTER
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.records import CarriedCounts
 
 from .standalone import (
     MAX_RATE,
@@ -99,7 +100,7 @@ class MotionStarDevice(Position):
         self.sequence_gaps = 0  # data packets whose number did not follow the previous one
         self._next_sequence: int | None = None
         self._poses = np.zeros((0, 4, 4))
-        self._counts = {"bad_packets": 0, "skipped_bytes": 0, "sensor_errors": 0}
+        self.counts = CarriedCounts(("bad_packets", "skipped_bytes", "sensor_errors"))
         self._told: set[str] = set()
         self._first: tuple[MotionStarSample, float] | None = None  # read by start_sampling
         self._last_data = 0.0  # monotonic time of the newest data packet
@@ -156,6 +157,7 @@ class MotionStarDevice(Position):
             self._poses = np.tile(np.eye(4), (len(ms.sensors), 1, 1))
         self._next_sequence = None
         self.ms = ms
+        self.counts.attach(ms)
         self._last_data, self._junk_mark = time.monotonic(), ms.skipped_bytes
         try:  # started means data arrive: wait for the first packet
             first = None
@@ -206,30 +208,25 @@ class MotionStarDevice(Position):
     def stop_sampling(self) -> None:
         ms, self.ms = self.ms, None
         self._first = None
+        self.counts.detach()
         if ms is not None:
-            for key in self._counts:
-                self._counts[key] += getattr(ms, key)
             ms.close()
 
     # -- counters over every start, for monitors and tests ------------------------------
 
-    def _count(self, key: str) -> int:
-        ms = self.ms
-        return self._counts[key] + (getattr(ms, key) if ms is not None else 0)
-
     @property
     def bad_packets(self) -> int:
         """Runs of bytes that were not a valid server message."""
-        return self._count("bad_packets")
+        return self.counts.get("bad_packets")
 
     @property
     def skipped_bytes(self) -> int:
-        return self._count("skipped_bytes")
+        return self.counts.get("skipped_bytes")
 
     @property
     def sensor_errors(self) -> int:
         """Records in which a sensor reported a sampling error."""
-        return self._count("sensor_errors")
+        return self.counts.get("sensor_errors")
 
     @property
     def counters(self) -> dict[str, int]:

@@ -15,11 +15,12 @@ from __future__ import annotations
 
 from gadgetctl.input import Analog, DeviceConfigError, Digital
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.records import SCANNER_COUNTERS, CarriedCounters, CarriedCounts
 
 from .standalone import LIMIT, Wanda, WandaError, WandaPacket
 
 
-class WandaDevice(Digital, Analog):
+class WandaDevice(Digital, Analog, CarriedCounters):
     """Buttons and joystick of an Ascension Wanda on a serial port."""
 
     ELEMENT_TYPE = "wanda"
@@ -35,7 +36,7 @@ class WandaDevice(Digital, Analog):
         self.port = ""
         self.read_timeout = 0.02
         self.wanda: Wanda | None = None
-        self._counts = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
+        self.counts = CarriedCounts(SCANNER_COUNTERS)  # over every connection
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)
@@ -58,6 +59,7 @@ class WandaDevice(Digital, Analog):
         )
         wanda.open()
         self.wanda = wanda
+        self.counts.attach(wanda)
 
     def sample(self) -> None:
         wanda = self.wanda
@@ -68,34 +70,9 @@ class WandaDevice(Digital, Analog):
 
     def stop_sampling(self) -> None:
         wanda, self.wanda = self.wanda, None
+        self.counts.detach()
         if wanda is not None:
-            for key in self._counts:
-                self._counts[key] += getattr(wanda, key)
             wanda.close()
-
-    def _count(self, key: str) -> int:
-        wanda = self.wanda
-        return self._counts[key] + (getattr(wanda, key) if wanda is not None else 0)
-
-    @property
-    def records(self) -> int:
-        """Packets decoded."""
-        return self._count("records")
-
-    @property
-    def bad_records(self) -> int:
-        """Runs of bytes outside packets skipped."""
-        return self._count("bad_records")
-
-    @property
-    def skipped_bytes(self) -> int:
-        """Bytes outside any valid packet."""
-        return self._count("skipped_bytes")
-
-    @property
-    def counters(self) -> dict[str, int]:
-        """The driver's health counters, reconnections included."""
-        return {key: self._count(key) for key in self._counts}
 
     def _add(self, packet: WandaPacket) -> None:
         stamp = self.now()
