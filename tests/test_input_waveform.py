@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from gadgetctl.input import InputManager, ManagerOptions
+from gadgetctl.input.clock import now
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.registry import DeviceRegistry, kind_disagreements
 from gadgetctl.input.samples import SampleBatch
@@ -161,3 +162,45 @@ def test_defaults_give_one_unit_per_listed_channel(make):
     assert [c.frequency for c in device.analog] == [3.0, 1.0]  # the second takes the default
     assert device.rate == 100.0 and device.event_period == 1.0 and device.positions == []
     assert math.isclose(device.analog_min, -1.0) and math.isclose(device.analog_max, 1.0)
+
+
+@pytest.mark.timeout(30)
+def test_a_frame_carries_every_sample_due_at_its_swap(make):
+    # frames publish before they swap: the newest sample of a frame is the last one whose
+    # time had come when the frame swapped, whatever the scheduler did meanwhile
+    m = make(WAVE.format(name="Now", rate=1000.0, seed=0))
+    device = m.device("Now")
+    checked = 0
+    for _ in range(50):
+        time.sleep(0.003)
+        before = now()
+        m.update()
+        frame = device.store.frame(DeviceKind.POSITION)
+        if not frame:
+            continue
+        newest = frame.newest.timestamp
+        assert newest <= device.store.swapped_at  # never a sample from the future
+        # every sample due before the frame began is in it (the next one was not yet due)
+        assert newest > before - 1e-3 - 1e-9
+        checked += 1
+    assert checked >= 40
+
+
+@pytest.mark.timeout(30)
+def test_without_frames_the_scheduler_still_publishes_and_nothing_is_lost(make):
+    from gadgetctl.input import waveform
+    from gadgetctl.input.testing import wait_until
+
+    m = make(WAVE.format(name="Alone", rate=1000.0, seed=0))
+    device = m.device("Alone")
+    m.update()  # a frame published: the scheduler stands back for FRAME_GRACE
+    published = device.store.total(DeviceKind.POSITION)
+    # no more frames: after the grace the scheduler publishes what comes due
+    assert wait_until(
+        lambda: device.store.total(DeviceKind.POSITION) > published + 50,
+        timeout=waveform.FRAME_GRACE + 10,
+    )
+    m.update()
+    stamps = device.store.frame(DeviceKind.POSITION).timestamps()
+    np.testing.assert_allclose(np.diff(stamps), 1e-3, rtol=0, atol=1e-9)
+    assert device.store.dropped() == 0
