@@ -19,6 +19,7 @@ from lxml import etree
 
 from gadgetctl.diagnostics import Diagnostic, Severity
 from gadgetctl.jccl.activation import DIFFERENCES, Node, RunTime, never_handled, settle, too_old
+from gadgetctl.jccl.chains import fold_chains
 from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.elementcheck import ElementReport, PointerValue, at, describe
 from gadgetctl.jccl.runtime import missing_target_effect
@@ -40,13 +41,20 @@ class Scope:
     def nowhere(self) -> str:
         if self.complete:
             return "no element of the configuration has that name"
-        return (f"no element in {self.root} or its includes has that name; it may come from another "
-                "file loaded with it (check them together with --together)")
+        return (
+            f"no element in {self.root} or its includes has that name; it may come from another "
+            "file loaded with it (check them together with --together)"
+        )
 
 
 class Wiring:
-    def __init__(self, config: Configuration, reports: dict[int, ElementReport], index: TypeIndex,
-                 scope: Scope) -> None:
+    def __init__(
+        self,
+        config: Configuration,
+        reports: dict[int, ElementReport],
+        index: TypeIndex,
+        scope: Scope,
+    ) -> None:
         self.config = config
         self.reports = reports
         self.index = index
@@ -59,9 +67,15 @@ class Wiring:
 
     def check(self) -> list[Diagnostic]:
         found = self.duplicates()
+        wrong: list[tuple[PointerValue, ConfigElement]] = []  # pointers at a type not allowed
         for element in self.config.loaded:
             for pointer in self.reports[id(element)].pointers:
-                found.extend(self.pointer(pointer, element))
+                missing = self.pointer(pointer, element)
+                if missing is not None:
+                    found.append(missing)
+                elif self._wrong_type(pointer) is not None:
+                    wrong.append((pointer, self.by_name[pointer.target]))
+        found.extend(self._wrong_types(wrong))
         found.extend(self.pending())
         return found
 
@@ -84,53 +98,110 @@ class Wiring:
                 continue
             first[element.name] = element  # the next duplicate is compared with the one kept
             if earlier.file == element.file:
-                found.append(at(
-                    "CFG040", f"element name {element.name!r} ({element.type}) is used before in this "
-                    f"file, by the {earlier.type} at {earlier.location}; VR Juggler keeps only the later "
-                    "one, at the earlier one's place", element.location,
-                    hint="Rename or remove one of them."))
+                found.append(
+                    at(
+                        "CFG040",
+                        f"element name {element.name!r} ({element.type}) is used before in this "
+                        f"file, by the {earlier.type} at {earlier.location}; VR Juggler keeps only the later "
+                        "one, at the earlier one's place",
+                        element.location,
+                        hint="Rename or remove one of them.",
+                    )
+                )
                 continue
             why = relation.override(earlier, element)
             if why is None and _same_text(earlier, element):
                 why = "an identical copy"
             if why is not None:
                 verb = "repeats" if why == "an identical copy" else "overrides"
-                found.append(at(
-                    "CFG042", f"{element.type} {element.name!r} {verb} the {earlier.type} of that name "
-                    f"from {earlier.location} ({why})", element.location))
+                found.append(
+                    at(
+                        "CFG042",
+                        f"{element.type} {element.name!r} {verb} the {earlier.type} of that name "
+                        f"from {earlier.location} ({why})",
+                        element.location,
+                    )
+                )
                 continue
-            found.append(at(
-                "CFG040", f"element name {element.name!r} ({element.type}) is used before, by the "
-                f"{earlier.type} at {earlier.location}; VR Juggler keeps only the later one, at the "
-                "earlier one's place, although neither file includes the other", element.location,
-                hint="If this element is meant to override the other, include the other's file from "
-                "this one (or give the files in that order with --together); otherwise rename one."))
+            found.append(
+                at(
+                    "CFG040",
+                    f"element name {element.name!r} ({element.type}) is used before, by the "
+                    f"{earlier.type} at {earlier.location}; VR Juggler keeps only the later one, at the "
+                    "earlier one's place, although neither file includes the other",
+                    element.location,
+                    hint="If this element is meant to override the other, include the other's file from "
+                    "this one (or give the files in that order with --together); otherwise rename one.",
+                )
+            )
         return found
 
     # -- pointers --------------------------------------------------------------------
 
-    def pointer(self, pointer: PointerValue, root: ConfigElement) -> list[Diagnostic]:
+    def pointer(self, pointer: PointerValue, root: ConfigElement) -> Diagnostic | None:
+        """CFG031 when the pointer names no top-level element (nor an embedded one)."""
+        if pointer.target in self.by_name or pointer.target in self.embedded:
+            return None  # an embedded target never satisfies a dependency: see pending()
+        who = f"{describe(pointer.element)}: {pointer.prop.name} {pointer.target!r}"
+        close = self._close_names("/" in pointer.target)(pointer.target, n=3, cutoff=0.7)
+        effect = missing_target_effect(root.type, root.name, pointer.element is not root)
+        if root.type in DIFFERENCES and pointer.element is root:
+            effect += f" ({GADGETCTL_RUNS_IT})"
+        return at(
+            "CFG031",
+            f"{who}: {self.scope.nowhere()}; {effect}",
+            pointer.value.location,
+            severity=Severity.ERROR if self.scope.complete else None,
+            hint=f"Did you mean {', '.join(repr(c) for c in close)}?" if close else None,
+        )
+
+    def _wrong_type(self, pointer: PointerValue) -> ConfigElement | None:
+        """The top-level target of the pointer when its type is not one the property takes."""
         target = self.by_name.get(pointer.target)
-        prop = pointer.prop
-        who = f"{describe(pointer.element)}: {prop.name} {pointer.target!r}"
         if target is None:
-            if pointer.target in self.embedded:
-                return []  # found, but never satisfies a dependency: see pending()
-            close = self._close_names("/" in pointer.target)(pointer.target, n=3, cutoff=0.7)
-            effect = missing_target_effect(root.type, root.name, pointer.element is not root)
-            if root.type in DIFFERENCES and pointer.element is root:
-                effect += f" ({GADGETCTL_RUNS_IT})"
-            return [at("CFG031", f"{who}: {self.scope.nowhere()}; {effect}",
-                       pointer.value.location,
-                       severity=Severity.ERROR if self.scope.complete else None,
-                       hint=f"Did you mean {', '.join(repr(c) for c in close)}?" if close else None)]
-        allowed = prop.allowed_types
+            return None
+        allowed = pointer.prop.allowed_types
         index = self.index
-        if allowed and all(index.known(t) for t in allowed) and index.known(target.type) \
-                and not index.is_any(target.type, allowed):
-            return [at("CFG032", f"{who} is a {target.type} (at {target.location}); {prop.name} "
-                       f"takes {' or '.join(allowed)}", pointer.value.location)]
-        return []
+        if (
+            allowed
+            and all(index.known(t) for t in allowed)
+            and index.known(target.type)
+            and not index.is_any(target.type, allowed)
+        ):
+            return target
+        return None
+
+    def _wrong_types(self, wrong: list[tuple[PointerValue, ConfigElement]]) -> list[Diagnostic]:
+        """CFG032 for each pointer at an element of a type the property does not take; a
+        chain of elements of one type each naming the one before through the same property
+        (aliases naming aliases) is one finding at its head, with a count."""
+        keys = [(id(p.element), p.prop.name) for p, _ in wrong]
+        counts: dict[tuple[int, str], int] = defaultdict(int)
+        for key in keys:
+            counts[key] += 1
+        leader = {}
+        for key, (pointer, target) in zip(keys, wrong, strict=True):
+            ahead = (id(target), pointer.prop.name)
+            if target.type == pointer.element.type and counts[key] == 1 and counts.get(ahead) == 1:
+                leader[key] = ahead
+        heads = fold_chains(range(len(keys)), _by_position(keys, leader))
+        found = []
+        for position, followers in heads.items():
+            pointer, target = wrong[position]
+            prop = pointer.prop
+            message = (
+                f"{describe(pointer.element)}: {prop.name} {pointer.target!r} is a {target.type} "
+                f"(at {target.location}); {prop.name} takes {' or '.join(prop.allowed_types)}"
+            )
+            if followers:
+                last = wrong[followers[-1]][0].element
+                message += (
+                    f"; {len(followers)} more {pointer.element.type} elements chained behind it "
+                    f"make the same mistake, each naming one before it (the last is "
+                    f"{describe(last)} at {last.location})"
+                )
+            found.append(at("CFG032", message, pointer.value.location))
+        return found
 
     def _close_names(self, embedded: bool) -> CloseNames:
         """The indexed "did you mean" search over top-level (or embedded) element names,
@@ -138,7 +209,9 @@ class Wiring:
         found = self._suggesters.get(embedded)
         if found is None:
             names = self.embedded if embedded else self.by_name
-            found = self._suggesters[embedded] = CloseNames(names)  # case ignored, as close_names does
+            found = self._suggesters[embedded] = CloseNames(
+                names
+            )  # case ignored, as close_names does
         return found
 
     # -- pending ---------------------------------------------------------------------
@@ -156,9 +229,16 @@ class Wiring:
         return (reason, Severity.WARNING) if reason else None
 
     def _nodes(self) -> list[Node]:
-        return [Node(e.name, e.type, e.version, tuple(p.target for p in self.reports[id(e)].pointers),
-                     UNHANDLED if self.blocked.get(id(e), ("",))[0] == UNHANDLED else None)
-                for e in self.effective]
+        return [
+            Node(
+                e.name,
+                e.type,
+                e.version,
+                tuple(p.target for p in self.reports[id(e)].pointers),
+                UNHANDLED if self.blocked.get(id(e), ("",))[0] == UNHANDLED else None,
+            )
+            for e in self.effective
+        ]
 
     def pending(self) -> list[Diagnostic]:
         self.blocked: dict[int, tuple[str, Severity]] = {}
@@ -171,40 +251,111 @@ class Wiring:
         active = {name for name, why in fate.items() if why is None}
         ours = settle(nodes, RunTime.GADGETCTL, self.index.versions)
         found = []
+        waiting: list[
+            tuple[ConfigElement, str, list[tuple[PointerValue, ConfigElement | None, str]]]
+        ] = []
         for element in self.effective:
             if element.name in active:
                 continue
-            where = f" in VR Juggler ({GADGETCTL_RUNS_IT})" if ours.get(element.name, "") is None else ""
+            where = (
+                f" in VR Juggler ({GADGETCTL_RUNS_IT})"
+                if ours.get(element.name, "") is None
+                else ""
+            )
             blocker = self.blocked.get(id(element))
             if blocker is None:
-                found.extend(self._waiting(element, active, where))
+                reasons = self._reasons(element, active)
+                if reasons:  # only missing targets: reported as CFG031
+                    waiting.append((element, where, reasons))
             elif blocker[0] != UNHANDLED:
-                found.append(at("CFG041", f"{describe(element)} would stay pending{where}: {blocker[0]}",
-                                element.location, severity=blocker[1]))
+                found.append(
+                    at(
+                        "CFG041",
+                        f"{describe(element)} would stay pending{where}: {blocker[0]}",
+                        element.location,
+                        severity=blocker[1],
+                    )
+                )
+        found.extend(self._waiting(waiting, active))
         return found
 
-    def _waiting(self, element: ConfigElement, active: set[str], where: str = "") -> list[Diagnostic]:
-        reasons: list[tuple[PointerValue, str]] = []
+    def _reasons(
+        self, element: ConfigElement, active: set[str]
+    ) -> list[tuple[PointerValue, ConfigElement | None, str]]:
+        """The unmet pointers of a pending element that name an element: (pointer, target,
+        why it is never met)."""
+        reasons = []
         for pointer in self.reports[id(element)].pointers:
             name = pointer.target
             if name in active:
                 continue
             target = self.by_name.get(name)
             if target is None and name in self.embedded:
-                reasons.append((pointer, f"{pointer.prop.name} names the embedded element {name!r}, "
-                                "and VR Juggler only looks for top-level elements"))
+                reasons.append(
+                    (
+                        pointer,
+                        None,
+                        f"{pointer.prop.name} names the embedded element {name!r}, "
+                        "and VR Juggler only looks for top-level elements",
+                    )
+                )
             elif target is not None:
                 why = "which stays pending itself"
                 if self.blocked.get(id(target), ("",))[0] == UNHANDLED:
-                    why = ("whose type VR Juggler does not handle" if self.index.known(target.type)
-                           else "which VR Juggler drops because its type has no definition")
-                reasons.append((pointer, f"it waits for {target.type} {name!r}, {why}"))
-        if not reasons:
-            return []  # only missing targets: reported as CFG031
-        pointer, text = reasons[0]
-        more = f" (and {len(reasons) - 1} more)" if len(reasons) > 1 else ""
-        return [at("CFG041", f"{describe(element)} would stay pending{where}: {text}{more}",
-                   pointer.value.location, severity=self._root_severity(element, active))]
+                    why = (
+                        "whose type VR Juggler does not handle"
+                        if self.index.known(target.type)
+                        else "which VR Juggler drops because its type has no definition"
+                    )
+                reasons.append((pointer, target, why))
+        return reasons
+
+    def _waiting(
+        self,
+        waiting: list[
+            tuple[ConfigElement, str, list[tuple[PointerValue, ConfigElement | None, str]]]
+        ],
+        active: set[str],
+    ) -> list[Diagnostic]:
+        """CFG041 for elements pending because what they point at stays pending. A chain of
+        elements of one type each waiting only for the one before (aliases naming aliases)
+        is one finding at its head, with a count: the cause is the same for all of them."""
+        position = {id(element): i for i, (element, _, _) in enumerate(waiting)}
+        leader: dict[int, int] = {}
+        for i, (element, where, reasons) in enumerate(waiting):
+            if len(reasons) != 1:
+                continue
+            target = reasons[0][1]
+            ahead = position.get(id(target)) if target is not None else None
+            if ahead is not None and target.type == element.type and waiting[ahead][1] == where:
+                leader[i] = ahead
+        found = []
+        for head, followers in fold_chains(range(len(waiting)), leader).items():
+            element, where, reasons = waiting[head]
+            pointer, target, why = reasons[0]
+            text = (
+                f"it waits for {target.type} {pointer.target!r}, {why}"
+                if target is not None
+                else why
+            )
+            more = f" (and {len(reasons) - 1} more)" if len(reasons) > 1 else ""
+            message = f"{describe(element)} would stay pending{where}: {text}{more}"
+            if followers:
+                last = waiting[followers[-1]][0]
+                message += (
+                    f"; so would {len(followers)} more {element.type} elements chained behind it, "
+                    f"each waiting only for one before it (the last is {describe(last)} at "
+                    f"{last.location})"
+                )
+            found.append(
+                at(
+                    "CFG041",
+                    message,
+                    pointer.value.location,
+                    severity=self._root_severity(element, active),
+                )
+            )
+        return found
 
     def _root_severity(self, element: ConfigElement, active: set[str]) -> Severity:
         """The worst of the causes at the ends of the chains of unmet pointers from ``element``:
@@ -236,7 +387,9 @@ class Wiring:
                 if target is not None:
                     waiters[id(target)].append(key)
                 else:
-                    reaches[Severity.ERROR if pointer.target in self.embedded else missing].append(key)
+                    reaches[Severity.ERROR if pointer.target in self.embedded else missing].append(
+                        key
+                    )
         caused: dict[Severity, set[int]] = {}
         for severity, seeds in reaches.items():
             seen = caused[severity] = set(seeds)
@@ -250,7 +403,9 @@ class Wiring:
         for current in pending:
             key = id(current)
             found = [s for s, reached in caused.items() if key in reached]
-            result[key] = Severity.ERROR if not found or Severity.ERROR in found else Severity.WARNING
+            result[key] = (
+                Severity.ERROR if not found or Severity.ERROR in found else Severity.WARNING
+            )
         return result
 
 
@@ -290,12 +445,20 @@ class _FileRelation:
         return None
 
 
+def _by_position(keys: list, leader: dict) -> dict[int, int]:
+    """``leader`` (key -> key) as positions in ``keys``: each key's position leads to the
+    position of the (single) entry of its leader's key."""
+    position = {key: i for i, key in enumerate(keys)}
+    return {i: position[leader[key]] for i, key in enumerate(keys) if key in leader}
+
+
 def _same_text(one: ConfigElement, other: ConfigElement) -> bool:
     if one.node is None or other.node is None:
         return False
     return etree.tostring(one.node, with_tail=False) == etree.tostring(other.node, with_tail=False)
 
 
-def check_wiring(config: Configuration, reports: dict[int, ElementReport], index: TypeIndex,
-                 scope: Scope) -> list[Diagnostic]:
+def check_wiring(
+    config: Configuration, reports: dict[int, ElementReport], index: TypeIndex, scope: Scope
+) -> list[Diagnostic]:
     return Wiring(config, reports, index, scope).check()
