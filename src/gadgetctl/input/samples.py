@@ -249,41 +249,61 @@ class SampleStore:
     def add_slices(self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]], start: int, stop: int) -> None:
         """Append samples ``start`` .. ``stop - 1`` of arrays computed ahead (``timestamps``
         and, per kind, ``values`` of shape (n, units, ...)) without slicing them now."""
+        if stop > start:
+            with self._lock:
+                self._add_slices(timestamps, values, start, stop)
+
+    def _add_slices(self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]], start: int, stop: int) -> None:
         size = stop - start
-        if size <= 0:
-            return
         channels = self._channels
         cap = self.cap
-        with self._lock:
-            for kind, data in values:
-                channel = channels[kind]
-                ready = channel.ready
-                last = ready[-1] if ready else None
-                if type(last) is SampleBatch and last.extends(data, start):
-                    last.stop = stop
-                else:
-                    ready.append(SampleBatch.window(timestamps, data, start, stop))
-                channel.count += size
-                channel.total += size
-                if channel.count > cap:
-                    channel.trim(cap)
+        for kind, data in values:
+            channel = channels[kind]
+            ready = channel.ready
+            last = ready[-1] if ready else None
+            if type(last) is SampleBatch and last.extends(data, start):
+                last.stop = stop
+            else:
+                ready.append(SampleBatch.window(timestamps, data, start, stop))
+            channel.count += size
+            channel.total += size
+            if channel.count > cap:
+                channel.trim(cap)
 
     # -- frame side -------------------------------------------------------------------
 
     def swap(self) -> None:
         """Make everything added since the previous swap the current frame's samples."""
-        taken: list[tuple[DeviceKind, _Channel, deque[Chunk], int]] = []
         self.swapped_at = now()
         with self._lock:
-            for kind, channel in self._pairs:
-                if channel.count:
-                    taken.append((kind, channel, channel.ready, channel.count))
-                    channel.ready = deque()
-                    channel.count = 0
-                elif channel.frame.count:
-                    if channel.latest is None:
-                        channel.latest = channel.frame.newest  # keep it latched
-                    channel.frame = EMPTY_FRAME
+            taken = self._take()
+        self._current(taken)
+
+    def add_slices_and_swap(self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]],
+                            start: int, stop: int) -> None:
+        """:meth:`add_slices` then :meth:`swap`, under one lock (a device publishing samples
+        computed ahead at the frame)."""
+        self.swapped_at = now()
+        with self._lock:
+            if stop > start:
+                self._add_slices(timestamps, values, start, stop)
+            taken = self._take()
+        self._current(taken)
+
+    def _take(self) -> list[tuple[DeviceKind, _Channel, deque[Chunk], int]]:
+        taken: list[tuple[DeviceKind, _Channel, deque[Chunk], int]] = []
+        for kind, channel in self._pairs:
+            if channel.count:
+                taken.append((kind, channel, channel.ready, channel.count))
+                channel.ready = deque()
+                channel.count = 0
+            elif channel.frame.count:
+                if channel.latest is None:
+                    channel.latest = channel.frame.newest  # keep it latched
+                channel.frame = EMPTY_FRAME
+        return taken
+
+    def _current(self, taken: list[tuple[DeviceKind, _Channel, deque[Chunk], int]]) -> None:
         current = {}
         for kind, channel, chunks, count in taken:
             channel.frame = current[kind] = FrameSamples(chunks, count)

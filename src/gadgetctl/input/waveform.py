@@ -168,20 +168,18 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         if self.state is _RUNNING:
             moment = now()
             with self._publishing:
+                self._frame_published = moment
                 end = int((moment - self.t0) * self.rate) + 1  # samples whose time has come
                 first = self.next_index
                 block = self._block
-                if first >= end:
-                    pass
-                elif block is not None and block.start <= first and end <= block.end and not block.events:
-                    # the usual frame: one more window of the current block
-                    self.store.add_slices(
+                if block is not None and block.start <= first < end <= block.end and not block.events:
+                    # the usual frame: one more window of the current block, and the swap
+                    self.next_index = end
+                    self.store.add_slices_and_swap(
                         block.timestamps, block.items, first - block.start, end - block.start
                     )
-                    self.next_index = end
-                else:
-                    self._publish_due(moment)
-                self._frame_published = moment
+                    return
+                self._publish_due(moment)
         self.store.swap()
 
     def _publish_due(self, moment: float) -> None:
