@@ -39,7 +39,7 @@ from gadgetctl.transport.sdl import SdlError, hub
 from .standalone import AXIS_RANGE, SdlJoystickReader
 
 SCENARIOS = ("idle", "motion", "buttons", "hats", "garbage", "disconnect")
-PERIOD = 100  # ticks per motion cycle
+PERIOD = 250  # ticks per motion cycle (2.5 s at 100 Hz)
 HAT_STEPS = (0, 1, 3, 2, 6, 4, 12, 8, 9)  # centre, then clockwise from up
 IMPOSSIBLE_HATS = (1 | 4, 2 | 8, 0x1F, 0xF0)  # up+down, right+left, all bits, high bits
 
