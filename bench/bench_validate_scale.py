@@ -7,7 +7,12 @@ the same run (ratio of the time per element; linear means about 1x):
   (every alias pending): 8,000 and 50,000 aliases (target: 50,000 in under 2 s);
 - proxies pointing at devices with one letter dropped ("did you mean" for each): 8,000;
 - the same file written on one line (columns): 8,000;
-- `config graph` of devices with 70 values each: 700,000 values, against 70,000.
+- `config graph` of devices with 70 values each: 700,000 values, against 70,000;
+- dangling pointers at doubling sizes (8,000, 16,000, 32,000, also on one line): the ratio
+  of the time per element to the previous size's (linear: about 1x per doubling);
+- end to end, `gadgetctl validate FILE` of the 50,000-alias chain (target: under 2 s of
+  CPU time, user + system, which a loaded machine inflates less than the wall clock),
+  against the same command on a 1,000-alias chain (the baseline: mostly start-up).
 
     python bench/bench_validate_scale.py
 """
@@ -15,11 +20,13 @@ the same run (ratio of the time per element; linear means about 1x):
 from __future__ import annotations
 
 import random
+import resource
+import subprocess
 import tempfile
 import time
 from pathlib import Path
 
-from common import Report
+from common import GADGETCTL, Report
 
 from gadgetctl.jccl.configcheck import open_configuration
 from gadgetctl.jccl.graph import build_graph, render_text
@@ -98,7 +105,39 @@ def main() -> None:
                 report.figure(f"{label}, {size} elements", took, "s",
                               target=2.0 if (label == "alias chain" and size == 50_000) else None)
                 report.figure(f"  per element vs {base_size} elements", took / size / base, "x", target=TARGET_RATIO)
+        for label, one_line in (("dangling pointers", False), ("dangling pointers, one line", True)):
+            previous = None
+            for size in (8_000, 16_000, 32_000):
+                took = min(validate_time(write(f"{label}-d{size}", dangling(size), one_line)) for _ in range(2))
+                report.figure(f"{label}, {size} elements", took, "s")
+                if previous is not None:
+                    report.figure("  per element vs half the size", (took / size) / (previous[0] / previous[1]),
+                                  "x", target=TARGET_RATIO)
+                previous = (took, size)
+        big = write("e2e-chain-50000", chain(50_000), False)
+        small = write("e2e-chain-1000", chain(1_000), False)
+        command_cpu([*GADGETCTL, "validate", str(small)])  # warm the file cache
+        runs = [command_cpu([*GADGETCTL, "validate", str(big)]) for _ in range(3)]
+        base = [command_cpu([*GADGETCTL, "validate", str(small)]) for _ in range(3)]
+        print("end to end: gadgetctl validate FILE (best of 3)")
+        report.figure("50,000-alias chain (wall clock)", min(r[0] for r in runs), "s")
+        report.figure("50,000-alias chain (CPU time, user + system)", min(r[1] for r in runs), "s", target=2.0)
+        report.figure("1,000-alias chain, the baseline (wall clock)", min(r[0] for r in base), "s")
+        report.figure("1,000-alias chain, the baseline (CPU time)", min(r[1] for r in base), "s")
+        report.ratio("50,000 / 1,000 aliases (CPU time)", min(r[1] for r in runs), min(r[1] for r in base))
     report.exit()
+
+
+def command_cpu(args: list[str]) -> tuple[float, float]:
+    """Wall-clock and CPU seconds (user + system) of one run of a command (exit 1: findings)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    done = subprocess.run(args, capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode not in (0, 1) or "internal error" in done.stderr:
+        raise SystemExit(f"{' '.join(args)} failed ({done.returncode}): {done.stderr[-500:]}")
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 if __name__ == "__main__":

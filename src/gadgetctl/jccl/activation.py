@@ -116,16 +116,20 @@ def settle(
     waiting: dict[str, list[Node]] = defaultdict(list)
     unmet: dict[str, int] = {}
     ready: list[Node] = []
+    refusals: dict[tuple[str, int | None], str | None] = {}  # the same for every element of a kind
+    waits: dict[str, bool] = {}
     for node in nodes:
-        reason = (
-            node.refused
-            or ("refused" if node.name in refused else None)
-            or refusal(node.type, node.version, versions(node.type), runtime)
-        )
+        kind = (node.type, node.version)
+        if kind not in refusals:
+            refusals[kind] = refusal(node.type, node.version, versions(node.type), runtime)
+        reason = node.refused or ("refused" if node.name in refused else None) or refusals[kind]
         if reason is not None:
             fate[node.name] = reason
             continue
-        deps = set(node.targets) if waits_for_pointers(node.type, runtime) else set()
+        waits_here = waits.get(node.type)
+        if waits_here is None:
+            waits_here = waits[node.type] = waits_for_pointers(node.type, runtime)
+        deps = set(node.targets) if waits_here else set()
         unmet[node.name] = len(deps)
         fate[node.name] = WAITING
         for dep in deps:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 from lxml import etree
@@ -97,7 +98,7 @@ class ConfigElement:
     parent_property: str | None = None
     node: etree._Element | None = field(default=None, repr=False)
 
-    @property
+    @cached_property
     def version(self) -> int | None:
         try:
             return int((self.version_text or "").strip())

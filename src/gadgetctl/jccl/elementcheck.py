@@ -25,10 +25,7 @@ class PointerValue:
     element: ConfigElement
     prop: PropertyDefinition
     value: PropertyValue
-
-    @property
-    def target(self) -> str:
-        return self.value.stripped
+    target: str  # the value without surrounding white space: the name pointed at
 
 
 @dataclass
@@ -201,7 +198,7 @@ class ElementChecker:
             return
         if prop.valuetype is ValueType.POINTER:
             if value.stripped:
-                report.pointers.append(PointerValue(element, prop, value))
+                report.pointers.append(PointerValue(element, prop, value, value.stripped))
             return
         key = (id(prop), value.text)
         try:

@@ -24,7 +24,9 @@ def _local(tag: str) -> str:
 
 
 def has_stray_text(root: etree._Element) -> bool:
-    for element in root.iter(etree.Element):
+    # XPath finds the elements holding elements and text that is not XML white space (a
+    # superset: Python's strip() also removes other white space); each is then confirmed.
+    for element in root.xpath("descendant-or-self::*[*][text()[normalize-space()]]"):
         children = [c for c in element if isinstance(c.tag, str)]
         if not children:
             continue

@@ -64,6 +64,7 @@ class Wiring:
         self.embedded = {c.full_name: c for e in self.effective for c in e.embedded()}
         self._severities: dict[int, Severity] | None = None
         self._suggesters: dict[bool, CloseNames] = {}
+        self._kind_blocked: dict[tuple[str, int | None], tuple[str, Severity] | None] = {}
 
     def check(self) -> list[Diagnostic]:
         found = self.duplicates()
@@ -222,11 +223,18 @@ class Wiring:
         view = self.reports[id(element)].views.get(id(element))
         if view is None or view.definition.abstract:
             return UNHANDLED, Severity.ERROR  # reported as CFG010 / CFG011
-        old = too_old(element.type, element.version, self.index.versions(element.type))
-        if old is not None:
-            return old.replace("the run time", "VR Juggler", 1), Severity.ERROR
-        reason = never_handled(element.type, RunTime.VRJUGGLER)
-        return (reason, Severity.WARNING) if reason else None
+        kind = (element.type, element.version)
+        if kind not in self._kind_blocked:  # the same for every element of a type and version
+            old = too_old(element.type, element.version, self.index.versions(element.type))
+            if old is not None:
+                self._kind_blocked[kind] = (
+                    old.replace("the run time", "VR Juggler", 1),
+                    Severity.ERROR,
+                )
+            else:
+                reason = never_handled(element.type, RunTime.VRJUGGLER)
+                self._kind_blocked[kind] = (reason, Severity.WARNING) if reason else None
+        return self._kind_blocked[kind]
 
     def _nodes(self) -> list[Node]:
         return [
@@ -249,7 +257,10 @@ class Wiring:
         nodes = self._nodes()
         fate = settle(nodes, RunTime.VRJUGGLER, self.index.versions)
         active = {name for name, why in fate.items() if why is None}
-        ours = settle(nodes, RunTime.GADGETCTL, self.index.versions)
+        # The run times' rules differ only for the types of DIFFERENCES: without any, their
+        # fates are the same.
+        differ = any(node.type in DIFFERENCES for node in nodes)
+        ours = settle(nodes, RunTime.GADGETCTL, self.index.versions) if differ else fate
         found = []
         waiting: list[
             tuple[ConfigElement, str, list[tuple[PointerValue, ConfigElement | None, str]]]
