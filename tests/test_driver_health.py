@@ -313,8 +313,9 @@ def shown_in(rows: dict[str, str], case: Case) -> bool:
     )
 
 
-def monitor_child(case: Case, config: Path, record: Path) -> list[str]:
-    """``gadgetctl monitor`` until its table shows the counters, then Ctrl-C; the table lines."""
+def monitor_child(case: Case, config: Path, record: Path, *, status: int = 0) -> list[str]:
+    """``gadgetctl monitor`` until its table shows the counters, then Ctrl-C; the table lines
+    (``status``: the exit status expected, 1 when a device faulted)."""
     command = [
         sys.executable,
         "-m",
@@ -340,7 +341,7 @@ def monitor_child(case: Case, config: Path, record: Path) -> list[str]:
         )
         assert shown and child.poll() is None, (out.lines[-5:], err.lines[-20:])
         child.send_signal(signal.SIGINT)  # Ctrl-C: the statistics are still written
-        assert child.wait(timeout=WAIT) == 0, err.lines[-20:]
+        assert child.wait(timeout=WAIT) == status, err.lines[-20:]
     finally:
         if child.poll() is None:
             child.kill()
@@ -400,3 +401,73 @@ def test_the_table_and_the_ndjson_statistics_show_the_garbage_counted(
         health = devices[name]["health"]
         assert shows_all(health, case), (name, health)
         assert {"faults", "reconnects", "dropped"} <= health.keys(), health
+
+
+# --------------------------------------------------------------------------- faults and reconnects
+
+#: A joystick unplugged (its FIFO replaced) after every 30 events: each time the driver reads
+#: the end of the file, faults, and is reconnected to the new FIFO.
+UNPLUGGED = Case(
+    "LinuxJoydev_drv",
+    ("Joystick",),
+    ("faults", "reconnects"),
+    lambda tmp: emulator_class("LinuxJoydev_drv", "JoydevEmulator")(
+        tmp / "js0", scenario="disconnect", disconnect_after=30
+    ),
+    lambda text, emu, tmp: set_property(text, "port_name", str(tmp / "js0")),
+)
+LAST_FAULT = re.compile(r"last fault (\d\d:\d\d:\d\d) JoystickDisconnected: \S*js0: end of file")
+
+
+def clock_times(began: float, ended: float) -> set[str]:
+    """The HH:MM:SS a view may print for a moment between ``began`` and ``ended``."""
+    return {
+        time.strftime("%H:%M:%S", time.localtime(s)) for s in range(int(began) - 1, int(ended) + 2)
+    }
+
+
+def test_faults_and_reconnects_show_with_the_last_reason_and_its_time(tmp_path: Path) -> None:
+    from rich.console import Console
+
+    from gadgetctl.cli.monitor_live import LiveView
+    from gadgetctl.input.manager import InputManager
+    from gadgetctl.monitor.session import MonitorSession
+
+    began = time.time()
+    with UNPLUGGED.emulator(tmp_path) as emu:
+        manager, configuration = InputManager.from_files([example(UNPLUGGED, emu, tmp_path)])
+        try:
+            session = MonitorSession(manager, configuration, selectors=["Joystick"])
+            session.start()
+            view = LiveView(session, Console(file=io.StringIO(), width=250, height=60))
+            line = ""
+
+            def rendered() -> bool:
+                nonlocal line
+                session.step()
+                line = next(
+                    (x for x in view.text(250, 60).splitlines() if x.startswith("Joystick ")), ""
+                )
+                return shows_all(counted(line), UNPLUGGED) and LAST_FAULT.search(line) is not None
+
+            assert wait_until(rendered, timeout=WAIT, pause=0.02), line
+        finally:
+            manager.shutdown()
+    assert LAST_FAULT.search(line).group(1) in clock_times(began, time.time()), line
+
+    record = tmp_path / "run.ndjson"
+    began = time.time()
+    (tmp_path / "table").mkdir()
+    with UNPLUGGED.emulator(tmp_path / "table") as emu:
+        lines = monitor_child(
+            UNPLUGGED, example(UNPLUGGED, emu, tmp_path / "table"), record, status=1
+        )
+    ended = time.time()
+    row = device_rows(lines, UNPLUGGED)["Joystick"]
+    assert shows_all(counted(row), UNPLUGGED), row
+    assert LAST_FAULT.search(row).group(1) in clock_times(began, ended), row
+    stats = [json.loads(x) for x in record.read_text().splitlines() if '"type":"stats"' in x]
+    health = stats[-1]["devices"]["Joystick"]["health"]
+    assert health["faults"] >= 1 and health["reconnects"] >= 1, health
+    assert health["last_fault"].endswith("js0: end of file"), health
+    assert began <= health["last_fault_at"] <= ended, health

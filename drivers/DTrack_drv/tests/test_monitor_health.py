@@ -116,6 +116,6 @@ def test_health_text_names_trouble_only_and_the_last_fault():
             "last_fault_at": 0.0,
         }
     )
-    assert text.startswith("skipped_bytes 12, reconnects 1, last fault ") and text.endswith(
-        "no data for 2 s"
-    )
+    assert text.startswith(
+        "skipped_bytes 12, reconnects 1, faults 1, last fault "
+    ) and text.endswith("no data for 2 s")

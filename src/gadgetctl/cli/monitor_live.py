@@ -336,9 +336,7 @@ class LiveView:
                 "red" if stats.dropped else "",
                 1 if stats.dropped else 2,
             )
-            if stats.faults:
-                head.add(f"  faults {stats.faults}", "red", 1)
-            health = health_text(view.health)
+            health = health_text(view.health)  # faults and reconnects included
             if health:
                 head.add(f"  health: {health}", "yellow", 1)
             head.add(f"  age {age_text(view.age):>9}", "", 2)

@@ -141,13 +141,13 @@ COLUMNS = ("NAME", "KIND", "TYPE", "STATUS", "RATE Hz", "/FRAME", "DROPPED", "AG
 #: Driver counters of traffic, not of trouble: left out of the health summary.
 THROUGHPUT = frozenset({"datagrams", "packets", "frames", "records", "polls", "other_messages",
                         "requests", "replies", "messages", "lobs_sent", "connects"})
-#: Health fields shown elsewhere (the dropped and faults columns) or formatted with another.
-_SHOWN_ELSEWHERE = frozenset({"dropped", "faults", "last_fault", "last_fault_at"})
+#: Health fields shown elsewhere (the dropped column) or formatted with another.
+_SHOWN_ELSEWHERE = frozenset({"dropped", "last_fault", "last_fault_at"})
 
 
 def health_text(health: Mapping[str, Any]) -> str:
-    """The trouble a driver counted (non-zero counters) and its last fault with its time;
-    empty when all is well."""
+    """The trouble a driver counted (non-zero counters, faults and reconnects over the
+    device's life) and its last fault with its time; empty when all is well."""
     import time
 
     parts = [f"{name} {value:g}" for name, value in health.items()

@@ -81,6 +81,7 @@ class _Supervision:
             device.start_sampling()
         except Exception as err:
             device.error = describe(err)
+            device.error_at = time.time()  # the reason and the time of the last fault go together
             device.state = DeviceState.FAULTED
             self.delay = self.policy.next_delay(self.delay)
             return False

@@ -204,7 +204,9 @@ class DeviceTrack:
         self.count = 0
         self.units: dict[str, int] = {}
         self._dropped_seen = self._dropped_now()
-        self._faults_seen = device.faults
+        # a device is new to its manager, and the session started it: a fault before the first
+        # frame (while it started) is one of this run's too
+        self._faults_seen = 0
         self.digital_state: np.ndarray | None = None
         self.presses: np.ndarray | None = None
         self.changed: np.ndarray | None = None
