@@ -31,7 +31,7 @@ DRIVERS = [
     ("OptiTrack_drv", {"position"}, r"<port>"),
     ("PinchGlove_drv", {"glove", "digital"}, r"<port>"),
     ("MotionStar_drv", {"position"}, r"<server_port>"),
-    ("VRPN_drv", {"position", "digital", "analog"}, r"VRPN device\(s\) on"),
+    ("VRPN_drv", {"position", "digital", "analog"}, r"VRPN devices? on"),
     ("IS900_drv", {"position", "digital", "analog"}, r"<port>"),
     ("SpaceBall_drv", {"digital", "analog"}, r"<port>"),
     ("Fastrak_drv", {"position", "digital"}, r"<port>"),
