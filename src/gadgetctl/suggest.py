@@ -90,6 +90,7 @@ class CloseNames:
         self._memo: dict[tuple[str, int, float], list[str]] = {}
         self._lengths_present = sorted(set(self._key_lengths))
         self._asked = 0
+        self._alphabet: frozenset[str] | None = None  # every letter of every candidate
         self._near: Any = None  # (sorted hashes of candidates and their deletions, their rows)
 
     def _fold(self, text: str) -> str:
@@ -104,6 +105,8 @@ class CloseNames:
             start, stop = self._window(len(folded), cutoff)
             if stop - start <= self.EXHAUSTIVE:
                 matches = get_close_matches(folded, self._keys[start:stop], n=n, cutoff=cutoff)
+            elif self._shares_too_little(folded, start, cutoff):
+                matches = []
             else:
                 self._asked += 1
                 matches = (
@@ -117,6 +120,16 @@ class CloseNames:
             if len(self._memo) < 65536:
                 self._memo[key] = found
         return list(found)
+
+    def _shares_too_little(self, word: str, start: int, cutoff: float) -> bool:
+        """Whether no candidate can reach ``cutoff`` because too few of the word's letters occur
+        in any of them (a word unlike every name, such as one naming nothing, is then
+        answered without the index)."""
+        if self._alphabet is None:
+            self._alphabet = frozenset("".join(self._keys))
+        shared = sum(1 for char in word if char in self._alphabet)
+        shortest = self._key_lengths[start] if start < len(self._key_lengths) else 0
+        return 2.0 * shared / (len(word) + shortest) < cutoff if word else False
 
     def _window(self, size: int, cutoff: float) -> tuple[int, int]:
         """The slice of candidates whose length can reach ``cutoff`` (difflib's first test,

@@ -21,6 +21,7 @@ from gadgetctl.diagnostics import Diagnostic, Severity
 from gadgetctl.jccl.activation import DIFFERENCES, Node, RunTime, never_handled, settle, too_old
 from gadgetctl.jccl.chains import fold_chains
 from gadgetctl.jccl.configuration import ConfigElement, Configuration
+from gadgetctl.jccl.definitions import PropertyDefinition
 from gadgetctl.jccl.elementcheck import ElementReport, PointerValue, at, describe
 from gadgetctl.jccl.runtime import missing_target_effect
 from gadgetctl.jccl.typeindex import TypeIndex
@@ -62,20 +63,24 @@ class Wiring:
         self.effective = config.elements
         self.by_name = {e.name: e for e in self.effective}
         self.embedded = {c.full_name: c for e in self.effective for c in e.embedded()}
-        self._severities: dict[int, Severity] | None = None
+        self._severities: dict[Severity, set[int]] | None = None
         self._suggesters: dict[bool, CloseNames] = {}
+        self._taken: dict[tuple[int, str], bool] = {}  # (property, target type) -> allowed
         self._kind_blocked: dict[tuple[str, int | None], tuple[str, Severity] | None] = {}
 
     def check(self) -> list[Diagnostic]:
         found = self.duplicates()
         wrong: list[tuple[PointerValue, ConfigElement]] = []  # pointers at a type not allowed
+        by_name = self.by_name
         for element in self.config.loaded:
             for pointer in self.reports[id(element)].pointers:
-                missing = self.pointer(pointer, element)
-                if missing is not None:
-                    found.append(missing)
-                elif self._wrong_type(pointer) is not None:
-                    wrong.append((pointer, self.by_name[pointer.target]))
+                target = by_name.get(pointer.target)
+                if target is None:
+                    missing = self.pointer(pointer, element)
+                    if missing is not None:
+                        found.append(missing)
+                elif not self._takes(pointer.prop, target.type):
+                    wrong.append((pointer, target))
         found.extend(self._wrong_types(wrong))
         found.extend(self.pending())
         return found
@@ -156,21 +161,22 @@ class Wiring:
             hint=f"Did you mean {', '.join(repr(c) for c in close)}?" if close else None,
         )
 
-    def _wrong_type(self, pointer: PointerValue) -> ConfigElement | None:
-        """The top-level target of the pointer when its type is not one the property takes."""
-        target = self.by_name.get(pointer.target)
-        if target is None:
-            return None
-        allowed = pointer.prop.allowed_types
-        index = self.index
-        if (
-            allowed
-            and all(index.known(t) for t in allowed)
-            and index.known(target.type)
-            and not index.is_any(target.type, allowed)
-        ):
-            return target
-        return None
+    def _takes(self, prop: PropertyDefinition, type_name: str) -> bool:
+        """Whether the pointer property may name an element of this type (unknown types are
+        not judged); the same for every pointer of a property at a type, so asked once."""
+        key = (id(prop), type_name)
+        takes = self._taken.get(key)
+        if takes is None:
+            allowed = prop.allowed_types
+            index = self.index
+            takes = not (
+                allowed
+                and all(index.known(t) for t in allowed)
+                and index.known(type_name)
+                and not index.is_any(type_name, allowed)
+            )
+            self._taken[key] = takes
+        return takes
 
     def _wrong_types(self, wrong: list[tuple[PointerValue, ConfigElement]]) -> list[Diagnostic]:
         """CFG032 for each pointer at an element of a type the property does not take; a
@@ -374,13 +380,20 @@ class Wiring:
         can never be active, an embedded target; a pure waiting cycle is an error."""
         if self._severities is None:
             self._severities = self._root_severities(active)
-        return self._severities.get(id(element), Severity.ERROR)
+        key = id(element)
+        if key in self._severities.get(Severity.ERROR, ()):
+            return Severity.ERROR
+        return (
+            Severity.WARNING
+            if key in self._severities.get(Severity.WARNING, ())
+            else Severity.ERROR
+        )
 
-    def _root_severities(self, active: set[str]) -> dict[int, Severity]:
-        """:meth:`_root_severity` of every pending element at once, in time linear in the
-        pointers: each cause is spread backwards along the unmet pointers to everything that
-        waits for it, directly or through a chain (walking each element's chain again made
-        8,000 chained aliases cost 8,000 x 8,000 steps)."""
+    def _root_severities(self, active: set[str]) -> dict[Severity, set[int]]:
+        """The pending elements each severity of cause reaches, for :meth:`_root_severity`,
+        in time linear in the pointers: each cause is spread backwards along the unmet
+        pointers to everything that waits for it, directly or through a chain (walking each
+        element's chain again made 8,000 chained aliases cost 8,000 x 8,000 steps)."""
         missing = Severity.ERROR if self.scope.complete else Severity.WARNING
         waiters: dict[int, list[int]] = defaultdict(list)  # element -> elements pointing at it
         reaches: dict[Severity, list[int]] = {Severity.ERROR: [], Severity.WARNING: []}
@@ -410,14 +423,7 @@ class Wiring:
                     if waiter not in seen:
                         seen.add(waiter)
                         stack.append(waiter)
-        result: dict[int, Severity] = {}
-        for current in pending:
-            key = id(current)
-            found = [s for s, reached in caused.items() if key in reached]
-            result[key] = (
-                Severity.ERROR if not found or Severity.ERROR in found else Severity.WARNING
-            )
-        return result
+        return caused
 
 
 class _FileRelation:
