@@ -117,8 +117,10 @@ def test_chains_fold_into_their_heads_and_branches_are_not_lost(tmp_path):
 def test_fold_chains_gives_every_key_one_head():
     from gadgetctl.jccl.chains import fold_chains
 
-    heads = fold_chains("abcdefg", {"b": "a", "c": "b", "d": "b", "e": "f", "f": "e", "g": "z"})
-    assert heads == {"a": ["b", "c", "d"], "g": [], "e": ["f"]}
+    # 1 and 3 follow 0 and 2 follows 1 (a branch); 4 and 5 follow each other (a cycle); 6's
+    # leader is not among the positions
+    heads = fold_chains(7, {1: 0, 2: 1, 3: 0, 4: 5, 5: 4, 6: 99})
+    assert heads == {0: [1, 3, 2], 6: [], 4: [5]}
 
 
 @pytest.mark.timeout(300)
@@ -271,4 +273,5 @@ def test_the_near_index_answers_as_difflib_or_leaves_it_to_the_bounded_pass():
         theirs = get_close_matches(word, names, n=3, cutoff=0.7)
         assert ours[:1] == theirs[:1] and len(ours) == len(theirs), word
         assert all(ratio(word, found) >= 0.7 for found in ours)
-    assert answered > 75  # most: a changed letter next to names two letters longer is left to the pass
+    # most: a changed letter next to names two letters longer is left to the bounded pass
+    assert answered > 75

@@ -4,45 +4,39 @@ reported once, at the head of the chain, with a count of the elements behind it.
 
 from __future__ import annotations
 
-from collections import defaultdict, deque
-from collections.abc import Hashable, Iterable, Mapping
-from typing import TypeVar
-
-K = TypeVar("K", bound=Hashable)
+from collections.abc import Mapping
 
 
-def fold_chains(keys: Iterable[K], leader: Mapping[K, K]) -> dict[K, list[K]]:
-    """Each head (a key whose leader is not among ``keys``) with the keys that follow it,
-    directly or in turn, nearest first; in the order of ``keys``. Every key is either a head
-    or a follower of exactly one head; in a cycle the first key of it (in order) is its head.
-    Linear in the number of keys."""
-    keys = list(keys)
-    present = set(keys)
-    behind: dict[K, list[K]] = defaultdict(list)
-    for key in keys:
-        ahead = leader.get(key)
-        if ahead is not None and ahead in present and ahead != key:
-            behind[ahead].append(key)
-    heads: dict[K, list[K]] = {}
-    assigned: set[K] = set()
+def fold_chains(count: int, leader: Mapping[int, int]) -> dict[int, list[int]]:
+    """Positions ``0..count-1``, each following the position ``leader`` gives (if any): each
+    head (a position without a leader) with the positions that follow it, directly or in
+    turn, nearest first; heads in order (those of cycles last). Every position is either a head or a follower of
+    exactly one head; in a cycle the first position of it is its head. Linear in ``count``."""
+    behind: dict[int, list[int]] = {}
+    for key in sorted(leader):
+        ahead = leader[key]
+        if 0 <= ahead < count and ahead != key:
+            behind.setdefault(ahead, []).append(key)
+    assigned = bytearray(count)
+    heads: dict[int, list[int]] = {}
 
-    def gather(head: K) -> None:
-        assigned.add(head)
-        followers: list[K] = []
-        queue = deque([head])
-        while queue:
-            for follower in behind.get(queue.popleft(), ()):
-                if follower not in assigned:
-                    assigned.add(follower)
+    def gather(head: int) -> None:
+        assigned[head] = 1
+        followers: list[int] = []
+        queue = [head]
+        for current in queue:  # the list grows as followers are found: breadth first
+            for follower in behind.get(current, ()):
+                if not assigned[follower]:
+                    assigned[follower] = 1
                     followers.append(follower)
                     queue.append(follower)
         heads[head] = followers
 
-    for key in keys:
+    for key in range(count):
         ahead = leader.get(key)
-        if ahead is None or ahead not in present or ahead == key:
+        if ahead is None or not 0 <= ahead < count or ahead == key:
             gather(key)
-    for key in keys:  # what is left hangs on cycles
-        if key not in assigned:
+    for key in range(count):  # what is left hangs on cycles
+        if not assigned[key]:
             gather(key)
     return heads

@@ -182,16 +182,23 @@ class Wiring:
         """CFG032 for each pointer at an element of a type the property does not take; a
         chain of elements of one type each naming the one before through the same property
         (aliases naming aliases) is one finding at its head, with a count."""
-        keys = [(id(p.element), p.prop.name) for p, _ in wrong]
-        counts: dict[tuple[int, str], int] = defaultdict(int)
-        for key in keys:
-            counts[key] += 1
-        leader = {}
-        for key, (pointer, target) in zip(keys, wrong, strict=True):
-            ahead = (id(target), pointer.prop.name)
-            if target.type == pointer.element.type and counts[key] == 1 and counts.get(ahead) == 1:
-                leader[key] = ahead
-        heads = fold_chains(range(len(keys)), _by_position(keys, leader))
+        wrongs_of: dict[int, int] = defaultdict(int)  # element -> its pointers at a wrong type
+        position: dict[int, int] = {}
+        for i, (pointer, _) in enumerate(wrong):
+            wrongs_of[id(pointer.element)] += 1
+            position[id(pointer.element)] = i
+        leader: dict[int, int] = {}
+        for i, (pointer, target) in enumerate(wrong):
+            ahead = position.get(id(target))
+            if (
+                ahead is not None
+                and target.type == pointer.element.type
+                and wrongs_of[id(pointer.element)] == 1
+                and wrongs_of[id(target)] == 1
+                and wrong[ahead][0].prop.name == pointer.prop.name
+            ):
+                leader[i] = ahead
+        heads = fold_chains(len(wrong), leader)
         found = []
         for position, followers in heads.items():
             pointer, target = wrong[position]
@@ -347,7 +354,7 @@ class Wiring:
             if ahead is not None and target.type == element.type and waiting[ahead][1] == where:
                 leader[i] = ahead
         found = []
-        for head, followers in fold_chains(range(len(waiting)), leader).items():
+        for head, followers in fold_chains(len(waiting), leader).items():
             element, where, reasons = waiting[head]
             pointer, target, why = reasons[0]
             text = (
@@ -460,13 +467,6 @@ class _FileRelation:
         if first is not None and second is not None and first < second:
             return f"{new.name} is given after {old.name}"
         return None
-
-
-def _by_position(keys: list, leader: dict) -> dict[int, int]:
-    """``leader`` (key -> key) as positions in ``keys``: each key's position leads to the
-    position of the (single) entry of its leader's key."""
-    position = {key: i for i, key in enumerate(keys)}
-    return {i: position[leader[key]] for i, key in enumerate(keys) if key in leader}
 
 
 def _same_text(one: ConfigElement, other: ConfigElement) -> bool:
