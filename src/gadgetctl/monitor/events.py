@@ -22,7 +22,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -39,6 +39,9 @@ from gadgetctl.monitor.poses import (
 )
 from gadgetctl.monitor.units import from_meters
 from gadgetctl.safetext import printable
+
+if TYPE_CHECKING:
+    from gadgetctl.monitor.session import MonitorSession
 
 DEFAULT_DEAD_BAND = 0.02  # of an analog device's range (min..max)
 DEFAULT_DISTANCE = 0.01  # meters
@@ -95,8 +98,9 @@ class ChangeDetector:
         self._devices: dict[str, _DeviceMemory] = {}
         self._markers_seen = 0
 
-    def frame(self, session: Any, moment: float) -> list[ChangeEvent]:
-        """The changes of the session's current frame, in time order per device."""
+    def frame(self, session: MonitorSession, moment: float) -> list[ChangeEvent]:
+        """The changes of the session's current frame (its watched devices and its new
+        markers), in time order."""
         events: list[ChangeEvent] = []
         manager = session.manager
         for name in session.watched:
