@@ -10,8 +10,16 @@ offers the 24 lines as digital units 0-23 (0 or 1). ``standalone.py`` holds the 
 GADGETCTL_API_VERSION = 1
 PLUGIN_NAME = "ElexolEther24_drv"
 ELEMENT_TYPES = {"elexol_ether24": ("digital",)}
-# Commands go to the board at ip_address, UDP port 2424 (ip_address may carry ":port").
-TRANSPORTS = {"elexol_ether24": {"kind": "udp-peer", "host": "ip_address"}}
+# Commands go to the board at ip_address, UDP port 2424 (ip_address may carry ":port"), or,
+# with config_method find_mac, to the board that answers discovery with mac_address.
+TRANSPORTS = {
+    "elexol_ether24": {
+        "kind": "udp-peer",
+        "host": "ip_address",
+        "mac": "mac_address",
+        "method": "config_method",
+    }
+}
 
 
 def register(registry):

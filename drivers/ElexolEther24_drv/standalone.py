@@ -7,6 +7,11 @@ input), ``'@'`` pull-up (0 = on), ``'#'`` threshold (0 = 2.5 V, 1 = 1.4 V), ``'$
 trigger (0 = on). A reply that is not two bytes with a known port letter is a counted bad
 reply, never a fault.
 
+Discovery (``config_method`` Match MAC Address): ``IO24`` sent to port 2424, by default to
+the broadcast address 255.255.255.255; each board answers ``IO24`` + its 6-byte MAC + a
+2-byte firmware version. :func:`find_board` stops at the first reply with the wanted MAC
+(upstream listened for a whole second, then matched); replies of another shape are counted.
+
 Upstream fix (Gadgeteer's ``Ether24``): a line is reported as 0 or 1; upstream stored the
 masked bit value (8, 16, ...), so line 3 read as 8 when on.
 """
@@ -22,6 +27,10 @@ BOARD_PORT = 2424
 PORTS = 3
 LINES = 8 * PORTS
 REGISTERS = {"direction": b"!", "pullup": b"@", "threshold": b"#", "schmitt_trigger": b"$"}
+IDENTIFY = b"IO24"
+IDENTITY_LENGTH = len(IDENTIFY) + 6 + 2
+BROADCAST = "255.255.255.255"
+DISCOVERY_TIME = 1.0  # seconds upstream listens for boards
 
 
 class Ether24Disconnected(ConnectionError):
@@ -49,6 +58,73 @@ def parse_address(text: str) -> tuple[str, int]:
     if not 1 <= number <= 65535:
         raise ValueError(f"port {number} is not between 1 and 65535")
     return host, number
+
+
+def parse_mac(text: str) -> bytes:
+    """Six bytes from ``00:0A:BC:12:34:56`` (``-`` or no separators also do)."""
+    digits = text.strip().replace(":", "").replace("-", "")
+    if len(digits) != 12:
+        raise ValueError(f"{text!r} is not a MAC address (six hex bytes, e.g. 00:0A:BC:12:34:56)")
+    try:
+        return bytes.fromhex(digits)
+    except ValueError:
+        raise ValueError(f"{text!r} is not a MAC address (six hex bytes)") from None
+
+
+def format_mac(raw: bytes) -> str:
+    return ":".join(f"{b:02X}" for b in raw)
+
+
+@dataclass(frozen=True)
+class BoardIdentity:
+    """A board's answer to ``IO24``: where it answered from, its MAC and firmware."""
+
+    host: str
+    port: int
+    mac: bytes
+    firmware: int
+
+
+@dataclass
+class DiscoveryCounts:
+    replies: int = 0
+    bad_replies: int = 0
+
+
+def find_board(
+    mac: bytes,
+    target: tuple[str, int] = (BROADCAST, BOARD_PORT),
+    *,
+    listen: float = DISCOVERY_TIME,
+    counts: DiscoveryCounts | None = None,
+) -> BoardIdentity | None:
+    """Send ``IO24`` to ``target`` and wait up to ``listen`` seconds for the board with
+    ``mac``; None when it did not answer. Other boards' answers are passed over."""
+    counts = counts if counts is not None else DiscoveryCounts()
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
+        sock.setblocking(False)
+        try:
+            sock.sendto(IDENTIFY, target)
+        except OSError as err:
+            raise Ether24Disconnected(
+                f"cannot send the discovery to {target[0]}:{target[1]}: {err}"
+            ) from None
+        deadline = time.monotonic() + listen
+        while (left := deadline - time.monotonic()) > 0:
+            if not select.select([sock], [], [], left)[0]:
+                break
+            try:
+                data, peer = sock.recvfrom(64)
+            except (BlockingIOError, ConnectionRefusedError):
+                continue
+            if len(data) != IDENTITY_LENGTH or not data.startswith(IDENTIFY):
+                counts.bad_replies += 1
+                continue
+            counts.replies += 1
+            if data[4:10] == mac:
+                return BoardIdentity(peer[0], peer[1], data[4:10], int.from_bytes(data[10:], "big"))
+    return None
 
 
 def lines(values: list[int], inverts: list[int]) -> list[int]:

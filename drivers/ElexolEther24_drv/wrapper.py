@@ -4,27 +4,41 @@ the port's ``invert`` setting. The embedded ``port_a``/``port_b``/``port_c`` ele
 pins (start level, direction, pull-up, threshold, Schmitt trigger), written when sampling
 starts, in upstream's order.
 
-Only ``config_method`` Static IP is supported: Match MAC Address discovers the board by
-broadcasting, which gadgetctl does not do; such an element stays pending with that reason.
-``ip_address`` may end in ``:port`` to reach a board (or its emulator) on another port than
-2424. No reply for :attr:`Ether24Device.peer_timeout` seconds raises from ``sample()``, so the
+``config_method`` Static IP talks to ``ip_address``, which may end in ``:port`` to reach a
+board (or its emulator) on another port than 2424. Match MAC Address (the definition's
+default) finds the board whose ``mac_address`` answers ``IO24``, sent by default to the
+broadcast address 255.255.255.255 on port 2424, each time sampling starts (so a board that
+changed its address is found again after a loss). The environment variable
+``GADGETCTL_ETHER24_DISCOVERY`` (``host[:port]``) sends it elsewhere: a subnet's broadcast
+address on a machine with several interfaces (255.255.255.255 leaves by one only), or a
+board's own address. A board that does not answer within a second faults the device, which
+the input manager restarts. No reply for :attr:`Ether24Device.peer_timeout` seconds raises from ``sample()``, so the
 input manager marks the device faulted and restarts it.
 """
 
 from __future__ import annotations
+
+import os
 
 from gadgetctl.input import DeviceConfigError, Digital
 from gadgetctl.jccl.access import ElementAccess
 
 from .standalone import (
     BOARD_PORT,
+    BROADCAST,
     PORTS,
+    DiscoveryCounts,
     Ether24Board,
     Ether24Disconnected,
     PortSettings,
+    find_board,
+    format_mac,
     lines,
     parse_address,
+    parse_mac,
 )
+
+DISCOVERY_VARIABLE = "GADGETCTL_ETHER24_DISCOVERY"
 
 _PIN_PROPERTIES = {
     "initial_value": "initial_value",
@@ -67,22 +81,37 @@ class Ether24Device(Digital):
         self.ports = [PortSettings()] * PORTS
         self._board: Ether24Board | None = None
         self._started = False
+        self.mac: bytes | None = None  # set for config_method find_mac
+        self.discovery_target = (BROADCAST, BOARD_PORT)
+        self.discovery_time = 1.0
+        self.discovery = DiscoveryCounts()
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)
         method = access.string("config_method")
-        if method != "static_ip":
-            raise DeviceConfigError(
-                f"config_method {method!r} finds the board by broadcasting, which gadgetctl "
-                "does not do: set config_method static_ip and ip_address"
-            )
-        try:
-            self.host, self.board_port = parse_address(access.string("ip_address"))
-        except ValueError as err:
-            raise DeviceConfigError(f"ip_address: {err}") from None
+        if method == "find_mac":
+            try:
+                self.mac = parse_mac(access.string("mac_address"))
+            except ValueError as err:
+                raise DeviceConfigError(f"mac_address: {err}") from None
+            target = os.environ.get(DISCOVERY_VARIABLE, "").strip()
+            if target:
+                try:
+                    self.discovery_target = parse_address(target)
+                except ValueError as err:
+                    raise DeviceConfigError(f"{DISCOVERY_VARIABLE}: {err}") from None
+        elif method == "static_ip":
+            try:
+                self.host, self.board_port = parse_address(access.string("ip_address"))
+            except ValueError as err:
+                raise DeviceConfigError(f"ip_address: {err}") from None
+        else:
+            raise DeviceConfigError(f"config_method {method!r} is neither static_ip nor find_mac")
         self.ports = [_port_settings(access, p) for p in ("port_a", "port_b", "port_c")]
 
     def start_sampling(self) -> None:
+        if self.mac is not None:
+            self._discover()
         if self._board is None:
             self._board = Ether24Board(self.host, self.board_port)
         board = self._board
@@ -117,17 +146,44 @@ class Ether24Device(Digital):
         if self._board is not None:
             self._board.close()
 
+    def _discover(self) -> None:
+        """Find the board with :attr:`mac`; a new address replaces the board's connection."""
+        assert self.mac is not None
+        found = find_board(
+            self.mac, self.discovery_target, listen=self.discovery_time, counts=self.discovery
+        )
+        if found is None:
+            host, port = self.discovery_target
+            raise Ether24Disconnected(
+                f"no Ether I/O 24 with MAC {format_mac(self.mac)} answered IO24 sent to "
+                f"{host}:{port} within {self.discovery_time:g} s"
+            )
+        if (found.host, found.port) != (self.host, self.board_port):
+            if self._board is not None:
+                self._board.close()
+                self._board = None
+            self.host, self.board_port = found.host, found.port
+
     def _add(self, values: list[int]) -> None:
         self.add_digital_sample(lines(values, [p.invert for p in self.ports]))
 
     @property
     def counters(self) -> dict[str, int]:
         b = self._board
+        found = (
+            {
+                "discovery_replies": self.discovery.replies,
+                "bad_discovery_replies": self.discovery.bad_replies,
+            }
+            if self.mac is not None
+            else {}
+        )
         if b is None:
-            return {}
+            return found
         return {
             "requests": b.requests,
             "replies": b.replies,
             "bad_replies": b.bad_replies,
             "timeouts": b.timeouts,
+            **found,
         }

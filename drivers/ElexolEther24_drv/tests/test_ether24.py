@@ -1,6 +1,6 @@
 """The Ether I/O 24 driver against its loopback board: the 24 lines as 0/1 (upstream stored
 raw bit values), inversion, the pin set-up written in upstream's order, garbage replies,
-the board going silent and coming back, find_mac refused without broadcasting."""
+the board going silent and coming back, find_mac discovery (sent to loopback, never broadcast)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,15 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from ElexolEther24_drv.emulator import IDLE_PATTERN, Ether24Emulator
-from ElexolEther24_drv.standalone import lines, parse_address
+from ElexolEther24_drv.emulator import IDLE_PATTERN, MAC, Ether24Emulator
+from ElexolEther24_drv.standalone import (
+    DiscoveryCounts,
+    find_board,
+    format_mac,
+    lines,
+    parse_address,
+    parse_mac,
+)
 
 from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
 from gadgetctl.input.testing import frames_until
@@ -136,10 +143,87 @@ def test_a_silent_board_faults_and_data_returns_within_two_seconds(build) -> Non
     assert dev.restarts >= 1
 
 
-def test_find_mac_stays_pending_without_broadcasting(build) -> None:
-    manager = build(board("IO", "", method="find_mac"), pending_ok=True)
-    reasons = {p.name: p.message for p in manager.pending()}
-    assert "broadcasting" in reasons["IO"] and "static_ip" in reasons["IO"]
+def mac_board(name: str, mac: str) -> str:
+    return (
+        f'<elexol_ether24 name="{name}" version="1"><mac_address>{mac}</mac_address>'
+        "<config_method>find_mac</config_method></elexol_ether24>\n"
+    )
+
+
+def test_find_mac_finds_the_board_by_its_mac_and_reads_its_lines(build, monkeypatch) -> None:
+    # the discovery goes to the emulator's loopback address, never to a broadcast address
+    with Ether24Emulator(0, scenario="idle") as emu:
+        monkeypatch.setenv("GADGETCTL_ETHER24_DISCOVERY", emu.address)
+        manager = build(
+            mac_board("IO", format_mac(MAC).lower().replace(":", "-")) + proxy("L3", "IO", 3)
+        )
+        dev = manager.device("IO")
+        frames_until(manager, lambda: dev.store.total(DeviceKind.DIGITAL) > 2)
+        assert (dev.host, dev.board_port) == parse_address(emu.address)
+        assert dev.counters["discovery_replies"] == 1
+        expected = lines(list(IDLE_PATTERN), [0, 0, 0])[3]
+        assert (manager.proxy("L3").data in PRESSED) == bool(expected)
+
+
+def test_find_mac_with_no_such_board_is_pending_with_the_reason(build, monkeypatch) -> None:
+    with Ether24Emulator(0, scenario="idle") as emu:
+        monkeypatch.setenv("GADGETCTL_ETHER24_DISCOVERY", emu.address)
+        manager = build(
+            mac_board("Other", "00:00:00:00:00:01") + mac_board("Typo", "00:0A:BC:12:34"),
+            pending_ok=True,
+        )
+        reasons = {p.name: p.message for p in manager.pending()}
+    assert "no Ether I/O 24 with MAC 00:00:00:00:00:01 answered" in reasons["Other"]
+    assert emu.address in reasons["Other"]
+    assert "mac_address" in reasons["Typo"] and "not a MAC address" in reasons["Typo"]
+
+
+def test_a_bad_discovery_variable_is_a_config_error(build, monkeypatch) -> None:
+    monkeypatch.setenv("GADGETCTL_ETHER24_DISCOVERY", "127.0.0.1:99999")
+    manager = build(mac_board("IO", format_mac(MAC)), pending_ok=True)
+    (entry,) = manager.pending()
+    assert "GADGETCTL_ETHER24_DISCOVERY" in entry.message
+
+
+def test_find_board_passes_over_other_boards_and_counts_odd_replies() -> None:
+    import socket
+    import threading
+
+    wanted = bytes.fromhex("0011223344ff")
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as responder:
+        responder.bind(("127.0.0.1", 0))
+        where = responder.getsockname()
+
+        def answer() -> None:
+            data, peer = responder.recvfrom(64)
+            assert data == b"IO24"
+            responder.sendto(b"IO24" + b"\x00" * 6 + b"\x01\x00", peer)  # another board
+            responder.sendto(b"IO2", peer)  # too short
+            responder.sendto(b"XX24" + wanted + b"\x01\x00", peer)  # wrong head
+            responder.sendto(b"IO24" + wanted + b"\x02\x07", peer)
+
+        thread = threading.Thread(target=answer)
+        thread.start()
+        counts = DiscoveryCounts()
+        found = find_board(wanted, where, listen=5.0, counts=counts)
+        thread.join(5.0)
+    assert found is not None and found.mac == wanted and found.firmware == 0x0207
+    assert (found.host, found.port) == where
+    assert (counts.replies, counts.bad_replies) == (2, 2)
+
+
+def test_mac_addresses_in_the_usual_spellings() -> None:
+    raw = bytes.fromhex("000abc123456")
+    assert (
+        parse_mac("00:0A:BC:12:34:56")
+        == parse_mac("00-0a-bc-12-34-56")
+        == parse_mac("000ABC123456")
+        == raw
+    )
+    assert format_mac(raw) == "00:0A:BC:12:34:56"
+    for bad in ("", "00:0A:BC:12:34", "00:0A:BC:12:34:ZZ"):
+        with pytest.raises(ValueError):
+            parse_mac(bad)
 
 
 def test_validate_knows_the_24_lines_and_doctor_the_board(tmp_path: Path) -> None:
@@ -167,3 +251,17 @@ def test_validate_knows_the_24_lines_and_doctor_the_board(tmp_path: Path) -> Non
     (dev,) = report["devices"]
     assert dev["checks"][0]["target"] == "127.0.0.1:2500"
     assert dev["checks"][0]["status"] == "unchecked"
+
+
+def test_doctor_names_the_mac_a_find_mac_board_is_found_by(tmp_path: Path) -> None:
+    import json
+    import subprocess
+    import sys
+
+    path = tmp_path / "mac.jconf"
+    path.write_text(HEAD + mac_board("IO", "00:0A:BC:12:34:56") + "</elements>\n</configuration>\n")
+    command = [sys.executable, "-m", "gadgetctl", "doctor", str(path), "--format", "json"]
+    report = json.loads(subprocess.run(command, capture_output=True, text=True, timeout=60).stdout)
+    ((check,),) = [dev["checks"] for dev in report["devices"]]
+    assert check["target"] == "MAC 00:0A:BC:12:34:56" and check["status"] == "unchecked"
+    assert check["property"] == "mac_address"

@@ -79,6 +79,13 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
                                     prop=transport.props["host"]))
         return checks
     if kind == "udp-peer":
+        # a board found by its MAC address (optional keys "mac" and "method": the element's
+        # discovery method property says "find_mac") is reached through discovery, not host
+        mac = str(_read(access, transport, "mac") or "")
+        if mac and _read(access, transport, "method") == "find_mac":
+            return [PortCheck("udp", f"MAC {mac}", Status.UNCHECKED,
+                              f"the board with MAC {mac} is looked for by the driver's discovery "
+                              "when the device starts (not contacted)", prop=transport.props["mac"])]
         host = str(_read(access, transport, "host") or "")
         return [PortCheck("udp", host or "(no address)", Status.UNCHECKED,
                           f"commands are sent to {host or 'no address'} (UDP; not contacted)",

@@ -32,7 +32,9 @@ TRANSPORT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "file": (("path",), ()),
     "serial": (("port",), ("baud",)),
     "udp": (("port",), ("host", "peer_port", "group")),  # group: a literal multicast address
-    "udp-peer": (("host",), ()),  # only sends to host (a property; "host:port" or a fixed port)
+    # only sends to host (a property; "host:port" or a fixed port); or to the board whose "mac"
+    # answers discovery, when the "method" property says find_mac
+    "udp-peer": (("host",), ("mac", "method")),
     "tcp": (("host", "port"), ()),
     "vrpn": (("name",), ("count",)),  # a Device@host name; count: 0 means unused
     "shm": (("key",), ()),  # a System V shared-memory key (trackd)
