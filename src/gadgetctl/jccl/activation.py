@@ -15,6 +15,7 @@ from collections import defaultdict
 from collections.abc import Callable, Collection, Iterable, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
+from typing import NamedTuple
 
 from gadgetctl.jccl.runtime import NEVER_HANDLED, NO_DEPENDENCY_CHECK, minimum_version
 
@@ -88,11 +89,11 @@ def refusal(
     return never_handled(type_name, runtime) or too_old(type_name, version, versions)
 
 
-@dataclass(frozen=True, slots=True)
-class Node:
+class Node(NamedTuple):
     """One top-level element as the rules see it: ``targets`` are the names its pointers
     (and its embedded elements' pointers) give; ``refused`` says why it can never become
-    active for a reason outside the rules (no definition, abstract type, no driver...)."""
+    active for a reason outside the rules (no definition, abstract type, no driver...).
+    (A named tuple: a configuration of 50,000 elements makes 50,000 of them per check.)"""
 
     name: str
     type: str
