@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -13,79 +11,35 @@ import pytest
 from Wanda_drv.emulator import GARBAGE_CHUNKS, WandaEmulator, encode_packet
 from Wanda_drv.standalone import PacketScanner, Wanda, WandaDisconnected, decode_packet
 
-from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
+from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing import (
+    InputManagers,
+    corpus_file,
+    gather,
+    rewritten,
+    run_gadgetctl,
+    wait_until,
+)
 
 pytestmark = pytest.mark.timeout(30)
 
-HERE = Path(__file__).resolve()
-REPO = HERE.parents[3]
-CONFIG_FILES = (
-    REPO.parent
-    / "shared"
-    / "corpus"
-    / "vrjuggler"
-    / "modules"
-    / "vrjuggler"
-    / "data"
-    / "configFiles"
-)
 FAST = {"reset_time": 0.0, "hello_timeout": 2.0}
-HEAD = (
-    '<?xml version="1.0" encoding="UTF-8"?>\n'
-    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
-    '<elements>\n<input_manager name="IM" version="2"><driver>Wanda_drv</driver></input_manager>\n'
-)
-TAIL = "</elements>\n</configuration>\n"
 
 
 @pytest.fixture
 def emulator() -> Iterator[Callable[..., WandaEmulator]]:
-    made: list[WandaEmulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> WandaEmulator:
-        emu = WandaEmulator(scenario, **{"rate": 100.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
+    with emulators(WandaEmulator, rate=100.0) as start:
+        yield start
 
 
 @pytest.fixture
-def managers(monkeypatch) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def build(path: Path) -> InputManager:
-        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
-        manager, configuration = InputManager.from_files([path], options=options)
-        made.append(manager)
-        loaded = manager.loader.load_name("Wanda_drv", manager.search)
-        assert loaded.ok, [d.message for d in loaded.diagnostics]
-        for name, value in FAST.items():
-            monkeypatch.setattr(manager.registry.get("wanda").device_class, name, value)
-        manager.configure(configuration)
-        return manager
-
-    yield build
-    for manager in made:
-        manager.shutdown()
-
-
-def write(tmp_path: Path, body: str) -> Path:
-    path = tmp_path / "test.jconf"
-    path.write_text(HEAD + body + TAIL)
-    return path
-
-
-def collect(wanda: Wanda, count: int) -> list:
-    got: list = []
-    assert wait_until(lambda: len(got) >= count, timeout=5, step=lambda: got.extend(wanda.read()))
-    return got
+def managers(tmp_path, monkeypatch) -> Iterator[InputManagers]:
+    with InputManagers(
+        tmp_path, "Wanda_drv", tune={"wanda": FAST}, patch=monkeypatch.setattr
+    ) as built:
+        yield built
 
 
 def test_packet_bits_sign_and_button_numbering() -> None:
@@ -120,7 +74,7 @@ def test_hello_and_motion_over_a_pty(emulator) -> None:
     emu = emulator("motion")
     with Wanda(emu.address, reset_time=0.0) as wanda:
         assert wanda.degraded  # the pty stays 8N1 (and has no RTS): tolerated
-        got = collect(wanda, 30)
+        got = gather(wanda.read, 30)
     for packet, (buttons, axes) in zip(got, emu.sent[: len(got)], strict=True):
         assert packet.buttons == buttons and packet.axes == axes
     assert {abs(p.axes[0]) for p in got} & {34}  # the joystick reaches its limit
@@ -149,7 +103,7 @@ def element(port: str) -> str:
 
 def test_buttons_and_joystick_reach_proxies(tmp_path, emulator, managers) -> None:
     emu = emulator("buttons")
-    manager = managers(write(tmp_path, element(emu.address)))
+    manager = managers(element(emu.address))
     assert not manager.pending()
     device = manager.device("W")
     seen: list[tuple] = []
@@ -169,7 +123,7 @@ def test_buttons_and_joystick_reach_proxies(tmp_path, emulator, managers) -> Non
 
 def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> None:
     emu = emulator("garbage")
-    manager = managers(write(tmp_path, element(emu.address)))
+    manager = managers(element(emu.address))
     device = manager.device("W")
     assert wait_until(lambda: device.records >= 30, timeout=10, step=manager.update)
     assert device.bad_records >= 20 and device.skipped_bytes > 0
@@ -181,7 +135,7 @@ def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> Non
 def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, managers) -> None:
     link = tmp_path / "wanda"
     emu = emulator("disconnect", disconnect_after=20, link=link)
-    manager = managers(write(tmp_path, element(str(link))))
+    manager = managers(element(str(link)))
     device = manager.device("W")
     assert emu.disconnected.wait(5)
     assert wait_until(
@@ -203,13 +157,11 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
 
 
 def corpus_example(tmp_path: Path, port: str) -> Path:
-    source = CONFIG_FILES / "example.wanda.jconf"
-    assert source.is_file(), f"the VR Juggler corpus is missing: {source}"
-    text = source.read_text(encoding="utf-8")
-    assert text.count("<port>/dev/ttyS1</port>") == 1
-    path = tmp_path / source.name
-    path.write_text(text.replace("<port>/dev/ttyS1</port>", f"<port>{port}</port>"))
-    return path
+    return rewritten(
+        corpus_file("example.wanda.jconf"),
+        tmp_path,
+        ("<port>/dev/ttyS1</port>", f"<port>{port}</port>"),
+    )
 
 
 def test_corpus_example_delivers_through_its_aliases(tmp_path, emulator, managers) -> None:
@@ -231,34 +183,14 @@ def test_corpus_example_delivers_through_its_aliases(tmp_path, emulator, manager
 def test_gadgetctl_monitor_reads_the_corpus_example(tmp_path, emulator) -> None:
     emu = emulator("motion")
     config = corpus_example(tmp_path, emu.address)
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "gadgetctl",
-            "monitor",
-            str(config),
-            "--duration",
-            "3",
-            "--format",
-            "ndjson",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=40,
-        cwd=REPO,
+    done = run_gadgetctl(
+        "monitor", str(config), "--duration", "3", "--format", "ndjson", timeout=40
     )
     records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
     samples = [r for r in records if r.get("type") == "sample" and r.get("device") == "Wanda"]
     assert {r["kind"] for r in samples} == {"digital", "analog"}, done.stderr[-2000:]
     for command in (["validate"], ["doctor"], ["config", "pending"]):
-        out = subprocess.run(
-            [sys.executable, "-m", "gadgetctl", *command, str(config)],
-            capture_output=True,
-            text=True,
-            timeout=30,
-            cwd=REPO,
-        )
+        out = run_gadgetctl(*command, str(config), timeout=30)
         text = out.stdout + out.stderr
         assert "DRV001" not in text and "PENDING" not in text and "stays pending" not in text, text
         if command == ["config", "pending"]:
