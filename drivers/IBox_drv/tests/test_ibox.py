@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -20,84 +18,34 @@ from IBox_drv.standalone import (
     packet_size,
 )
 
-from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
+from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing import (
+    InputManagers,
+    corpus_file,
+    gather,
+    rewritten,
+    run_gadgetctl,
+    wait_until,
+)
 
 pytestmark = pytest.mark.timeout(30)
-
-HERE = Path(__file__).resolve()
-REPO = HERE.parents[3]
-CONFIG_FILES = (
-    REPO.parent
-    / "shared"
-    / "corpus"
-    / "vrjuggler"
-    / "modules"
-    / "vrjuggler"
-    / "data"
-    / "configFiles"
-)
 FAST = {"settle": 0.0, "read_timeout": 1.0, "poll_timeout": 0.05, "poll_interval": 0.005}
-HEAD = (
-    '<?xml version="1.0" encoding="UTF-8"?>\n'
-    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
-    '<elements>\n<input_manager name="IM" version="2"><driver>IBox_drv</driver></input_manager>\n'
-)
-TAIL = "</elements>\n</configuration>\n"
 
 
 @pytest.fixture
 def emulator() -> Iterator[Callable[..., IBoxEmulator]]:
-    made: list[IBoxEmulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> IBoxEmulator:
-        emu = IBoxEmulator(scenario, **{"rate": 500.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
+    with emulators(IBoxEmulator, rate=500.0) as start:
+        yield start
 
 
 @pytest.fixture
-def managers(monkeypatch) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def build(path: Path, drivers: tuple[str, ...] = ("IBox_drv",)) -> InputManager:
-        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
-        manager, configuration = InputManager.from_files([path], options=options)
-        made.append(manager)
-        for driver in drivers:
-            loaded = manager.loader.load_name(driver, manager.search)
-            assert loaded.ok, [d.message for d in loaded.diagnostics]
-        for name, value in FAST.items():
-            monkeypatch.setattr(manager.registry.get("ibox").device_class, name, value)
-        if "Flock_drv" in drivers:
-            flock = manager.registry.get("flock").device_class
-            for name, value in {"reset_time": 0.0, "examine_delay": 0.0}.items():
-                monkeypatch.setattr(flock, name, value)
-        manager.configure(configuration)
-        return manager
-
-    yield build
-    for manager in made:
-        manager.shutdown()
-
-
-def write(tmp_path: Path, body: str) -> Path:
-    path = tmp_path / "test.jconf"
-    path.write_text(HEAD + body + TAIL)
-    return path
-
-
-def collect(box: IBox, count: int) -> list:
-    got: list = []
-    assert wait_until(lambda: len(got) >= count, timeout=5, step=lambda: got.extend(box.read()))
-    return got
+def managers(tmp_path, monkeypatch) -> Iterator[InputManagers]:
+    with InputManagers(
+        tmp_path, "IBox_drv", tune={"ibox": FAST}, patch=monkeypatch.setattr
+    ) as built:
+        yield built
 
 
 def test_packet_layout_and_low_bits() -> None:
@@ -118,7 +66,7 @@ def test_sign_on_info_strings_and_polled_packets(emulator) -> None:
     with IBox(emu.address, **FAST) as box:
         assert box.info["sign-on"] == "IBox emulator" and box.info["product id"] == "IBOX"
         assert box.info["product name"] == "Interface Box" and box.info["version"] == "2.0"
-        got = collect(box, 30)
+        got = gather(box.read, 30)
     assert emu.commands[:3] == [b"END", b"IMMC", b"BEGIN"]
     assert set(emu.queries) == {QUERY}
     for packet, (buttons, analog) in zip(got, emu.sent[: len(got)], strict=True):
@@ -158,7 +106,7 @@ def ibox_element(name: str, port: str) -> str:
 
 def test_buttons_and_analogs_reach_proxies(tmp_path, emulator, managers) -> None:
     emu = emulator("buttons")
-    manager = managers(write(tmp_path, ibox_element("IB", emu.address)))
+    manager = managers(ibox_element("IB", emu.address))
     assert not manager.pending()
     device = manager.device("IB")
     seen: list[tuple] = []
@@ -179,7 +127,7 @@ def test_buttons_and_analogs_reach_proxies(tmp_path, emulator, managers) -> None
 
 def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> None:
     emu = emulator("garbage")
-    manager = managers(write(tmp_path, ibox_element("IB", emu.address)))
+    manager = managers(ibox_element("IB", emu.address))
     device = manager.device("IB")
     assert wait_until(lambda: device.records >= 40, timeout=5, step=manager.update)
     assert device.bad_records >= 30 and device.skipped_bytes > 0
@@ -189,7 +137,7 @@ def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> Non
 def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, managers) -> None:
     link = tmp_path / "ibox"
     emu = emulator("disconnect", disconnect_after=20, link=link)
-    manager = managers(write(tmp_path, ibox_element("IB", str(link))))
+    manager = managers(ibox_element("IB", str(link)))
     device = manager.device("IB")
     assert emu.disconnected.wait(5)
     assert wait_until(
@@ -211,18 +159,12 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
 
 
 def corpus_powerwall(tmp_path: Path, flock_port: str, ibox_port: str) -> Path:
-    source = CONFIG_FILES / "powerwall_18x8.jconf"
-    assert source.is_file(), f"the VR Juggler corpus is missing: {source}"
-    text = source.read_text(encoding="utf-8")
-    for old, new in (
-        ("<port>/dev/ttyd3</port>", flock_port),
-        ("<port>/dev/ttyd4</port>", ibox_port),
-    ):
-        assert text.count(old) == 1
-        text = text.replace(old, f"<port>{new}</port>")
-    path = tmp_path / source.name
-    path.write_text(text, encoding="utf-8")
-    return path
+    return rewritten(
+        corpus_file("powerwall_18x8.jconf"),
+        tmp_path,
+        ("<port>/dev/ttyd3</port>", f"<port>{flock_port}</port>"),
+        ("<port>/dev/ttyd4</port>", f"<port>{ibox_port}</port>"),
+    )
 
 
 def test_powerwall_flock_and_ibox_deliver_through_proxies_and_aliases(
@@ -233,7 +175,9 @@ def test_powerwall_flock_and_ibox_deliver_through_proxies_and_aliases(
     box = emulator("buttons")
     with FlockEmulator("motion", 144.0, birds=2) as flock:
         manager = managers(
-            corpus_powerwall(tmp_path, flock.address, box.address), ("Flock_drv", "IBox_drv")
+            corpus_powerwall(tmp_path, flock.address, box.address),
+            drivers=("Flock_drv", "IBox_drv"),
+            tune={"flock": {"reset_time": 0.0, "examine_delay": 0.0}},
         )
         assert not [p for p in manager.pending() if p.name in ("IBox1", "Flock_o_Birds")]
         birds = manager.device("Flock_o_Birds")
@@ -258,22 +202,8 @@ def test_gadgetctl_monitor_reads_the_powerwall(tmp_path, emulator) -> None:
     box = emulator("motion")
     with FlockEmulator("motion", 144.0, birds=2) as flock:
         config = corpus_powerwall(tmp_path, flock.address, box.address)
-        done = subprocess.run(
-            [
-                sys.executable,
-                "-m",
-                "gadgetctl",
-                "monitor",
-                str(config),
-                "--duration",
-                "3",
-                "--format",
-                "ndjson",
-            ],
-            capture_output=True,
-            text=True,
-            timeout=40,
-            cwd=REPO,
+        done = run_gadgetctl(
+            "monitor", str(config), "--duration", "3", "--format", "ndjson", timeout=40
         )
     records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
     samples = [r for r in records if r.get("type") == "sample"]
@@ -282,13 +212,7 @@ def test_gadgetctl_monitor_reads_the_powerwall(tmp_path, emulator) -> None:
         done.stderr[-2000:]
     )
     for command in (["validate"], ["doctor"], ["config", "pending"]):
-        out = subprocess.run(
-            [sys.executable, "-m", "gadgetctl", *command, str(config)],
-            capture_output=True,
-            text=True,
-            timeout=30,
-            cwd=REPO,
-        )
+        out = run_gadgetctl(*command, str(config), timeout=30)
         text = out.stdout + out.stderr
         assert "DRV001" not in text, text
         assert "IBox_drv" not in text or "not found" not in text, text
