@@ -3,41 +3,27 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
+from gadgetctl.input.testing import configuration, run_gadgetctl
+
 pytestmark = pytest.mark.timeout(60)
-REPO = Path(__file__).resolve().parents[3]
-CONFIG = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">
-<elements>
-<input_manager name="IM" version="2"><driver>Fastrak_drv</driver></input_manager>
+CONFIG = configuration(
+    "Fastrak_drv",
+    """\
 <fastrak name="F" version="2"><port>{port}</port></fastrak>
 <position_proxy name="P3" version="1"><device>F</device><unit>3</unit></position_proxy>
 <position_proxy name="P4" version="1"><device>F</device><unit>4</unit></position_proxy>
 <digital_proxy name="B1" version="1"><device>F</device><unit>1</unit></digital_proxy>
-</elements></configuration>
-"""
-
-
-def gadgetctl(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "gadgetctl", *args],
-        capture_output=True,
-        text=True,
-        timeout=50,
-        cwd=REPO,
-    )
+""",
+)
 
 
 def test_units_beyond_four_stations_and_one_stylus_are_reported(tmp_path) -> None:
     path = tmp_path / "t.jconf"
     path.write_text(CONFIG.format(port="/dev/null"))
-    out = gadgetctl("validate", str(path))
+    out = run_gadgetctl("validate", str(path))
     problems = [line for line in out.stdout.splitlines() if "CFG034" in line]
     assert out.returncode == 1 and len(problems) == 2, out.stdout
     assert (
@@ -46,11 +32,11 @@ def test_units_beyond_four_stations_and_one_stylus_are_reported(tmp_path) -> Non
 
 
 def test_emulate_lists_it_and_doctor_knows_its_serial_port(tmp_path) -> None:
-    listed = json.loads(gadgetctl("emulate", "--list", "--format", "json").stdout)["emulators"]
+    listed = json.loads(run_gadgetctl("emulate", "--list", "--format", "json").stdout)["emulators"]
     assert next(e for e in listed if e["plugin"] == "Fastrak_drv")["element_types"] == ["fastrak"]
     path = tmp_path / "t.jconf"
     path.write_text(CONFIG.format(port=tmp_path / "no-such-tty"))
-    out = gadgetctl("doctor", str(path))
+    out = run_gadgetctl("doctor", str(path))
     problem = [line for line in out.stdout.splitlines() if "DRV100" in line]
     assert len(problem) == 1 and "no-such-tty does not exist" in problem[0], out.stdout
     assert "gadgetctl emulate Fastrak_drv" in out.stdout

@@ -19,7 +19,8 @@ from Fastrak_drv.standalone import (
     quaternion_matrix,
 )
 
-from gadgetctl.input.testing import wait_until
+from gadgetctl.emulation.testing import emulators
+from gadgetctl.input.testing import gather, wait_until
 
 pytestmark = pytest.mark.timeout(20)
 FAST = {"read_timeout": 2.0, "poll_interval": 0.005}
@@ -27,22 +28,8 @@ FAST = {"read_timeout": 2.0, "poll_interval": 0.005}
 
 @pytest.fixture
 def emulator() -> Iterator[Callable[..., FastrakEmulator]]:
-    made: list[FastrakEmulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> FastrakEmulator:
-        emu = FastrakEmulator(scenario, **{"rate": 500.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
-
-
-def collect(tracker: Fastrak, count: int) -> list:
-    got: list = []
-    assert wait_until(lambda: len(got) >= count, timeout=5, step=lambda: got.extend(tracker.read()))
-    return got
+    with emulators(FastrakEmulator, rate=500.0) as start:
+        yield start
 
 
 def test_port_is_opened_before_the_set_up_which_ends_in_streaming(emulator) -> None:
@@ -64,7 +51,7 @@ def test_port_is_opened_before_the_set_up_which_ends_in_streaming(emulator) -> N
 def test_records_decode_to_metres_quaternions_and_a_0_1_stylus(emulator) -> None:
     emu = emulator("buttons", active=(1, 4))
     with Fastrak(emu.address, **FAST) as tracker:
-        got = collect(tracker, 30)
+        got = gather(tracker.read, 30)
     assert tracker.bad_records == 0
     sent = emu.sent[: len(got)]
     assert [r.station for r in got] == [s[0] for s in sent] and {r.station for r in got} == {1, 4}
@@ -92,7 +79,7 @@ def test_quaternion_is_w_first_and_its_sign_does_not_matter() -> None:
 def test_garbage_is_skipped_and_counted(emulator) -> None:
     emu = emulator("garbage")
     with Fastrak(emu.address, **FAST) as tracker:
-        got = collect(tracker, 40)
+        got = gather(tracker.read, 40)
     sent = emu.sent[: len(got)]
     assert [(r.station, r.stylus) for r in got] == [(s[0], s[3]) for s in sent]
     for record, (_, position, _, _) in zip(got, sent, strict=True):

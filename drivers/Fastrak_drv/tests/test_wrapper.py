@@ -10,22 +10,15 @@ import numpy as np
 import pytest
 from Fastrak_drv.emulator import FastrakEmulator
 
-from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
+from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing import InputManagers, rewritten, wait_until
 
 pytestmark = pytest.mark.timeout(30)
 EXAMPLE = Path(__file__).resolve().parents[1] / "example.jconf"
 FAST = {"read_timeout": 1.0, "poll_interval": 0.005}
 CM = 0.01
-HEAD = (
-    '<?xml version="1.0" encoding="UTF-8"?>\n'
-    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
-    '<elements>\n<input_manager name="IM" version="2"><driver>Fastrak_drv</driver></input_manager>\n'
-)
-TAIL = "</elements>\n</configuration>\n"
 
 
 def element(name: str, port: str) -> str:
@@ -40,52 +33,25 @@ def element(name: str, port: str) -> str:
     )
 
 
-def write(tmp_path: Path, body: str) -> Path:
-    path = tmp_path / "test.jconf"
-    path.write_text(HEAD + body + TAIL)
-    return path
-
-
 @pytest.fixture
 def emulator() -> Iterator[Callable[..., FastrakEmulator]]:
-    made: list[FastrakEmulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> FastrakEmulator:
-        emu = FastrakEmulator(scenario, **{"rate": 240.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
+    with emulators(FastrakEmulator, rate=240.0) as start:
+        yield start
 
 
 @pytest.fixture
-def managers(monkeypatch) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def build(path: Path) -> InputManager:
-        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
-        manager, configuration = InputManager.from_files([path], options=options)
-        made.append(manager)
-        loaded = manager.loader.load_name("Fastrak_drv", manager.search)
-        assert loaded.ok, [d.message for d in loaded.diagnostics]
-        device_class = manager.registry.get("fastrak").device_class
-        for name, value in FAST.items():
-            monkeypatch.setattr(device_class, name, value)
-        manager.configure(configuration)
-        return manager
-
-    yield build
-    for manager in made:
-        manager.shutdown()
+def managers(tmp_path, monkeypatch) -> Iterator[InputManagers]:
+    with InputManagers(
+        tmp_path, "Fastrak_drv", tune={"fastrak": FAST}, patch=monkeypatch.setattr
+    ) as built:
+        yield built
 
 
 def test_station_four_is_unit_three_and_the_stylus_digital_zero(
     tmp_path, emulator, managers
 ) -> None:
     emu = emulator("buttons", active=(1, 4))
-    manager = managers(write(tmp_path, element("F", emu.address)))
+    manager = managers(element("F", emu.address))
     assert not manager.pending()
     device = manager.device("F")
     seen: list[tuple] = []
@@ -117,7 +83,7 @@ def test_station_four_is_unit_three_and_the_stylus_digital_zero(
 
 def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> None:
     emu = emulator("garbage")
-    manager = managers(write(tmp_path, element("F", emu.address)))
+    manager = managers(element("F", emu.address))
     device = manager.device("F")
     assert wait_until(lambda: device.records >= 40, timeout=5, step=manager.update)
     assert device.bad_records >= 20 and device.counters["skipped_bytes"] > 0
@@ -127,7 +93,7 @@ def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> Non
 def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, managers) -> None:
     link = tmp_path / "fastrak"
     emu = emulator("disconnect", disconnect_after=15, link=link)
-    manager = managers(write(tmp_path, element("F", str(link))))
+    manager = managers(element("F", str(link)))
     device = manager.device("F")
     assert emu.disconnected.wait(5)
     assert wait_until(
@@ -151,18 +117,16 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
         '<fastrak name="No Port" version="2"><port></port></fastrak>\n'
         '<fastrak name="No Tracker" version="2"><port>/nonexistent/tty</port></fastrak>\n'
     )
-    pending = {p.name: p.message for p in managers(write(tmp_path, body)).pending()}
+    pending = {p.name: p.message for p in managers(body).pending()}
     assert pending["No Port"].startswith("port is empty")
     assert "/nonexistent/tty" in pending["No Tracker"]
 
 
 def test_example_delivers_through_its_aliases(tmp_path, emulator, managers) -> None:
     emu = emulator("motion")
-    text = EXAMPLE.read_text().replace(
-        "<port>/tmp/gadgetctl-fastrak</port>", f"<port>{emu.address}</port>"
+    path = rewritten(
+        EXAMPLE, tmp_path, ("<port>/tmp/gadgetctl-fastrak</port>", f"<port>{emu.address}</port>")
     )
-    path = tmp_path / "example.jconf"
-    path.write_text(text)
     manager = managers(path)
     device = manager.device("Fastrak")
     assert wait_until(lambda: device.records >= 10, timeout=5, step=manager.update)
