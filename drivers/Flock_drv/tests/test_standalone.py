@@ -21,7 +21,8 @@ from Flock_drv.standalone import (
     fbb_prefix,
 )
 
-from gadgetctl.input.testing import wait_until
+from gadgetctl.emulation.testing import emulators
+from gadgetctl.input.testing import gather, wait_until
 
 pytestmark = pytest.mark.timeout(20)
 FAST = {"reset_time": 0.0, "examine_delay": 0.0, "read_timeout": 2.0, "poll_interval": 0.005}
@@ -30,22 +31,8 @@ WORD = 4 / 32768  # one step of a 14-bit word
 
 @pytest.fixture
 def emulator() -> Iterator[Callable[..., FlockEmulator]]:
-    made: list[FlockEmulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> FlockEmulator:
-        emu = FlockEmulator(scenario, **{"rate": 300.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
-
-
-def collect(flock: Flock, count: int) -> list:
-    got: list = []
-    assert wait_until(lambda: len(got) >= count, timeout=5, step=lambda: got.extend(flock.read()))
-    return got
+    with emulators(FlockEmulator, rate=300.0) as start:
+        yield start
 
 
 def expected_matrix(position: tuple[float, ...], angles: tuple[float, ...]) -> np.ndarray:
@@ -79,7 +66,7 @@ def test_group_mode_start_sequence_and_position_quaternion_records(emulator) -> 
         assert flock.revision == (3, 67) and flock.model == "6DFOB"
         assert flock.sensors == [1, 2, 3] and not flock.standalone
         assert flock.scale_inches == 36.0
-        got = collect(flock, 30)
+        got = gather(flock.read, 30)
     assert emu.group and emu.auto_configured == 3
     assert emu.formats == {1: POS_QUATERNION, 2: POS_QUATERNION, 3: POS_QUATERNION}
     assert set(emu.hemispheres.values()) == {b"\x06\x00"}  # Right
@@ -101,7 +88,7 @@ def test_group_mode_start_sequence_and_position_quaternion_records(emulator) -> 
 def test_position_angles_records_and_angle_order(emulator) -> None:
     emu = emulator("idle", birds=2)
     with Flock(emu.address, output_format=POS_ANGLES, **FAST) as flock:
-        got = collect(flock, 4)
+        got = gather(flock.read, 4)
     for record in got:
         _bird, position, angles = emu.sent[record.address - 1]
         assert record.angles == pytest.approx(angles, abs=180 * WORD)  # azimuth, elevation, roll
@@ -112,7 +99,7 @@ def test_standalone_bird_has_no_prefix_and_no_address_byte(emulator) -> None:
     emu = emulator("motion", birds=1, master=0)
     with Flock(emu.address, **FAST) as flock:
         assert flock.standalone and flock.sensors == [0]
-        got = collect(flock, 10)
+        got = gather(flock.read, 10)
     assert not emu.group and all(target is None for target, _ in emu.addressed)
     assert all(r.address == 0 for r in got)
     np.testing.assert_allclose(got[0].matrix(), expected_matrix(*emu.sent[0][1:]), atol=2e-3)
@@ -123,7 +110,7 @@ def test_extended_range_transmitter_scales_to_144_inches(emulator) -> None:
     with Flock(emu.address, **FAST) as flock:
         assert flock.extended_range and flock.scale_inches == 144.0
         assert flock.sensors == [2, 3]  # the controller at address 1 has no sensor
-        got = collect(flock, 2)
+        got = gather(flock.read, 2)
     assert got[0].position == pytest.approx(emu.sent[0][1], abs=12 * WORD)
 
 
@@ -131,14 +118,14 @@ def test_72_inch_scaling(emulator) -> None:
     emu = emulator("idle", birds=1, scale_inches=72)
     with Flock(emu.address, **FAST) as flock:
         assert flock.scale_inches == 72.0
-        got = collect(flock, 1)
+        got = gather(flock.read, 1)
     assert got[0].position == pytest.approx(emu.sent[0][1], abs=6 * WORD)
 
 
 def test_garbage_is_skipped_by_whole_runs_and_counted(emulator) -> None:
     emu = emulator("garbage", birds=2)
     with Flock(emu.address, **FAST) as flock:
-        got = collect(flock, 40)
+        got = gather(flock.read, 40)
         assert flock.bad_records >= 20 and flock.skipped_bytes > flock.bad_records
     assert [r.address for r in got[:4]] == [1, 2, 1, 2]
     for record, (bird, position, angles) in zip(got, emu.sent[: len(got)], strict=True):

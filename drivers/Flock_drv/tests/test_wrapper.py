@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -14,33 +12,14 @@ import pytest
 from Flock_drv.emulator import FlockEmulator
 from Flock_drv.standalone import euler_matrix
 
-from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
+from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing import InputManagers, corpus_file, rewritten, run_gadgetctl, wait_until
 
 pytestmark = pytest.mark.timeout(30)
 
-HERE = Path(__file__).resolve()
-REPO = HERE.parents[3]
-CONFIG_FILES = (
-    REPO.parent
-    / "shared"
-    / "corpus"
-    / "vrjuggler"
-    / "modules"
-    / "vrjuggler"
-    / "data"
-    / "configFiles"
-)
 FAST = {"reset_time": 0.0, "examine_delay": 0.0, "read_timeout": 1.0, "poll_interval": 0.005}
 FOOT = 0.3048
-HEAD = (
-    '<?xml version="1.0" encoding="UTF-8"?>\n'
-    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
-    '<elements>\n<input_manager name="IM" version="2"><driver>Flock_drv</driver></input_manager>\n'
-)
-TAIL = "</elements>\n</configuration>\n"
 
 
 def flock_element(name: str, port: str, extra: str = "") -> str:
@@ -52,10 +31,18 @@ def flock_element(name: str, port: str, extra: str = "") -> str:
     )
 
 
-def write(tmp_path: Path, body: str) -> Path:
-    path = tmp_path / "test.jconf"
-    path.write_text(HEAD + body + TAIL)
-    return path
+@pytest.fixture
+def emulator() -> Iterator[Callable[..., FlockEmulator]]:
+    with emulators(FlockEmulator, rate=144.0) as start:
+        yield start
+
+
+@pytest.fixture
+def managers(tmp_path, monkeypatch) -> Iterator[InputManagers]:
+    with InputManagers(
+        tmp_path, "Flock_drv", tune={"flock": FAST}, patch=monkeypatch.setattr
+    ) as built:
+        yield built
 
 
 def pose_matrix(position: tuple[float, ...], angles: tuple[float, ...]) -> np.ndarray:
@@ -65,45 +52,9 @@ def pose_matrix(position: tuple[float, ...], angles: tuple[float, ...]) -> np.nd
     return m
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., FlockEmulator]]:
-    made: list[FlockEmulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> FlockEmulator:
-        emu = FlockEmulator(scenario, **{"rate": 144.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
-
-
-@pytest.fixture
-def managers(monkeypatch) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def build(path: Path, drivers: tuple[str, ...] = ("Flock_drv",)) -> InputManager:
-        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
-        manager, configuration = InputManager.from_files([path], options=options)
-        made.append(manager)
-        for driver in drivers:
-            loaded = manager.loader.load_name(driver, manager.search)
-            assert loaded.ok, [d.message for d in loaded.diagnostics]
-        device_class = manager.registry.get("flock").device_class
-        for name, value in FAST.items():
-            monkeypatch.setattr(device_class, name, value)
-        manager.configure(configuration)
-        return manager
-
-    yield build
-    for manager in made:
-        manager.shutdown()
-
-
 def test_birds_reach_their_proxies_in_feet(tmp_path, emulator, managers) -> None:
     emu = emulator("motion", birds=2)
-    manager = managers(write(tmp_path, flock_element("F", emu.address)))
+    manager = managers(flock_element("F", emu.address))
     assert not manager.pending()
     device = manager.device("F")
     assert wait_until(lambda: device.records >= 20, timeout=5, step=manager.update)
@@ -124,7 +75,7 @@ def test_birds_reach_their_proxies_in_feet(tmp_path, emulator, managers) -> None
 
 def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> None:
     emu = emulator("garbage", birds=2)
-    manager = managers(write(tmp_path, flock_element("F", emu.address)))
+    manager = managers(flock_element("F", emu.address))
     device = manager.device("F")
     assert wait_until(lambda: device.records >= 40, timeout=5, step=manager.update)
     assert device.bad_records >= 20 and device.skipped_bytes > 0
@@ -135,7 +86,7 @@ def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> Non
 def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, managers) -> None:
     link = tmp_path / "flock"
     emu = emulator("disconnect", birds=2, disconnect_after=10, link=link)
-    manager = managers(write(tmp_path, flock_element("F", str(link))))
+    manager = managers(flock_element("F", str(link)))
     device = manager.device("F")
     assert emu.disconnected.wait(5)
     assert wait_until(
@@ -162,25 +113,17 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
         "<hemisphere>9</hemisphere></flock>\n"
         '<flock name="No Port" version="2"><port></port></flock>\n'
     )
-    pending = {p.name: p.message for p in managers(write(tmp_path, body)).pending()}
+    pending = {p.name: p.message for p in managers(body).pending()}
     assert "hemisphere 9" in pending["Bad Hemisphere"]
     assert "port is empty" in pending["No Port"]
 
 
-def rewritten(source: Path, tmp_path: Path, replacements: dict[str, str]) -> Path:
-    text = source.read_text(encoding="utf-8")
-    for old, new in replacements.items():
-        assert text.count(old) == 1, f"{old!r} not found once in {source}"
-        text = text.replace(old, new)
-    path = tmp_path / source.name
-    path.write_text(text, encoding="utf-8")
-    return path
-
-
 def corpus_example(tmp_path: Path, port: str) -> Path:
-    source = CONFIG_FILES / "example.flock.jconf"
-    assert source.is_file(), f"the VR Juggler corpus is missing: {source}"
-    return rewritten(source, tmp_path, {"<port>/dev/ttyd3</port>": f"<port>{port}</port>"})
+    return rewritten(
+        corpus_file("example.flock.jconf"),
+        tmp_path,
+        ("<port>/dev/ttyd3</port>", f"<port>{port}</port>"),
+    )
 
 
 def test_corpus_example_delivers_through_its_proxies_and_aliases(
@@ -206,35 +149,15 @@ def test_corpus_example_delivers_through_its_proxies_and_aliases(
 def test_gadgetctl_monitor_reads_the_corpus_example(tmp_path, emulator) -> None:
     emu = emulator("motion", birds=2)
     config = corpus_example(tmp_path, emu.address)
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "gadgetctl",
-            "monitor",
-            str(config),
-            "--duration",
-            "3",
-            "--format",
-            "ndjson",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=30,
-        cwd=REPO,
+    done = run_gadgetctl(
+        "monitor", str(config), "--duration", "3", "--format", "ndjson", timeout=30
     )
     records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
     samples = [r for r in records if r.get("type") == "sample" and r.get("device") == "Flock"]
     assert {r["kind"] for r in samples} == {"position"}, done.stderr[-2000:]
     assert {r["unit"] for r in samples} == {0, 1}
     for command in (["validate"], ["doctor"], ["config", "pending"]):
-        out = subprocess.run(
-            [sys.executable, "-m", "gadgetctl", *command, str(config)],
-            capture_output=True,
-            text=True,
-            timeout=30,
-            cwd=REPO,
-        )
+        out = run_gadgetctl(*command, str(config), timeout=30)
         text = out.stdout + out.stderr
         assert "DRV001" not in text and "PENDING" not in text and "stays pending" not in text, text
         if command == ["config", "pending"]:

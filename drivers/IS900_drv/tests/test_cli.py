@@ -3,19 +3,15 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
+from gadgetctl.input.testing import configuration, run_gadgetctl
+
 pytestmark = pytest.mark.timeout(60)
-REPO = Path(__file__).resolve().parents[3]
-CONFIG = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">
-<elements>
-<input_manager name="IM" version="2"><driver>IS900_drv</driver></input_manager>
+CONFIG = configuration(
+    "IS900_drv",
+    """\
 <intersense name="IS" version="1"><port>{port}</port><stations>
 <intersense_station name="S" version="1"><digital_first>1</digital_first><digital_count>3</digital_count>
 </intersense_station></stations></intersense>
@@ -23,24 +19,14 @@ CONFIG = """<?xml version="1.0" encoding="UTF-8"?>
 <digital_proxy name="B4" version="1"><device>IS</device><unit>4</unit></digital_proxy>
 <position_proxy name="P0" version="1"><device>IS</device><unit>0</unit></position_proxy>
 <position_proxy name="P1" version="1"><device>IS</device><unit>1</unit></position_proxy>
-</elements></configuration>
-"""
-
-
-def gadgetctl(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "gadgetctl", *args],
-        capture_output=True,
-        text=True,
-        timeout=50,
-        cwd=REPO,
-    )
+""",
+)
 
 
 def test_units_beyond_the_stations_are_reported(tmp_path) -> None:
     path = tmp_path / "t.jconf"
     path.write_text(CONFIG.format(port="/dev/null"))
-    out = gadgetctl("validate", str(path))
+    out = run_gadgetctl("validate", str(path))
     assert out.returncode == 1
     problems = [line for line in out.stdout.splitlines() if "CFG034" in line]
     assert len(problems) == 2, out.stdout
@@ -49,12 +35,12 @@ def test_units_beyond_the_stations_are_reported(tmp_path) -> None:
 
 
 def test_emulate_lists_it_and_doctor_knows_its_serial_port(tmp_path) -> None:
-    listed = json.loads(gadgetctl("emulate", "--list", "--format", "json").stdout)["emulators"]
+    listed = json.loads(run_gadgetctl("emulate", "--list", "--format", "json").stdout)["emulators"]
     entry = next(e for e in listed if e["plugin"] == "IS900_drv")
     assert entry["element_types"] == ["intersense"]
     path = tmp_path / "t.jconf"
     path.write_text(CONFIG.format(port=tmp_path / "no-such-tty"))
-    out = gadgetctl("doctor", str(path))
+    out = run_gadgetctl("doctor", str(path))
     port_problem = [line for line in out.stdout.splitlines() if "DRV100" in line]
     assert len(port_problem) == 1 and "no-such-tty does not exist" in port_problem[0], out.stdout
     assert "gadgetctl emulate IS900_drv" in out.stdout

@@ -20,7 +20,8 @@ from IS900_drv.standalone import (
     pose_matrix,
 )
 
-from gadgetctl.input.testing import wait_until
+from gadgetctl.emulation.testing import emulators
+from gadgetctl.input.testing import gather, wait_until
 
 pytestmark = pytest.mark.timeout(20)
 FAST = {"settle": 0.0, "read_timeout": 2.0, "poll_timeout": 0.05, "poll_interval": 0.005}
@@ -28,22 +29,8 @@ FAST = {"settle": 0.0, "read_timeout": 2.0, "poll_timeout": 0.05, "poll_interval
 
 @pytest.fixture
 def emulator() -> Iterator[Callable[..., IS900Emulator]]:
-    made: list[IS900Emulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> IS900Emulator:
-        emu = IS900Emulator(scenario, **{"rate": 500.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
-
-
-def collect(tracker: IS900, count: int) -> list:
-    got: list = []
-    assert wait_until(lambda: len(got) >= count, timeout=5, step=lambda: got.extend(tracker.read()))
-    return got
+    with emulators(IS900Emulator, rate=500.0) as start:
+        yield start
 
 
 def test_start_sequence_sets_binary_polled_mode_and_each_station(emulator) -> None:
@@ -63,7 +50,7 @@ def test_start_sequence_sets_binary_polled_mode_and_each_station(emulator) -> No
 def test_records_decode_to_metres_degrees_and_buttons(emulator, units, scale) -> None:
     emu = emulator("buttons", units=units)
     with IS900(emu.address, stations=(StationSetup(0), StationSetup(1)), **FAST) as tracker:
-        got = collect(tracker, 40)
+        got = gather(tracker.read, 40)
     assert tracker.bad_records == 0 and tracker.skipped_bytes == 0
     sent = emu.sent[: len(got)]
     assert [r.station for r in got] == [s[0] for s in sent]
@@ -91,7 +78,7 @@ def test_euler_angles_are_azimuth_about_z_then_elevation_then_roll() -> None:
 def test_garbage_is_skipped_whole_runs_at_a_time_and_counted(emulator) -> None:
     emu = emulator("garbage")
     with IS900(emu.address, stations=(StationSetup(0), StationSetup(1)), **FAST) as tracker:
-        got = collect(tracker, 60)
+        got = gather(tracker.read, 60)
     sent = emu.sent[: len(got)]
     assert [(r.station, r.buttons, r.analog) for r in got] == [(s[0], s[3], s[4]) for s in sent]
     for record, (_, position, _, _, _) in zip(got, sent, strict=True):

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -14,36 +12,22 @@ import pytest
 from IS900_drv.emulator import IS900Emulator
 from IS900_drv.standalone import pose_matrix
 
-from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
+from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing import (
+    InputManagers,
+    corpus_file,
+    proxy,
+    rewritten,
+    run_gadgetctl,
+    wait_until,
+)
 
 pytestmark = pytest.mark.timeout(30)
 
-HERE = Path(__file__).resolve()
-DRIVER = HERE.parents[1]
-REPO = HERE.parents[3]
-CONFIG_FILES = (
-    REPO.parent
-    / "shared"
-    / "corpus"
-    / "vrjuggler"
-    / "modules"
-    / "vrjuggler"
-    / "data"
-    / "configFiles"
-)
-EXAMPLE = DRIVER / "example.jconf"
 FAST = {"settle": 0.0, "read_timeout": 1.0, "poll_timeout": 0.05, "poll_interval": 0.005}
 INCH = 0.0254
-HEAD = (
-    '<?xml version="1.0" encoding="UTF-8"?>\n'
-    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
-    '<elements>\n<input_manager name="IM" version="2"><driver>IS900_drv</driver></input_manager>\n'
-)
-TAIL = "</elements>\n</configuration>\n"
 
 
 def tracker_element(name: str, port: str) -> str:
@@ -58,68 +42,26 @@ def tracker_element(name: str, port: str) -> str:
     )
 
 
-def write(tmp_path: Path, body: str) -> Path:
-    path = tmp_path / "test.jconf"
-    path.write_text(HEAD + body + TAIL)
-    return path
-
-
-def rewritten(source: Path, tmp_path: Path, old: str, new: str) -> Path:
-    text = source.read_text(encoding="utf-8")
-    assert text.count(old) == 1, f"{old!r} not found once in {source}"
-    path = tmp_path / source.name
-    path.write_text(text.replace(old, new), encoding="utf-8")
-    return path
-
-
 @pytest.fixture
 def emulator() -> Iterator[Callable[..., IS900Emulator]]:
-    made: list[IS900Emulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> IS900Emulator:
-        emu = IS900Emulator(scenario, **{"rate": 200.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
+    with emulators(IS900Emulator, rate=200.0) as start:
+        yield start
 
 
 @pytest.fixture
-def managers(monkeypatch) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def build(path: Path) -> InputManager:
-        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
-        manager, configuration = InputManager.from_files([path], options=options)
-        made.append(manager)
-        loaded = manager.loader.load_name("IS900_drv", manager.search)
-        assert loaded.ok, [d.message for d in loaded.diagnostics]
-        device_class = manager.registry.get("intersense").device_class
-        for name, value in FAST.items():
-            monkeypatch.setattr(device_class, name, value)
-        manager.configure(configuration)
-        return manager
-
-    yield build
-    for manager in made:
-        manager.shutdown()
+def managers(tmp_path, monkeypatch) -> Iterator[InputManagers]:
+    with InputManagers(
+        tmp_path, "IS900_drv", tune={"intersense": FAST}, patch=monkeypatch.setattr
+    ) as built:
+        yield built
 
 
 def test_station_units_buttons_and_joystick_reach_proxies(tmp_path, emulator, managers) -> None:
     emu = emulator("buttons")
     manager = managers(
-        write(
-            tmp_path,
-            tracker_element("IS", emu.address)
-            + "".join(
-                f'<digital_proxy name="B{u}" version="1"><device>IS</device>'
-                f"<unit>{u}</unit></digital_proxy>"
-                for u in range(6)
-            )
-            + '<analog_proxy name="A1" version="1"><device>IS</device><unit>1</unit></analog_proxy>',
-        )
+        tracker_element("IS", emu.address)
+        + "".join(proxy("digital", f"B{u}", "IS", u) for u in range(6))
+        + proxy("analog", "A1", "IS", 1)
     )
     assert not manager.pending()
     device = manager.device("IS")
@@ -157,7 +99,7 @@ def test_station_units_buttons_and_joystick_reach_proxies(tmp_path, emulator, ma
 
 def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> None:
     emu = emulator("garbage")
-    manager = managers(write(tmp_path, tracker_element("IS", emu.address)))
+    manager = managers(tracker_element("IS", emu.address))
     device = manager.device("IS")
     assert wait_until(lambda: device.records >= 40, timeout=5, step=manager.update)
     assert device.bad_records >= 20 and device.skipped_bytes > 0
@@ -168,7 +110,7 @@ def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> Non
 def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, managers) -> None:
     link = tmp_path / "is900"
     emu = emulator("disconnect", disconnect_after=10, link=link)
-    manager = managers(write(tmp_path, tracker_element("IS", str(link))))
+    manager = managers(tracker_element("IS", str(link)))
     device = manager.device("IS")
     assert emu.disconnected.wait(5)
     assert wait_until(
@@ -195,15 +137,17 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
         '<intersense_station name="S" version="1"><station_index>99</station_index>'
         "</intersense_station></stations></intersense>\n"
     )
-    pending = {p.name: p.message for p in managers(write(tmp_path, body)).pending()}
+    pending = {p.name: p.message for p in managers(body).pending()}
     assert "no stations" in pending["No Stations"]
     assert "station_index 99" in pending["Bad Station"]
 
 
 def corpus_example(tmp_path: Path, port: str) -> Path:
-    source = CONFIG_FILES / "example.intersense.jconf"
-    assert source.is_file(), f"the VR Juggler corpus is missing: {source}"
-    return rewritten(source, tmp_path, "<port>/dev/ttyd11</port>", f"<port>{port}</port>")
+    return rewritten(
+        corpus_file("example.intersense.jconf"),
+        tmp_path,
+        ("<port>/dev/ttyd11</port>", f"<port>{port}</port>"),
+    )
 
 
 def test_corpus_example_delivers_through_its_proxies_and_aliases(
@@ -241,22 +185,8 @@ def test_corpus_example_delivers_through_its_proxies_and_aliases(
 def test_gadgetctl_monitor_reads_the_corpus_example(tmp_path, emulator) -> None:
     emu = emulator("motion")
     config = corpus_example(tmp_path, emu.address)
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "gadgetctl",
-            "monitor",
-            str(config),
-            "--duration",
-            "1",
-            "--format",
-            "ndjson",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=30,
-        cwd=REPO,
+    done = run_gadgetctl(
+        "monitor", str(config), "--duration", "1", "--format", "ndjson", timeout=30
     )
     records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
     samples = [r for r in records if r.get("type") == "sample" and r.get("device") == "Isense1"]
@@ -264,13 +194,7 @@ def test_gadgetctl_monitor_reads_the_corpus_example(tmp_path, emulator) -> None:
     assert {r["unit"] for r in samples if r["kind"] == "position"} == {0, 1}
     assert {r["unit"] for r in samples if r["kind"] == "digital"} == set(range(4))
     for command in (["validate"], ["doctor"], ["config", "pending"]):
-        out = subprocess.run(
-            [sys.executable, "-m", "gadgetctl", *command, str(config)],
-            capture_output=True,
-            text=True,
-            timeout=30,
-            cwd=REPO,
-        )
+        out = run_gadgetctl(*command, str(config), timeout=30)
         text = out.stdout + out.stderr
         assert "DRV001" not in text and "PENDING" not in text and "stays pending" not in text, text
         if command == ["config", "pending"]:

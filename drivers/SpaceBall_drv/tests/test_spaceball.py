@@ -25,7 +25,11 @@ from gadgetctl.input.testing import wait_until
 pytestmark = pytest.mark.timeout(30)
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "example.jconf"
-FAST = {"reset_wait": 3.0, "sample_timeout": 0.02, "poll_interval": 0.005}  # reset_wait: a hang guard
+FAST = {
+    "reset_wait": 3.0,
+    "sample_timeout": 0.02,
+    "poll_interval": 0.005,
+}  # reset_wait: a hang guard
 HEAD = (
     '<?xml version="1.0" encoding="UTF-8"?>\n'
     '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'

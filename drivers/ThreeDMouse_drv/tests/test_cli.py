@@ -3,42 +3,28 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
+from gadgetctl.input.testing import configuration, run_gadgetctl
+
 pytestmark = pytest.mark.timeout(60)
-REPO = Path(__file__).resolve().parents[3]
-CONFIG = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">
-<elements>
-<input_manager name="IM" version="2"><driver>ThreeDMouse_drv</driver></input_manager>
+CONFIG = configuration(
+    "ThreeDMouse_drv",
+    """\
 <three_d_mouse name="F" version="1"><port>{port}</port></three_d_mouse>
 <position_proxy name="P0" version="1"><device>F</device><unit>0</unit></position_proxy>
 <position_proxy name="P1" version="1"><device>F</device><unit>1</unit></position_proxy>
 <digital_proxy name="B2" version="1"><device>F</device><unit>2</unit></digital_proxy>
 <digital_proxy name="B3" version="1"><device>F</device><unit>3</unit></digital_proxy>
-</elements></configuration>
-"""
-
-
-def gadgetctl(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "gadgetctl", *args],
-        capture_output=True,
-        text=True,
-        timeout=50,
-        cwd=REPO,
-    )
+""",
+)
 
 
 def test_units_beyond_one_pose_and_three_buttons_are_reported(tmp_path) -> None:
     path = tmp_path / "t.jconf"
     path.write_text(CONFIG.format(port="/dev/null"))
-    out = gadgetctl("validate", str(path))
+    out = run_gadgetctl("validate", str(path))
     problems = [line for line in out.stdout.splitlines() if "CFG034" in line]
     assert out.returncode == 1 and len(problems) == 2, out.stdout
     assert (
@@ -47,13 +33,13 @@ def test_units_beyond_one_pose_and_three_buttons_are_reported(tmp_path) -> None:
 
 
 def test_emulate_lists_it_and_doctor_knows_its_serial_port(tmp_path) -> None:
-    listed = json.loads(gadgetctl("emulate", "--list", "--format", "json").stdout)["emulators"]
+    listed = json.loads(run_gadgetctl("emulate", "--list", "--format", "json").stdout)["emulators"]
     assert next(e for e in listed if e["plugin"] == "ThreeDMouse_drv")["element_types"] == [
         "three_d_mouse"
     ]
     path = tmp_path / "t.jconf"
     path.write_text(CONFIG.format(port=tmp_path / "no-such-tty"))
-    out = gadgetctl("doctor", str(path))
+    out = run_gadgetctl("doctor", str(path))
     problem = [line for line in out.stdout.splitlines() if "DRV100" in line]
     assert len(problem) == 1 and "no-such-tty does not exist" in problem[0], out.stdout
     assert "gadgetctl emulate ThreeDMouse_drv" in out.stdout

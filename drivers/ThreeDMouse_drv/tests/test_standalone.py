@@ -18,7 +18,8 @@ from ThreeDMouse_drv.standalone import (
     rotation_xyz,
 )
 
-from gadgetctl.input.testing import wait_until
+from gadgetctl.emulation.testing import emulators
+from gadgetctl.input.testing import gather
 
 pytestmark = pytest.mark.timeout(20)
 FAST = {
@@ -33,29 +34,15 @@ FAST = {
 
 @pytest.fixture
 def emulator() -> Iterator[Callable[..., ThreeDMouseEmulator]]:
-    made: list[ThreeDMouseEmulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> ThreeDMouseEmulator:
-        emu = ThreeDMouseEmulator(scenario, **{"rate": 500.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
-
-
-def collect(mouse: ThreeDMouse, count: int) -> list:
-    got: list = []
-    assert wait_until(lambda: len(got) >= count, timeout=5, step=lambda: got.extend(mouse.read()))
-    return got
+    with emulators(ThreeDMouseEmulator, rate=500.0) as start:
+        yield start
 
 
 def test_start_resets_checks_diagnostics_and_chooses_modes(emulator) -> None:
     emu = emulator("idle")
     with ThreeDMouse(emu.address, **FAST) as mouse:
         assert mouse.character_format in ("8N2", "8N1")  # a pty may not do two stop bits
-        collect(mouse, 1)
+        gather(mouse.read, 1)
     assert emu.commands[:5] == [b"*D", b"*R", b"*\x05", b"*H", b"*G"]
     assert emu.commands[5] == b"*d"
 
@@ -72,7 +59,7 @@ def test_reports_decode_to_metres_degrees_and_buttons(emulator) -> None:
     for scenario in ("motion", "buttons"):
         emu = emulator(scenario)
         with ThreeDMouse(emu.address, **FAST) as mouse:
-            got = collect(mouse, 30)
+            got = gather(mouse.read, 30)
         assert mouse.bad_records == 0
         for report, (position, angles, flags) in zip(got, emu.sent, strict=False):
             np.testing.assert_allclose(
@@ -108,7 +95,7 @@ def test_angles_rotate_and_no_longer_overwrite_the_translation() -> None:
 def test_garbage_is_skipped_and_counted(emulator) -> None:
     emu = emulator("garbage")
     with ThreeDMouse(emu.address, **FAST) as mouse:
-        got = collect(mouse, 40)
+        got = gather(mouse.read, 40)
     for report, (position, _, _) in zip(got, emu.sent, strict=False):
         np.testing.assert_allclose(report.position, [v / 1000 * INCH for v in position], atol=1e-12)
     assert len(got) == len(emu.sent[: len(got)])

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from ThreeDMouse_drv.emulator import ThreeDMouseEmulator
 
-from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
+from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing import InputManagers, rewritten, wait_until
 
 pytestmark = pytest.mark.timeout(30)
 EXAMPLE = Path(__file__).resolve().parents[1] / "example.jconf"
@@ -26,13 +26,6 @@ FAST = {
     "poll_interval": 0.005,
 }
 INCH = 0.0254
-HEAD = (
-    '<?xml version="1.0" encoding="UTF-8"?>\n'
-    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
-    '<elements>\n<input_manager name="IM" version="2"><driver>ThreeDMouse_drv</driver></input_manager>\n'
-)
-TAIL = "</elements>\n</configuration>\n"
 
 
 def element(name: str, port: str, baud: int = 19200) -> str:
@@ -46,50 +39,23 @@ def element(name: str, port: str, baud: int = 19200) -> str:
     )
 
 
-def write(tmp_path: Path, body: str) -> Path:
-    path = tmp_path / "test.jconf"
-    path.write_text(HEAD + body + TAIL)
-    return path
-
-
 @pytest.fixture
 def emulator() -> Iterator[Callable[..., ThreeDMouseEmulator]]:
-    made: list[ThreeDMouseEmulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> ThreeDMouseEmulator:
-        emu = ThreeDMouseEmulator(scenario, **{"rate": 200.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
+    with emulators(ThreeDMouseEmulator, rate=200.0) as start:
+        yield start
 
 
 @pytest.fixture
-def managers(monkeypatch) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def build(path: Path) -> InputManager:
-        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
-        manager, configuration = InputManager.from_files([path], options=options)
-        made.append(manager)
-        loaded = manager.loader.load_name("ThreeDMouse_drv", manager.search)
-        assert loaded.ok, [d.message for d in loaded.diagnostics]
-        device_class = manager.registry.get("three_d_mouse").device_class
-        for name, value in FAST.items():
-            monkeypatch.setattr(device_class, name, value)
-        manager.configure(configuration)
-        return manager
-
-    yield build
-    for manager in made:
-        manager.shutdown()
+def managers(tmp_path, monkeypatch) -> Iterator[InputManagers]:
+    with InputManagers(
+        tmp_path, "ThreeDMouse_drv", tune={"three_d_mouse": FAST}, patch=monkeypatch.setattr
+    ) as built:
+        yield built
 
 
 def test_translation_rotation_and_buttons_reach_the_proxies(tmp_path, emulator, managers) -> None:
     emu = emulator("buttons")
-    manager = managers(write(tmp_path, element("M", emu.address, baud=12900)))
+    manager = managers(element("M", emu.address, baud=12900))
     assert not manager.pending()
     device = manager.device("M")
     assert device.baud == 19200  # the definition's "19200" label has the value 12900
@@ -125,7 +91,7 @@ def test_translation_rotation_and_buttons_reach_the_proxies(tmp_path, emulator, 
 
 def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> None:
     emu = emulator("garbage")
-    manager = managers(write(tmp_path, element("M", emu.address)))
+    manager = managers(element("M", emu.address))
     device = manager.device("M")
     assert wait_until(lambda: device.records >= 30, timeout=5, step=manager.update)
     assert device.bad_records >= 20 and device.counters["skipped_bytes"] > 0
@@ -135,7 +101,7 @@ def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> Non
 def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, managers) -> None:
     link = tmp_path / "mouse"
     emu = emulator("disconnect", disconnect_after=15, link=link)
-    manager = managers(write(tmp_path, element("M", str(link))))
+    manager = managers(element("M", str(link)))
     device = manager.device("M")
     assert emu.disconnected.wait(5)
     assert wait_until(
@@ -159,18 +125,15 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
         '<three_d_mouse name="No Port" version="1"><port></port></three_d_mouse>\n'
         '<three_d_mouse name="No Mouse" version="1"><port>/nonexistent/tty</port></three_d_mouse>\n'
     )
-    pending = {p.name: p.message for p in managers(write(tmp_path, body)).pending()}
+    pending = {p.name: p.message for p in managers(body).pending()}
     assert pending["No Port"].startswith("port is empty")
     assert "/nonexistent/tty" in pending["No Mouse"]
 
 
 def test_example_delivers_through_its_aliases(tmp_path, emulator, managers) -> None:
     emu = emulator("motion")
-    path = tmp_path / "example.jconf"
-    path.write_text(
-        EXAMPLE.read_text().replace(
-            "<port>/tmp/gadgetctl-3dmouse</port>", f"<port>{emu.address}</port>"
-        )
+    path = rewritten(
+        EXAMPLE, tmp_path, ("<port>/tmp/gadgetctl-3dmouse</port>", f"<port>{emu.address}</port>")
     )
     manager = managers(path)
     device = manager.device("3D Mouse")
