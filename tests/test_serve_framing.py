@@ -85,3 +85,75 @@ def test_a_full_buffer_drops_whole_messages_and_udp_datagrams_hold_whole_message
     finally:
         a.close()
         b.close()
+
+
+class _Broadcasts:
+    """A server stand-in for VrpnOutlet: names get ids, broadcasts are kept."""
+
+    def __init__(self) -> None:
+        self.names: dict[str, int] = {}
+        self.sent: list[bytes] = []
+        self.clients: list = []
+
+    def register_sender(self, name: str) -> int:
+        return self.names.setdefault(name, len(self.names))
+
+    register_type = register_sender
+
+    def broadcast(self, data: bytes, size: int, *, reliable: bool = True) -> int:
+        self.sent.append(bytes(data))
+        return len(data) // size
+
+
+def test_windows_of_arrays_computed_ahead_give_the_bytes_of_their_batches():
+    """A device publishing windows of a block (waveform) is framed a stretch ahead and cut
+    per frame: every frame's bytes are those of framing its window's samples there and then,
+    for one sensor and several, across the end of a stretch and a new block, mixed with a
+    sender whose windows are not float64 and one sent as a plain batch."""
+    from gadgetctl.serve.catalog import Role, ServedElement
+    from gadgetctl.serve.outlet import FRAME_AHEAD, VrpnOutlet
+
+    rng = np.random.default_rng(5)
+
+    def block(n: int, sensors: int, dtype=np.float64) -> tuple[np.ndarray, np.ndarray]:
+        matrices = np.tile(np.eye(4), (n, sensors, 1, 1))
+        angle = rng.uniform(0, np.pi, size=(n, sensors))
+        matrices[..., 0, 0] = matrices[..., 2, 2] = np.cos(angle)
+        matrices[..., 0, 2], matrices[..., 2, 0] = np.sin(angle), -np.sin(angle)
+        matrices[..., :3, 3] = rng.normal(size=(n, sensors, 3))
+        return 100.0 + np.arange(n) * 0.001, matrices.astype(dtype)
+
+    catalog = [
+        ServedElement(name, name, "device", "waveform_device", (Role.TRACKER,))
+        for name in ("One", "Three", "Single", "Batch")
+    ]
+    windowed, batched = _Broadcasts(), _Broadcasts()
+    outlets = [VrpnOutlet(windowed, catalog), VrpnOutlet(batched, catalog)]
+    for outlet in outlets:
+        outlet.audience = True
+    blocks = {
+        "One": [block(700, 1), block(50, 1)],
+        "Three": [block(400, 3)],
+        "Single": [block(300, 2, np.float32)],
+    }
+    offset = 1.7e9
+    position = {name: (0, 0) for name in blocks}  # (block, next sample)
+    for frame in range(260):
+        windows, plain = [], []
+        for name, blocks_of in blocks.items():
+            which, start = position[name]
+            times, matrices = blocks_of[which % len(blocks_of)]
+            stop = min(len(times), start + 1 + frame % 4)
+            windows.append((name, times, matrices, start, stop))
+            plain.append((name, times[start:stop], np.asarray(matrices[start:stop], np.float64)))
+            position[name] = (which + 1, 0) if stop == len(times) else (which, stop)
+        extra = ("Batch", *block(2, 1))
+        outlets[0].tracker_windows(windows, offset)
+        outlets[0].trackers([extra], offset)
+        outlets[1].trackers([*plain, extra], offset)
+        for outlet in outlets:
+            outlet.end_frame()
+            outlet.audience = True
+        assert windowed.sent[-1] == batched.sent[-1], f"frame {frame}"
+    assert outlets[0].messages == outlets[1].messages
+    assert FRAME_AHEAD < 700  # the stretches did run out within the first block

@@ -74,6 +74,16 @@ class SampleBatch:
             self._values = self._base_values[self.start:self.stop]
         return self._values
 
+    @property
+    def base(self) -> tuple[Any, Any, int, int] | None:
+        """For a window (:meth:`window`): ``(timestamps, values, start, stop)``, the arrays it
+        is cut from and its bounds; None for a batch of arrays of its own. A consumer that
+        converts every sample (VRPN framing) can convert a stretch of the arrays once and cut
+        this and later windows from the result."""
+        if self._base_values is None:
+            return None
+        return self._base_timestamps, self._base_values, self.start, self.stop
+
     def __len__(self) -> int:
         return self.stop - self.start
 
@@ -194,6 +204,7 @@ class SampleStore:
         self._channels: dict[DeviceKind, _Channel] = {DeviceKind(k): _Channel() for k in kinds}
         self._pairs = tuple(self._channels.items())
         self.swapped_at: float | None = None  # when the current frame's samples were taken over
+        self._waiting = False  # samples were added since the last swap
         #: The current frame's samples of each kind that has any (read-only; replaced, never
         #: changed, by each swap): what a consumer of every sample reads without asking per kind.
         self.current: Mapping[DeviceKind, FrameSamples] = {}
@@ -214,6 +225,7 @@ class SampleStore:
         """Append one sample."""
         channel = self._channel(kind)
         with self._lock:
+            self._waiting = True
             channel.ready.append(Sample(timestamp, values))
             channel.count += 1
             channel.total += 1
@@ -239,6 +251,7 @@ class SampleStore:
             raise KeyError(f"this device provides no {err.args[0]} data") from None
         cap = self.cap
         with self._lock:
+            self._waiting = True
             for channel, batch in chunks:
                 channel.ready.append(batch)
                 channel.count += size
@@ -257,6 +270,7 @@ class SampleStore:
         size = stop - start
         channels = self._channels
         cap = self.cap
+        self._waiting = True
         for kind, data in values:
             channel = channels[kind]
             ready = channel.ready
@@ -280,17 +294,39 @@ class SampleStore:
         self._current(taken)
 
     def add_slices_and_swap(self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]],
-                            start: int, stop: int) -> None:
+                            start: int, stop: int, moment: float | None = None) -> None:
         """:meth:`add_slices` then :meth:`swap`, under one lock (a device publishing samples
-        computed ahead at the frame)."""
-        self.swapped_at = now()
+        computed ahead at the frame); ``moment``: the swap's time when the caller has it.
+
+        When nothing else waits (the usual frame of a device that publishes only here), each
+        kind's frame is its one window, made without the general bookkeeping."""
+        self.swapped_at = now() if moment is None else moment
+        size = stop - start
         with self._lock:
-            if stop > start:
+            if not self._waiting and 0 < size <= self.cap:
+                current = {}
+                channels = self._channels
+                window = SampleBatch.window
+                for kind, data in values:
+                    channel = channels[kind]
+                    channel.total += size
+                    channel.frame = current[kind] = FrameSamples((window(timestamps, data, start, stop),), size)
+                    channel.latest = None  # the frame's newest, computed when asked
+                if len(current) != len(self._pairs):  # kinds without samples now: latch and empty
+                    for kind, channel in self._pairs:
+                        if kind not in current and channel.frame.count:
+                            if channel.latest is None:
+                                channel.latest = channel.frame.newest
+                            channel.frame = EMPTY_FRAME
+                self.current = current
+                return
+            if size > 0:
                 self._add_slices(timestamps, values, start, stop)
             taken = self._take()
         self._current(taken)
 
     def _take(self) -> list[tuple[DeviceKind, _Channel, deque[Chunk], int]]:
+        self._waiting = False
         taken: list[tuple[DeviceKind, _Channel, deque[Chunk], int]] = []
         for kind, channel in self._pairs:
             if channel.count:

@@ -176,7 +176,7 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
                     # the usual frame: one more window of the current block, and the swap
                     self.next_index = end
                     self.store.add_slices_and_swap(
-                        block.timestamps, block.items, first - block.start, end - block.start
+                        block.timestamps, block.items, first - block.start, end - block.start, moment
                     )
                     return
                 self._publish_due(moment)

@@ -22,6 +22,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any, Protocol
 
 import numpy as np
@@ -64,6 +65,9 @@ PENDING = "pending"
 DEFAULT_HISTORY_SECONDS = 5.0
 STATS_REFRESH = 0.25  # seconds between recomputations of interval percentiles and jitter
 SINK_WARMUP = 0.5  # seconds a session waits for every device's first sample before its header
+
+
+_NOTHING: Mapping = MappingProxyType({})
 
 
 class SelectionError(GadgetctlError):
@@ -534,6 +538,7 @@ class MonitorSession:
         self._samples_written = 0
         self._watch: list[str] = []
         self._consumers: list[FrameConsumer] = []
+        self._gathered: Mapping[str, Mapping[DeviceKind, FrameSamples]] = _NOTHING
 
     # -- setting up ---------------------------------------------------------------------
 
@@ -613,10 +618,13 @@ class MonitorSession:
     def frame_samples(self, name: str) -> Mapping[DeviceKind, FrameSamples]:
         """Every sample the watched device ``name`` delivered this frame, per kind (empty
         when it delivered nothing or is not watched)."""
-        track = self._tracks.get(name)
-        if track is None or self.manager.device(name) is not track.device:
-            return {}
-        return track.frames
+        return self._gathered.get(name, _NOTHING)
+
+    @property
+    def gathered(self) -> Mapping[str, Mapping[DeviceKind, FrameSamples]]:
+        """This frame's samples of every watched device that delivered any, by device name:
+        what :meth:`frame_samples` gives, in one read-only mapping (replaced each frame)."""
+        return self._gathered
 
     def add_sink(self, opener: Callable[[Mapping[str, object]], Recorder], *, per_frame: bool = False,
                  pose: str = MATRIX) -> None:
@@ -764,6 +772,7 @@ class MonitorSession:
         samples = 0
         tracks = self._tracks
         device_named = manager.devices.get
+        self._gathered = gathered = {}
         for name in self._watch:
             device = device_named(name)
             if device is None:
@@ -772,6 +781,8 @@ class MonitorSession:
             if track is None or track.device is not device:
                 track = tracks[name] = DeviceTrack(name, device, self.history, self.statistics)
             samples += track.update()
+            if track.frames:
+                gathered[name] = track.frames
         if self.source is not None:
             for marker in self.source.drain_markers():
                 self._note_marker(marker)

@@ -18,7 +18,7 @@ from gadgetctl.input.clock import now
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.proxies import Proxy
-from gadgetctl.input.samples import FrameSamples, Sample
+from gadgetctl.input.samples import FrameSamples, Sample, SampleBatch
 from gadgetctl.serve.catalog import Role, ServedElement, proxy_role
 
 _PRESSED = (DigitalState.ON, DigitalState.TOGGLE_ON)
@@ -54,6 +54,19 @@ class BatchOutlet(Outlet, Protocol):
         """Every (sender, times, matrices) of a frame, as :meth:`Outlet.tracker` takes them
         except that the times are on the input manager's clock: ``offset`` makes them Unix
         time (added once for the whole frame, not per batch)."""
+
+
+class WindowOutlet(BatchOutlet, Protocol):
+    """An outlet that also takes tracker samples as windows of arrays computed ahead."""
+
+    def tracker_windows(
+        self, windows: list[tuple[str, np.ndarray, np.ndarray, int, int]], offset: float
+    ) -> None:
+        """A frame's (sender, times, matrices, start, stop): samples ``start`` .. ``stop - 1``
+        of ``times`` (n,) on the input manager's clock and ``matrices`` (n, sensors, 4, 4),
+        arrays that later frames cut their windows from too (a waveform device's block): the
+        outlet may convert a stretch of them once for several frames. Like
+        :meth:`Outlet.tracker`, it ignores what is not (samples, sensors, 4, 4)."""
 
 
 def wall_clock_offset() -> float:
@@ -107,18 +120,40 @@ class ServeFeed:
         self.proxies = [e for e in catalog if e.kind != "device" and e.roles]
         self._buttons: dict[str, _ButtonState] = {}
         self._batched = callable(getattr(outlet, "trackers", None))
+        self._windowed = self._batched and callable(getattr(outlet, "tracker_windows", None))
         self._poses: list[tuple[str, np.ndarray, np.ndarray]] = []  # this frame's tracker batches
+        # this frame's tracker windows of arrays computed ahead (see WindowOutlet)
+        self._windows: list[tuple[str, np.ndarray, np.ndarray, int, int]] = []
         self._proxy_stamps: dict[str, float | None] = {}
-        self.reports = (
-            0  # reports handed to the outlet (one per sensor, button change, analog row, text)
-        )
+        #: Reports handed to the outlet (one per sensor, button change, analog row, text);
+        #: tracker windows are counted by the outlet that takes them (its ``messages``).
+        self.reports = 0
 
     def __call__(self, session: Any, moment: float) -> None:
-        frame_samples = session.frame_samples
+        gathered = getattr(session, "gathered", None)
+        if gathered is None:  # a session without the gathered map: ask per device
+            frame_samples = session.frame_samples
+            gathered = {e.element: f for e in self.devices if (f := frame_samples(e.element))}
+        windows = self._windows
+        windowed = self._windowed
+        position = DeviceKind.POSITION
         for entry in self.devices:
-            frames = frame_samples(entry.element)
-            if frames:
-                self._device(entry, frames)
+            frames = gathered.get(entry.element)
+            if not frames:
+                continue
+            if windowed and len(frames) == 1:
+                # the usual frame of a device publishing what it computed ahead: one window
+                frame = frames.get(position)
+                if frame is not None and len(frame.chunks) == 1:
+                    chunk = frame.chunks[0]
+                    base = chunk.base if type(chunk) is SampleBatch else None
+                    if base is not None:
+                        windows.append((entry.vrpn_name, *base))
+                        continue
+            self._device(entry, frames)
+        if windows:
+            windows, self._windows = self._windows, []
+            self.outlet.tracker_windows(windows, self.offset)
         poses, self._poses = self._poses, []
         if poses:
             if self._batched:
@@ -146,6 +181,11 @@ class ServeFeed:
                 # added and every tracker framed once for all devices
                 poses = self._poses
                 for chunk in frame.chunks:
+                    if self._windowed and type(chunk) is SampleBatch:
+                        base = chunk.base
+                        if base is not None:  # framed by the outlet, a stretch at a time
+                            self._windows.append((sender, *base))
+                            continue
                     if type(chunk) is Sample:
                         stamps = np.array([chunk.timestamp])
                         matrices = np.asarray([chunk.values], dtype=np.float64)

@@ -22,6 +22,11 @@ from gadgetctl.serve.framing import (
 from gadgetctl.vrpn import codecs
 from gadgetctl.vrpn.server import OPEN
 
+#: Messages of a window's arrays framed at once (the window and the samples after it, up to
+#: the end of the arrays): a waveform device's block of 500 samples of one sensor is framed
+#: in one go, not one frame's sample at a time.
+FRAME_AHEAD = 512
+
 #: The message types each VRPN device class registers (the C++ classes register the same).
 ROLE_TYPES: dict[Role, tuple[str, ...]] = {
     Role.TRACKER: codecs.TRACKER_TYPES,
@@ -29,6 +34,18 @@ ROLE_TYPES: dict[Role, tuple[str, ...]] = {
     Role.ANALOG: (codecs.ANALOG_CHANNEL,),
     Role.TEXT: (),
 }
+
+
+def _framable(matrices: object) -> bool:
+    """Whether ``matrices`` is a float64 array of (samples, sensors, 4, 4), sensors > 0."""
+    shape = getattr(matrices, "shape", None)
+    return (
+        shape is not None
+        and len(shape) == 4
+        and shape[1] > 0
+        and shape[2:] == (4, 4)
+        and matrices.dtype == np.float64  # type: ignore[attr-defined]
+    )
 
 
 class VrpnOutlet:
@@ -56,6 +73,10 @@ class VrpnOutlet:
         # batches whose times are on the input manager's clock, and the offset to Unix time
         self._clock_poses: list[tuple[int, np.ndarray, np.ndarray]] = []
         self._clock_offset = 0.0
+        # per sender: a stretch of a window's arrays framed ahead, (matrices, first, last,
+        # bytes, bytes per sample, offset), and this frame's pieces cut from such stretches
+        self._framed: dict[int, tuple[np.ndarray, int, int, memoryview, int, float]] = {}
+        self._pieces: list[memoryview] = []
         # whether a client is connected (refreshed every frame and on connection): with
         # nobody to send to, reports are not framed at all
         self.audience = False
@@ -73,6 +94,105 @@ class VrpnOutlet:
             senders = self.senders
             self._clock_poses.extend(
                 (senders[name], times, matrices) for name, times, matrices in batches
+            )
+            self._clock_offset = offset
+
+    def tracker_windows(
+        self, windows: list[tuple[str, np.ndarray, np.ndarray, int, int]], offset: float
+    ) -> None:
+        """A frame's windows of arrays computed ahead (times on the input manager's clock plus
+        ``offset``), each cut from bytes framed earlier for a stretch of the same arrays; the
+        senders whose stretch ran out (a few per frame at most) are framed again together,
+        one numpy pass for all of them, :data:`FRAME_AHEAD` messages ahead."""
+        if not self.audience:
+            return
+        framed = self._framed
+        pieces = self._pieces
+        senders = self.senders
+        refill: list[tuple[int, int, np.ndarray, np.ndarray, int, int]] = []
+        count = 0
+        for name, times, matrices, start, stop in windows:
+            sender = senders[name]
+            stretch = framed.get(sender)
+            if (
+                stretch is None
+                or stretch[0] is not matrices
+                or start < stretch[1]
+                or stop > stretch[2]
+                or stretch[5] != offset
+            ):
+                if not _framable(matrices):  # as Outlet.tracker would take it, or not at all
+                    self._other_window(sender, times, matrices, start, stop, offset)
+                    continue
+                refill.append((len(pieces), sender, times, matrices, start, stop))
+                pieces.append(memoryview(b""))  # its place, cut once framed
+                continue
+            first, step = stretch[1], stretch[4]
+            pieces.append(stretch[3][(start - first) * step : (stop - first) * step])
+            count += (stop - start) * matrices.shape[1]
+        if refill:
+            count += self._frame_ahead(refill, offset)
+        self.messages += count
+
+    def _frame_ahead(
+        self, refill: list[tuple[int, int, np.ndarray, np.ndarray, int, int]], offset: float
+    ) -> int:
+        """Frame, in one pass, each window of ``refill`` and the samples after it in its
+        arrays (up to :data:`FRAME_AHEAD` messages in all, to the end of the arrays); keep
+        each sender's stretch and put its window in its place among the frame's pieces.
+        Returns the messages of the windows."""
+        spans = []
+        for _, sender, _times, matrices, start, stop in refill:
+            sensors = matrices.shape[1]
+            last = min(len(matrices), max(stop, start + FRAME_AHEAD // sensors))
+            spans.append((sender, start, last, sensors))
+        stamps = np.concatenate(
+            [
+                times[start:last]
+                for (_, _, times, _, _, _), (_, start, last, _) in zip(refill, spans, strict=True)
+            ]
+        )
+        stamps += offset
+        flat = np.concatenate(
+            [
+                m[start:last].reshape(-1, 4, 4)
+                for (_, _, _, m, _, _), (_, start, last, _) in zip(refill, spans, strict=True)
+            ]
+        )
+        sizes = np.array([(last - start) * sensors for _, start, last, sensors in spans])
+        widths = np.array([sensors for *_, sensors in spans])
+        senders = np.repeat(np.array([sender for sender, *_ in spans], dtype=np.int32), sizes)
+        times = np.repeat(stamps, np.repeat(widths, sizes // widths))
+        starts = np.repeat(np.cumsum(sizes) - sizes, sizes)
+        sensor_numbers = (np.arange(len(flat)) - starts) % np.repeat(widths, sizes)
+        data = memoryview(
+            pack_poses(
+                senders, self._pose, times, sensor_numbers, flat[:, :3, 3], quaternions_xyzw(flat)
+            )
+        )
+        framed, pieces = self._framed, self._pieces
+        at = 0
+        count = 0
+        for (place, sender, _, matrices, start, stop), (_, first, last, sensors) in zip(
+            refill, spans, strict=True
+        ):
+            size = (last - first) * sensors * POSE_SIZE
+            step = sensors * POSE_SIZE
+            stretch = framed[sender] = (matrices, first, last, data[at : at + size], step, offset)
+            at += size
+            pieces[place] = stretch[3][: (stop - first) * step]
+            count += (stop - start) * sensors
+        return count
+
+    def _other_window(
+        self, sender: int, times: object, matrices: object, start: int, stop: int, offset: float
+    ) -> None:
+        """A window whose arrays are not float64 (samples, sensors, 4, 4): framed with the
+        frame's other tracker batches when it converts to that shape, else ignored."""
+        values = np.asarray(matrices[start:stop], dtype=np.float64)
+        if values.ndim == 4 and values.shape[1] and values.shape[2:] == (4, 4):
+            self._clock_poses.append(
+                (sender, np.asarray(times[start:stop], dtype=np.float64), values)
             )
             self._clock_offset = offset
 
@@ -115,13 +235,18 @@ class VrpnOutlet:
         )
 
     def end_frame(self) -> None:
-        """Frame and queue the frame's tracker reports: one conversion to quaternions and
-        one framing for all of them, however many devices and sensors."""
+        """Frame and queue the frame's tracker reports: the pieces cut from stretches framed
+        ahead, then one conversion to quaternions and one framing for all the others, however
+        many devices and sensors; queued as one bytes object for every client."""
+        pieces = self._pieces
         if self._poses or self._clock_poses:
-            self._frame_poses()
+            pieces.append(self._frame_poses())
+        if pieces:
+            self._pieces = []
+            self.server.broadcast(b"".join(pieces), POSE_SIZE, reliable=False)
         self.audience = any(client.state == OPEN for client in self.server.clients)
 
-    def _frame_poses(self) -> None:
+    def _frame_poses(self) -> bytes:
         clock, self._clock_poses = self._clock_poses, []
         wall, self._poses = self._poses, []
         pending = (clock + wall if wall else clock) if clock else wall
@@ -160,7 +285,7 @@ class VrpnOutlet:
             senders, self._pose, times, sensor_numbers, flat[:, :3, 3], quaternions_xyzw(flat)
         )
         self.messages += len(flat)
-        self.server.broadcast(data, POSE_SIZE, reliable=False)
+        return data
 
     # -- for new clients ----------------------------------------------------------------
 
