@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Callable, Iterator
 
 import numpy as np
 import pytest
@@ -19,17 +18,14 @@ from Fastrak_drv.standalone import (
     quaternion_matrix,
 )
 
-from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.testing import gather, wait_until
+from gadgetctl.input.testing.fixtures import emulator_fixture
 
 pytestmark = pytest.mark.timeout(20)
 FAST = {"read_timeout": 2.0, "poll_interval": 0.005}
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., FastrakEmulator]]:
-    with emulators(FastrakEmulator, rate=500.0) as start:
-        yield start
+emulator = emulator_fixture(FastrakEmulator, rate=500.0)
 
 
 def test_port_is_opened_before_the_set_up_which_ends_in_streaming(emulator) -> None:

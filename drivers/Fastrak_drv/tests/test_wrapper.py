@@ -3,17 +3,16 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
 from Fastrak_drv.emulator import FastrakEmulator
 
-from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import InputManagers, rewritten, wait_until
+from gadgetctl.input.testing import rewritten, wait_until
+from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 EXAMPLE = Path(__file__).resolve().parents[1] / "example.jconf"
@@ -33,18 +32,8 @@ def element(name: str, port: str) -> str:
     )
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., FastrakEmulator]]:
-    with emulators(FastrakEmulator, rate=240.0) as start:
-        yield start
-
-
-@pytest.fixture
-def managers(tmp_path, monkeypatch) -> Iterator[InputManagers]:
-    with InputManagers(
-        tmp_path, "Fastrak_drv", tune={"fastrak": FAST}, patch=monkeypatch.setattr
-    ) as built:
-        yield built
+emulator = emulator_fixture(FastrakEmulator, rate=240.0)
+managers = managers_fixture("Fastrak_drv", tune={"fastrak": FAST})
 
 
 def test_station_four_is_unit_three_and_the_stylus_digital_zero(

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator
 
 import numpy as np
 import pytest
@@ -21,18 +20,15 @@ from Flock_drv.standalone import (
     fbb_prefix,
 )
 
-from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.testing import gather, wait_until
+from gadgetctl.input.testing.fixtures import emulator_fixture
 
 pytestmark = pytest.mark.timeout(20)
 FAST = {"reset_time": 0.0, "examine_delay": 0.0, "read_timeout": 2.0, "poll_interval": 0.005}
 WORD = 4 / 32768  # one step of a 14-bit word
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., FlockEmulator]]:
-    with emulators(FlockEmulator, rate=300.0) as start:
-        yield start
+emulator = emulator_fixture(FlockEmulator, rate=300.0)
 
 
 def expected_matrix(position: tuple[float, ...], angles: tuple[float, ...]) -> np.ndarray:

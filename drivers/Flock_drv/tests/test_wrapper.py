@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -12,9 +11,9 @@ import pytest
 from Flock_drv.emulator import FlockEmulator
 from Flock_drv.standalone import euler_matrix
 
-from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import InputManagers, corpus_file, rewritten, run_gadgetctl, wait_until
+from gadgetctl.input.testing import corpus_file, rewritten, run_gadgetctl, wait_until
+from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -31,18 +30,8 @@ def flock_element(name: str, port: str, extra: str = "") -> str:
     )
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., FlockEmulator]]:
-    with emulators(FlockEmulator, rate=144.0) as start:
-        yield start
-
-
-@pytest.fixture
-def managers(tmp_path, monkeypatch) -> Iterator[InputManagers]:
-    with InputManagers(
-        tmp_path, "Flock_drv", tune={"flock": FAST}, patch=monkeypatch.setattr
-    ) as built:
-        yield built
+emulator = emulator_fixture(FlockEmulator, rate=144.0)
+managers = managers_fixture("Flock_drv", tune={"flock": FAST})
 
 
 def pose_matrix(position: tuple[float, ...], angles: tuple[float, ...]) -> np.ndarray:

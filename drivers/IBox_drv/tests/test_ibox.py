@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -18,34 +17,23 @@ from IBox_drv.standalone import (
     packet_size,
 )
 
-from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.testing import (
-    InputManagers,
     corpus_file,
     gather,
     rewritten,
     run_gadgetctl,
     wait_until,
 )
+from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 FAST = {"settle": 0.0, "read_timeout": 1.0, "poll_timeout": 0.05, "poll_interval": 0.005}
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., IBoxEmulator]]:
-    with emulators(IBoxEmulator, rate=500.0) as start:
-        yield start
-
-
-@pytest.fixture
-def managers(tmp_path, monkeypatch) -> Iterator[InputManagers]:
-    with InputManagers(
-        tmp_path, "IBox_drv", tune={"ibox": FAST}, patch=monkeypatch.setattr
-    ) as built:
-        yield built
+emulator = emulator_fixture(IBoxEmulator, rate=500.0)
+managers = managers_fixture("IBox_drv", tune={"ibox": FAST})
 
 
 def test_packet_layout_and_low_bits() -> None:

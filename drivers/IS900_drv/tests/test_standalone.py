@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Callable, Iterator
 
 import numpy as np
 import pytest
@@ -20,17 +19,14 @@ from IS900_drv.standalone import (
     pose_matrix,
 )
 
-from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.testing import gather, wait_until
+from gadgetctl.input.testing.fixtures import emulator_fixture
 
 pytestmark = pytest.mark.timeout(20)
 FAST = {"settle": 0.0, "read_timeout": 2.0, "poll_timeout": 0.05, "poll_interval": 0.005}
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., IS900Emulator]]:
-    with emulators(IS900Emulator, rate=500.0) as start:
-        yield start
+emulator = emulator_fixture(IS900Emulator, rate=500.0)
 
 
 def test_start_sequence_sets_binary_polled_mode_and_each_station(emulator) -> None:

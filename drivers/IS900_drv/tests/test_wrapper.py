@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -12,17 +11,16 @@ import pytest
 from IS900_drv.emulator import IS900Emulator
 from IS900_drv.standalone import pose_matrix
 
-from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.testing import (
-    InputManagers,
     corpus_file,
     proxy,
     rewritten,
     run_gadgetctl,
     wait_until,
 )
+from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -42,18 +40,8 @@ def tracker_element(name: str, port: str) -> str:
     )
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., IS900Emulator]]:
-    with emulators(IS900Emulator, rate=200.0) as start:
-        yield start
-
-
-@pytest.fixture
-def managers(tmp_path, monkeypatch) -> Iterator[InputManagers]:
-    with InputManagers(
-        tmp_path, "IS900_drv", tune={"intersense": FAST}, patch=monkeypatch.setattr
-    ) as built:
-        yield built
+emulator = emulator_fixture(IS900Emulator, rate=200.0)
+managers = managers_fixture("IS900_drv", tune={"intersense": FAST})
 
 
 def test_station_units_buttons_and_joystick_reach_proxies(tmp_path, emulator, managers) -> None:

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
-
 import numpy as np
 import pytest
 from ThreeDMouse_drv.emulator import GARBAGE_CHUNKS, ThreeDMouseEmulator, encode_report
@@ -18,8 +16,8 @@ from ThreeDMouse_drv.standalone import (
     rotation_xyz,
 )
 
-from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.testing import gather
+from gadgetctl.input.testing.fixtures import emulator_fixture
 
 pytestmark = pytest.mark.timeout(20)
 FAST = {
@@ -32,10 +30,7 @@ FAST = {
 }
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., ThreeDMouseEmulator]]:
-    with emulators(ThreeDMouseEmulator, rate=500.0) as start:
-        yield start
+emulator = emulator_fixture(ThreeDMouseEmulator, rate=500.0)
 
 
 def test_start_resets_checks_diagnostics_and_chooses_modes(emulator) -> None:

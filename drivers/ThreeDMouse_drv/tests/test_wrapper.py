@@ -3,17 +3,16 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
 from ThreeDMouse_drv.emulator import ThreeDMouseEmulator
 
-from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import InputManagers, rewritten, wait_until
+from gadgetctl.input.testing import rewritten, wait_until
+from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 EXAMPLE = Path(__file__).resolve().parents[1] / "example.jconf"
@@ -39,18 +38,8 @@ def element(name: str, port: str, baud: int = 19200) -> str:
     )
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., ThreeDMouseEmulator]]:
-    with emulators(ThreeDMouseEmulator, rate=200.0) as start:
-        yield start
-
-
-@pytest.fixture
-def managers(tmp_path, monkeypatch) -> Iterator[InputManagers]:
-    with InputManagers(
-        tmp_path, "ThreeDMouse_drv", tune={"three_d_mouse": FAST}, patch=monkeypatch.setattr
-    ) as built:
-        yield built
+emulator = emulator_fixture(ThreeDMouseEmulator, rate=200.0)
+managers = managers_fixture("ThreeDMouse_drv", tune={"three_d_mouse": FAST})
 
 
 def test_translation_rotation_and_buttons_reach_the_proxies(tmp_path, emulator, managers) -> None:

@@ -4,42 +4,30 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
 from Wanda_drv.emulator import GARBAGE_CHUNKS, WandaEmulator, encode_packet
 from Wanda_drv.standalone import PacketScanner, Wanda, WandaDisconnected, decode_packet
 
-from gadgetctl.emulation.testing import emulators
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.testing import (
-    InputManagers,
     corpus_file,
     gather,
     rewritten,
     run_gadgetctl,
     wait_until,
 )
+from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
 FAST = {"reset_time": 0.0, "hello_timeout": 2.0}
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., WandaEmulator]]:
-    with emulators(WandaEmulator, rate=100.0) as start:
-        yield start
-
-
-@pytest.fixture
-def managers(tmp_path, monkeypatch) -> Iterator[InputManagers]:
-    with InputManagers(
-        tmp_path, "Wanda_drv", tune={"wanda": FAST}, patch=monkeypatch.setattr
-    ) as built:
-        yield built
+emulator = emulator_fixture(WandaEmulator, rate=100.0)
+managers = managers_fixture("Wanda_drv", tune={"wanda": FAST})
 
 
 def test_packet_bits_sign_and_button_numbering() -> None:

@@ -112,7 +112,7 @@ def alias(name: str, target: str) -> str:
 
 def checkout() -> Path:
     """The root of the source checkout this module runs from (tests run from a checkout)."""
-    return Path(__file__).resolve().parents[3]
+    return Path(__file__).resolve().parents[4]
 
 
 def corpus_configs() -> Path:
