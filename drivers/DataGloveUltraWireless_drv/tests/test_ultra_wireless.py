@@ -4,7 +4,6 @@ standalone and in an input manager."""
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator
 
 import pytest
 from DataGloveUltraWireless_drv.emulator import UltraGloveEmulator, encode_record
@@ -17,21 +16,13 @@ from DataGloveUltraWireless_drv.standalone import (
     gesture,
 )
 
-from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing import frame_recorder, wait_until
+from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
 FAST = {"sample_timeout": 0.02, "poll_interval": 0.005}
-HEAD = (
-    '<?xml version="1.0" encoding="UTF-8"?>\n'
-    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
-    '<elements>\n<input_manager name="IM" version="2"><driver>DataGloveUltraWireless_drv</driver>'
-    "</input_manager>\n"
-)
-TAIL = "</elements>\n</configuration>\n"
 
 
 def gloves(name: str, port: str, extra: str = "") -> str:
@@ -60,54 +51,8 @@ def auto_ranged(sent: list[tuple[int, tuple[int, ...]]]) -> list[tuple[int, tupl
     return out
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., UltraGloveEmulator]]:
-    made: list[UltraGloveEmulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> UltraGloveEmulator:
-        emu = UltraGloveEmulator(scenario, **{"rate": 200.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
-
-
-@pytest.fixture
-def managers(monkeypatch, tmp_path) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def build(body: str) -> InputManager:
-        path = tmp_path / "test.jconf"
-        path.write_text(HEAD + body + TAIL)
-        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
-        manager, configuration = InputManager.from_files([path], options=options)
-        made.append(manager)
-        loaded = manager.loader.load_name("DataGloveUltraWireless_drv", manager.search)
-        assert loaded.ok, [d.message for d in loaded.diagnostics]
-        device_class = manager.registry.get("data_glove_ultra_wireless").device_class
-        for name, value in FAST.items():
-            monkeypatch.setattr(device_class, name, value)
-        manager.configure(configuration)
-        return manager
-
-    yield build
-    for manager in made:
-        manager.shutdown()
-
-
-def collect(manager: InputManager, name: str) -> tuple[Callable[[], None], list, list]:
-    device = manager.device(name)
-    analog: list[tuple[float, ...]] = []
-    commands: list[tuple[int, ...]] = []
-
-    def frame() -> None:
-        manager.update()
-        analog.extend(s.values for s in device.store.frame(DeviceKind.ANALOG))
-        commands.extend(s.values for s in device.store.frame(DeviceKind.COMMAND))
-
-    return frame, analog, commands
+emulator = emulator_fixture(UltraGloveEmulator, rate=200.0)
+managers = managers_fixture("DataGloveUltraWireless_drv", tune={"data_glove_ultra_wireless": FAST})
 
 
 # -- the wire format --------------------------------------------------------------------------
@@ -165,7 +110,9 @@ def test_units_of_both_gloves_and_their_gestures(emulator, managers) -> None:
     emu = emulator("buttons", rate=100.0)
     manager = managers(gloves("Gloves", emu.address))
     assert not manager.pending()
-    frame, analog, commands = collect(manager, "Gloves")
+    frame, analog, commands = frame_recorder(
+        manager, "Gloves", DeviceKind.ANALOG, DeviceKind.COMMAND
+    )
     assert wait_until(lambda: len(analog) > 16, step=frame)
 
     def replayed(sent: list[tuple[int, tuple[int, ...]]]) -> list[tuple[float, ...]]:
@@ -187,7 +134,9 @@ def test_units_of_both_gloves_and_their_gestures(emulator, managers) -> None:
 def test_a_disabled_port_is_not_read(emulator, managers) -> None:
     emu = emulator("motion")
     manager = managers(gloves("Gloves", emu.address, "<port_a_enabled>false</port_a_enabled>"))
-    frame, analog, commands = collect(manager, "Gloves")
+    frame, analog, commands = frame_recorder(
+        manager, "Gloves", DeviceKind.ANALOG, DeviceKind.COMMAND
+    )
     assert wait_until(lambda: len(analog) > 10, step=frame)
     device = manager.device("Gloves")
     assert device.ignored > 0
@@ -198,7 +147,9 @@ def test_a_disabled_port_is_not_read(emulator, managers) -> None:
 def test_garbage_is_resynchronised_and_counted_without_a_fault(emulator, managers) -> None:
     emu = emulator("garbage")
     manager = managers(gloves("Gloves", emu.address))
-    frame, analog, _commands = collect(manager, "Gloves")
+    frame, analog, _commands = frame_recorder(
+        manager, "Gloves", DeviceKind.ANALOG, DeviceKind.COMMAND
+    )
     assert wait_until(lambda: len(analog) > 30, step=frame)
     device = manager.device("Gloves")
     assert device.records >= len(analog)
@@ -216,7 +167,9 @@ def test_lost_line_faults_then_samples_within_two_seconds(tmp_path, emulator, ma
     link = tmp_path / "gloves"
     emu = emulator("disconnect", rate=100.0, link=link)
     manager = managers(gloves("Gloves", str(link)))
-    frame, analog, _commands = collect(manager, "Gloves")
+    frame, analog, _commands = frame_recorder(
+        manager, "Gloves", DeviceKind.ANALOG, DeviceKind.COMMAND
+    )
     assert emu.disconnected.wait(5)
     assert wait_until(
         lambda: manager.status("Gloves").state in ("faulted", "reconnecting"), step=frame

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterator
 
 import numpy as np
 import pytest
@@ -19,20 +18,13 @@ from DataGlove_drv.standalone import (
     gesture,
 )
 
-from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing import frame_recorder, wait_until
+from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
 FAST = {"sample_timeout": 0.02, "poll_interval": 0.005}
-HEAD = (
-    '<?xml version="1.0" encoding="UTF-8"?>\n'
-    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
-    '<elements>\n<input_manager name="IM" version="2"><driver>DataGlove_drv</driver></input_manager>\n'
-)
-TAIL = "</elements>\n</configuration>\n"
 
 
 def glove(name: str, port: str) -> str:
@@ -76,52 +68,8 @@ def expected(data: tuple[int, ...], capability: int = 0) -> tuple[float, ...]:
     return (*flex, data[5] * 180 / 255, data[6] * 180 / 255, float(number), float(capability))
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., DataGloveEmulator]]:
-    made: list[DataGloveEmulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> DataGloveEmulator:
-        emu = DataGloveEmulator(scenario, **{"rate": 200.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
-
-
-@pytest.fixture
-def managers(monkeypatch, tmp_path) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def build(body: str) -> InputManager:
-        path = tmp_path / "test.jconf"
-        path.write_text(HEAD + body + TAIL)
-        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
-        manager, configuration = InputManager.from_files([path], options=options)
-        made.append(manager)
-        loaded = manager.loader.load_name("DataGlove_drv", manager.search)
-        assert loaded.ok, [d.message for d in loaded.diagnostics]
-        device_class = manager.registry.get("data_glove").device_class
-        for name, value in FAST.items():
-            monkeypatch.setattr(device_class, name, value)
-        manager.configure(configuration)
-        return manager
-
-    yield build
-    for manager in made:
-        manager.shutdown()
-
-
-def collect(manager: InputManager, name: str) -> tuple[Callable[[], None], list]:
-    device = manager.device(name)
-    analog: list[tuple[float, ...]] = []
-
-    def frame() -> None:
-        manager.update()
-        analog.extend(s.values for s in device.store.frame(DeviceKind.ANALOG))
-
-    return frame, analog
+emulator = emulator_fixture(DataGloveEmulator, rate=200.0)
+managers = managers_fixture("DataGlove_drv", tune={"data_glove": FAST})
 
 
 def aligned(decoded: list[tuple[float, ...]], emu: DataGloveEmulator, capability: int = 0) -> None:
@@ -187,7 +135,7 @@ def test_units_scaling_and_glove_angles(emulator, managers) -> None:
     emu = emulator("buttons", rate=100.0)
     manager = managers(glove("Glove", emu.address))
     assert not manager.pending()
-    frame, analog = collect(manager, "Glove")
+    frame, analog = frame_recorder(manager, "Glove", DeviceKind.ANALOG)
     assert wait_until(lambda: len(analog) > 12, step=frame)
     aligned(analog, emu)
     assert {a[7] for a in analog} >= {0.0, 15.0}  # a fist, then an open hand
@@ -205,7 +153,7 @@ def test_units_scaling_and_glove_angles(emulator, managers) -> None:
 def test_garbage_is_resynchronised_and_counted_without_a_fault(emulator, managers) -> None:
     emu = emulator("garbage")
     manager = managers(glove("Glove", emu.address))
-    frame, analog = collect(manager, "Glove")
+    frame, analog = frame_recorder(manager, "Glove", DeviceKind.ANALOG)
     assert wait_until(lambda: len(analog) > 30, step=frame)
     aligned(analog, emu)
     device = manager.device("Glove")
@@ -217,7 +165,7 @@ def test_lost_line_faults_then_samples_within_two_seconds(tmp_path, emulator, ma
     link = tmp_path / "glove"
     emu = emulator("disconnect", rate=100.0, disconnect_after=5, link=link)
     manager = managers(glove("Glove", str(link)))
-    frame, analog = collect(manager, "Glove")
+    frame, analog = frame_recorder(manager, "Glove", DeviceKind.ANALOG)
     assert emu.disconnected.wait(5)
     assert wait_until(
         lambda: manager.status("Glove").state in ("faulted", "reconnecting"), step=frame

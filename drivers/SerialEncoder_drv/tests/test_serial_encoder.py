@@ -6,34 +6,23 @@ from __future__ import annotations
 import math
 import struct
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 import numpy as np
 import pytest
 from SerialEncoder_drv.emulator import PRESETS, SerialEncoderEmulator
-from SerialEncoder_drv.standalone import (
-    MAX_POSITION,
-    SerialEncoderBus,
-    decode_reply,
-    table_matrix,
-)
+from SerialEncoder_drv.standalone import MAX_POSITION, SerialEncoderBus, decode_reply, table_matrix
 
-from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
+from gadgetctl.input import InputManager
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
 # reply_timeout is a hang guard: under load a late answer would count as a timeout and shift the
 # pairing of answers the tests compare, so it is generous (answers normally take milliseconds)
 FAST = {"poll_rate": 400.0, "reply_timeout": 3.0, "poll_interval": 0.005}
-HEAD = (
-    '<?xml version="1.0" encoding="UTF-8"?>\n'
-    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
-    '<elements>\n<input_manager name="IM" version="2"><driver>SerialEncoder_drv</driver></input_manager>\n'
-)
-TAIL = "</elements>\n</configuration>\n"
 
 
 def encoders(name: str, port: str, baud: str = "<baud>9600</baud>") -> str:
@@ -59,41 +48,8 @@ def expected_matrix(tilt: float, height: float) -> np.ndarray:
     return lift @ rot
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., SerialEncoderEmulator]]:
-    made: list[SerialEncoderEmulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> SerialEncoderEmulator:
-        emu = SerialEncoderEmulator(scenario, **{"rate": 2000.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
-
-
-@pytest.fixture
-def managers(monkeypatch, tmp_path) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def build(body: str) -> InputManager:
-        path = tmp_path / "test.jconf"
-        path.write_text(HEAD + body + TAIL)
-        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
-        manager, configuration = InputManager.from_files([path], options=options)
-        made.append(manager)
-        loaded = manager.loader.load_name("SerialEncoder_drv", manager.search)
-        assert loaded.ok, [d.message for d in loaded.diagnostics]
-        device_class = manager.registry.get("serial_encoder").device_class
-        for name, value in FAST.items():
-            monkeypatch.setattr(device_class, name, value)
-        manager.configure(configuration)
-        return manager
-
-    yield build
-    for manager in made:
-        manager.shutdown()
+emulator = emulator_fixture(SerialEncoderEmulator, rate=2000.0)
+managers = managers_fixture("SerialEncoder_drv", tune={"serial_encoder": FAST})
 
 
 def collect(manager: InputManager, name: str) -> tuple[Callable[[], None], list]:

@@ -4,7 +4,6 @@ an input manager."""
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -17,10 +16,10 @@ from SpaceBall_drv.standalone import (
     decode_spacemouse,
 )
 
-from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing import frame_recorder, wait_until
+from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -30,13 +29,6 @@ FAST = {
     "sample_timeout": 0.02,
     "poll_interval": 0.005,
 }  # reset_wait: a hang guard
-HEAD = (
-    '<?xml version="1.0" encoding="UTF-8"?>\n'
-    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
-    '<elements>\n<input_manager name="IM" version="2"><driver>SpaceBall_drv</driver></input_manager>\n'
-)
-TAIL = "</elements>\n</configuration>\n"
 
 
 def puck(name: str, port: str, model: str = "SpaceMouse") -> str:
@@ -53,54 +45,8 @@ def puck(name: str, port: str, model: str = "SpaceMouse") -> str:
     )
 
 
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., SpaceBallEmulator]]:
-    made: list[SpaceBallEmulator] = []
-
-    def make(scenario: str = "motion", **kwargs: object) -> SpaceBallEmulator:
-        emu = SpaceBallEmulator(scenario, **{"rate": 200.0, **kwargs})  # type: ignore[arg-type]
-        made.append(emu.start())
-        return emu
-
-    yield make
-    for emu in made:
-        emu.stop()
-
-
-@pytest.fixture
-def managers(monkeypatch, tmp_path) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def build(body: str) -> InputManager:
-        path = tmp_path / "test.jconf"
-        path.write_text(HEAD + body + TAIL)
-        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
-        manager, configuration = InputManager.from_files([path], options=options)
-        made.append(manager)
-        loaded = manager.loader.load_name("SpaceBall_drv", manager.search)
-        assert loaded.ok, [d.message for d in loaded.diagnostics]
-        device_class = manager.registry.get("puck_device").device_class
-        for name, value in FAST.items():
-            monkeypatch.setattr(device_class, name, value)
-        manager.configure(configuration)
-        return manager
-
-    yield build
-    for manager in made:
-        manager.shutdown()
-
-
-def collect(manager: InputManager, name: str) -> tuple[Callable[[], None], list, list]:
-    device = manager.device(name)
-    axes: list[tuple[float, ...]] = []
-    buttons: list[tuple[int, ...]] = []
-
-    def frame() -> None:
-        manager.update()
-        axes.extend(s.values for s in device.store.frame(DeviceKind.ANALOG))
-        buttons.extend(s.values for s in device.store.frame(DeviceKind.DIGITAL))
-
-    return frame, axes, buttons
+emulator = emulator_fixture(SpaceBallEmulator, rate=200.0)
+managers = managers_fixture("SpaceBall_drv", tune={"puck_device": FAST})
 
 
 # -- the wire format, from the protocol description (not from the emulator) ------------------
@@ -177,7 +123,7 @@ def test_example_units_and_button_numbering(emulator, managers) -> None:
     emu = emulator("buttons", rate=100.0)
     manager = managers(puck("Puck", emu.address))
     assert not manager.pending()
-    frame, _axes, buttons = collect(manager, "Puck")
+    frame, _axes, buttons = frame_recorder(manager, "Puck", DeviceKind.ANALOG, DeviceKind.DIGITAL)
     assert wait_until(lambda: len(buttons) > 6, step=frame)
     assert buttons[0] == (0,) * 12  # released until the puck reports
     assert buttons[1:] == [v for _k, v in emu.sent[: len(buttons) - 1]]
@@ -188,7 +134,7 @@ def test_example_units_and_button_numbering(emulator, managers) -> None:
 def test_axes_are_raw_counts_normalised_by_the_dialect_range(emulator, managers) -> None:
     emu = emulator("motion", rate=100.0, model="SpaceBall 4000 FLX")
     manager = managers(puck("Ball", emu.address, "SpaceBall 4000 FLX"))
-    frame, axes, _buttons = collect(manager, "Ball")
+    frame, axes, _buttons = frame_recorder(manager, "Ball", DeviceKind.ANALOG, DeviceKind.DIGITAL)
     assert wait_until(lambda: len(axes) > 8, step=frame)
     expected = [v for k, v in emu.sent if k == "axes"][: len(axes) - 1]
     assert axes[1:] == [tuple(float(a) for a in v) for v in expected]
@@ -202,7 +148,7 @@ def test_axes_are_raw_counts_normalised_by_the_dialect_range(emulator, managers)
 def test_garbage_is_resynchronised_and_counted_without_a_fault(emulator, managers) -> None:
     emu = emulator("garbage")
     manager = managers(puck("Puck", emu.address))
-    frame, axes, buttons = collect(manager, "Puck")
+    frame, axes, buttons = frame_recorder(manager, "Puck", DeviceKind.ANALOG, DeviceKind.DIGITAL)
     assert wait_until(lambda: len(axes) + len(buttons) > 30, step=frame)
     device = manager.device("Puck")
     sent_axes = [tuple(float(a) for a in v) for k, v in emu.sent if k == "axes"]
@@ -217,7 +163,7 @@ def test_lost_line_faults_then_samples_within_two_seconds(tmp_path, emulator, ma
     link = tmp_path / "puck"
     emu = emulator("disconnect", rate=100.0, disconnect_after=5, link=link)
     manager = managers(puck("Puck", str(link)))
-    frame, axes, _buttons = collect(manager, "Puck")
+    frame, axes, _buttons = frame_recorder(manager, "Puck", DeviceKind.ANALOG, DeviceKind.DIGITAL)
     assert emu.disconnected.wait(5)
     assert wait_until(
         lambda: manager.status("Puck").state in ("faulted", "reconnecting"), step=frame

@@ -64,11 +64,10 @@ def gather(read: Callable[[], Iterable[T]], count: int, timeout: float = 5.0) ->
     return got
 
 
-def frame_recorder(
-    manager: InputManager, device: str, *kinds: DeviceKind
-) -> tuple[Callable[[], None], list[list]]:
-    """A frame step (``manager.update()``) that keeps the values of every sample ``device``
-    stored in that frame, one list per kind, in the order of ``kinds``."""
+def frame_recorder(manager: InputManager, device: str, *kinds: DeviceKind) -> tuple:
+    """``(frame, values, ...)``: a frame step (``manager.update()``) and, per kind in the order
+    of ``kinds``, a list that step extends with the values of every sample ``device`` stored
+    in that frame."""
     source = manager.device(device)
     kept: list[list] = [[] for _ in kinds]
 
@@ -77,7 +76,7 @@ def frame_recorder(
         for kind, values in zip(kinds, kept, strict=True):
             values.extend(s.values for s in source.store.frame(kind))
 
-    return frame, kept
+    return (frame, *kept)
 
 
 # -- configurations -------------------------------------------------------------------------
