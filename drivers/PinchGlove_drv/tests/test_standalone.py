@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterator
 
 import pytest
 import serial
@@ -16,6 +15,8 @@ from PinchGlove_drv.standalone import (
     PinchSample,
     decode_frame,
 )
+
+from gadgetctl.input.testing.fixtures import emulator_fixture
 
 pytestmark = pytest.mark.timeout(10)
 
@@ -29,19 +30,7 @@ FAST = {
 OPEN = (0,) * 10
 
 
-@pytest.fixture
-def emulator() -> Iterator[type[PinchGloveEmulator]]:
-    """Factory whose emulators are stopped after the test."""
-    started: list[PinchGloveEmulator] = []
-
-    def make(scenario: str = "touches", **kwargs: object) -> PinchGloveEmulator:
-        emu = PinchGloveEmulator(scenario, **{"rate": 200.0, **kwargs})  # type: ignore[arg-type]
-        started.append(emu.start())
-        return emu
-
-    yield make  # type: ignore[misc]
-    for emu in started:
-        emu.stop()
+emulator = emulator_fixture(PinchGloveEmulator, "touches", rate=200.0)
 
 
 def digital_of(left: int, right: int) -> tuple[int, ...]:

@@ -4,10 +4,7 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 import time
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -25,19 +22,15 @@ from PinchGlove_drv.emulator import (
     encode_frame,
 )
 
-from gadgetctl.input import InputManager, ManagerOptions, RestartPolicy
+from gadgetctl.input import InputManager
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing import corpus_file, rewritten, run_gadgetctl, wait_until
+from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(20)
 
-HERE = Path(__file__).resolve()
-DRIVER = HERE.parents[1]
-REPO = HERE.parents[3]
-CORPUS = REPO.parent / "shared" / "corpus" / "vrjuggler"
-CONFIG_FILES = CORPUS / "modules" / "vrjuggler" / "data" / "configFiles"
-EXAMPLE = DRIVER / "example.jconf"
+EXAMPLE = Path(__file__).resolve().parents[1] / "example.jconf"
 EXAMPLE_PORT = "<port>/tmp/gadgetctl-pinch</port>"
 
 FAST = {
@@ -49,20 +42,11 @@ FAST = {
 }
 OPEN = (0,) * 10
 BENT = math.pi / 2
-HEAD = (
-    '<?xml version="1.0" encoding="UTF-8"?>\n'
-    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
-    '<elements>\n<input_manager name="IM" version="2"><driver>PinchGlove_drv</driver></input_manager>\n'
-)
-TAIL = "</elements>\n</configuration>\n"
 FINGERS = ("Thumb", "Index", "Middle", "Ring", "Pinky")
 
 
-def corpus_file(name: str) -> Path:
-    path = CONFIG_FILES / name
-    assert path.is_file(), f"the VR Juggler corpus is missing: {path}"
-    return path
+emulator = emulator_fixture(PinchGloveEmulator, "idle", rate=100.0)
+managers = managers_fixture("PinchGlove_drv", tune={"pinch_glove": FAST})
 
 
 def glove_element(name: str, port: str) -> str:
@@ -89,63 +73,6 @@ def digital_of(groups: tuple[tuple[int, int], ...]) -> tuple[int, ...]:
     return tuple(left >> k & 1 for k in range(5)) + tuple(right >> k & 1 for k in range(5))
 
 
-def status_of(manager: InputManager, name: str):
-    return manager.status(name)
-
-
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., PinchGloveEmulator]]:
-    started: list[PinchGloveEmulator] = []
-
-    def make(scenario: str = "idle", **kwargs: object) -> PinchGloveEmulator:
-        emu = PinchGloveEmulator(scenario, **{"rate": 100.0, **kwargs})  # type: ignore[arg-type]
-        started.append(emu.start())
-        return emu
-
-    yield make
-    for emu in started:
-        emu.stop()
-
-
-@pytest.fixture
-def managers(monkeypatch) -> Iterator[Callable[..., InputManager]]:
-    """Builds configured managers whose PinchGlove devices use millisecond timings."""
-    made: list[InputManager] = []
-
-    def build(*paths: Path, restart: RestartPolicy | None = None) -> InputManager:
-        options = ManagerOptions(
-            retry_interval=None, entry_points=False, restart=restart or RestartPolicy()
-        )
-        manager, configuration = InputManager.from_files(list(paths), options=options)
-        made.append(manager)
-        loaded = manager.loader.load_name("PinchGlove_drv", manager.search)
-        assert loaded.ok, [d.message for d in loaded.diagnostics]
-        device_class = manager.registry.get("pinch_glove").device_class
-        for name, value in FAST.items():
-            monkeypatch.setattr(device_class, name, value)
-        manager.configure(configuration)
-        return manager
-
-    yield build
-    for manager in made:
-        manager.shutdown()
-
-
-def write(tmp_path: Path, body: str, name: str = "test.jconf") -> Path:
-    path = tmp_path / name
-    path.write_text(HEAD + body + TAIL)
-    return path
-
-
-def rewritten(source: Path, tmp_path: Path, old: str, new: str) -> Path:
-    """``source`` copied into tmp_path with only ``old`` replaced."""
-    text = source.read_text(encoding="utf-8")
-    assert text.count(old) == 1, f"{old!r} not found once in {source}"
-    path = tmp_path / source.name
-    path.write_text(text.replace(old, new), encoding="utf-8")
-    return path
-
-
 def digital_states(manager: InputManager, names: list[str]) -> list[DigitalState]:
     return [manager.proxy(name).data for name in names]
 
@@ -157,7 +84,7 @@ def test_initial_state_then_touch_frames_reach_proxies_and_aliases(
     tmp_path, emulator, managers
 ) -> None:
     emu = emulator("idle")
-    manager = managers(rewritten(EXAMPLE, tmp_path, EXAMPLE_PORT, f"<port>{emu.address}</port>"))
+    manager = managers(rewritten(EXAMPLE, tmp_path, (EXAMPLE_PORT, f"<port>{emu.address}</port>")))
     assert not manager.pending()
     device = manager.device("PinchGlove")
     assert emu.commands == [b"CL", b"CR", b"CP", b"CT", b"T1"]  # hardware queries, timestamps on
@@ -208,7 +135,7 @@ def test_initial_state_then_touch_frames_reach_proxies_and_aliases(
 
 def test_touch_stream_arrives_in_order(tmp_path, emulator, managers) -> None:
     emu = emulator("touches", rate=200.0)
-    manager = managers(write(tmp_path, glove_element("Glove", emu.address)))
+    manager = managers(glove_element("Glove", emu.address))
     device = manager.device("Glove")
     received: list[tuple[int, ...]] = []
 
@@ -230,7 +157,7 @@ def test_touch_stream_arrives_in_order(tmp_path, emulator, managers) -> None:
 
 def test_garbage_is_skipped_without_a_fault(tmp_path, emulator, managers) -> None:
     emu = emulator("garbage", rate=200.0)
-    manager = managers(write(tmp_path, glove_element("Glove", emu.address)))
+    manager = managers(glove_element("Glove", emu.address))
     device = manager.device("Glove")
     received: list[tuple[int, ...]] = []
 
@@ -241,7 +168,7 @@ def test_garbage_is_skipped_without_a_fault(tmp_path, emulator, managers) -> Non
     assert wait_until(lambda: len(received) > 15, step=frame)
     assert received[1:] == [digital_of(groups) for groups, _ in emu.sent[: len(received) - 1]]
     assert device.bad_frames > 0 and device.skipped_bytes > 0
-    assert device.faults == 0 and status_of(manager, "Glove").state == "running"
+    assert device.faults == 0 and manager.status("Glove").state == "running"
 
 
 # -- faults and restarts ----------------------------------------------------------------------
@@ -252,7 +179,7 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
     emu_a = emulator("touches", link=link_a)
     emu_b = emulator("touches", link=link_b)
     body = glove_element("Glove A", str(link_a)) + glove_element("Glove B", str(link_b))
-    manager = managers(write(tmp_path, body))  # the default restart policy
+    manager = managers(body)  # the default restart policy
     glove_a, glove_b = manager.device("Glove A"), manager.device("Glove B")
     received_b: list[tuple[int, ...]] = []
 
@@ -262,22 +189,20 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
 
     assert wait_until(lambda: glove_a.frames >= 3, step=frame)
     emu_a.stop()  # the box goes away: its pty and symlink vanish
-    assert wait_until(
-        lambda: status_of(manager, "Glove A").state == "faulted", timeout=2, step=frame
-    )
-    status = status_of(manager, "Glove A")
+    assert wait_until(lambda: manager.status("Glove A").state == "faulted", timeout=2, step=frame)
+    status = manager.status("Glove A")
     assert status.reason and "serial line lost" in status.reason and status.code == "DRV042"
     assert status.stats.faults == 1
     assert manager.proxy("Glove A Left Thumb").stupefied is False  # proxies keep the last state
 
     wait_until(lambda: False, timeout=0.6, step=frame)  # restarts keep failing meanwhile
-    assert status_of(manager, "Glove A").state in ("faulted", "reconnecting")
+    assert manager.status("Glove A").state in ("faulted", "reconnecting")
     frames_before = glove_a.frames
     emulator("touches", link=link_a)  # the box is back, on a new pty behind the same link
     back = time.monotonic()
     assert wait_until(lambda: glove_a.frames > frames_before, timeout=2.0, step=frame)
     assert time.monotonic() - back < 2.0
-    assert status_of(manager, "Glove A").state == "running" and glove_a.restarts >= 1
+    assert manager.status("Glove A").state == "running" and glove_a.restarts >= 1
 
     # the other glove went on and lost nothing
     assert glove_b.faults == 0 and glove_b.restarts == 0
@@ -287,10 +212,10 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
 
 def test_disconnect_scenario_faults_the_device(tmp_path, emulator, managers) -> None:
     emu = emulator("disconnect", disconnect_after=3, link=tmp_path / "glove")
-    manager = managers(write(tmp_path, glove_element("Glove", str(tmp_path / "glove"))))
+    manager = managers(glove_element("Glove", str(tmp_path / "glove")))
     assert emu.disconnected.wait(3)
     assert wait_until(
-        lambda: status_of(manager, "Glove").state in ("faulted", "reconnecting"),
+        lambda: manager.status("Glove").state in ("faulted", "reconnecting"),
         step=manager.update,
     )
     assert manager.device("Glove").frames == 3
@@ -298,7 +223,7 @@ def test_disconnect_scenario_faults_the_device(tmp_path, emulator, managers) -> 
 
 def test_stop_and_start_again(tmp_path, emulator, managers) -> None:
     emu = emulator("idle")
-    manager = managers(write(tmp_path, glove_element("Glove", emu.address)))
+    manager = managers(glove_element("Glove", emu.address))
     device = manager.device("Glove")
     # The manager's sampling thread must end first: it calls sample() on its own, and
     # stopping the device under it made it fault and close the glove the test reopened.
@@ -323,7 +248,7 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
         '<pinch_glove name="No Port" version="1"><port></port></pinch_glove>\n'
         '<pinch_glove name="No Box" version="1"><port>/nonexistent/tty</port></pinch_glove>\n'
     )
-    manager = managers(write(tmp_path, body))
+    manager = managers(body)
     pending = {p.name: p for p in manager.pending()}
     assert pending["No Port"].message.startswith("port is empty")
     assert pending["No Port"].code == "DRV032"
@@ -346,8 +271,7 @@ def test_corpus_pinch_mixin_delivers_through_its_proxies(tmp_path, emulator, man
         rewritten(
             corpus_file("pinch.mixin.jconf"),
             tmp_path,
-            "<port>/dev/ttyd1</port>",
-            f"<port>{emu.address}</port>",
+            ("<port>/dev/ttyd1</port>", f"<port>{emu.address}</port>"),
         )
     )
     pending = {p.name for p in manager.pending()}
@@ -385,21 +309,11 @@ def test_gadgetctl_monitor_reads_the_corpus_configuration(tmp_path, emulator) ->
     config = rewritten(
         corpus_file("pinch.mixin.jconf"),
         tmp_path,
-        "<port>/dev/ttyd1</port>",
-        f"<port>{emu.address}</port>",
+        ("<port>/dev/ttyd1</port>", f"<port>{emu.address}</port>"),
     )
-    command = [
-        sys.executable,
-        "-m",
-        "gadgetctl",
-        "monitor",
-        str(config),
-        "--duration",
-        "1",
-        "--format",
-        "ndjson",
-    ]
-    done = subprocess.run(command, capture_output=True, text=True, timeout=30, cwd=REPO)
+    done = run_gadgetctl(
+        "monitor", str(config), "--duration", "1", "--format", "ndjson", timeout=30
+    )
     records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
     samples = [
         r for r in records if r.get("type") == "sample" and r.get("device") == "FakespacePinchGlove"
