@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 import socket
 import struct
-from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -18,25 +17,15 @@ from MotionStar_drv.standalone import (
     parse_records,
 )
 
+from gadgetctl.input.testing.fixtures import emulator_fixture
+
 pytestmark = pytest.mark.timeout(10)
 
 FAST = {"connect_timeout": 2.0, "read_timeout": 1.0, "sample_timeout": 1.0, "close_timeout": 0.5}
 FULL_SCALE = 144
 
 
-@pytest.fixture
-def emulator() -> Iterator[object]:
-    """Factory whose emulators are stopped after the test."""
-    started: list[MotionStarEmulator] = []
-
-    def make(scenario: str = "idle", **kwargs: object) -> MotionStarEmulator:
-        emu = MotionStarEmulator(scenario, **{"rate": 500.0, **kwargs})  # type: ignore[arg-type]
-        started.append(emu.start())
-        return emu
-
-    yield make
-    for emu in started:
-        emu.stop()
+emulator = emulator_fixture(MotionStarEmulator, "idle", rate=500.0)
 
 
 def client(emu: MotionStarEmulator, **kwargs: object) -> MotionStar:

@@ -4,39 +4,26 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 from MotionStar_drv.emulator import MotionStarEmulator
 
-from gadgetctl.input import InputManager, LengthUnit, ManagerOptions, RestartPolicy
+from gadgetctl.input import InputManager, LengthUnit
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.pending import PendingKind
-from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing import corpus_file, rewritten, run_gadgetctl, wait_until
+from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(20)
 
-HERE = Path(__file__).resolve()
-DRIVER = HERE.parents[1]
-REPO = HERE.parents[3]
-CORPUS = REPO.parent / "shared" / "corpus" / "vrjuggler"
-CONFIG_FILES = CORPUS / "modules" / "vrjuggler" / "data" / "configFiles"
-EXAMPLE = DRIVER / "example.jconf"
+EXAMPLE = Path(__file__).resolve().parents[1] / "example.jconf"
 
 FAST = {"connect_timeout": 1.0, "read_timeout": 1.0, "sample_timeout": 0.05, "close_timeout": 0.2}
 FULL_SCALE = 144  # the emulator's birds: inches at full scale
-HEAD = (
-    '<?xml version="1.0" encoding="UTF-8"?>\n'
-    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n'
-    '<elements>\n<input_manager name="IM" version="2"><driver>MotionStar_drv</driver></input_manager>\n'
-)
-TAIL = "</elements>\n</configuration>\n"
 
 
 def units_filter(device_units: float, custom_scale: float = 1.0) -> str:
@@ -104,67 +91,8 @@ def poses_sent(emu: MotionStarEmulator, sequence: int, scale: float = 0.0254) ->
     return [sensor_pose(records[d.address], scale) for d in emu.sensors]
 
 
-def status_of(manager: InputManager, name: str):
-    return manager.status(name)
-
-
-def corpus_file(name: str) -> Path:
-    path = CONFIG_FILES / name
-    assert path.is_file(), f"the VR Juggler corpus is missing: {path}"
-    return path
-
-
-def rewritten(source: Path, tmp_path: Path, *changes: tuple[str, str]) -> Path:
-    """``source`` copied into tmp_path with only the given texts replaced (each found once)."""
-    text = source.read_text(encoding="utf-8")
-    for old, new in changes:
-        assert text.count(old) == 1, f"{old!r} not found once in {source}"
-        text = text.replace(old, new)
-    path = tmp_path / source.name
-    path.write_text(text, encoding="utf-8")
-    return path
-
-
-def write(tmp_path: Path, body: str, name: str = "test.jconf") -> Path:
-    path = tmp_path / name
-    path.write_text(HEAD + body + TAIL)
-    return path
-
-
-@pytest.fixture
-def emulator() -> Iterator[Callable[..., MotionStarEmulator]]:
-    started: list[MotionStarEmulator] = []
-
-    def make(scenario: str = "idle", **kwargs: object) -> MotionStarEmulator:
-        emu = MotionStarEmulator(scenario, **{"rate": 200.0, **kwargs})  # type: ignore[arg-type]
-        started.append(emu.start())
-        return emu
-
-    yield make
-    for emu in started:
-        emu.stop()
-
-
-@pytest.fixture
-def managers(monkeypatch) -> Iterator[Callable[..., InputManager]]:
-    """Builds configured managers whose MotionStar devices use short timeouts."""
-    made: list[InputManager] = []
-
-    def build(*paths: Path) -> InputManager:
-        options = ManagerOptions(retry_interval=None, entry_points=False, restart=RestartPolicy())
-        manager, configuration = InputManager.from_files(list(paths), options=options)
-        made.append(manager)
-        loaded = manager.loader.load_name("MotionStar_drv", manager.search)
-        assert loaded.ok, [d.message for d in loaded.diagnostics]
-        device_class = manager.registry.get("motion_star").device_class
-        for name, value in FAST.items():
-            monkeypatch.setattr(device_class, name, value)
-        manager.configure(configuration)
-        return manager
-
-    yield build
-    for manager in made:
-        manager.shutdown()
+emulator = emulator_fixture(MotionStarEmulator, "idle", rate=200.0)
+managers = managers_fixture("MotionStar_drv", tune={"motion_star": FAST})
 
 
 def collect(manager: InputManager, device, into: list[np.ndarray]) -> Callable[[], None]:
@@ -225,7 +153,7 @@ def test_sequence_numbers_follow_each_other_through_the_proxies(
     tmp_path, emulator, managers
 ) -> None:
     emu = emulator("motion", birds=2)
-    manager = managers(write(tmp_path, star("Star", emu.port)))
+    manager = managers(star("Star", emu.port))
     device = manager.device("Star")
     samples: list[np.ndarray] = []
     assert wait_until(lambda: len(samples) >= 30, step=collect(manager, device, samples))
@@ -252,7 +180,7 @@ def test_sequence_numbers_follow_each_other_through_the_proxies(
 )
 def test_device_units_scale_and_warn(tmp_path, emulator, managers, filters, scale, warning) -> None:
     emu = emulator("idle", birds=2)
-    manager = managers(write(tmp_path, star("Star", emu.port, filters=filters)))
+    manager = managers(star("Star", emu.port, filters=filters))
     device = manager.device("Star")
     found = [d.message for d in manager.diagnostics if d.code == "DRV024"]
     if warning is None:
@@ -269,10 +197,7 @@ def test_device_units_scale_and_warn(tmp_path, emulator, managers, filters, scal
 def test_single_shot_mode_asks_for_every_packet(tmp_path, emulator, managers) -> None:
     emu = emulator("motion", birds=2)
     manager = managers(
-        write(
-            tmp_path,
-            star("Star", emu.port, mode="Sample Individually", hemisphere="Upper", report_rate=3),
-        )
+        star("Star", emu.port, mode="Sample Individually", hemisphere="Upper", report_rate=3)
     )
     device = manager.device("Star")
     assert wait_until(lambda: device.packets >= 5)
@@ -284,7 +209,7 @@ def test_single_shot_mode_asks_for_every_packet(tmp_path, emulator, managers) ->
 
 def test_garbage_is_skipped_without_a_fault(tmp_path, emulator, managers) -> None:
     emu = emulator("garbage", birds=2)
-    manager = managers(write(tmp_path, star("Star", emu.port)))
+    manager = managers(star("Star", emu.port))
     device = manager.device("Star")
     samples: list[np.ndarray] = []
     assert wait_until(lambda: len(samples) >= 24, step=collect(manager, device, samples))
@@ -299,34 +224,34 @@ def test_only_junk_faults_the_device_and_samples_resume_when_data_return(
     tmp_path, emulator, managers, monkeypatch
 ) -> None:
     emu = emulator("motion", birds=2)
-    manager = managers(write(tmp_path, star("Star", emu.port)))
+    manager = managers(star("Star", emu.port))
     device = manager.device("Star")
     monkeypatch.setattr(type(device), "data_timeout", 0.5)
     assert wait_until(lambda: device.packets > 0, step=manager.update)
 
     emu.noise.set()  # random bytes instead of data packets, on this and later connections
     assert wait_until(lambda: device.faults >= 1, timeout=10, step=manager.update)
-    status = status_of(manager, "Star")
+    status = manager.status("Star")
     assert status.code == "DRV042" and "only junk for" in status.reason, status
     assert "bytes skipped, no data packet" in status.reason
     states: list[str] = []
 
     def watch() -> None:
         manager.update()
-        state = status_of(manager, "Star").state
+        state = manager.status("Star").state
         if not states or states[-1] != state:
             states.append(state)
 
     # reconnections do not help while only junk arrives, and none of them reads "running"
     assert wait_until(lambda: states.count("reconnecting") >= 2, timeout=15, step=watch)
     assert "running" not in states and {"faulted", "reconnecting"} >= set(states)
-    assert "only junk for" in status_of(manager, "Star").reason
+    assert "only junk for" in manager.status("Star").reason
     assert device.counters["skipped_bytes"] > 0 and device.counters["bad_packets"] >= 2
 
     packets = device.packets
     emu.noise.clear()
     assert wait_until(
-        lambda: device.packets > packets and status_of(manager, "Star").state == "running",
+        lambda: device.packets > packets and manager.status("Star").state == "running",
         timeout=10,
         step=manager.update,
     )
@@ -338,28 +263,26 @@ def test_only_junk_faults_the_device_and_samples_resume_when_data_return(
 def test_lost_server_faults_then_resumes_within_two_seconds(tmp_path, emulator, managers) -> None:
     emu_a = emulator("motion", birds=2)
     emu_b = emulator("motion", birds=2)
-    manager = managers(write(tmp_path, star("Star A", emu_a.port) + star("Star B", emu_b.port)))
+    manager = managers(star("Star A", emu_a.port) + star("Star B", emu_b.port))
     star_a, star_b = manager.device("Star A"), manager.device("Star B")
     samples_b: list[np.ndarray] = []
     frame = collect(manager, star_b, samples_b)
 
     assert wait_until(lambda: star_a.packets >= 3, step=frame)
     emu_a.stop()  # the chassis goes away: the connection closes
-    assert wait_until(
-        lambda: status_of(manager, "Star A").state == "faulted", timeout=2, step=frame
-    )
-    status = status_of(manager, "Star A")
+    assert wait_until(lambda: manager.status("Star A").state == "faulted", timeout=2, step=frame)
+    status = manager.status("Star A")
     assert status.code == "DRV042" and "MotionStarDisconnected" in status.reason
     wait_until(lambda: False, timeout=0.6, step=frame)  # reconnections are refused meanwhile
-    assert status_of(manager, "Star A").state in ("faulted", "reconnecting")
-    assert "cannot connect" in (status_of(manager, "Star A").reason or "")
+    assert manager.status("Star A").state in ("faulted", "reconnecting")
+    assert "cannot connect" in (manager.status("Star A").reason or "")
 
     packets_before = star_a.packets
     emulator("motion", birds=2, port=emu_a.port)  # back on the same port
     back = time.monotonic()
     assert wait_until(lambda: star_a.packets > packets_before, timeout=2.0, step=frame)
     assert time.monotonic() - back < 2.0
-    assert status_of(manager, "Star A").state == "running" and star_a.restarts >= 1
+    assert manager.status("Star A").state == "running" and star_a.restarts >= 1
     assert star_a.faults >= 1
 
     # the other chassis went on and lost nothing: consecutive packets, none missing
@@ -371,7 +294,7 @@ def test_lost_server_faults_then_resumes_within_two_seconds(tmp_path, emulator, 
 
 def test_disconnect_scenario_faults_the_device(tmp_path, emulator, managers) -> None:
     emu = emulator("disconnect", birds=1, disconnect_after=4)
-    manager = managers(write(tmp_path, star("Star", emu.port)))
+    manager = managers(star("Star", emu.port))
     assert emu.disconnected.wait(3)
     assert wait_until(lambda: manager.device("Star").faults >= 1, step=manager.update)
     assert manager.device("Star").packets >= 4
@@ -379,7 +302,7 @@ def test_disconnect_scenario_faults_the_device(tmp_path, emulator, managers) -> 
 
 def test_stop_and_start_again(tmp_path, emulator, managers) -> None:
     emu = emulator("idle", birds=2)
-    manager = managers(write(tmp_path, star("Star", emu.port)))
+    manager = managers(star("Star", emu.port))
     device = manager.device("Star")
     assert wait_until(lambda: device.packets > 0)
     manager.shutdown()  # stop-data and shut-down are sent
@@ -404,7 +327,7 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
         + star("Bad Rate", 6000, report_rate=0)
         + '<motion_star name="Old" version="1"><address>mstar</address></motion_star>\n'
     )
-    manager = managers(write(tmp_path, body))
+    manager = managers(body)
     pending = {p.name: p for p in manager.pending()}
     assert set(pending) == {"UDP", "No Address", "Bad Format", "Bad Rate", "Old"}
     assert pending["UDP"].kind is PendingKind.CONFIG_FAILED
@@ -421,7 +344,7 @@ def test_measurement_rate_outside_the_range_is_clamped_with_a_warning(
     tmp_path, emulator, managers
 ) -> None:
     emu = emulator("idle", birds=2)
-    manager = managers(write(tmp_path, star("Star", emu.port, measurement_rate=500)))
+    manager = managers(star("Star", emu.port, measurement_rate=500))
     assert not manager.pending()
     found = [d.message for d in manager.diagnostics if d.code == "DRV024"]
     assert found == [
@@ -487,18 +410,9 @@ def test_corpus_c4_mstar_delivers_through_its_proxies_and_aliases(
 def test_gadgetctl_monitor_reads_the_corpus_configuration(tmp_path, emulator) -> None:
     emu = emulator("motion", birds=2, rate=100.0)
     config = c4_files(tmp_path, emu.port)[1]
-    command = [
-        sys.executable,
-        "-m",
-        "gadgetctl",
-        "monitor",
-        str(config),
-        "--duration",
-        "1",
-        "--format",
-        "ndjson",
-    ]
-    done = subprocess.run(command, capture_output=True, text=True, timeout=30, cwd=REPO)
+    done = run_gadgetctl(
+        "monitor", str(config), "--duration", "1", "--format", "ndjson", timeout=30
+    )
     records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
     samples = [
         r for r in records if r.get("type") == "sample" and r.get("device") == "Motion Star master"
