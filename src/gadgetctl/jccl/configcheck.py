@@ -97,7 +97,8 @@ def check_configuration(config: Configuration, session: Session, scope: Scope) -
         report = checker.check(element)
         reports[id(element)] = report
         found += report.diagnostics
-        found += _path_variables(element, session.environ)
+        if element.type in _PATH_TYPES:
+            found += _path_variables(element, session.environ)
     found += check_wiring(config, reports, checker.index, scope)
     found += proxy_unit_problems(config.elements, repo)
     return found
@@ -119,7 +120,12 @@ def _definition_path_findings(entries: list[SearchPathEntry]) -> list[Diagnostic
     return found
 
 
+_PATH_TYPES = frozenset(type_name for type_name, _ in PATH_PROPERTIES)
+
+
 def _path_variables(element: ConfigElement, environ: Mapping[str, str]) -> list[Diagnostic]:
+    if element.type not in _PATH_TYPES:
+        return []
     found = []
     for prop, values in element.properties.items():
         if (element.type, prop) not in PATH_PROPERTIES:

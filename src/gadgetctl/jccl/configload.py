@@ -48,14 +48,16 @@ class ElementReader:
 
     def read(self, node: etree._Element, parent: ConfigElement | None = None,
              parent_property: str | None = None) -> ConfigElement:
+        name = node.get("name")
         element = ConfigElement(
-            type=_local(node) or "",
-            name=node.get("name") if node.get("name") is not None else "",
-            version_text=node.get("version"),
-            location=self.location(node),
-            parent=parent,
-            parent_property=parent_property,
-            node=node,
+            _local(node) or "",
+            "" if name is None else name,
+            node.get("version"),
+            SourceLocation(self.doc, node),
+            {},
+            parent,
+            parent_property,
+            node,
         )
         doc = self.doc
         properties = element.properties

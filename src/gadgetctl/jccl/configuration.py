@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from functools import cached_property
 from pathlib import Path
 
 from lxml import etree
@@ -87,7 +86,14 @@ class PropertyValue:
         return self.text.strip()
 
 
-@dataclass(eq=False)
+def _version_number(text: str | None) -> int | None:
+    try:
+        return int((text or "").strip())
+    except ValueError:
+        return None
+
+
+@dataclass(eq=False, slots=True)
 class ConfigElement:
     type: str
     name: str
@@ -97,13 +103,12 @@ class ConfigElement:
     parent: ConfigElement | None = None
     parent_property: str | None = None
     node: etree._Element | None = field(default=None, repr=False)
+    #: The version attribute as a number (None when missing or not a number), read once: a
+    #: configuration of 50,000 elements asks for it several times per element.
+    version: int | None = field(init=False, repr=False)
 
-    @cached_property
-    def version(self) -> int | None:
-        try:
-            return int((self.version_text or "").strip())
-        except ValueError:
-            return None
+    def __post_init__(self) -> None:
+        self.version = _version_number(self.version_text)
 
     @property
     def file(self) -> str:
@@ -114,7 +119,9 @@ class ConfigElement:
         """``parent/property/child`` for embedded elements, as VR Juggler names them."""
         if self.parent is None:
             return self.name
-        return EMBEDDED_SEPARATOR.join((self.parent.full_name, self.parent_property or "", self.name))
+        return EMBEDDED_SEPARATOR.join(
+            (self.parent.full_name, self.parent_property or "", self.name)
+        )
 
     def values(self, prop: str) -> list[PropertyValue]:
         return self.properties.get(prop, [])
@@ -146,11 +153,16 @@ class Configuration:
     """One or more files loaded together, includes followed."""
 
     files: list[ConfigFile] = field(default_factory=list)
-    loaded: list[ConfigElement] = field(default_factory=list)  # every top-level element, in load order
+    loaded: list[ConfigElement] = field(
+        default_factory=list
+    )  # every top-level element, in load order
     diagnostics: list[Diagnostic] = field(default_factory=list)
     #: The files given, in order (resolved paths), and each file's resolved includes.
     roots: list[Path] = field(default_factory=list)
     includes: dict[Path, list[Path]] = field(default_factory=dict)
+    _effective: tuple[int, list[ConfigElement]] | None = field(
+        default=None, init=False, repr=False, compare=False
+    )
 
     def reachable(self, start: Path) -> set[Path]:
         """``start`` and every file it includes, directly or not."""
@@ -167,7 +179,14 @@ class Configuration:
     def elements(self) -> list[ConfigElement]:
         """The effective elements: a later element replaces an earlier one of the same name in
         place, as VR Juggler's ``Configuration::add`` does (so an including file overrides
-        its includes)."""
+        its includes). Worked out again only when ``loaded`` has changed length (elements are
+        only ever appended to it); a fresh list each time, so callers may change theirs."""
+        cached = self._effective
+        if cached is None or cached[0] != len(self.loaded):
+            cached = self._effective = (len(self.loaded), self._effective_elements())
+        return list(cached[1])
+
+    def _effective_elements(self) -> list[ConfigElement]:
         result: list[ConfigElement] = []
         index: dict[str, int] = {}
         for element in self.loaded:

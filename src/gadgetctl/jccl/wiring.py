@@ -353,8 +353,10 @@ class Wiring:
             ahead = position.get(id(target)) if target is not None else None
             if ahead is not None and target.type == element.type and waiting[ahead][1] == where:
                 leader[i] = ahead
+        heads = fold_chains(len(waiting), leader)
+        self._severities = self._root_severities(active, [waiting[h][0] for h in heads])
         found = []
-        for head, followers in fold_chains(len(waiting), leader).items():
+        for head, followers in heads.items():
             element, where, reasons = waiting[head]
             pointer, target, why = reasons[0]
             text = (
@@ -385,27 +387,26 @@ class Wiring:
         """The worst of the causes at the ends of the chains of unmet pointers from ``element``:
         a missing target (an error only when the configuration is complete), an element that
         can never be active, an embedded target; a pure waiting cycle is an error."""
-        if self._severities is None:
-            self._severities = self._root_severities(active)
+        severities = self._severities
+        if severities is None:  # not worked out for every head at once by _waiting
+            severities = self._root_severities(active, [element])
         key = id(element)
-        if key in self._severities.get(Severity.ERROR, ()):
+        if key in severities.get(Severity.ERROR, ()):
             return Severity.ERROR
-        return (
-            Severity.WARNING
-            if key in self._severities.get(Severity.WARNING, ())
-            else Severity.ERROR
-        )
+        return Severity.WARNING if key in severities.get(Severity.WARNING, ()) else Severity.ERROR
 
-    def _root_severities(self, active: set[str]) -> dict[Severity, set[int]]:
-        """The pending elements each severity of cause reaches, for :meth:`_root_severity`,
-        in time linear in the pointers: each cause is spread backwards along the unmet
-        pointers to everything that waits for it, directly or through a chain (walking each
-        element's chain again made 8,000 chained aliases cost 8,000 x 8,000 steps)."""
+    def _root_severities(
+        self, active: set[str], starts: list[ConfigElement]
+    ) -> dict[Severity, set[int]]:
+        """The pending elements each severity of cause reaches, for :meth:`_root_severity`
+        of ``starts`` and of every pending element they wait for, directly or not (only
+        those decide the answers), in time linear in their unmet pointers: each cause is
+        spread backwards along the unmet pointers to everything that waits for it (walking
+        each element's chain again made 8,000 chained aliases cost 8,000 x 8,000 steps)."""
         missing = Severity.ERROR if self.scope.complete else Severity.WARNING
         waiters: dict[int, list[int]] = defaultdict(list)  # element -> elements pointing at it
         reaches: dict[Severity, list[int]] = {Severity.ERROR: [], Severity.WARNING: []}
-        pending = [e for e in self.effective if e.name not in active]
-        for current in pending:
+        for current in self._waited_on(active, starts):
             key = id(current)
             blocker = self.blocked.get(key)
             if blocker is not None:
@@ -431,6 +432,28 @@ class Wiring:
                         seen.add(waiter)
                         stack.append(waiter)
         return caused
+
+    def _waited_on(self, active: set[str], starts: list[ConfigElement]) -> list[ConfigElement]:
+        """``starts`` and the pending elements they wait for, directly or through others
+        (each once): an element's unmet pointers at pending, unblocked top-level elements."""
+        seen: set[int] = set()
+        order: list[ConfigElement] = []
+        stack = [e for e in starts if e.name not in active]
+        while stack:
+            current = stack.pop()
+            key = id(current)
+            if key in seen:
+                continue
+            seen.add(key)
+            order.append(current)
+            if key in self.blocked:
+                continue
+            for pointer in self.reports[key].pointers:
+                if pointer.target not in active:
+                    target = self.by_name.get(pointer.target)
+                    if target is not None and id(target) not in seen:
+                        stack.append(target)
+        return order
 
 
 class _FileRelation:
