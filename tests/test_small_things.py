@@ -217,3 +217,10 @@ def test_scaffold_next_steps_say_how_to_get_pytest(cli, tmp_path, package):
     else:
         install = next(i for i, line in enumerate(steps) if "python -m pip install pytest" in line)
         assert install == pytest_step - 1
+
+
+def test_articles_follow_the_sound_of_the_first_letter():
+    from gadgetctl.wording import article, with_article
+
+    assert with_article("alias") == "an alias" and with_article("int") == "an int"
+    assert with_article("position_proxy") == "a position_proxy" and article("") == "a"

@@ -64,6 +64,7 @@ def test_a_50000_alias_chain_is_reported_once_at_its_head_with_a_count(tmp_path)
         assert head.message.startswith("alias 'A1'") and (head.line, head.column) == (6, 30)
         assert f"{count - 2} more alias elements chained behind it" in head.message
         assert f"the last is alias 'A{count - 1}' at {path}:{count + 4}:1" in head.message
+    assert "proxy 'A0' is an alias (at" in wrong.message  # not "a alias"
     # The chain ends at a name no element of this file has, which another file loaded with
     # it could provide: a warning, as at its end.
     assert pending.severity is Severity.WARNING and wrong.severity is Severity.ERROR

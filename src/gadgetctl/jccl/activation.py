@@ -120,23 +120,28 @@ def settle(
     refusals: dict[tuple[str, int | None], str | None] = {}  # the same for every element of a kind
     waits: dict[str, bool] = {}
     for node in nodes:
-        kind = (node.type, node.version)
-        if kind not in refusals:
-            refusals[kind] = refusal(node.type, node.version, versions(node.type), runtime)
-        reason = node.refused or ("refused" if node.name in refused else None) or refusals[kind]
+        name, type_name, targets = node.name, node.type, node.targets
+        kind = (type_name, node.version)
+        try:
+            reason = refusals[kind]
+        except KeyError:
+            reason = refusals[kind] = refusal(type_name, node.version, versions(type_name), runtime)
+        reason = node.refused or ("refused" if refused and name in refused else None) or reason
         if reason is not None:
-            fate[node.name] = reason
+            fate[name] = reason
             continue
-        waits_here = waits.get(node.type)
+        waits_here = waits.get(type_name)
         if waits_here is None:
-            waits_here = waits[node.type] = waits_for_pointers(node.type, runtime)
-        deps = set(node.targets) if waits_here else set()
-        unmet[node.name] = len(deps)
-        fate[node.name] = WAITING
+            waits_here = waits[type_name] = waits_for_pointers(type_name, runtime)
+        fate[name] = WAITING
+        if not waits_here or not targets:
+            unmet[name] = 0
+            ready.append(node)
+            continue
+        deps = targets if len(targets) == 1 else set(targets)
+        unmet[name] = len(deps)
         for dep in deps:
             waiting[dep].append(node)
-        if not deps:
-            ready.append(node)
     while ready:
         node = ready.pop()
         if fate.get(node.name) is None:

@@ -16,6 +16,7 @@ from gadgetctl.jccl.runtime import REQUIRED_POINTERS
 from gadgetctl.jccl.typeindex import TypeIndex, TypeView
 from gadgetctl.jccl.valuecheck import ValueProblem, check_text
 from gadgetctl.suggest import close_names
+from gadgetctl.wording import with_article
 
 
 class PointerValue(NamedTuple):
@@ -56,6 +57,7 @@ class ElementChecker:
         self.search_path = search_path
         self._cache: dict[int, tuple[ConfigElement, ElementReport]] = {}
         self._values: dict[tuple[int, str], ValueProblem | None] = {}
+        self._clean_views: dict[tuple[str, int | None], TypeView] = {}
         self._required_cache: dict[tuple[str, int], list[tuple[PropertyDefinition, str]]] = {}
 
     def check(self, element: ConfigElement) -> ElementReport:
@@ -89,9 +91,12 @@ class ElementChecker:
     def _judged_view(self, element: ConfigElement, report: ElementReport) -> TypeView | None:
         """The definition version the element is judged by; version and type findings."""
         index, found = self.index, report.diagnostics
-        versions = index.versions(element.type)
         if not element.name.strip():
             found.append(at("CFG015", f"{element.type} element has no name", element.location))
+        clean = self._clean_views.get((element.type, element.version))
+        if clean is not None:
+            return clean
+        versions = index.versions(element.type)
         if not versions:
             close = close_names(element.type, self.index.repo.names(), cutoff=0.6)
             hint = f"Did you mean {', '.join(close)}? " if close else ""
@@ -142,6 +147,10 @@ class ElementChecker:
             judged = declared
         view = index.view(element.type, judged)
         assert view is not None
+        if judged == newest and not view.definition.abstract:
+            # Nothing to say about the type or version of any element of this type and
+            # version: the next one is judged by this view at once.
+            self._clean_views[(element.type, declared)] = view
         if view.definition.abstract:
             found.append(
                 at(
@@ -290,14 +299,15 @@ class ElementChecker:
                 at(
                     "CFG029",
                     f"{describe(element)}: {prop.name} holds an embedded "
-                    f"{value.element.type}; it takes a {prop.valuetype.value} value",
+                    f"{value.element.type}; it takes {with_article(prop.valuetype.value)} value",
                     value.location,
                 )
             )
             return
         if prop.valuetype is ValueType.POINTER:
-            if value.stripped:
-                report.pointers.append(PointerValue(element, prop, value, value.stripped))
+            target = value.text.strip()
+            if target:
+                report.pointers.append(PointerValue(element, prop, value, target))
             return
         key = (id(prop), value.text)
         try:

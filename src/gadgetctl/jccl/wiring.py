@@ -26,6 +26,7 @@ from gadgetctl.jccl.elementcheck import ElementReport, PointerValue, at, describ
 from gadgetctl.jccl.runtime import missing_target_effect
 from gadgetctl.jccl.typeindex import TypeIndex
 from gadgetctl.suggest import CloseNames
+from gadgetctl.wording import with_article
 
 UNHANDLED = "unhandled"
 #: Said of an element VR Juggler leaves pending where gadgetctl deliberately runs it.
@@ -67,6 +68,8 @@ class Wiring:
         self._suggesters: dict[bool, CloseNames] = {}
         self._taken: dict[tuple[int, str], bool] = {}  # (property, target type) -> allowed
         self._kind_blocked: dict[tuple[str, int | None], tuple[str, Severity] | None] = {}
+        #: Why each element that can never become active cannot (see :meth:`_blocked`).
+        self.blocked: dict[int, tuple[str, Severity]] = {}
 
     def check(self) -> list[Diagnostic]:
         found = self.duplicates()
@@ -204,7 +207,7 @@ class Wiring:
             pointer, target = wrong[position]
             prop = pointer.prop
             message = (
-                f"{describe(pointer.element)}: {prop.name} {pointer.target!r} is a {target.type} "
+                f"{describe(pointer.element)}: {prop.name} {pointer.target!r} is {with_article(target.type)} "
                 f"(at {target.location}); {prop.name} takes {' or '.join(prop.allowed_types)}"
             )
             if followers:
@@ -250,23 +253,24 @@ class Wiring:
         return self._kind_blocked[kind]
 
     def _nodes(self) -> list[Node]:
-        return [
-            Node(
-                e.name,
-                e.type,
-                e.version,
-                tuple(p.target for p in self.reports[id(e)].pointers),
-                UNHANDLED if self.blocked.get(id(e), ("",))[0] == UNHANDLED else None,
-            )
-            for e in self.effective
-        ]
+        """The effective elements as the activation rules see them; fills :attr:`blocked`."""
+        blocked = self.blocked = {}
+        reports = self.reports
+        nodes = []
+        for element in self.effective:
+            key = id(element)
+            blocker = self._blocked(element)
+            refused = None
+            if blocker is not None:
+                blocked[key] = blocker
+                if blocker[0] == UNHANDLED:
+                    refused = UNHANDLED
+            pointers = reports[key].pointers
+            targets = tuple([p.target for p in pointers]) if pointers else ()
+            nodes.append(Node(element.name, element.type, element.version, targets, refused))
+        return nodes
 
     def pending(self) -> list[Diagnostic]:
-        self.blocked: dict[int, tuple[str, Severity]] = {}
-        for element in self.effective:
-            blocker = self._blocked(element)
-            if blocker is not None:
-                self.blocked[id(element)] = blocker
         nodes = self._nodes()
         fate = settle(nodes, RunTime.VRJUGGLER, self.index.versions)
         active = {name for name, why in fate.items() if why is None}
