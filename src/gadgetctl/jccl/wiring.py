@@ -63,7 +63,7 @@ class Wiring:
         self.scope = scope
         self.effective = config.elements
         self.by_name = {e.name: e for e in self.effective}
-        self.embedded = {c.full_name: c for e in self.effective for c in e.embedded()}
+        self.embedded = embedded_by_name(self.effective)
         self._severities: dict[Severity, set[int]] | None = None
         self._suggesters: dict[bool, CloseNames] = {}
         self._taken: dict[tuple[int, str], bool] = {}  # (property, target type) -> allowed
@@ -74,15 +74,19 @@ class Wiring:
     def check(self) -> list[Diagnostic]:
         found = self.duplicates()
         wrong: list[tuple[PointerValue, ConfigElement]] = []  # pointers at a type not allowed
-        by_name = self.by_name
+        by_name, reports, taken = self.by_name, self.reports, self._taken
         for element in self.config.loaded:
-            for pointer in self.reports[id(element)].pointers:
+            for pointer in reports[id(element)].pointers:
                 target = by_name.get(pointer.target)
                 if target is None:
                     missing = self.pointer(pointer, element)
                     if missing is not None:
                         found.append(missing)
-                elif not self._takes(pointer.prop, target.type):
+                    continue
+                takes = taken.get((id(pointer.prop), target.type))
+                if takes is None:
+                    takes = self._takes(pointer.prop, target.type)
+                if not takes:
                     wrong.append((pointer, target))
         found.extend(self._wrong_types(wrong))
         found.extend(self.pending())
@@ -96,6 +100,12 @@ class Wiring:
         includes and a later file given supersedes earlier ones (info, CFG042), as does a
         byte-identical copy. Within one file, or between files that neither include each
         other nor are ordered as given files, it may be an accident (CFG040, warning)."""
+        if len({e.name for e in self.config.loaded}) == len(self.config.loaded):
+            return []  # every name once: nothing to compare (the usual case)
+        return self._duplicates()
+
+    def _duplicates(self) -> list[Diagnostic]:
+        """The findings of :meth:`duplicates` when some name is used twice."""
         found = []
         first: dict[str, ConfigElement] = {}
         relation = _FileRelation(self.config)
@@ -235,22 +245,26 @@ class Wiring:
 
     def _blocked(self, element: ConfigElement) -> tuple[str, Severity] | None:
         """Why the element can never become active whatever the others do, and how bad that
-        is; None when it can."""
-        view = self.reports[id(element)].views.get(id(element))
-        if view is None or view.definition.abstract:
-            return UNHANDLED, Severity.ERROR  # reported as CFG010 / CFG011
+        is; None when it can. The same for every element of a type and version (the view it
+        is judged by depends on nothing else), so worked out once per type and version."""
         kind = (element.type, element.version)
-        if kind not in self._kind_blocked:  # the same for every element of a type and version
+        try:
+            return self._kind_blocked[kind]
+        except KeyError:
+            pass
+        view = self.reports[id(element)].views.get(id(element))
+        found: tuple[str, Severity] | None
+        if view is None or view.definition.abstract:
+            found = UNHANDLED, Severity.ERROR  # reported as CFG010 / CFG011
+        else:
             old = too_old(element.type, element.version, self.index.versions(element.type))
             if old is not None:
-                self._kind_blocked[kind] = (
-                    old.replace("the run time", "VR Juggler", 1),
-                    Severity.ERROR,
-                )
+                found = old.replace("the run time", "VR Juggler", 1), Severity.ERROR
             else:
                 reason = never_handled(element.type, RunTime.VRJUGGLER)
-                self._kind_blocked[kind] = (reason, Severity.WARNING) if reason else None
-        return self._kind_blocked[kind]
+                found = (reason, Severity.WARNING) if reason else None
+        self._kind_blocked[kind] = found
+        return found
 
     def _nodes(self) -> list[Node]:
         """The effective elements as the activation rules see them; fills :attr:`blocked`."""
@@ -506,3 +520,19 @@ def check_wiring(
     config: Configuration, reports: dict[int, ElementReport], index: TypeIndex, scope: Scope
 ) -> list[Diagnostic]:
     return Wiring(config, reports, index, scope).check()
+
+
+def embedded_by_name(elements: list[ConfigElement]) -> dict[str, ConfigElement]:
+    """Every embedded element of ``elements``, at any depth, by its full name (looking into
+    the values of each element directly: most have no embedded element, and a generator
+    per element cost a tenth of the pointer checks of 50,000 aliases)."""
+    found: dict[str, ConfigElement] = {}
+    for element in elements:
+        for values in element.properties.values():
+            for value in values:
+                if value.element is not None:
+                    child = value.element
+                    found[child.full_name] = child
+                    for deeper in child.embedded():
+                        found[deeper.full_name] = deeper
+    return found
