@@ -13,6 +13,8 @@ from pathlib import Path
 import pytest
 from DTrack_drv.standalone import DTrackLimits, DTrackUnits, parse_frame, parse_frames
 
+from gadgetctl.input.testing import configuration
+
 EYE = "[1 0 0 0 1 0 0 0 1]"
 BODY = f"[0 1.0][1 2 3]{EYE}"
 POISON = [
@@ -128,12 +130,9 @@ CHILD = textwrap.dedent(
 def test_the_device_delivers_good_frames_around_poison_with_bounded_memory(tmp_path: Path) -> None:
     config = tmp_path / "dt.jconf"
     config.write_text(
-        '<?xml version="1.0" encoding="UTF-8"?>\n'
-        '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">'
-        '<elements><input_manager name="IM" version="2"><driver>DTrack_drv</driver>'
-        '</input_manager><dtrack name="DT" version="1"><receive_port>0</receive_port></dtrack>'
-        "</elements></configuration>\n"
+        configuration(
+            "DTrack_drv", '<dtrack name="DT" version="1"><receive_port>0</receive_port></dtrack>'
+        )
     )
     poison = [
         "6dcal 2000000\r\n",

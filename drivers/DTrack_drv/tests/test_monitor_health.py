@@ -14,41 +14,29 @@ import pytest
 from DTrack_drv.emulator import DTrackEmulator
 
 from gadgetctl.cli.monitor_text import health_text
+from gadgetctl.input.testing import configuration, free_udp_port, run_gadgetctl
 
-HEAD = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">
-<elements>
-<input_manager name="IM" version="2"><driver>DTrack_drv</driver></input_manager>
-"""
 pytestmark = pytest.mark.timeout(120)
 
 
-def configuration(tmp_path: Path) -> tuple[Path, int]:
-    import socket
-
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
+def tracker_configuration(tmp_path: Path) -> tuple[Path, int]:
+    port = free_udp_port()
     path = tmp_path / "dtrack.jconf"
     path.write_text(
-        HEAD + f'<dtrack name="DT" version="1"><receive_port>{port}</receive_port></dtrack>\n'
-        "</elements>\n</configuration>\n"
+        configuration(
+            "DTrack_drv",
+            f'<dtrack name="DT" version="1"><receive_port>{port}</receive_port></dtrack>\n',
+        )
     )
     return path, port
 
 
 def monitor(path: Path, *args: str) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "gadgetctl", "monitor", str(path), "DT", *args],
-        capture_output=True,
-        text=True,
-        timeout=90,
-    )
+    return run_gadgetctl("monitor", str(path), "DT", *args, timeout=90)
 
 
 def test_the_table_and_the_ndjson_statistics_show_the_garbage_counted(tmp_path: Path) -> None:
-    path, port = configuration(tmp_path)
+    path, port = tracker_configuration(tmp_path)
     with DTrackEmulator(port, scenario="garbage", rate=100.0, seed=3):
         table = monitor(path, "--format", "table", "--duration", "1.5")
         records = monitor(path, "--format", "ndjson", "--duration", "1.5")
@@ -87,7 +75,7 @@ def test_the_live_view_shows_the_health_counters(tmp_path: Path) -> None:
     sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "tests"))
     from tmux_pane import Pane
 
-    path, port = configuration(tmp_path)
+    path, port = tracker_configuration(tmp_path)
     command = " ".join(
         shlex.quote(a)
         for a in (sys.executable, "-m", "gadgetctl", "monitor", str(path), "DT", "--no-mouse")

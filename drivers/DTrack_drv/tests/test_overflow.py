@@ -11,7 +11,7 @@ from DTrack_drv.standalone import DTrackFrame, DTrackStandalone
 from DTrack_drv.wrapper import DTrackDevice
 
 from gadgetctl.input import InputManager, ManagerOptions
-from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing import configuration, wait_until
 from gadgetctl.monitor.session import MonitorSession
 
 pytestmark = pytest.mark.timeout(60)
@@ -51,16 +51,13 @@ def test_the_monitor_shows_kernel_drops_with_the_other_drops(tmp_path: Path, mon
     monkeypatch.setattr(DTrackDevice, "receive_buffer", 1)  # the kernel's smallest buffer
     config = tmp_path / "dt.jconf"
     config.write_text(
-        '<?xml version="1.0" encoding="UTF-8"?>\n'
-        '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">'
-        '<elements><input_manager name="IM" version="2"><driver>DTrack_drv</driver>'
-        '</input_manager><dtrack name="DT" version="1"><receive_port>0</receive_port></dtrack>'
-        "</elements></configuration>\n"
+        configuration(
+            "DTrack_drv", '<dtrack name="DT" version="1"><receive_port>0</receive_port></dtrack>'
+        )
     )
     options = ManagerOptions(retry_interval=None, entry_points=False)
-    manager, configuration = InputManager.from_files([config], options=options)
-    session = MonitorSession(manager, configuration)
+    manager, loaded = InputManager.from_files([config], options=options)
+    session = MonitorSession(manager, loaded)
     try:
         session.start()
         device = manager.device("DT")

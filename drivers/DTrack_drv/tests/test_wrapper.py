@@ -6,9 +6,6 @@ from __future__ import annotations
 
 import json
 import socket
-import subprocess
-import sys
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -22,77 +19,28 @@ from DTrack_drv.standalone import (
 )
 
 from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
-from gadgetctl.input.testing import frames_until
+from gadgetctl.input.testing import (
+    alias,
+    corpus_file,
+    frames_until,
+    free_udp_port,
+    proxy,
+    rewritten,
+    run_gadgetctl,
+)
+from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
-DRIVER = Path(__file__).resolve().parents[1]
-CORPUS = Path(__file__).resolve().parents[3].parent / "shared" / "corpus" / "vrjuggler"
-CORPUS_CONFIG = CORPUS / "modules" / "vrjuggler" / "data" / "configFiles" / "example.dtrack.jconf"
-HEAD = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">
-<elements>
-<input_manager name="IM" version="2"><driver>DTrack_drv</driver></input_manager>
-"""
 PRESSED = (DigitalState.ON, DigitalState.TOGGLE_ON)
 RATE = 250.0
 
 
-def free_port() -> int:
-    """A UDP port the OS has just handed out on loopback."""
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
+build = managers_fixture("DTrack_drv", name="build", ready=True)
 
 
 def tracker(name: str, port: int, *extra: str) -> str:
     return f'<dtrack name="{name}" version="1"><receive_port>{port}</receive_port>{"".join(extra)}</dtrack>\n'
-
-
-def proxy(kind: str, name: str, device: str, unit: int) -> str:
-    return f'<{kind}_proxy name="{name}" version="1"><device>{device}</device><unit>{unit}</unit></{kind}_proxy>\n'
-
-
-def alias(name: str, target: str) -> str:
-    return f'<alias name="{name}" version="1"><proxy>{target}</proxy></alias>\n'
-
-
-def write(tmp_path: Path, body: str) -> Path:
-    path = tmp_path / f"test{len(list(tmp_path.glob('*.jconf')))}.jconf"
-    path.write_text(HEAD + body + "</elements>\n</configuration>\n")
-    return path
-
-
-@pytest.fixture
-def managers() -> Iterator[list[InputManager]]:
-    made: list[InputManager] = []
-    yield made
-    for manager in made:
-        manager.shutdown()
-
-
-@pytest.fixture
-def build(tmp_path: Path, managers: list[InputManager]) -> Callable[..., InputManager]:
-    """A running input manager for a configuration (a body of elements, or a file)."""
-
-    def make(config: str | Path, peer_timeout: float | None = None) -> InputManager:
-        path = write(tmp_path, config) if isinstance(config, str) else config
-        options = ManagerOptions(retry_interval=None, entry_points=False)
-        manager, configuration = InputManager.from_files([path], options=options)
-        managers.append(manager)
-        manager.configure(configuration)
-        assert not manager.pending(), [(p.name, p.message) for p in manager.pending()]
-        if peer_timeout is not None:
-            for device in manager.devices.values():
-                device.peer_timeout = peer_timeout
-        return manager
-
-    return make
-
-
-def state(manager: InputManager, name: str) -> str:
-    return manager.status(name).state
 
 
 def expected_pose(index: int) -> np.ndarray:
@@ -107,7 +55,7 @@ def expected_pose(index: int) -> np.ndarray:
 
 
 def test_position_units_are_flysticks_then_bodies_in_metres(tmp_path: Path, build) -> None:
-    port = free_port()
+    port = free_udp_port()
     body = tracker("DT", port)
     names = ["Flystick", "Body 0", "Body 1", "Body 2"]
     for unit, name in enumerate(names):
@@ -122,7 +70,7 @@ def test_position_units_are_flysticks_then_bodies_in_metres(tmp_path: Path, buil
 
 
 def test_rotation_is_read_column_by_column(tmp_path: Path, build) -> None:
-    port = free_port()
+    port = free_udp_port()
     manager = build(tracker("DT", port) + proxy("position", "Body", "DT", 0))
     # a quarter turn about z, sent column by column: R00 R10 R20 R01 R11 R21 R02 R12 R22
     datagram = b"fr 1\r\n6d 1 [0 1.0][100 -250 1500 0 0 90][0 1 0 -1 0 0 0 0 1]\r\n"
@@ -136,7 +84,7 @@ def test_rotation_is_read_column_by_column(tmp_path: Path, build) -> None:
 
 
 def test_flystick_buttons_beyond_eight_and_the_joystick(tmp_path: Path, build) -> None:
-    port = free_port()
+    port = free_udp_port()
     body = tracker("DT", port)
     for b in range(10):
         body += proxy("digital", f"Button {b}", "DT", b) + alias(f"VJButton{b}", f"Button {b}")
@@ -160,7 +108,7 @@ def test_flystick_buttons_beyond_eight_and_the_joystick(tmp_path: Path, build) -
 
 
 def test_garbage_is_counted_and_every_valid_frame_is_a_sample(tmp_path: Path, build) -> None:
-    port = free_port()
+    port = free_udp_port()
     manager = build(tracker("DT", port) + proxy("position", "Flystick", "DT", 0))
     device = manager.device("DT")
     with DTrackEmulator(port, scenario="garbage", rate=RATE, max_frames=60, seed=3) as emu:
@@ -173,7 +121,7 @@ def test_garbage_is_counted_and_every_valid_frame_is_a_sample(tmp_path: Path, bu
                 and device.store.total(DeviceKind.POSITION) >= 60
             ),
         )
-        assert state(manager, "DT") == "running" and device.faults == 0
+        assert manager.status("DT").state == "running" and device.faults == 0
     counters = device.counters
     assert counters["bad_datagrams"] == emu.garbage_sent == 60
     assert counters["bad_lines"] == emu.bad_lines_sent > 0
@@ -185,21 +133,21 @@ def test_garbage_is_counted_and_every_valid_frame_is_a_sample(tmp_path: Path, bu
 
 
 def test_a_silent_tracker_faults_and_resumes_within_two_seconds(tmp_path: Path, build) -> None:
-    port, other_port = free_port(), free_port()
+    port, other_port = free_udp_port(), free_udp_port()
     body = tracker("DT", port) + tracker("Other", other_port) + proxy("position", "Body", "DT", 1)
     manager = build(body, peer_timeout=0.3)
     device, other = manager.device("DT"), manager.device("Other")
     with DTrackEmulator(other_port, scenario="motion", rate=RATE):
         with DTrackEmulator(port, scenario="motion", rate=RATE):
             frames_until(manager, lambda: device.store.total() > 10)
-        frames_until(manager, lambda: state(manager, "DT") == "faulted")
+        frames_until(manager, lambda: manager.status("DT").state == "faulted")
         status = manager.status("DT")
         assert "DTrack" in status.reason and status.code == "DRV042"
         before, failed_at = other.store.total(), device.error_at
         # silent for a while: a restart attempt finds nothing (its failure renews the fault's
         # time); waited for, not slept
         frames_until(manager, lambda: device.error_at != failed_at, timeout=10.0)
-        assert state(manager, "DT") in ("faulted", "reconnecting")
+        assert manager.status("DT").state in ("faulted", "reconnecting")
         # the other tracker went on meanwhile (it may have been starved of the CPU for a
         # moment on a loaded machine, so this too is waited for, with a hang guard)
         frames_until(manager, lambda: other.store.total() > before, timeout=10.0)
@@ -209,13 +157,13 @@ def test_a_silent_tracker_faults_and_resumes_within_two_seconds(tmp_path: Path, 
             count = device.store.total()
             resumed = frames_until(manager, lambda: device.store.total() > count, timeout=4.0)
             assert resumed < 2.0
-            frames_until(manager, lambda: state(manager, "DT") == "running")
+            frames_until(manager, lambda: manager.status("DT").state == "running")
             assert device.restarts >= 1
-        assert other.faults == 0 and state(manager, "Other") == "running"
+        assert other.faults == 0 and manager.status("Other").state == "running"
 
 
 def test_remote_control_starts_and_stops_the_tracker(tmp_path: Path, build, monkeypatch) -> None:
-    port = free_port()
+    port = free_udp_port()
     with DTrackEmulator(port, rate=RATE, command_port=0, wait_for_start=True) as emu:
         host, command_port = emu.command_address.rsplit(":", 1)
         body = tracker(
@@ -223,7 +171,7 @@ def test_remote_control_starts_and_stops_the_tracker(tmp_path: Path, build, monk
             port,
             f"<server_name>{host}</server_name><command_port>{command_port}</command_port>",
         )
-        path = write(tmp_path, body + proxy("position", "F", "DT", 0))
+        path = build.write(body + proxy("position", "F", "DT", 0))
         options = ManagerOptions(retry_interval=None, entry_points=False)
         manager, configuration = InputManager.from_files([path], options=options)
         try:  # load the driver first, to shorten its start delay
@@ -240,14 +188,11 @@ def test_remote_control_starts_and_stops_the_tracker(tmp_path: Path, build, monk
         assert emu.commands[2:] == [CMD_STOP_SENDING, CMD_CAMERAS_OFF]
 
 
-def test_unusable_elements_stay_pending_with_a_reason(tmp_path: Path) -> None:
+def test_unusable_elements_stay_pending_with_a_reason(build) -> None:
     taken = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     taken.bind(("", 0))
     try:
-        path = write(
-            tmp_path,
-            tracker("Huge", 70000) + tracker("Taken", taken.getsockname()[1]),
-        )
+        path = build.write(tracker("Huge", 70000) + tracker("Taken", taken.getsockname()[1]))
         manager, configuration = InputManager.from_files(
             [path], options=ManagerOptions(retry_interval=None)
         )
@@ -269,13 +214,13 @@ def test_unusable_elements_stay_pending_with_a_reason(tmp_path: Path) -> None:
 def corpus_config(tmp_path: Path) -> tuple[Path, int]:
     """VR Juggler's example.dtrack.jconf with only its receive_port changed (it keeps the
     configuration namespace 3.1, which does not exist; VR Juggler loads it all the same)."""
-    assert CORPUS_CONFIG.is_file(), f"corpus not found at {CORPUS}"
-    text = CORPUS_CONFIG.read_text()
-    assert text.count("<receive_port>5000</receive_port>") == 1 and "xsd/3.1/configuration" in text
-    port = free_port()
-    path = tmp_path / CORPUS_CONFIG.name
-    path.write_text(
-        text.replace("<receive_port>5000</receive_port>", f"<receive_port>{port}</receive_port>")
+    source = corpus_file("example.dtrack.jconf")
+    assert "xsd/3.1/configuration" in source.read_text()
+    port = free_udp_port()
+    path = rewritten(
+        source,
+        tmp_path,
+        ("<receive_port>5000</receive_port>", f"<receive_port>{port}</receive_port>"),
     )
     return path, port
 
@@ -315,21 +260,8 @@ def test_the_corpus_example_delivers_through_its_proxies(
 def test_monitor_shows_samples_of_the_corpus_example(corpus_config: tuple[Path, int]) -> None:
     path, port = corpus_config
     with DTrackEmulator(port, scenario="motion", rate=100.0, bodies=1):
-        result = subprocess.run(
-            [
-                sys.executable,
-                "-m",
-                "gadgetctl",
-                "monitor",
-                str(path),
-                "--duration",
-                "1",
-                "--format",
-                "ndjson",
-            ],
-            capture_output=True,
-            text=True,
-            timeout=60,
+        result = run_gadgetctl(
+            "monitor", str(path), "--duration", "1", "--format", "ndjson", timeout=60
         )
     assert result.returncode == 0, result.stderr[-2000:]
     records = [json.loads(line) for line in result.stdout.splitlines() if line.strip()]
