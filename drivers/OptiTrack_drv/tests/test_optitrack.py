@@ -5,9 +5,7 @@ bounded decoding, garbage, disconnection and return, multicast through loopback.
 from __future__ import annotations
 
 import math
-import socket
 import struct
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -23,23 +21,27 @@ from OptiTrack_drv.standalone import (
 )
 
 from gadgetctl.input import DeviceKind, InputManager, ManagerOptions
-from gadgetctl.input.testing import frames_until, wait_until
+from gadgetctl.input.testing import (
+    configuration,
+    frames_until,
+    free_udp_port,
+    proxy,
+    run_gadgetctl,
+    wait_until,
+)
+from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
-HEAD = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">
-<elements>
-<input_manager name="IM" version="2"><driver>Optitrack_drv</driver></input_manager>
-"""
 RATE = 200.0
 
 
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
+build = managers_fixture(
+    "Optitrack_drv",
+    name="build",
+    ready=True,
+    tune={"optitrack": {"multicast_interface": "127.0.0.1"}},  # multicast through loopback
+)
 
 
 def device(name: str, port: int, bodies: list[int], markers: list[int]) -> str:
@@ -55,36 +57,6 @@ def device(name: str, port: int, bodies: list[int], markers: list[int]) -> str:
             f"<marker_index>{m}</marker_index></optitrack_marker></marker>"
         )
     return "".join(parts) + "</optitrack>\n"
-
-
-def proxy(name: str, dev: str, unit: int) -> str:
-    return f'<position_proxy name="{name}" version="1"><device>{dev}</device><unit>{unit}</unit></position_proxy>\n'
-
-
-@pytest.fixture
-def build(tmp_path: Path, monkeypatch) -> Iterator[Callable[..., InputManager]]:
-    from OptiTrack_drv.wrapper import OptiTrackDevice
-
-    monkeypatch.setattr(OptiTrackDevice, "multicast_interface", "127.0.0.1")
-    made: list[InputManager] = []
-
-    def make(body: str, peer_timeout: float | None = None) -> InputManager:
-        path = tmp_path / f"t{len(made)}.jconf"
-        path.write_text(HEAD + body + "</elements>\n</configuration>\n")
-        manager, configuration = InputManager.from_files(
-            [path], options=ManagerOptions(retry_interval=None, entry_points=False)
-        )
-        made.append(manager)
-        manager.configure(configuration)
-        assert not manager.pending(), [(p.name, p.message) for p in manager.pending()]
-        if peer_timeout is not None:
-            for dev in manager.devices.values():
-                dev.peer_timeout = peer_timeout
-        return manager
-
-    yield make
-    for manager in made:
-        manager.shutdown()
 
 
 def expected_body(index: int, frame: int = 0, moving: bool = False) -> np.ndarray:
@@ -156,10 +128,10 @@ def test_a_body_without_a_rotation_is_a_bad_record() -> None:
 
 
 def test_bodies_then_markers_in_metres_through_proxies(build) -> None:
-    port = free_port()
+    port = free_udp_port()
     body = device("OT", port, [2, 1, 3], [1000, 1002])
     for unit, name in enumerate(["B2", "B1", "B3", "M0", "M2"]):
-        body += proxy(name, "OT", unit)
+        body += proxy("position", name, "OT", unit)
     manager = build(body)
     with OptiTrackEmulator(port, scenario="idle", rate=RATE, bodies=3, markers=3):
         frames_until(manager, lambda: manager.device("OT").store.total(DeviceKind.POSITION) > 3)
@@ -180,8 +152,12 @@ def test_bodies_then_markers_in_metres_through_proxies(build) -> None:
 
 
 def test_moving_bodies_follow_the_frames(build) -> None:
-    port = free_port()
-    manager = build(device("OT", port, [2], [1000]) + proxy("B", "OT", 0) + proxy("M", "OT", 1))
+    port = free_udp_port()
+    manager = build(
+        device("OT", port, [2], [1000])
+        + proxy("position", "B", "OT", 0)
+        + proxy("position", "M", "OT", 1)
+    )
     with OptiTrackEmulator(port, scenario="motion", rate=RATE, max_frames=40) as emu:
         frames_until(
             manager, lambda: emu.finished.is_set() and manager.device("OT").counters["frames"] >= 40
@@ -195,8 +171,8 @@ def test_moving_bodies_follow_the_frames(build) -> None:
 
 
 def test_garbage_is_counted_and_every_frame_is_a_sample(build) -> None:
-    port = free_port()
-    manager = build(device("OT", port, [1], []) + proxy("B", "OT", 0))
+    port = free_udp_port()
+    manager = build(device("OT", port, [1], []) + proxy("position", "B", "OT", 0))
     dev = manager.device("OT")
     with OptiTrackEmulator(port, scenario="garbage", rate=RATE, max_frames=40, seed=2) as emu:
         frames_until(
@@ -214,8 +190,8 @@ def test_garbage_is_counted_and_every_frame_is_a_sample(build) -> None:
 
 
 def test_a_silent_server_faults_and_data_returns_within_two_seconds(build) -> None:
-    port = free_port()
-    manager = build(device("OT", port, [1], []) + proxy("B", "OT", 0), peer_timeout=0.3)
+    port = free_udp_port()
+    manager = build(device("OT", port, [1], []) + proxy("position", "B", "OT", 0), peer_timeout=0.3)
     dev = manager.device("OT")
     with OptiTrackEmulator(port, scenario="disconnect", rate=RATE, disconnect_after=20) as emu:
         frames_until(manager, lambda: emu.finished.is_set() and dev.store.total() >= 20)
@@ -246,12 +222,10 @@ def test_multicast_through_loopback_reaches_the_receiver() -> None:
 
 def test_unusable_ports_stay_pending_with_a_reason(tmp_path: Path) -> None:
     path = tmp_path / "bad.jconf"
-    path.write_text(HEAD + device("Huge", 70000, [1], []) + "</elements>\n</configuration>\n")
-    manager, configuration = InputManager.from_files(
-        [path], options=ManagerOptions(retry_interval=None)
-    )
+    path.write_text(configuration("Optitrack_drv", device("Huge", 70000, [1], [])))
+    manager, loaded = InputManager.from_files([path], options=ManagerOptions(retry_interval=None))
     try:
-        manager.configure(configuration)
+        manager.configure(loaded)
         reasons = {p.name: p.message for p in manager.pending()}
     finally:
         manager.shutdown()
@@ -260,18 +234,11 @@ def test_unusable_ports_stay_pending_with_a_reason(tmp_path: Path) -> None:
 
 def test_doctor_checks_the_port_and_the_multicast_group(tmp_path: Path) -> None:
     import json
-    import subprocess
-    import sys
 
-    port = free_port()
+    port = free_udp_port()
     path = tmp_path / "doctor.jconf"
-    path.write_text(HEAD + device("OT", port, [1], []) + "</elements>\n</configuration>\n")
-    result = subprocess.run(
-        [sys.executable, "-m", "gadgetctl", "doctor", str(path), "--format", "json"],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    path.write_text(configuration("Optitrack_drv", device("OT", port, [1], [])))
+    result = run_gadgetctl("doctor", str(path), "--format", "json", timeout=60)
     report = json.loads(result.stdout)
     checks = {c["target"]: c for d in report["devices"] for c in d["checks"]}
     assert checks[f"{port}/udp"]["status"] == "ok"
@@ -279,17 +246,14 @@ def test_doctor_checks_the_port_and_the_multicast_group(tmp_path: Path) -> None:
 
 
 def test_validate_counts_bodies_and_markers_as_units(tmp_path: Path) -> None:
-    import subprocess
-    import sys
 
     path = tmp_path / "units.jconf"
-    body = device("OT", 1001, [1], [1000]) + proxy("Ok", "OT", 1) + proxy("Beyond", "OT", 2)
-    path.write_text(HEAD + body + "</elements>\n</configuration>\n")
-    result = subprocess.run(
-        [sys.executable, "-m", "gadgetctl", "validate", str(path)],
-        capture_output=True,
-        text=True,
-        timeout=60,
+    body = (
+        device("OT", 1001, [1], [1000])
+        + proxy("position", "Ok", "OT", 1)
+        + proxy("position", "Beyond", "OT", 2)
     )
+    path.write_text(configuration("Optitrack_drv", body))
+    result = run_gadgetctl("validate", str(path), timeout=60)
     assert result.returncode == 1
     assert "CFG034" in result.stdout and "'Beyond'" in result.stdout and "'Ok'" not in result.stdout
