@@ -4,7 +4,6 @@ the board going silent and coming back, find_mac discovery (sent to loopback, ne
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -18,17 +17,12 @@ from ElexolEther24_drv.standalone import (
     parse_mac,
 )
 
-from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
-from gadgetctl.input.testing import frames_until
+from gadgetctl.input import DeviceKind, DigitalState
+from gadgetctl.input.testing import configuration, frames_until, proxy, run_gadgetctl
+from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
-HEAD = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">
-<elements>
-<input_manager name="IM" version="2"><driver>ElexolEther24_drv</driver></input_manager>
-"""
 PRESSED = (DigitalState.ON, DigitalState.TOGGLE_ON)
 
 
@@ -40,34 +34,7 @@ def board(name: str, address: str, port_a: str = "", method: str = "static_ip") 
     )
 
 
-def proxy(name: str, dev: str, unit: int) -> str:
-    return f'<digital_proxy name="{name}" version="1"><device>{dev}</device><unit>{unit}</unit></digital_proxy>\n'
-
-
-@pytest.fixture
-def build(tmp_path: Path) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def make(
-        body: str, peer_timeout: float | None = None, pending_ok: bool = False
-    ) -> InputManager:
-        path = tmp_path / f"t{len(made)}.jconf"
-        path.write_text(HEAD + body + "</elements>\n</configuration>\n")
-        manager, configuration = InputManager.from_files(
-            [path], options=ManagerOptions(retry_interval=None, entry_points=False)
-        )
-        made.append(manager)
-        manager.configure(configuration)
-        if not pending_ok:
-            assert not manager.pending(), [(p.name, p.message) for p in manager.pending()]
-        if peer_timeout is not None:
-            for dev in manager.devices.values():
-                dev.peer_timeout = peer_timeout
-        return manager
-
-    yield make
-    for manager in made:
-        manager.shutdown()
+build = managers_fixture("ElexolEther24_drv", name="build", ready=True)
 
 
 def test_lines_are_zero_or_one_after_inversion() -> None:
@@ -88,7 +55,7 @@ def test_addresses_with_and_without_a_port() -> None:
 def test_24_lines_through_proxies_and_the_setup_written(build) -> None:
     with Ether24Emulator(0, scenario="idle") as emu:
         body = board("IO", emu.address, "<invert0>1</invert0><pullup1>0</pullup1>")
-        body += "".join(proxy(f"L{u}", "IO", u) for u in range(24))
+        body += "".join(proxy("digital", f"L{u}", "IO", u) for u in range(24))
         manager = build(body)
         frames_until(manager, lambda: manager.device("IO").store.total(DeviceKind.DIGITAL) > 2)
         expected = lines(list(IDLE_PATTERN), [0x01, 0, 0])
@@ -103,7 +70,8 @@ def test_24_lines_through_proxies_and_the_setup_written(build) -> None:
 def test_each_line_goes_high_in_turn(build) -> None:
     with Ether24Emulator(0, scenario="buttons", rate=100.0) as emu:
         manager = build(
-            board("IO", emu.address) + "".join(proxy(f"L{u}", "IO", u) for u in range(24))
+            board("IO", emu.address)
+            + "".join(proxy("digital", f"L{u}", "IO", u) for u in range(24))
         )
         seen: set[int] = set()
 
@@ -116,7 +84,7 @@ def test_each_line_goes_high_in_turn(build) -> None:
 
 def test_garbage_replies_are_counted_without_a_fault(build) -> None:
     with Ether24Emulator(0, scenario="garbage", rate=50.0) as emu:
-        manager = build(board("IO", emu.address) + proxy("L0", "IO", 0))
+        manager = build(board("IO", emu.address) + proxy("digital", "L0", "IO", 0))
         dev = manager.device("IO")
         frames_until(manager, lambda: dev.counters.get("bad_replies", 0) >= 30)
         frames_until(manager, lambda: dev.store.total(DeviceKind.DIGITAL) >= 10)
@@ -128,7 +96,9 @@ def test_a_silent_board_faults_and_data_returns_within_two_seconds(build) -> Non
     emu = Ether24Emulator(0, scenario="disconnect", rate=50.0, disconnect_after=20).start()
     port = emu.port
     try:
-        manager = build(board("IO", emu.address) + proxy("L0", "IO", 0), peer_timeout=0.3)
+        manager = build(
+            board("IO", emu.address) + proxy("digital", "L0", "IO", 0), peer_timeout=0.3
+        )
         dev = manager.device("IO")
         frames_until(manager, lambda: emu.finished.is_set() and dev.store.total() > 3)
         frames_until(manager, lambda: manager.status("IO").state == "faulted")
@@ -155,7 +125,8 @@ def test_find_mac_finds_the_board_by_its_mac_and_reads_its_lines(build, monkeypa
     with Ether24Emulator(0, scenario="idle") as emu:
         monkeypatch.setenv("GADGETCTL_ETHER24_DISCOVERY", emu.address)
         manager = build(
-            mac_board("IO", format_mac(MAC).lower().replace(":", "-")) + proxy("L3", "IO", 3)
+            mac_board("IO", format_mac(MAC).lower().replace(":", "-"))
+            + proxy("digital", "L3", "IO", 3)
         )
         dev = manager.device("IO")
         frames_until(manager, lambda: dev.store.total(DeviceKind.DIGITAL) > 2)
@@ -170,7 +141,7 @@ def test_find_mac_with_no_such_board_is_pending_with_the_reason(build, monkeypat
         monkeypatch.setenv("GADGETCTL_ETHER24_DISCOVERY", emu.address)
         manager = build(
             mac_board("Other", "00:00:00:00:00:01") + mac_board("Typo", "00:0A:BC:12:34"),
-            pending_ok=True,
+            ready=False,
         )
         reasons = {p.name: p.message for p in manager.pending()}
     assert "no Ether I/O 24 with MAC 00:00:00:00:00:01 answered" in reasons["Other"]
@@ -180,7 +151,7 @@ def test_find_mac_with_no_such_board_is_pending_with_the_reason(build, monkeypat
 
 def test_a_bad_discovery_variable_is_a_config_error(build, monkeypatch) -> None:
     monkeypatch.setenv("GADGETCTL_ETHER24_DISCOVERY", "127.0.0.1:99999")
-    manager = build(mac_board("IO", format_mac(MAC)), pending_ok=True)
+    manager = build(mac_board("IO", format_mac(MAC)), ready=False)
     (entry,) = manager.pending()
     assert "GADGETCTL_ETHER24_DISCOVERY" in entry.message
 
@@ -228,26 +199,21 @@ def test_mac_addresses_in_the_usual_spellings() -> None:
 
 def test_validate_knows_the_24_lines_and_doctor_the_board(tmp_path: Path) -> None:
     import json
-    import subprocess
-    import sys
 
     path = tmp_path / "units.jconf"
     path.write_text(
-        HEAD
-        + board("IO", "127.0.0.1:2500")
-        + proxy("Last", "IO", 23)
-        + proxy("Beyond", "IO", 24)
-        + "</elements>\n</configuration>\n"
+        configuration(
+            "ElexolEther24_drv",
+            board("IO", "127.0.0.1:2500")
+            + proxy("digital", "Last", "IO", 23)
+            + proxy("digital", "Beyond", "IO", 24),
+        )
     )
 
-    def gadgetctl(*args: str) -> subprocess.CompletedProcess:
-        command = [sys.executable, "-m", "gadgetctl", *args]
-        return subprocess.run(command, capture_output=True, text=True, timeout=60)
-
-    result = gadgetctl("validate", str(path))
+    result = run_gadgetctl("validate", str(path), timeout=60)
     assert result.returncode == 1 and result.stdout.count("CFG034") == 1
     assert "'Beyond'" in result.stdout
-    report = json.loads(gadgetctl("doctor", str(path), "--format", "json").stdout)
+    report = json.loads(run_gadgetctl("doctor", str(path), "--format", "json", timeout=60).stdout)
     (dev,) = report["devices"]
     assert dev["checks"][0]["target"] == "127.0.0.1:2500"
     assert dev["checks"][0]["status"] == "unchecked"
@@ -259,7 +225,7 @@ def test_doctor_names_the_mac_a_find_mac_board_is_found_by(tmp_path: Path) -> No
     import sys
 
     path = tmp_path / "mac.jconf"
-    path.write_text(HEAD + mac_board("IO", "00:0A:BC:12:34:56") + "</elements>\n</configuration>\n")
+    path.write_text(configuration("ElexolEther24_drv", mac_board("IO", "00:0A:BC:12:34:56")))
     command = [sys.executable, "-m", "gadgetctl", "doctor", str(path), "--format", "json"]
     report = json.loads(subprocess.run(command, capture_output=True, text=True, timeout=60).stdout)
     ((check,),) = [dev["checks"] for dev in report["devices"]]

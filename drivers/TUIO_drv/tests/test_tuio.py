@@ -5,10 +5,8 @@ disconnection and return, and a clear DRV003 without python-osc."""
 from __future__ import annotations
 
 import json
-import socket
 import subprocess
 import sys
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -16,57 +14,22 @@ from pythonosc.osc_message_builder import OscMessageBuilder
 from TUIO_drv.emulator import TuioEmulator, cursor_position, frame_bundle, message
 from TUIO_drv.standalone import MAX_ALIVE, TouchSlots, TuioReceiver
 
-from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
-from gadgetctl.input.testing import frames_until
+from gadgetctl.input import DeviceKind, DigitalState
+from gadgetctl.input.testing import configuration, frames_until, free_udp_port, proxy, run_gadgetctl
+from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
-HEAD = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">
-<elements>
-<input_manager name="IM" version="2"><driver>TUIO_drv</driver></input_manager>
-"""
 RATE = 200.0
 PRESSED = (DigitalState.ON, DigitalState.TOGGLE_ON)
 RELEASED = (DigitalState.OFF, DigitalState.TOGGLE_OFF)
 
 
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
+build = managers_fixture("TUIO_drv", name="build", ready=True)
 
 
 def table(name: str, port: int, points: int = 4) -> str:
     return f'<TUIO_drv name="{name}" version="1"><points>{points}</points><port>{port}</port></TUIO_drv>\n'
-
-
-def proxy(kind: str, name: str, dev: str, unit: int) -> str:
-    return f'<{kind}_proxy name="{name}" version="1"><device>{dev}</device><unit>{unit}</unit></{kind}_proxy>\n'
-
-
-@pytest.fixture
-def build(tmp_path: Path) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def make(body: str, peer_timeout: float | None = None) -> InputManager:
-        path = tmp_path / f"t{len(made)}.jconf"
-        path.write_text(HEAD + body + "</elements>\n</configuration>\n")
-        manager, configuration = InputManager.from_files(
-            [path], options=ManagerOptions(retry_interval=None, entry_points=False)
-        )
-        made.append(manager)
-        manager.configure(configuration)
-        assert not manager.pending(), [(p.name, p.message) for p in manager.pending()]
-        if peer_timeout is not None:
-            for dev in manager.devices.values():
-                dev.peer_timeout = peer_timeout
-        return manager
-
-    yield make
-    for manager in made:
-        manager.shutdown()
 
 
 # -- the protocol ------------------------------------------------------------------------------
@@ -110,7 +73,7 @@ def test_a_bare_message_is_decoded_like_a_bundle() -> None:
 
 
 def test_touches_appear_and_leave_through_proxies(build) -> None:
-    port = free_port()
+    port = free_udp_port()
     body = table("T", port, points=4)
     for slot in range(3):
         body += proxy("digital", f"Touch {slot}", "T", slot)
@@ -134,7 +97,7 @@ def test_touches_appear_and_leave_through_proxies(build) -> None:
 
 
 def test_positions_reach_the_analog_proxies(build) -> None:
-    port = free_port()
+    port = free_udp_port()
     body = (
         table("T", port, points=4) + proxy("analog", "X2", "T", 4) + proxy("analog", "Y2", "T", 5)
     )
@@ -147,7 +110,7 @@ def test_positions_reach_the_analog_proxies(build) -> None:
 
 
 def test_garbage_is_counted_and_the_device_keeps_running(build) -> None:
-    port = free_port()
+    port = free_udp_port()
     manager = build(table("T", port, points=4) + proxy("digital", "Touch 0", "T", 0))
     dev = manager.device("T")
     with TuioEmulator(port, scenario="garbage", rate=RATE, cursors=2, max_frames=40) as emu:
@@ -161,7 +124,7 @@ def test_garbage_is_counted_and_the_device_keeps_running(build) -> None:
 
 
 def test_a_silent_source_faults_and_data_returns_within_two_seconds(build) -> None:
-    port = free_port()
+    port = free_udp_port()
     manager = build(table("T", port) + proxy("digital", "Touch 0", "T", 0), peer_timeout=0.3)
     dev = manager.device("T")
     with TuioEmulator(port, scenario="disconnect", rate=RATE, disconnect_after=20) as emu:
@@ -203,13 +166,8 @@ def test_validate_knows_the_units_of_points(tmp_path: Path) -> None:
         table("T", 3333, points=2) + proxy("digital", "D1", "T", 1) + proxy("digital", "D2", "T", 2)
     )
     body += proxy("analog", "A3", "T", 3) + proxy("analog", "A4", "T", 4)
-    path.write_text(HEAD + body + "</elements>\n</configuration>\n")
-    result = subprocess.run(
-        [sys.executable, "-m", "gadgetctl", "validate", str(path)],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
+    path.write_text(configuration("TUIO_drv", body))
+    result = run_gadgetctl("validate", str(path), timeout=60)
     assert result.returncode == 1 and result.stdout.count("CFG034") == 2
     assert "'D2'" in result.stdout and "'A4'" in result.stdout
     assert "'D1'" not in result.stdout and "'A3'" not in result.stdout
