@@ -12,7 +12,7 @@ import re
 import signal
 import subprocess
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -22,29 +22,13 @@ from SdlJoystick_drv.standalone import SdlJoystickLost, SdlJoystickReader
 from gadgetctl.doctor import DoctorOptions, Status, diagnose, render_text
 from gadgetctl.doctor.sdl import check_sdl
 from gadgetctl.input import DeviceKind, DigitalState, HatState, InputManager, ManagerOptions
-from gadgetctl.input.testing import frames_until, wait_until
+from gadgetctl.input.testing import configuration, corpus_file, frames_until, proxy, wait_until
+from gadgetctl.input.testing.fixtures import managers_fixture
 from gadgetctl.transport.sdl import hub
 
 pytestmark = pytest.mark.timeout(60)
 
 ROOT = Path(__file__).resolve().parents[3]
-CORPUS_EXAMPLE = (
-    ROOT.parent
-    / "shared"
-    / "corpus"
-    / "vrjuggler"
-    / "modules"
-    / "vrjuggler"
-    / "data"
-    / "configFiles"
-    / "example.sdl_joystick.jconf"
-)
-HEAD = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">
-<elements>
-<input_manager name="IM" version="2"><driver>SdlJoystick_drv</driver></input_manager>
-"""
 PRESSED = (DigitalState.ON, DigitalState.TOGGLE_ON)
 RELEASED = (DigitalState.OFF, DigitalState.TOGGLE_OFF)
 
@@ -53,28 +37,12 @@ def joystick(name: str, index: int) -> str:
     return f'<sdl_joystick name="{name}" version="2"><device>{index}</device></sdl_joystick>\n'
 
 
-def proxy(kind: str, name: str, dev: str, unit: int) -> str:
-    return f'<{kind}_proxy name="{name}" version="1"><device>{dev}</device><unit>{unit}</unit></{kind}_proxy>\n'
-
-
-@pytest.fixture
-def build(tmp_path: Path) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def make(body: str) -> InputManager:
-        path = tmp_path / f"t{len(made)}.jconf"
-        path.write_text(HEAD + body + "</elements>\n</configuration>\n")
-        manager, configuration = InputManager.from_files(
-            [path], options=ManagerOptions(retry_interval=0.2, entry_points=False)
-        )
-        made.append(manager)
-        manager.configure(configuration)
-        assert not manager.pending(), [(p.name, p.message) for p in manager.pending()]
-        return manager
-
-    yield make
-    for manager in made:
-        manager.shutdown()
+build = managers_fixture(
+    "SdlJoystick_drv",
+    name="build",
+    ready=True,
+    options=ManagerOptions(retry_interval=0.2, entry_points=False),
+)
 
 
 @pytest.fixture(autouse=True)
@@ -213,12 +181,12 @@ def test_the_disconnect_scenario_comes_back_by_itself(build) -> None:
 
 def test_a_missing_index_leaves_the_device_pending_with_the_reason(tmp_path: Path) -> None:
     path = tmp_path / "missing.jconf"
-    path.write_text(HEAD + joystick("Pad", 7) + "</elements>\n</configuration>\n")
-    manager, configuration = InputManager.from_files(
+    path.write_text(configuration("SdlJoystick_drv", joystick("Pad", 7)))
+    manager, loaded = InputManager.from_files(
         [path], options=ManagerOptions(retry_interval=None, entry_points=False)
     )
     try:
-        manager.configure(configuration)
+        manager.configure(loaded)
         (entry,) = manager.pending()
         assert entry.code == "DRV033" and "no SDL joystick 7" in entry.message
     finally:
@@ -284,7 +252,7 @@ def run_cli(capsys, *args: str) -> tuple[int, str, str]:
 
 
 def test_the_corpus_example_runs_under_monitor_ndjson(tmp_path: Path, capsys) -> None:
-    text = CORPUS_EXAMPLE.read_text()
+    text = corpus_file("example.sdl_joystick.jconf").read_text()
     with SdlJoystickEmulator(scenario="motion", rate=100.0, axes=10, buttons=16, hats=1) as emu:
         changed = re.sub(
             r"<device>0</device>(\s*</sdl_joystick>)",
@@ -347,10 +315,9 @@ def test_doctor_checks_the_sdl_index(tmp_path: Path) -> None:
         assert "doctor pad" in (missing.hint or "")
         path = tmp_path / "doctor.jconf"
         path.write_text(
-            HEAD
-            + joystick("Pad", emu.index)
-            + joystick("Far", emu.index + 5)
-            + "</elements>\n</configuration>\n"
+            configuration(
+                "SdlJoystick_drv", joystick("Pad", emu.index) + joystick("Far", emu.index + 5)
+            )
         )
         report = diagnose([path], DoctorOptions())
         checks = {d.name: d.checks for d in report.devices}
