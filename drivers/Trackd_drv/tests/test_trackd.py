@@ -38,30 +38,23 @@ from Trackd_drv.standalone import (
 )
 
 from gadgetctl.doctor import Status
-from gadgetctl.input import DigitalState, InputManager, ManagerOptions
-from gadgetctl.input.testing import frames_until, wait_until
+from gadgetctl.input import DigitalState
+from gadgetctl.input.testing import (
+    alias,
+    configuration,
+    corpus_file,
+    frames_until,
+    proxy,
+    rewritten,
+    run_gadgetctl,
+    wait_until,
+)
+from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(60)
 
 REPO = Path(__file__).resolve().parents[3]
-CORPUS_CONFIG = (
-    REPO.parent
-    / "shared"
-    / "corpus"
-    / "vrjuggler"
-    / "modules"
-    / "vrjuggler"
-    / "data"
-    / "configFiles"
-    / "sim.trackd.jconf"
-)
 FEET = 0.3048
-HEAD = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">
-<elements>
-<input_manager name="IM" version="2"><driver>Trackd_drv</driver></input_manager>
-"""
 PRESSED = (DigitalState.ON, DigitalState.TOGGLE_ON)
 SHM_TABLE = Path("/proc/sysvipc/shm")
 _counter = itertools.count()
@@ -207,33 +200,7 @@ def controller(name: str, key: int) -> str:
     )
 
 
-def proxy(kind: str, name: str, device: str, unit: int) -> str:
-    return f'<{kind}_proxy name="{name}" version="1"><device>{device}</device><unit>{unit}</unit></{kind}_proxy>\n'
-
-
-def alias(name: str, target: str) -> str:
-    return f'<alias name="{name}" version="1"><proxy>{target}</proxy></alias>\n'
-
-
-@pytest.fixture
-def build(tmp_path: Path) -> Iterator[Callable[..., InputManager]]:
-    made: list[InputManager] = []
-
-    def make(config: str | Path) -> InputManager:
-        if isinstance(config, str):
-            path = tmp_path / f"test{len(made)}.jconf"
-            path.write_text(HEAD + config + "</elements>\n</configuration>\n")
-            config = path
-        options = ManagerOptions(retry_interval=None, entry_points=False)
-        manager, configuration = InputManager.from_files([config], options=options)
-        made.append(manager)
-        manager.configure(configuration)
-        assert not manager.pending(), [(p.name, p.message) for p in manager.pending()]
-        return manager
-
-    yield make
-    for manager in made:
-        manager.shutdown()
+build = managers_fixture("Trackd_drv", name="build", ready=True)
 
 
 @pytest.fixture
@@ -377,20 +344,18 @@ def test_the_disconnect_scenario_is_survived_again_and_again(build, keys) -> Non
 
 
 def corpus_with_keys(tmp_path: Path, skey: int, ckey: int) -> Path:
-    text = CORPUS_CONFIG.read_text()
-    assert text.count("<shared_memory_key>4148</shared_memory_key>") == 1
-    assert text.count("<shared_memory_key>4147</shared_memory_key>") == 1
-    text = text.replace(
-        "<shared_memory_key>4148</shared_memory_key>",
-        f"<shared_memory_key>{skey}</shared_memory_key>",
+    return rewritten(
+        corpus_file("sim.trackd.jconf"),
+        tmp_path,
+        (
+            "<shared_memory_key>4148</shared_memory_key>",
+            f"<shared_memory_key>{skey}</shared_memory_key>",
+        ),
+        (
+            "<shared_memory_key>4147</shared_memory_key>",
+            f"<shared_memory_key>{ckey}</shared_memory_key>",
+        ),
     )
-    text = text.replace(
-        "<shared_memory_key>4147</shared_memory_key>",
-        f"<shared_memory_key>{ckey}</shared_memory_key>",
-    )
-    path = tmp_path / CORPUS_CONFIG.name
-    path.write_text(text)
-    return path
 
 
 def test_the_corpus_sim_trackd_delivers_through_its_proxies_and_aliases(
@@ -418,21 +383,8 @@ def test_monitor_ndjson_shows_the_corpus_samples(tmp_path: Path, keys) -> None:
     skey, ckey = keys
     path = corpus_with_keys(tmp_path, skey, ckey)
     with TrackdEmulator(skey, ckey, scenario="motion", rate=100.0, sensors=2, buttons=3):
-        result = subprocess.run(
-            [
-                sys.executable,
-                "-m",
-                "gadgetctl",
-                "monitor",
-                str(path),
-                "--duration",
-                "1",
-                "--format",
-                "ndjson",
-            ],
-            capture_output=True,
-            text=True,
-            timeout=60,
+        result = run_gadgetctl(
+            "monitor", str(path), "--duration", "1", "--format", "ndjson", timeout=60
         )
     assert result.returncode == 0, result.stderr[-2000:]
     records = [json.loads(line) for line in result.stdout.splitlines() if line.strip()]
@@ -509,13 +461,7 @@ def test_a_left_over_segment_of_a_killed_emulator_is_taken_over(keys) -> None:
 
 
 def doctor(path: Path) -> tuple[int, dict]:
-    result = subprocess.run(
-        [sys.executable, "-m", "gadgetctl", "doctor", str(path), "--format", "json"],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        cwd=REPO,
-    )
+    result = run_gadgetctl("doctor", str(path), "--format", "json", timeout=60)
     return result.returncode, json.loads(result.stdout)
 
 
@@ -523,10 +469,7 @@ def test_doctor_finds_the_segments_present_and_readable_or_missing(tmp_path: Pat
     skey, ckey = keys
     path = tmp_path / "trackd.jconf"
     path.write_text(
-        HEAD
-        + sensor("Sensors", skey)
-        + controller("Controller", ckey)
-        + "</elements>\n</configuration>\n"
+        configuration("Trackd_drv", sensor("Sensors", skey) + controller("Controller", ckey))
     )
     code, report = doctor(path)
     assert code == 1
