@@ -4,8 +4,6 @@ skipped in whole runs, and the monitor's --duration still ends on time."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -18,6 +16,8 @@ from LinuxJoydev_drv.standalone import (
     JoystickEvent,
     LinuxJoydevStandalone,
 )
+
+from gadgetctl.input.testing import rewritten, run_gadgetctl
 
 pytestmark = pytest.mark.timeout(30)
 EXAMPLE = Path(__file__).resolve().parents[1] / "example.jconf"
@@ -43,13 +43,14 @@ def test_records_after_a_megabyte_of_junk_are_found() -> None:
 
 
 def test_monitor_duration_is_kept_with_dev_zero_as_port(tmp_path: Path) -> None:
-    config = tmp_path / "zero.jconf"
-    config.write_text(EXAMPLE.read_text().replace("/tmp/gadgetctl-js0", "/dev/zero"))
-    result = subprocess.run(
-        [sys.executable, "-m", "gadgetctl", "monitor", str(config), "--duration", "1",
-         "--format", "ndjson"],
-        capture_output=True, text=True, timeout=25,
-    )  # fmt: skip
+    config = rewritten(
+        EXAMPLE,
+        tmp_path,
+        ("<port_name>/tmp/gadgetctl-js0</port_name>", "<port_name>/dev/zero</port_name>"),
+    )
+    result = run_gadgetctl(
+        "monitor", str(config), "--duration", "1", "--format", "ndjson", timeout=25
+    )
     assert result.returncode == 0, result.stderr[-2000:]
     records = [json.loads(line) for line in result.stdout.splitlines()]
     stats = next(r for r in records if r["type"] == "stats")["devices"]["Joystick"]

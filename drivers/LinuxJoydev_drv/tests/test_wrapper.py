@@ -4,31 +4,25 @@ through proxies and aliases, garbage, disconnection and reconnection, the corpus
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
 from LinuxJoydev_drv.emulator import AXIS_HIGH, AXIS_LOW, JoydevEmulator
 
 from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
-from gadgetctl.input.testing import frames_until
+from gadgetctl.input.testing import (
+    alias,
+    configuration,
+    corpus_file,
+    frames_until,
+    proxy,
+    rewritten,
+    run_gadgetctl,
+)
+from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
-DRIVER = Path(__file__).resolve().parents[1]
-CORPUS = Path(__file__).resolve().parents[3].parent / "shared" / "corpus" / "vrjuggler"
-CORPUS_CONFIG = (
-    CORPUS / "modules" / "vrjuggler" / "data" / "configFiles" / "example.linux_joydev.jconf"
-)
-HEAD = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">
-<elements>
-<input_manager name="IM" version="2"><driver>LinuxJoydev_drv</driver></input_manager>
-"""
 PRESSED = (DigitalState.ON, DigitalState.TOGGLE_ON)
 
 
@@ -36,43 +30,7 @@ def joystick(name: str, fifo: Path, *extra: str) -> str:
     return f'<linux_joydev name="{name}" version="1"><port_name>{fifo}</port_name>{"".join(extra)}</linux_joydev>\n'
 
 
-def proxy(kind: str, name: str, device: str, unit: int) -> str:
-    return f'<{kind}_proxy name="{name}" version="1"><device>{device}</device><unit>{unit}</unit></{kind}_proxy>\n'
-
-
-def alias(name: str, target: str) -> str:
-    return f'<alias name="{name}" version="1"><proxy>{target}</proxy></alias>\n'
-
-
-@pytest.fixture
-def managers() -> Iterator[list[InputManager]]:
-    made: list[InputManager] = []
-    yield made
-    for manager in made:
-        manager.shutdown()
-
-
-@pytest.fixture
-def build(tmp_path: Path, managers: list[InputManager]) -> Callable[..., InputManager]:
-    """A running input manager for a configuration file (a body of elements, or a path)."""
-
-    def make(config: str | Path) -> InputManager:
-        if isinstance(config, str):
-            path = tmp_path / f"test{len(managers)}.jconf"
-            path.write_text(HEAD + config + "</elements>\n</configuration>\n")
-            config = path
-        options = ManagerOptions(retry_interval=None, entry_points=False)
-        manager, configuration = InputManager.from_files([config], options=options)
-        managers.append(manager)
-        manager.configure(configuration)
-        assert not manager.pending(), [(p.name, p.message) for p in manager.pending()]
-        return manager
-
-    return make
-
-
-def state(manager: InputManager, name: str) -> str:
-    return manager.status(name).state
+build = managers_fixture("LinuxJoydev_drv", name="build", ready=True)
 
 
 # -- units through proxies and aliases --------------------------------------------------------
@@ -158,7 +116,7 @@ def test_garbage_is_skipped_counted_and_never_becomes_a_value(tmp_path: Path, bu
 
         frames_until(manager, collected)
         sent = emu.sent_events()
-        assert state(manager, "Stick") == "running" and device.faults == 0
+        assert manager.status("Stick").state == "running" and device.faults == 0
     for a in range(6):
         assert values[a] <= {0.0} | {float(v) for _t, v, kind, n in sent if kind & 0x02 and n == a}
     assert device.counters["skipped_bytes"] > 0
@@ -177,13 +135,13 @@ def test_a_lost_device_faults_and_resumes_within_two_seconds(tmp_path: Path, bui
         stick, other = manager.device("Stick"), manager.device("Other")
         frames_until(manager, lambda: stick.store.total() > 20)
         emulator.stop()
-        frames_until(manager, lambda: state(manager, "Stick") == "faulted")
+        frames_until(manager, lambda: manager.status("Stick").state == "faulted")
         status = manager.status("Stick")
         assert status.reason and status.code == "DRV042" and status.stats.faults >= 1
         other_before, failed_at = other.store.total(), stick.error_at
         # away for a while: a restart attempt fails (renewing the fault's time); waited for
         frames_until(manager, lambda: stick.error_at != failed_at, timeout=10.0)
-        assert state(manager, "Stick") in ("faulted", "reconnecting")
+        assert manager.status("Stick").state in ("faulted", "reconnecting")
         # the other device went on meanwhile (waited for: a loaded machine may starve it a while)
         frames_until(manager, lambda: other.store.total() > other_before + 100, timeout=10.0)
 
@@ -192,7 +150,7 @@ def test_a_lost_device_faults_and_resumes_within_two_seconds(tmp_path: Path, bui
             resumed = frames_until(manager, lambda: stick.store.total() > before + 5, timeout=4.0)
             assert resumed < 2.0
             frames_until(manager, lambda: manager.proxy("Axis").timestamp is not None)
-            assert state(manager, "Stick") == "running" and stick.restarts >= 1
+            assert manager.status("Stick").state == "running" and stick.restarts >= 1
         assert other.faults == 0
 
 
@@ -213,17 +171,16 @@ def test_an_unplugged_device_file_is_reopened(tmp_path: Path, build) -> None:
 def test_unusable_elements_stay_pending_with_a_reason(tmp_path: Path) -> None:
     path = tmp_path / "bad.jconf"
     path.write_text(
-        HEAD
-        + '<linux_joydev name="Empty" version="1"><port_name></port_name></linux_joydev>\n'
-        + joystick("Negative", tmp_path / "js0", "<axis_buttons>-1</axis_buttons>")
-        + joystick("Missing", tmp_path / "nothing-here")
-        + "</elements>\n</configuration>\n"
+        configuration(
+            "LinuxJoydev_drv",
+            '<linux_joydev name="Empty" version="1"><port_name></port_name></linux_joydev>\n'
+            + joystick("Negative", tmp_path / "js0", "<axis_buttons>-1</axis_buttons>")
+            + joystick("Missing", tmp_path / "nothing-here"),
+        )
     )
-    manager, configuration = InputManager.from_files(
-        [path], options=ManagerOptions(retry_interval=None)
-    )
+    manager, loaded = InputManager.from_files([path], options=ManagerOptions(retry_interval=None))
     try:
-        manager.configure(configuration)
+        manager.configure(loaded)
         reasons = {p.name: p.message for p in manager.pending()}
     finally:
         manager.shutdown()
@@ -238,11 +195,11 @@ def test_unusable_elements_stay_pending_with_a_reason(tmp_path: Path) -> None:
 @pytest.fixture
 def corpus_config(tmp_path: Path) -> Path:
     """VR Juggler's example.linux_joydev.jconf with only its port_name pointing at a FIFO."""
-    assert CORPUS_CONFIG.is_file(), f"corpus not found at {CORPUS}"
-    text = CORPUS_CONFIG.read_text()
-    assert text.count("<port_name>/dev/input/js0</port_name>") == 1
-    path = tmp_path / CORPUS_CONFIG.name
-    path.write_text(text.replace("/dev/input/js0", str(tmp_path / "js0")))
+    path = rewritten(
+        corpus_file("example.linux_joydev.jconf"),
+        tmp_path,
+        ("<port_name>/dev/input/js0</port_name>", f"<port_name>{tmp_path / 'js0'}</port_name>"),
+    )
     return path
 
 
@@ -270,9 +227,9 @@ def test_the_corpus_example_delivers_through_its_proxies_and_aliases(
 
 def test_monitor_shows_samples_of_the_corpus_example(tmp_path: Path, corpus_config: Path) -> None:
     with JoydevEmulator(directory=tmp_path, scenario="motion", rate=200.0):
-        result = subprocess.run(
-            [sys.executable, "-m", "gadgetctl", "monitor", str(corpus_config), "--duration", "1", "--format", "ndjson"],
-            capture_output=True, text=True, timeout=60, env={**os.environ, "NO_COLOR": "1"},
+        result = run_gadgetctl(
+            "monitor", str(corpus_config), "--duration", "1", "--format", "ndjson",
+            timeout=60, env={"NO_COLOR": "1"},
         )  # fmt: skip
     assert result.returncode == 0, result.stderr[-2000:]
     records = [json.loads(line) for line in result.stdout.splitlines() if line.strip()]

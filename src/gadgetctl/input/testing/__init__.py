@@ -9,6 +9,7 @@ VR Juggler corpus and pointed at an emulator (:func:`corpus_file`, :func:`rewrit
 
 from __future__ import annotations
 
+import os
 import socket
 import subprocess
 import sys
@@ -239,14 +240,18 @@ class InputManagers:
 
 
 def run_gadgetctl(
-    *args: str, timeout: float = 50, cwd: Path | None = None
+    *args: str,
+    timeout: float = 50,
+    cwd: Path | None = None,
+    env: Mapping[str, str] | None = None,
 ) -> subprocess.CompletedProcess[str]:
-    """``python -m gadgetctl ARGS`` in a child process (in the checkout unless ``cwd``), its
-    output captured as text."""
+    """``python -m gadgetctl ARGS`` in a child process (in the checkout unless ``cwd``; ``env``
+    added to this process's environment), its output captured as text."""
     return subprocess.run(
         [sys.executable, "-m", "gadgetctl", *args],
         capture_output=True,
         text=True,
         timeout=timeout,
         cwd=cwd or checkout(),
+        env=None if env is None else {**os.environ, **env},
     )

@@ -22,7 +22,11 @@ from gadgetctl.input.testing import InputManagers
 
 
 def emulator_fixture(
-    kind: Callable[..., Any], scenario: str = "motion", *, name: str = "emulator", **defaults: object
+    kind: Callable[..., Any],
+    scenario: str = "motion",
+    *,
+    name: str = "emulator",
+    **defaults: object,
 ) -> Any:
     """A fixture (called ``name``) that starts ``kind`` emulators, ``defaults`` under the
     options a test gives, and stops them after the test."""
