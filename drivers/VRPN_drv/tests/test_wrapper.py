@@ -10,7 +10,6 @@ import socket
 import struct
 import threading
 import time
-from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -19,18 +18,11 @@ from VRPN_drv.emulator import VrpnEmulator, analog_values, sensor_pose
 from VRPN_drv.standalone import pose_matrix
 
 from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions, RestartPolicy
-from gadgetctl.input.testing import frames_until
+from gadgetctl.input.testing import alias, corpus_file, frames_until, proxy
+from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(60)
 
-CORPUS = Path(__file__).resolve().parents[3].parent / "shared" / "corpus" / "vrjuggler"
-CORPUS_CONFIG = CORPUS / "modules" / "vrjuggler" / "data" / "configFiles" / "example.vrpn.jconf"
-HEAD = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">
-<elements>
-<input_manager name="IM" version="2"><driver>VRPN_drv</driver></input_manager>
-"""
 COOKIE = bytes.fromhex("7672706e3a207665722e2030372e33382020300000000000")
 
 
@@ -53,12 +45,16 @@ def vrpn(
     )
 
 
-def proxy(kind: str, name: str, device: str, unit: int) -> str:
-    return f'<{kind}_proxy name="{name}" version="1"><device>{device}</device><unit>{unit}</unit></{kind}_proxy>\n'
-
-
-def alias(name: str, target: str) -> str:
-    return f'<alias name="{name}" version="1"><proxy>{target}</proxy></alias>\n'
+build = managers_fixture(
+    "VRPN_drv",
+    name="build",
+    ready=True,
+    options=ManagerOptions(
+        retry_interval=None,
+        entry_points=False,
+        restart=RestartPolicy(initial_delay=0.05, max_delay=0.5),
+    ),
+)
 
 
 def reserved_port() -> socket.socket:
@@ -66,40 +62,6 @@ def reserved_port() -> socket.socket:
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     s.bind(("127.0.0.1", 0))
     return s
-
-
-@pytest.fixture
-def managers() -> Iterator[list[InputManager]]:
-    made: list[InputManager] = []
-    yield made
-    for manager in made:
-        manager.shutdown()
-
-
-@pytest.fixture
-def build(tmp_path: Path, managers: list[InputManager]) -> Callable[..., InputManager]:
-    def make(config: str | Path) -> InputManager:
-        if isinstance(config, str):
-            path = tmp_path / f"test{len(managers)}.jconf"
-            path.write_text(HEAD + config + "</elements>\n</configuration>\n")
-        else:
-            path = config
-        options = ManagerOptions(
-            retry_interval=None,
-            entry_points=False,
-            restart=RestartPolicy(initial_delay=0.05, max_delay=0.5),
-        )
-        manager, configuration = InputManager.from_files([path], options=options)
-        managers.append(manager)
-        manager.configure(configuration)
-        assert not manager.pending(), [(p.name, p.message) for p in manager.pending()]
-        return manager
-
-    return make
-
-
-def state(manager: InputManager, name: str) -> str:
-    return manager.status(name).state
 
 
 def total(manager: InputManager, device: str, kind: DeviceKind) -> int:
@@ -122,7 +84,7 @@ def test_units_through_proxies_and_aliases(build, scheme) -> None:
             ),
             timeout=10,
         )
-        assert state(manager, "V") == "running"
+        assert manager.status("V").state == "running"
     for unit in range(3):
         position, quat = sensor_pose(0, unit, False)
         np.testing.assert_allclose(
@@ -211,7 +173,9 @@ def test_server_down_then_up_then_gone_then_back(build) -> None:
     holder = reserved_port()
     port = holder.getsockname()[1]
     manager = build(vrpn("V", f"127.0.0.1:{port}", 1, 1, 0) + proxy("position", "P", "V", 0))
-    frames_until(manager, lambda: state(manager, "V") in ("faulted", "reconnecting"), timeout=10)
+    frames_until(
+        manager, lambda: manager.status("V").state in ("faulted", "reconnecting"), timeout=10
+    )
     assert "no VRPN server" in manager.status("V").reason
     holder.close()
     for _ in range(2):
@@ -222,9 +186,9 @@ def test_server_down_then_up_then_gone_then_back(build) -> None:
                 lambda b=before: total(manager, "V", DeviceKind.POSITION) > b + 5,
                 timeout=10,
             )
-            assert state(manager, "V") == "running"
+            assert manager.status("V").state == "running"
         frames_until(
-            manager, lambda: state(manager, "V") in ("faulted", "reconnecting"), timeout=10
+            manager, lambda: manager.status("V").state in ("faulted", "reconnecting"), timeout=10
         )
     assert manager.device("V").stats.faults >= 2
 
@@ -235,7 +199,7 @@ def test_a_wrong_device_name_names_the_announced_ones(build) -> None:
         frames_until(
             manager,
             lambda: (
-                state(manager, "V") in ("faulted", "reconnecting")
+                manager.status("V").state in ("faulted", "reconnecting")
                 and "Trakcer0" in (manager.status("V").reason or "")
             ),
             timeout=10,
@@ -308,21 +272,24 @@ def test_a_hostile_server_is_counted_and_survived(build) -> None:
         counters["bad_cookies"] >= 2 and counters["oversized"] >= 1 and counters["bad_reports"] >= 1
     ), counters
     # (the last hostile connection may still be ending: wait for the fault)
-    frames_until(manager, lambda: state(manager, "V") in ("faulted", "reconnecting"), timeout=10)
+    frames_until(
+        manager, lambda: manager.status("V").state in ("faulted", "reconnecting"), timeout=10
+    )
     assert re.search(r"VRPN server", manager.status("V").reason or "")
     # The same port serves properly now: the device recovers.
     with VrpnEmulator(port, scenario="motion", rate=100, sensors=1, buttons=0, channels=0):
         frames_until(
             manager,
             lambda: (
-                state(manager, "V") == "running" and total(manager, "V", DeviceKind.POSITION) > 5
+                manager.status("V").state == "running"
+                and total(manager, "V", DeviceKind.POSITION) > 5
             ),
             timeout=15,
         )
 
 
 def test_corpus_example_with_only_the_server_names_changed(build, tmp_path: Path) -> None:
-    text = CORPUS_CONFIG.read_text()
+    text = corpus_file("example.vrpn.jconf").read_text()
     with VrpnEmulator(0, scenario="buttons", rate=100, sensors=2, buttons=4, channels=0) as emu:
         changed = text.replace("alpha.cs.ucl.ac.uk", emu.address)
         assert changed.count(emu.address) == 3
@@ -348,5 +315,5 @@ def test_corpus_example_with_only_the_server_names_changed(build, tmp_path: Path
             "WandProxy",
             "Button3Proxy",
         ):
-            assert state(manager, name) == "active", (name, manager.status(name))
+            assert manager.status(name).state == "active", (name, manager.status(name))
         assert manager.proxy("VJHead").matrix[3, 3] == 1.0
