@@ -204,3 +204,35 @@ def test_without_frames_the_scheduler_still_publishes_and_nothing_is_lost(make):
     stamps = device.store.frame(DeviceKind.POSITION).timestamps()
     np.testing.assert_allclose(np.diff(stamps), 1e-3, rtol=0, atol=1e-9)
     assert device.store.dropped() == 0
+
+
+def test_waveform_devices_are_updated_together_at_one_instant_and_fault_alone(make):
+    """The manager updates the waveform devices of a frame as one group (one clock reading
+    for all of them): each swaps once per frame at the same instant with every sample due by
+    then; one whose update raises is faulted while the others go on delivering."""
+    body = "\n".join(WAVE.format(name=f"Group {i}", rate=1000.0, seed=i) for i in range(4))
+    m = make(body)
+    devices = [m.device(f"Group {i}") for i in range(4)]
+
+    def broken(moment: float) -> None:
+        raise RuntimeError("broken on purpose")
+
+    checked = 0
+    for frame in range(30):
+        time.sleep(0.003)
+        before = now()
+        if frame == 20:
+            devices[3]._update_at = broken  # from now on this device's frame update raises
+        m.update()
+        working = devices[:3] if frame >= 20 else devices
+        instants = {d.store.swapped_at for d in working}
+        assert len(instants) == 1  # one instant for the whole group
+        instant = instants.pop()
+        for device in working:
+            frame_samples = device.store.frame(DeviceKind.POSITION)
+            if frame_samples:
+                assert before - 1e-3 - 1e-9 < frame_samples.newest.timestamp <= instant
+                checked += 1
+    assert checked >= 60
+    assert devices[3].state.value == "faulted" and "broken on purpose" in devices[3].error
+    assert all(d.state.value == "running" for d in devices[:3])

@@ -87,6 +87,38 @@ def test_a_full_buffer_drops_whole_messages_and_udp_datagrams_hold_whole_message
         b.close()
 
 
+def test_a_written_batch_goes_out_whole_then_queues_the_rest_and_drops_whole_messages():
+    """``queue_batch(write=True)`` sends from the shared bytes when nothing waits: a reader
+    gets them all; against a peer that stopped reading, the message the socket took in part
+    is finished from the buffer and only whole messages beyond the limit are dropped."""
+    a, b = socket.socketpair()
+    try:
+        a.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 4096)
+        endpoint = Endpoint(a, out_limit=8 * POSE_SIZE)
+        endpoint.flush()  # the cookie
+        b.recv(64)
+        data = pack_poses(1, 4, times(3), np.zeros(3), np.zeros((3, 3)), np.zeros((3, 4)))
+        assert endpoint.queue_batch(data, POSE_SIZE, write=True) == 3
+        assert not endpoint.out and b.recv(4096) == data
+        big = pack_poses(
+            1, 4, times(2000), np.zeros(2000), np.zeros((2000, 3)), np.zeros((2000, 4))
+        )
+        taken = endpoint.queue_batch(big, POSE_SIZE, write=True)
+        assert endpoint.dropped == 2000 - taken and 0 < endpoint.dropped < 2000
+        assert len(endpoint.out) <= 8 * POSE_SIZE + POSE_SIZE
+        b.setblocking(False)
+        received = bytearray()
+        while len(received) < taken * POSE_SIZE:
+            try:
+                received += b.recv(1 << 16)
+            except BlockingIOError:
+                endpoint.flush()
+        assert bytes(received) == big[: taken * POSE_SIZE] and not endpoint.out
+    finally:
+        a.close()
+        b.close()
+
+
 class _Broadcasts:
     """A server stand-in for VrpnOutlet: names get ids, broadcasts are kept."""
 
@@ -100,7 +132,9 @@ class _Broadcasts:
 
     register_type = register_sender
 
-    def broadcast(self, data: bytes, size: int, *, reliable: bool = True) -> int:
+    def broadcast(
+        self, data: bytes, size: int, *, reliable: bool = True, flush: bool = False
+    ) -> int:
         self.sent.append(bytes(data))
         return len(data) // size
 

@@ -19,7 +19,7 @@ devices), or nobody (devices that compute their data in ``update_data``).
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import TYPE_CHECKING, ClassVar, Protocol
@@ -173,13 +173,31 @@ class Input:
         try:
             self.update_data()
         except Exception as err:  # a faulty driver must not stop the frame loop
-            self.faults += 1
-            self.error = describe(err)
-            self.error_at = time.time()
-            self.state = DeviceState.FAULTED
+            self.frame_fault(err)
         else:
             if self.state is DeviceState.FAULTED and self.SAMPLING is SamplingMode.FRAME:
                 self.state = DeviceState.RUNNING
+
+    def frame_fault(self, err: Exception) -> None:
+        """Record that the frame's update of this device raised ``err`` (FAULTED)."""
+        self.faults += 1
+        self.error = describe(err)
+        self.error_at = time.time()
+        self.state = DeviceState.FAULTED
+
+    #: Whether the input manager updates this class's devices together, once per frame, by
+    #: :meth:`update_frame_group` (set by a class that overrides it).
+    FRAME_GROUP: ClassVar[bool] = False
+
+    @classmethod
+    def update_frame_group(cls, devices: Sequence[Input], frame: int) -> None:
+        """:meth:`update_for_frame` of each of ``devices`` (all of this class, in name
+        order): with :attr:`FRAME_GROUP`, the input manager calls this once per frame instead,
+        so that a class can do together what each device would do alone (one clock reading,
+        one pass over their arrays). Each device is still updated once per frame, and a
+        device that raises is faulted alone."""
+        for device in devices:
+            device.update_for_frame(frame)
 
     def transport_dropped(self) -> int:
         """What the transport lost before the driver could read it (a UDP socket's receive

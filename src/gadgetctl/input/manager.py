@@ -144,7 +144,8 @@ class InputManager:
         self._proxy_elements: dict[str, ConfigElement] = {}
         self._proxies_of: dict[str, set[str]] = {}  # device name -> names of proxies pointing at it
         self._waiters: dict[str, set[str]] = {}  # name -> pending elements whose pointer waits for it
-        self._frame_order: tuple[list[Input], list[Proxy]] | None = None  # update() order; None: stale
+        # update() order (devices, or (class, devices) updated together); None: stale
+        self._frame_order: tuple[list[Input | tuple[type[Input], list[Input]]], list[Proxy]] | None = None
         self._aliases: dict[str, str] = {}
         self._alias_elements: dict[str, ConfigElement] = {}
         self._input_managers: dict[str, ConfigElement] = {}
@@ -590,10 +591,13 @@ class InputManager:
         frame = self.frame
         order = self._frame_order
         if order is None:  # sorted once per change of what is configured, not every frame
-            order = self._frame_order = ([self._device_objects[n] for n in sorted(self._device_objects)],
+            order = self._frame_order = (_frame_groups([self._device_objects[n] for n in sorted(self._device_objects)]),
                                          [self._proxies[n] for n in sorted(self._proxies)])
         for device in order[0]:
-            device.update_for_frame(frame)
+            if type(device) is tuple:  # devices updated together (Input.FRAME_GROUP)
+                device[0].update_frame_group(device[1], frame)
+            else:
+                device.update_for_frame(frame)
         for proxy in order[1]:
             proxy.update_for_frame(frame)
         return frame
@@ -800,3 +804,20 @@ class InputManager:
 
 def _error_text(err: Exception) -> str:
     return str(err) if isinstance(err, DeviceConfigError) else describe(err)
+
+
+def _frame_groups(devices: list[Input]) -> list[Input | tuple[type[Input], list[Input]]]:
+    """``devices`` (in name order) as update() runs them: each alone, except the devices of a
+    class with :attr:`Input.FRAME_GROUP`, together at the place of the first of them."""
+    order: list[Input | tuple[type[Input], list[Input]]] = []
+    groups: dict[type[Input], list[Input]] = {}
+    for device in devices:
+        cls = type(device)
+        if not cls.FRAME_GROUP:
+            order.append(device)
+        elif cls in groups:
+            groups[cls].append(device)
+        else:
+            groups[cls] = [device]
+            order.append((cls, groups[cls]))
+    return order

@@ -286,9 +286,10 @@ class SampleStore:
 
     # -- frame side -------------------------------------------------------------------
 
-    def swap(self) -> None:
-        """Make everything added since the previous swap the current frame's samples."""
-        self.swapped_at = now()
+    def swap(self, moment: float | None = None) -> None:
+        """Make everything added since the previous swap the current frame's samples;
+        ``moment``: the swap's time when the caller has it."""
+        self.swapped_at = now() if moment is None else moment
         with self._lock:
             taken = self._take()
         self._current(taken)
@@ -312,12 +313,12 @@ class SampleStore:
                     channel.total += size
                     channel.frame = current[kind] = FrameSamples((window(timestamps, data, start, stop),), size)
                     channel.latest = None  # the frame's newest, computed when asked
-                if len(current) != len(self._pairs):  # kinds without samples now: latch and empty
-                    for kind, channel in self._pairs:
-                        if kind not in current and channel.frame.count:
-                            if channel.latest is None:
-                                channel.latest = channel.frame.newest
-                            channel.frame = EMPTY_FRAME
+                for kind in self.current:  # kinds that had samples and have none now
+                    if kind not in current:
+                        channel = channels[kind]
+                        if channel.latest is None:  # keep the newest latched
+                            channel.latest = channel.frame.newest
+                        channel.frame = EMPTY_FRAME
                 self.current = current
                 return
             if size > 0:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 import threading
 import zlib
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 
@@ -163,10 +164,28 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         with self._publishing:
             self._publish_due(now())
 
+    FRAME_GROUP = True
+
+    @classmethod
+    def update_frame_group(cls, devices: Sequence[WaveformDevice], frame: int) -> None:
+        """Every waveform device's frame at one instant: one clock reading for all of them,
+        and for each the window of its block that came due, published and swapped."""
+        moment = now()
+        for device in devices:
+            if device._updated_frame == frame:
+                continue
+            device._updated_frame = frame
+            try:
+                device._update_at(moment)
+            except Exception as err:  # a faulty device must not stop the frame loop
+                device.frame_fault(err)
+
     def update_data(self) -> None:
         """Publish what has come due, then swap: the frame gets samples up to its instant."""
+        self._update_at(now())
+
+    def _update_at(self, moment: float) -> None:
         if self.state is _RUNNING:
-            moment = now()
             with self._publishing:
                 self._frame_published = moment
                 end = int((moment - self.t0) * self.rate) + 1  # samples whose time has come
@@ -180,7 +199,7 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
                     )
                     return
                 self._publish_due(moment)
-        self.store.swap()
+        self.store.swap(moment)
 
     def _publish_due(self, moment: float) -> None:
         end = int((moment - self.t0) * self.rate) + 1  # samples whose time has come

@@ -243,7 +243,7 @@ class VrpnOutlet:
             pieces.append(self._frame_poses())
         if pieces:
             self._pieces = []
-            self.server.broadcast(b"".join(pieces), POSE_SIZE, reliable=False)
+            self.server.broadcast(b"".join(pieces), POSE_SIZE, reliable=False, flush=True)
         self.audience = any(client.state == OPEN for client in self.server.clients)
 
     def _frame_poses(self) -> bytes:

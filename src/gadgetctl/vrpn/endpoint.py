@@ -281,10 +281,16 @@ class Endpoint:
         self.sent_messages += 1
         return True
 
-    def queue_batch(self, data: bytes, size: int, reliable: bool = True) -> int:
+    def queue_batch(
+        self, data: bytes, size: int, reliable: bool = True, *, write: bool = False
+    ) -> int:
         """Queue messages framed back to back, each ``size`` bytes long; how many were taken.
         Unreliable ones fill UDP datagrams (whole messages each); by TCP, the messages that
-        do not fit the output buffer are dropped and counted, whole."""
+        do not fit the output buffer are dropped and counted, whole.
+
+        With ``write``, also write now what the socket takes: when nothing waits before them,
+        straight from ``data`` (shared by every client, not copied into this one's buffer;
+        only what the socket does not take is queued)."""
         count = len(data) // size
         if not count:
             return 0
@@ -297,14 +303,44 @@ class Endpoint:
                     self._send_udp()
                 self._udp_batch += chunk
             self.sent_messages += count
+            if write:
+                self._send_udp()
             return count
+        if write and not self.out:
+            return self._write_batch(data, size, count)
         room = max(0, self.out_limit - len(self.out)) // size
         taken = min(count, room)
         if taken:
             self.out += data if taken == count else memoryview(data)[: taken * size]
         self.sent_messages += taken
         self.dropped += count - taken
+        if write:
+            self.flush()
         return taken
+
+    def _write_batch(self, data: bytes, size: int, count: int) -> int:
+        """Send ``data`` (``count`` messages of ``size`` bytes) to an empty output buffer:
+        the rest of a message the socket took in part is queued whatever the limit, then
+        the whole messages that fit."""
+        try:
+            written = self.sock.send(data)
+        except (BlockingIOError, InterruptedError):
+            written = 0
+        except OSError as exc:
+            raise ConnectionDropped(f"connection error: {exc.strerror or exc}") from None
+        if written == len(data):
+            self.sent_messages += count
+            return count
+        view = memoryview(data)
+        begun = -(-written // size)  # messages written at least in part
+        self.out += view[written : begun * size]
+        rest = count - begun
+        taken = min(rest, max(0, self.out_limit - len(self.out)) // size)
+        if taken:
+            self.out += view[begun * size : (begun + taken) * size]
+        self.sent_messages += begun + taken
+        self.dropped += rest - taken
+        return begun + taken
 
     def _send_udp(self) -> None:
         batch = self._udp_batch

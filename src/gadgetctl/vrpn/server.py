@@ -251,19 +251,30 @@ class VrpnServer:
                 self._wake()
         return taken
 
-    def broadcast(self, data: bytes, size: int, *, reliable: bool = True) -> int:
+    def broadcast(
+        self, data: bytes, size: int, *, reliable: bool = True, flush: bool = False
+    ) -> int:
         """Queue already framed messages of ``size`` bytes each (e.g. from :mod:`.batch`) for
-        every open client, without writing yet (:meth:`flush` or :meth:`poll` does); how
-        many messages all clients together took. A client's full buffer drops whole messages,
-        counted in its ``dropped``."""
+        every open client; how many messages all clients together took. A client's full
+        buffer drops whole messages, counted in its ``dropped``. Without ``flush`` nothing is
+        written yet (:meth:`flush` or :meth:`poll` does); with it, each client is written at
+        once what its socket takes, from ``data`` itself when nothing waits before it (one
+        bytes object for every client, not a copy per client)."""
         if size <= 0 or len(data) % size or size > MAX_SEND_MESSAGE:
             raise ValueError(f"{len(data)} bytes are not whole messages of {size} bytes")
         taken = 0
         with self._lock:
-            for client in self._clients.values():
-                if client.state == OPEN and client.endpoint is not None:
-                    taken += client.endpoint.queue_batch(data, size, reliable)
-            self._wake()
+            for client in list(self._clients.values()):
+                ep = client.endpoint
+                if client.state == OPEN and ep is not None:
+                    try:
+                        taken += ep.queue_batch(data, size, reliable, write=flush)
+                    except ConnectionDropped as exc:
+                        self._close_client(client, exc.reason)
+            if not flush or any(
+                c.endpoint is not None and c.endpoint.wants_write for c in self._clients.values()
+            ):
+                self._wake()  # a poll under way must watch the output left
         return taken
 
     def send_to(
