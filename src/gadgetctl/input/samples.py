@@ -163,6 +163,21 @@ class FrameSamples:
 EMPTY_FRAME = FrameSamples((), 0)
 
 
+def _window_frame(timestamps: Any, values: Any, start: int, stop: int) -> FrameSamples:
+    """A frame of one :meth:`SampleBatch.window` (made field by field: a device swaps one
+    such frame per kind every frame)."""
+    batch = _new(SampleBatch)
+    batch._base_timestamps, batch._base_values = timestamps, values
+    batch._timestamps = batch._values = None
+    batch.start, batch.stop = start, stop
+    frame = _new(FrameSamples)
+    frame.chunks, frame.count = (batch,), stop - start
+    return frame
+
+
+_new = object.__new__
+
+
 class _Channel:
     """The buffers of one kind of data."""
 
@@ -307,11 +322,10 @@ class SampleStore:
             if not self._waiting and 0 < size <= self.cap:
                 current = {}
                 channels = self._channels
-                window = SampleBatch.window
                 for kind, data in values:
                     channel = channels[kind]
                     channel.total += size
-                    channel.frame = current[kind] = FrameSamples((window(timestamps, data, start, stop),), size)
+                    channel.frame = current[kind] = _window_frame(timestamps, data, start, stop)
                     channel.latest = None  # the frame's newest, computed when asked
                 for kind in self.current:  # kinds that had samples and have none now
                     if kind not in current:
