@@ -445,7 +445,7 @@ def test_a_left_over_segment_of_a_killed_emulator_is_taken_over(keys) -> None:
     skey, ckey = keys
     first = TrackdEmulator(skey, ckey, scenario="idle")
     first.start()
-    first._segments = []  # as if the process had been killed: nothing removed
+    left_over, first._segments = first._segments, []  # as if killed: nothing removed
     second = TrackdEmulator(skey, ckey, scenario="idle", sensors=5).start()
     try:
         segment = TrackdSegment(skey)
@@ -454,6 +454,9 @@ def test_a_left_over_segment_of_a_killed_emulator_is_taken_over(keys) -> None:
         segment.close()
     finally:
         second.stop()
+        first.stop()  # its writing thread outlived the test, attached to the old segments
+        for memory in left_over:
+            memory.detach()
     assert wait_until(lambda: not {skey, ckey} & segment_keys(), timeout=2.0)
 
 
