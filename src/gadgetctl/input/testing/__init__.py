@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, TypeVar
 if TYPE_CHECKING:
     from gadgetctl.input.kinds import DeviceKind
     from gadgetctl.input.manager import InputManager, ManagerOptions
+    from gadgetctl.input.status import ElementStatus
 
 T = TypeVar("T")
 
@@ -78,6 +79,40 @@ def frame_recorder(manager: InputManager, device: str, *kinds: DeviceKind) -> tu
             values.extend(s.values for s in source.store.frame(kind))
 
     return (frame, *kept)
+
+
+def wait_for_fault(manager: InputManager, name: str, timeout: float = 5.0) -> ElementStatus:
+    """Run frames until device ``name`` is faulted or reconnecting; its status then."""
+    assert wait_until(
+        lambda: manager.status(name).state in ("faulted", "reconnecting"),
+        timeout=timeout,
+        step=manager.update,
+    ), manager.status(name)
+    status = manager.status(name)
+    assert status is not None
+    return status
+
+
+def resumes_within(
+    manager: InputManager,
+    name: str,
+    restart: Callable[[], object],
+    delivered: Callable[[], int],
+    within: float = 2.0,
+    more: int = 1,
+    step: Callable[[], object] | None = None,
+) -> None:
+    """``restart()`` brings device ``name`` back (an emulator started again): what it has
+    ``delivered()`` grows by ``more`` within ``within`` seconds of that, running frames with
+    ``step`` (``manager.update``), and the device is running again."""
+    before = delivered()
+    restart()
+    back = time.monotonic()
+    assert wait_until(
+        lambda: delivered() >= before + more, timeout=within, step=step or manager.update
+    )
+    assert time.monotonic() - back < within
+    assert manager.status(name).state == "running"
 
 
 # -- configurations -------------------------------------------------------------------------
