@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from DTrack_drv.standalone import DTrackLimits, DTrackUnits, parse_frame, parse_frames
 
-from gadgetctl.input.testing import configuration
+from gadgetctl.input.testing.configs import configuration
 
 EYE = "[1 0 0 0 1 0 0 0 1]"
 BODY = f"[0 1.0][1 2 3]{EYE}"

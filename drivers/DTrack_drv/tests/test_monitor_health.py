@@ -14,7 +14,7 @@ import pytest
 from DTrack_drv.emulator import DTrackEmulator
 
 from gadgetctl.cli.monitor_text import health_text
-from gadgetctl.input.testing import configuration, free_udp_port, run_gadgetctl
+from gadgetctl.input.testing.configs import configuration, free_udp_port, run_gadgetctl
 
 pytestmark = pytest.mark.timeout(120)
 

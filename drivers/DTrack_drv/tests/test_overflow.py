@@ -11,7 +11,8 @@ from DTrack_drv.standalone import DTrackFrame, DTrackStandalone
 from DTrack_drv.wrapper import DTrackDevice
 
 from gadgetctl.input import InputManager, ManagerOptions
-from gadgetctl.input.testing import configuration, wait_until
+from gadgetctl.input.testing import wait_until
+from gadgetctl.input.testing.configs import configuration
 from gadgetctl.monitor.session import MonitorSession
 
 pytestmark = pytest.mark.timeout(60)

@@ -19,15 +19,8 @@ from DTrack_drv.standalone import (
 )
 
 from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
-from gadgetctl.input.testing import (
-    alias,
-    corpus_file,
-    frames_until,
-    free_udp_port,
-    proxy,
-    rewritten,
-    run_gadgetctl,
-)
+from gadgetctl.input.testing import frames_until
+from gadgetctl.input.testing.configs import alias, corpus_copy, free_udp_port, proxy, run_gadgetctl
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -214,14 +207,13 @@ def test_unusable_elements_stay_pending_with_a_reason(build) -> None:
 def corpus_config(tmp_path: Path) -> tuple[Path, int]:
     """VR Juggler's example.dtrack.jconf with only its receive_port changed (it keeps the
     configuration namespace 3.1, which does not exist; VR Juggler loads it all the same)."""
-    source = corpus_file("example.dtrack.jconf")
-    assert "xsd/3.1/configuration" in source.read_text()
     port = free_udp_port()
-    path = rewritten(
-        source,
+    path = corpus_copy(
+        "example.dtrack.jconf",
         tmp_path,
         ("<receive_port>5000</receive_port>", f"<receive_port>{port}</receive_port>"),
     )
+    assert "xsd/3.1/configuration" in path.read_text()
     return path, port
 
 

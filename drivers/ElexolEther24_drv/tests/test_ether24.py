@@ -18,7 +18,8 @@ from ElexolEther24_drv.standalone import (
 )
 
 from gadgetctl.input import DeviceKind, DigitalState
-from gadgetctl.input.testing import configuration, frames_until, proxy, run_gadgetctl
+from gadgetctl.input.testing import frames_until
+from gadgetctl.input.testing.configs import configuration, proxy, run_gadgetctl
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)

@@ -10,7 +10,8 @@ from Fastrak_drv.emulator import FastrakEmulator
 
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import resumes_within, rewritten, wait_for_fault, wait_until
+from gadgetctl.input.testing import resumes_within, wait_for_fault, wait_until
+from gadgetctl.input.testing.configs import rewritten
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)

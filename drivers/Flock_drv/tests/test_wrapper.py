@@ -11,14 +11,8 @@ from Flock_drv.emulator import FlockEmulator
 from Flock_drv.standalone import euler_matrix
 
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import (
-    corpus_file,
-    resumes_within,
-    rewritten,
-    run_gadgetctl,
-    wait_for_fault,
-    wait_until,
-)
+from gadgetctl.input.testing import resumes_within, wait_for_fault, wait_until
+from gadgetctl.input.testing.configs import corpus_copy, run_gadgetctl
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -109,8 +103,8 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
 
 
 def corpus_example(tmp_path: Path, port: str) -> Path:
-    return rewritten(
-        corpus_file("example.flock.jconf"),
+    return corpus_copy(
+        "example.flock.jconf",
         tmp_path,
         ("<port>/dev/ttyd3</port>", f"<port>{port}</port>"),
     )

@@ -18,15 +18,8 @@ from IBox_drv.standalone import (
 
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import (
-    corpus_file,
-    gather,
-    resumes_within,
-    rewritten,
-    run_gadgetctl,
-    wait_for_fault,
-    wait_until,
-)
+from gadgetctl.input.testing import gather, resumes_within, wait_for_fault, wait_until
+from gadgetctl.input.testing.configs import corpus_copy, run_gadgetctl
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -140,8 +133,8 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
 
 
 def corpus_powerwall(tmp_path: Path, flock_port: str, ibox_port: str) -> Path:
-    return rewritten(
-        corpus_file("powerwall_18x8.jconf"),
+    return corpus_copy(
+        "powerwall_18x8.jconf",
         tmp_path,
         ("<port>/dev/ttyd3</port>", f"<port>{flock_port}</port>"),
         ("<port>/dev/ttyd4</port>", f"<port>{ibox_port}</port>"),

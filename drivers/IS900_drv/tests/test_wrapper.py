@@ -12,15 +12,8 @@ from IS900_drv.standalone import pose_matrix
 
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import (
-    corpus_file,
-    proxy,
-    resumes_within,
-    rewritten,
-    run_gadgetctl,
-    wait_for_fault,
-    wait_until,
-)
+from gadgetctl.input.testing import resumes_within, wait_for_fault, wait_until
+from gadgetctl.input.testing.configs import corpus_copy, proxy, run_gadgetctl
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -125,8 +118,8 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
 
 
 def corpus_example(tmp_path: Path, port: str) -> Path:
-    return rewritten(
-        corpus_file("example.intersense.jconf"),
+    return corpus_copy(
+        "example.intersense.jconf",
         tmp_path,
         ("<port>/dev/ttyd11</port>", f"<port>{port}</port>"),
     )

@@ -17,7 +17,7 @@ from LinuxJoydev_drv.standalone import (
     LinuxJoydevStandalone,
 )
 
-from gadgetctl.input.testing import rewritten, run_gadgetctl
+from gadgetctl.input.testing.configs import rewritten, run_gadgetctl
 
 pytestmark = pytest.mark.timeout(30)
 EXAMPLE = Path(__file__).resolve().parents[1] / "example.jconf"

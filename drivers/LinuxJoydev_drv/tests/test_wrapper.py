@@ -10,15 +10,8 @@ import pytest
 from LinuxJoydev_drv.emulator import AXIS_HIGH, AXIS_LOW, JoydevEmulator
 
 from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
-from gadgetctl.input.testing import (
-    alias,
-    configuration,
-    corpus_file,
-    frames_until,
-    proxy,
-    rewritten,
-    run_gadgetctl,
-)
+from gadgetctl.input.testing import frames_until
+from gadgetctl.input.testing.configs import alias, configuration, corpus_copy, proxy, run_gadgetctl
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -195,8 +188,8 @@ def test_unusable_elements_stay_pending_with_a_reason(tmp_path: Path) -> None:
 @pytest.fixture
 def corpus_config(tmp_path: Path) -> Path:
     """VR Juggler's example.linux_joydev.jconf with only its port_name pointing at a FIFO."""
-    path = rewritten(
-        corpus_file("example.linux_joydev.jconf"),
+    path = corpus_copy(
+        "example.linux_joydev.jconf",
         tmp_path,
         ("<port_name>/dev/input/js0</port_name>", f"<port_name>{tmp_path / 'js0'}</port_name>"),
     )

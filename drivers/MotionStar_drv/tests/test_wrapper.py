@@ -14,13 +14,8 @@ from MotionStar_drv.emulator import MotionStarEmulator
 from gadgetctl.input import InputManager, LengthUnit
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.pending import PendingKind
-from gadgetctl.input.testing import (
-    corpus_file,
-    resumes_within,
-    rewritten,
-    run_gadgetctl,
-    wait_until,
-)
+from gadgetctl.input.testing import resumes_within, wait_until
+from gadgetctl.input.testing.configs import corpus_copy, corpus_file, rewritten, run_gadgetctl
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(20)
@@ -369,8 +364,8 @@ def c4_files(tmp_path: Path, port: int) -> list[Path]:
     C4.mstar.jconf is complete for input on its own; the base's user element takes its head
     position from VJHead, an alias of the MotionStar's HeadProxy. The displays and the RF wand
     of C4.closed.jconf need other drivers and are left out."""
-    mstar = rewritten(
-        corpus_file("C4.mstar.jconf"),
+    mstar = corpus_copy(
+        "C4.mstar.jconf",
         tmp_path,
         ("<address>mstar3</address>", "<address>127.0.0.1</address>"),
         ("<server_port>6000</server_port>", f"<server_port>{port}</server_port>"),

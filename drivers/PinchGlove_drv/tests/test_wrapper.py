@@ -24,13 +24,8 @@ from PinchGlove_drv.emulator import (
 from gadgetctl.input import InputManager
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import (
-    corpus_file,
-    resumes_within,
-    rewritten,
-    run_gadgetctl,
-    wait_until,
-)
+from gadgetctl.input.testing import resumes_within, wait_until
+from gadgetctl.input.testing.configs import corpus_copy, rewritten, run_gadgetctl
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(20)
@@ -276,8 +271,8 @@ def test_corpus_pinch_mixin_delivers_through_its_proxies(tmp_path, emulator, man
     follows the right index finger."""
     emu = emulator("idle")
     manager = managers(
-        rewritten(
-            corpus_file("pinch.mixin.jconf"),
+        corpus_copy(
+            "pinch.mixin.jconf",
             tmp_path,
             ("<port>/dev/ttyd1</port>", f"<port>{emu.address}</port>"),
         )
@@ -314,8 +309,8 @@ def test_corpus_pinch_mixin_delivers_through_its_proxies(tmp_path, emulator, man
 
 def test_gadgetctl_monitor_reads_the_corpus_configuration(tmp_path, emulator) -> None:
     emu = emulator("touches", rate=50.0)
-    config = rewritten(
-        corpus_file("pinch.mixin.jconf"),
+    config = corpus_copy(
+        "pinch.mixin.jconf",
         tmp_path,
         ("<port>/dev/ttyd1</port>", f"<port>{emu.address}</port>"),
     )

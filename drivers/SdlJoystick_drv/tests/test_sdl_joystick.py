@@ -22,7 +22,8 @@ from SdlJoystick_drv.standalone import SdlJoystickLost, SdlJoystickReader
 from gadgetctl.doctor import DoctorOptions, Status, diagnose, render_text
 from gadgetctl.doctor.sdl import check_sdl
 from gadgetctl.input import DeviceKind, DigitalState, HatState, InputManager, ManagerOptions
-from gadgetctl.input.testing import configuration, corpus_file, frames_until, proxy, wait_until
+from gadgetctl.input.testing import frames_until, wait_until
+from gadgetctl.input.testing.configs import configuration, corpus_file, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
 from gadgetctl.transport.sdl import hub
 

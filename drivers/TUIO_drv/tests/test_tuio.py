@@ -15,7 +15,8 @@ from TUIO_drv.emulator import TuioEmulator, cursor_position, frame_bundle, messa
 from TUIO_drv.standalone import MAX_ALIVE, TouchSlots, TuioReceiver
 
 from gadgetctl.input import DeviceKind, DigitalState
-from gadgetctl.input.testing import configuration, frames_until, free_udp_port, proxy, run_gadgetctl
+from gadgetctl.input.testing import frames_until
+from gadgetctl.input.testing.configs import configuration, free_udp_port, proxy, run_gadgetctl
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from gadgetctl.input.testing import configuration, run_gadgetctl
+from gadgetctl.input.testing.configs import configuration, run_gadgetctl
 
 pytestmark = pytest.mark.timeout(60)
 CONFIG = configuration(

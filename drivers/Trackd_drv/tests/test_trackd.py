@@ -39,16 +39,8 @@ from Trackd_drv.standalone import (
 
 from gadgetctl.doctor import Status
 from gadgetctl.input import DigitalState
-from gadgetctl.input.testing import (
-    alias,
-    configuration,
-    corpus_file,
-    frames_until,
-    proxy,
-    rewritten,
-    run_gadgetctl,
-    wait_until,
-)
+from gadgetctl.input.testing import frames_until, wait_until
+from gadgetctl.input.testing.configs import alias, configuration, corpus_copy, proxy, run_gadgetctl
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(60)
@@ -344,8 +336,8 @@ def test_the_disconnect_scenario_is_survived_again_and_again(build, keys) -> Non
 
 
 def corpus_with_keys(tmp_path: Path, skey: int, ckey: int) -> Path:
-    return rewritten(
-        corpus_file("sim.trackd.jconf"),
+    return corpus_copy(
+        "sim.trackd.jconf",
         tmp_path,
         (
             "<shared_memory_key>4148</shared_memory_key>",

@@ -18,7 +18,8 @@ from VRPN_drv.emulator import VrpnEmulator, analog_values, sensor_pose
 from VRPN_drv.standalone import pose_matrix
 
 from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions, RestartPolicy
-from gadgetctl.input.testing import alias, corpus_file, frames_until, proxy
+from gadgetctl.input.testing import frames_until
+from gadgetctl.input.testing.configs import alias, corpus_file, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(60)

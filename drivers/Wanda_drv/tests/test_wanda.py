@@ -11,15 +11,8 @@ from Wanda_drv.standalone import PacketScanner, Wanda, WandaDisconnected, decode
 
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import (
-    corpus_file,
-    gather,
-    resumes_within,
-    rewritten,
-    run_gadgetctl,
-    wait_for_fault,
-    wait_until,
-)
+from gadgetctl.input.testing import gather, resumes_within, wait_for_fault, wait_until
+from gadgetctl.input.testing.configs import corpus_copy, run_gadgetctl
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -138,8 +131,8 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
 
 
 def corpus_example(tmp_path: Path, port: str) -> Path:
-    return rewritten(
-        corpus_file("example.wanda.jconf"),
+    return corpus_copy(
+        "example.wanda.jconf",
         tmp_path,
         ("<port>/dev/ttyS1</port>", f"<port>{port}</port>"),
     )

@@ -6,7 +6,7 @@
     managers = managers_fixture("Wanda_drv", tune={"wanda": FAST})
 
 ``emulator`` is then a fixture giving ``start(scenario, **options)`` (every emulator started is
-stopped after the test); ``managers`` one giving an :class:`~gadgetctl.input.testing.InputManagers`
+stopped after the test); ``managers`` one giving an :class:`~gadgetctl.input.testing.configs.InputManagers`
 on the test's ``tmp_path``, whose tuned class attributes go back through ``monkeypatch``.
 """
 
@@ -18,7 +18,7 @@ from typing import Any
 import pytest
 
 from gadgetctl.emulation.testing import emulators
-from gadgetctl.input.testing import InputManagers
+from gadgetctl.input.testing.configs import InputManagers
 
 
 def emulator_fixture(
