@@ -14,7 +14,8 @@ import pytest
 from DTrack_drv.emulator import DTrackEmulator
 
 from gadgetctl.cli.monitor_text import health_text
-from gadgetctl.input.testing.configs import configuration, free_udp_port, run_gadgetctl
+from gadgetctl.input.testing.commands import run_gadgetctl
+from gadgetctl.input.testing.configs import configuration, free_udp_port
 
 pytestmark = pytest.mark.timeout(120)
 

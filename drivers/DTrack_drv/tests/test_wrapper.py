@@ -4,7 +4,6 @@ disconnection and reconnection, remote control, the corpus example."""
 
 from __future__ import annotations
 
-import json
 import socket
 from pathlib import Path
 
@@ -20,7 +19,8 @@ from DTrack_drv.standalone import (
 
 from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
 from gadgetctl.input.testing import frames_until
-from gadgetctl.input.testing.configs import alias, corpus_copy, free_udp_port, proxy, run_gadgetctl
+from gadgetctl.input.testing.commands import monitor_ndjson
+from gadgetctl.input.testing.configs import alias, corpus_copy, free_udp_port, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -252,11 +252,8 @@ def test_the_corpus_example_delivers_through_its_proxies(
 def test_monitor_shows_samples_of_the_corpus_example(corpus_config: tuple[Path, int]) -> None:
     path, port = corpus_config
     with DTrackEmulator(port, scenario="motion", rate=100.0, bodies=1):
-        result = run_gadgetctl(
-            "monitor", str(path), "--duration", "1", "--format", "ndjson", timeout=60
-        )
+        result, records = monitor_ndjson(path, duration=1, timeout=60)
     assert result.returncode == 0, result.stderr[-2000:]
-    records = [json.loads(line) for line in result.stdout.splitlines() if line.strip()]
     kinds = {
         r["kind"]
         for r in records

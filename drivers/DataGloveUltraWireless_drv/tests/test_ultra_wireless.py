@@ -15,7 +15,7 @@ from DataGloveUltraWireless_drv.standalone import (
 )
 
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import frame_recorder, resumes_within, wait_until
+from gadgetctl.input.testing import frame_recorder, resumes_within, wait_for_fault, wait_until
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -169,9 +169,7 @@ def test_lost_line_faults_then_samples_within_two_seconds(tmp_path, emulator, ma
         manager, "Gloves", DeviceKind.ANALOG, DeviceKind.COMMAND
     )
     assert emu.disconnected.wait(5)
-    assert wait_until(
-        lambda: manager.status("Gloves").state in ("faulted", "reconnecting"), step=frame
-    )
+    wait_for_fault(manager, "Gloves", timeout=3.0, step=frame)
     assert manager.status("Gloves").stats.faults >= 1
     emu.stop()
     resumes_within(

@@ -18,7 +18,7 @@ from DataGlove_drv.standalone import (
 )
 
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import frame_recorder, resumes_within, wait_until
+from gadgetctl.input.testing import frame_recorder, resumes_within, wait_for_fault, wait_until
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -166,9 +166,7 @@ def test_lost_line_faults_then_samples_within_two_seconds(tmp_path, emulator, ma
     manager = managers(glove("Glove", str(link)))
     frame, analog = frame_recorder(manager, "Glove", DeviceKind.ANALOG)
     assert emu.disconnected.wait(5)
-    assert wait_until(
-        lambda: manager.status("Glove").state in ("faulted", "reconnecting"), step=frame
-    )
+    wait_for_fault(manager, "Glove", timeout=3.0, step=frame)
     assert manager.status("Glove").stats.faults >= 1
     emu.stop()
     resumes_within(

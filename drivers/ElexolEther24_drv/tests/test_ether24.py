@@ -19,7 +19,8 @@ from ElexolEther24_drv.standalone import (
 
 from gadgetctl.input import DeviceKind, DigitalState
 from gadgetctl.input.testing import frames_until
-from gadgetctl.input.testing.configs import configuration, proxy, run_gadgetctl
+from gadgetctl.input.testing.commands import run_gadgetctl
+from gadgetctl.input.testing.configs import configuration, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import pytest
@@ -19,7 +18,8 @@ from IBox_drv.standalone import (
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.testing import gather, resumes_within, wait_for_fault, wait_until
-from gadgetctl.input.testing.configs import corpus_copy, run_gadgetctl
+from gadgetctl.input.testing.commands import monitor_ndjson, run_gadgetctl, samples_of
+from gadgetctl.input.testing.configs import corpus_copy
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -176,11 +176,8 @@ def test_gadgetctl_monitor_reads_the_powerwall(tmp_path, emulator) -> None:
     box = emulator("motion")
     with FlockEmulator("motion", 144.0, birds=2) as flock:
         config = corpus_powerwall(tmp_path, flock.address, box.address)
-        done = run_gadgetctl(
-            "monitor", str(config), "--duration", "3", "--format", "ndjson", timeout=40
-        )
-    records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
-    samples = [r for r in records if r.get("type") == "sample"]
+        done, records = monitor_ndjson(config, duration=3, timeout=40)
+    samples = samples_of(records)
     kinds = {(r.get("device"), r["kind"]) for r in samples}
     assert {("IBox1", "digital"), ("IBox1", "analog"), ("Flock_o_Birds", "position")} <= kinds, (
         done.stderr[-2000:]

@@ -6,7 +6,8 @@ import json
 
 import pytest
 
-from gadgetctl.input.testing.configs import configuration, run_gadgetctl
+from gadgetctl.input.testing.commands import run_gadgetctl
+from gadgetctl.input.testing.configs import configuration
 
 pytestmark = pytest.mark.timeout(60)
 CONFIG = configuration(

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +12,8 @@ from IS900_drv.standalone import pose_matrix
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.testing import resumes_within, wait_for_fault, wait_until
-from gadgetctl.input.testing.configs import corpus_copy, proxy, run_gadgetctl
+from gadgetctl.input.testing.commands import monitor_ndjson, run_gadgetctl, samples_of
+from gadgetctl.input.testing.configs import corpus_copy, proxy
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -160,11 +160,8 @@ def test_corpus_example_delivers_through_its_proxies_and_aliases(
 def test_gadgetctl_monitor_reads_the_corpus_example(tmp_path, emulator) -> None:
     emu = emulator("motion")
     config = corpus_example(tmp_path, emu.address)
-    done = run_gadgetctl(
-        "monitor", str(config), "--duration", "1", "--format", "ndjson", timeout=30
-    )
-    records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
-    samples = [r for r in records if r.get("type") == "sample" and r.get("device") == "Isense1"]
+    done, records = monitor_ndjson(config, duration=1, timeout=30)
+    samples = samples_of(records, "Isense1")
     assert {r["kind"] for r in samples} == {"position", "digital", "analog"}, done.stderr[-2000:]
     assert {r["unit"] for r in samples if r["kind"] == "position"} == {0, 1}
     assert {r["unit"] for r in samples if r["kind"] == "digital"} == set(range(4))

@@ -3,7 +3,6 @@ skipped in whole runs, and the monitor's --duration still ends on time."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import pytest
@@ -17,7 +16,8 @@ from LinuxJoydev_drv.standalone import (
     LinuxJoydevStandalone,
 )
 
-from gadgetctl.input.testing.configs import rewritten, run_gadgetctl
+from gadgetctl.input.testing.commands import monitor_ndjson
+from gadgetctl.input.testing.configs import rewritten
 
 pytestmark = pytest.mark.timeout(30)
 EXAMPLE = Path(__file__).resolve().parents[1] / "example.jconf"
@@ -48,10 +48,7 @@ def test_monitor_duration_is_kept_with_dev_zero_as_port(tmp_path: Path) -> None:
         tmp_path,
         ("<port_name>/tmp/gadgetctl-js0</port_name>", "<port_name>/dev/zero</port_name>"),
     )
-    result = run_gadgetctl(
-        "monitor", str(config), "--duration", "1", "--format", "ndjson", timeout=25
-    )
+    result, records = monitor_ndjson(config, duration=1, timeout=25)
     assert result.returncode == 0, result.stderr[-2000:]
-    records = [json.loads(line) for line in result.stdout.splitlines()]
     stats = next(r for r in records if r["type"] == "stats")["devices"]["Joystick"]
     assert stats["state"] == "running" and stats["faults"] == 0 and stats["count"] == 0

@@ -3,7 +3,6 @@ through proxies and aliases, garbage, disconnection and reconnection, the corpus
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import pytest
@@ -11,7 +10,8 @@ from LinuxJoydev_drv.emulator import AXIS_HIGH, AXIS_LOW, JoydevEmulator
 
 from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
 from gadgetctl.input.testing import frames_until
-from gadgetctl.input.testing.configs import alias, configuration, corpus_copy, proxy, run_gadgetctl
+from gadgetctl.input.testing.commands import monitor_ndjson, samples_of
+from gadgetctl.input.testing.configs import alias, configuration, corpus_copy, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -220,15 +220,9 @@ def test_the_corpus_example_delivers_through_its_proxies_and_aliases(
 
 def test_monitor_shows_samples_of_the_corpus_example(tmp_path: Path, corpus_config: Path) -> None:
     with JoydevEmulator(directory=tmp_path, scenario="motion", rate=200.0):
-        result = run_gadgetctl(
-            "monitor", str(corpus_config), "--duration", "1", "--format", "ndjson",
-            timeout=60, env={"NO_COLOR": "1"},
-        )  # fmt: skip
+        result, records = monitor_ndjson(
+            corpus_config, duration=1, timeout=60, env={"NO_COLOR": "1"}
+        )
     assert result.returncode == 0, result.stderr[-2000:]
-    records = [json.loads(line) for line in result.stdout.splitlines() if line.strip()]
-    samples = [
-        r
-        for r in records
-        if r.get("type") == "sample" and r.get("device") == "Logitech Dual Action"
-    ]
+    samples = samples_of(records, "Logitech Dual Action")
     assert samples, records[:5]

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Callable
 from pathlib import Path
@@ -15,7 +14,8 @@ from gadgetctl.input import InputManager, LengthUnit
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.pending import PendingKind
 from gadgetctl.input.testing import resumes_within, wait_until
-from gadgetctl.input.testing.configs import corpus_copy, corpus_file, rewritten, run_gadgetctl
+from gadgetctl.input.testing.commands import monitor_ndjson, samples_of
+from gadgetctl.input.testing.configs import corpus_copy, corpus_file, rewritten
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(20)
@@ -413,13 +413,8 @@ def test_corpus_c4_mstar_delivers_through_its_proxies_and_aliases(
 def test_gadgetctl_monitor_reads_the_corpus_configuration(tmp_path, emulator) -> None:
     emu = emulator("motion", birds=2, rate=100.0)
     config = c4_files(tmp_path, emu.port)[1]
-    done = run_gadgetctl(
-        "monitor", str(config), "--duration", "1", "--format", "ndjson", timeout=30
-    )
-    records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
-    samples = [
-        r for r in records if r.get("type") == "sample" and r.get("device") == "Motion Star master"
-    ]
+    done, records = monitor_ndjson(config, duration=1, timeout=30)
+    samples = samples_of(records, "Motion Star master")
     assert samples, done.stdout[-2000:] + done.stderr[-2000:]
     assert {r["kind"] for r in samples} == {"position"} and {r["unit"] for r in samples} == {0, 1}
     assert len(samples) >= 20  # about 100 packets a second, two sensors each

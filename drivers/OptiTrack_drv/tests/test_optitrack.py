@@ -22,7 +22,8 @@ from OptiTrack_drv.standalone import (
 
 from gadgetctl.input import DeviceKind, InputManager, ManagerOptions
 from gadgetctl.input.testing import frames_until, wait_until
-from gadgetctl.input.testing.configs import configuration, free_udp_port, proxy, run_gadgetctl
+from gadgetctl.input.testing.commands import run_gadgetctl
+from gadgetctl.input.testing.configs import configuration, free_udp_port, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
@@ -25,7 +24,8 @@ from gadgetctl.input import InputManager
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.testing import resumes_within, wait_until
-from gadgetctl.input.testing.configs import corpus_copy, rewritten, run_gadgetctl
+from gadgetctl.input.testing.commands import monitor_ndjson, samples_of
+from gadgetctl.input.testing.configs import corpus_copy, rewritten
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(20)
@@ -314,13 +314,8 @@ def test_gadgetctl_monitor_reads_the_corpus_configuration(tmp_path, emulator) ->
         tmp_path,
         ("<port>/dev/ttyd1</port>", f"<port>{emu.address}</port>"),
     )
-    done = run_gadgetctl(
-        "monitor", str(config), "--duration", "1", "--format", "ndjson", timeout=30
-    )
-    records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
-    samples = [
-        r for r in records if r.get("type") == "sample" and r.get("device") == "FakespacePinchGlove"
-    ]
+    done, records = monitor_ndjson(config, duration=1, timeout=30)
+    samples = samples_of(records, "FakespacePinchGlove")
     assert {r["kind"] for r in samples} == {"digital", "glove"}, (
         done.stdout[-2000:] + done.stderr[-2000:]
     )

@@ -16,7 +16,8 @@ from TUIO_drv.standalone import MAX_ALIVE, TouchSlots, TuioReceiver
 
 from gadgetctl.input import DeviceKind, DigitalState
 from gadgetctl.input.testing import frames_until
-from gadgetctl.input.testing.configs import configuration, free_udp_port, proxy, run_gadgetctl
+from gadgetctl.input.testing.commands import run_gadgetctl
+from gadgetctl.input.testing.configs import configuration, free_udp_port, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)

@@ -40,7 +40,8 @@ from Trackd_drv.standalone import (
 from gadgetctl.doctor import Status
 from gadgetctl.input import DigitalState
 from gadgetctl.input.testing import frames_until, wait_until
-from gadgetctl.input.testing.configs import alias, configuration, corpus_copy, proxy, run_gadgetctl
+from gadgetctl.input.testing.commands import monitor_ndjson, run_gadgetctl
+from gadgetctl.input.testing.configs import alias, configuration, corpus_copy, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(60)
@@ -375,11 +376,8 @@ def test_monitor_ndjson_shows_the_corpus_samples(tmp_path: Path, keys) -> None:
     skey, ckey = keys
     path = corpus_with_keys(tmp_path, skey, ckey)
     with TrackdEmulator(skey, ckey, scenario="motion", rate=100.0, sensors=2, buttons=3):
-        result = run_gadgetctl(
-            "monitor", str(path), "--duration", "1", "--format", "ndjson", timeout=60
-        )
+        result, records = monitor_ndjson(path, duration=1, timeout=60)
     assert result.returncode == 0, result.stderr[-2000:]
-    records = [json.loads(line) for line in result.stdout.splitlines() if line.strip()]
     seen = {(r["device"], r["kind"]) for r in records if r.get("type") == "sample"}
     assert {("TrackdSensorDev", "position"), ("TrackdControllerDev", "digital")} <= seen
     active = {

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import pytest
@@ -12,7 +11,8 @@ from Wanda_drv.standalone import PacketScanner, Wanda, WandaDisconnected, decode
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.testing import gather, resumes_within, wait_for_fault, wait_until
-from gadgetctl.input.testing.configs import corpus_copy, run_gadgetctl
+from gadgetctl.input.testing.commands import monitor_ndjson, run_gadgetctl, samples_of
+from gadgetctl.input.testing.configs import corpus_copy
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -157,11 +157,8 @@ def test_corpus_example_delivers_through_its_aliases(tmp_path, emulator, manager
 def test_gadgetctl_monitor_reads_the_corpus_example(tmp_path, emulator) -> None:
     emu = emulator("motion")
     config = corpus_example(tmp_path, emu.address)
-    done = run_gadgetctl(
-        "monitor", str(config), "--duration", "3", "--format", "ndjson", timeout=40
-    )
-    records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
-    samples = [r for r in records if r.get("type") == "sample" and r.get("device") == "Wanda"]
+    done, records = monitor_ndjson(config, duration=3, timeout=40)
+    samples = samples_of(records, "Wanda")
     assert {r["kind"] for r in samples} == {"digital", "analog"}, done.stderr[-2000:]
     for command in (["validate"], ["doctor"], ["config", "pending"]):
         out = run_gadgetctl(*command, str(config), timeout=30)

@@ -76,12 +76,18 @@ def frame_recorder(manager: InputManager, device: str, *kinds: DeviceKind) -> tu
     return (frame, *kept)
 
 
-def wait_for_fault(manager: InputManager, name: str, timeout: float = 5.0) -> ElementStatus:
-    """Run frames until device ``name`` is faulted or reconnecting; its status then."""
+def wait_for_fault(
+    manager: InputManager,
+    name: str,
+    timeout: float = 5.0,
+    step: Callable[[], object] | None = None,
+) -> ElementStatus:
+    """Run frames (``step``, ``manager.update`` by default) until device ``name`` is faulted
+    or reconnecting; its status then."""
     assert wait_until(
         lambda: manager.status(name).state in ("faulted", "reconnecting"),
         timeout=timeout,
-        step=manager.update,
+        step=step or manager.update,
     ), manager.status(name)
     status = manager.status(name)
     assert status is not None

@@ -3,15 +3,13 @@
 A configuration is written from element snippets (:func:`configuration`, :func:`proxy`,
 :func:`alias`) or copied from the VR Juggler corpus beside the checkout and pointed at an
 emulator (:func:`corpus_copy`, :func:`rewritten`); :class:`InputManagers` builds the managers a
-test runs and shuts them down; :func:`run_gadgetctl` runs the command line on them.
+test runs and shuts them down. :mod:`~gadgetctl.input.testing.commands` runs the command
+line on them.
 """
 
 from __future__ import annotations
 
-import os
 import socket
-import subprocess
-import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -179,24 +177,3 @@ class InputManagers:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-
-# -- the command line -----------------------------------------------------------------------
-
-
-def run_gadgetctl(
-    *args: str,
-    timeout: float = 50,
-    cwd: Path | None = None,
-    env: Mapping[str, str] | None = None,
-) -> subprocess.CompletedProcess[str]:
-    """``python -m gadgetctl ARGS`` in a child process (in the checkout unless ``cwd``; ``env``
-    added to this process's environment), its output captured as text."""
-    return subprocess.run(
-        [sys.executable, "-m", "gadgetctl", *args],
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        cwd=cwd or checkout(),
-        env=None if env is None else {**os.environ, **env},
-    )
