@@ -15,7 +15,7 @@ from DataGloveUltraWireless_drv.standalone import (
 )
 
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import frame_recorder, resumes_within, wait_for_fault, wait_until
+from gadgetctl.input.testing import frame_recorder, hangs_up, resumes_within, wait_until
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -168,8 +168,7 @@ def test_lost_line_faults_then_samples_within_two_seconds(tmp_path, emulator, ma
     frame, analog, _commands = frame_recorder(
         manager, "Gloves", DeviceKind.ANALOG, DeviceKind.COMMAND
     )
-    assert emu.disconnected.wait(5)
-    wait_for_fault(manager, "Gloves", timeout=3.0, step=frame)
+    hangs_up(manager, "Gloves", emu, fault_timeout=3.0, step=frame)
     assert manager.status("Gloves").stats.faults >= 1
     emu.stop()
     resumes_within(

@@ -10,7 +10,7 @@ from Flock_drv.emulator import FlockEmulator
 from Flock_drv.standalone import euler_matrix
 
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import resumes_within, wait_for_fault, wait_until
+from gadgetctl.input.testing import hangs_up, reads_past_garbage, resumes_within, wait_until
 from gadgetctl.input.testing.commands import monitor_ndjson, run_gadgetctl, samples_of
 from gadgetctl.input.testing.configs import corpus_copy
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
@@ -65,11 +65,9 @@ def test_birds_reach_their_proxies_in_feet(tmp_path, emulator, managers) -> None
 def test_garbage_is_counted_without_a_fault(tmp_path, emulator, managers) -> None:
     emu = emulator("garbage", birds=2)
     manager = managers(flock_element("F", emu.address))
-    device = manager.device("F")
-    assert wait_until(lambda: device.records >= 40, timeout=5, step=manager.update)
+    device = reads_past_garbage(manager, "F", 40)
     assert device.bad_records >= 20 and device.skipped_bytes > 0
     assert device.counters["records"] == device.records
-    assert device.faults == 0 and manager.status("F").state == "running"
 
 
 def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, managers) -> None:
@@ -77,8 +75,7 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
     emu = emulator("disconnect", birds=2, disconnect_after=10, link=link)
     manager = managers(flock_element("F", str(link)))
     device = manager.device("F")
-    assert emu.disconnected.wait(5)
-    wait_for_fault(manager, "F")
+    hangs_up(manager, "F", emu)
     reason = manager.status("F").reason or ""
     # the line went, or (once the manager retried) the hung-up pty behind the link is gone
     assert "serial line lost" in reason or "cannot open" in reason, reason

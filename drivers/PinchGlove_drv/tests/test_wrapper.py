@@ -23,7 +23,7 @@ from PinchGlove_drv.emulator import (
 from gadgetctl.input import InputManager
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import resumes_within, wait_until
+from gadgetctl.input.testing import hangs_up, resumes_within, wait_until
 from gadgetctl.input.testing.commands import monitor_ndjson, samples_of
 from gadgetctl.input.testing.configs import corpus_copy, rewritten
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
@@ -216,11 +216,7 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
 def test_disconnect_scenario_faults_the_device(tmp_path, emulator, managers) -> None:
     emu = emulator("disconnect", disconnect_after=3, link=tmp_path / "glove")
     manager = managers(glove_element("Glove", str(tmp_path / "glove")))
-    assert emu.disconnected.wait(3)
-    assert wait_until(
-        lambda: manager.status("Glove").state in ("faulted", "reconnecting"),
-        step=manager.update,
-    )
+    hangs_up(manager, "Glove", emu, timeout=3, fault_timeout=3.0)
     assert manager.device("Glove").frames == 3
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 if TYPE_CHECKING:
     from gadgetctl.input.kinds import DeviceKind
@@ -92,6 +92,29 @@ def wait_for_fault(
     status = manager.status(name)
     assert status is not None
     return status
+
+
+def hangs_up(
+    manager: InputManager,
+    name: str,
+    emulator: Any,
+    timeout: float = 5.0,
+    fault_timeout: float = 5.0,
+    step: Callable[[], object] | None = None,
+) -> ElementStatus:
+    """The emulator hangs up (its ``disconnected`` event, set within ``timeout``) and device
+    ``name`` faults (:func:`wait_for_fault` within ``fault_timeout``); its status then."""
+    assert emulator.disconnected.wait(timeout), "the emulator never hung up"
+    return wait_for_fault(manager, name, fault_timeout, step)
+
+
+def reads_past_garbage(manager: InputManager, name: str, records: int, timeout: float = 5.0) -> Any:
+    """Run frames until device ``name`` has read ``records`` good records among the garbage its
+    emulator sends; it has neither faulted nor stopped running. The device."""
+    device = manager.device(name)
+    assert wait_until(lambda: device.records >= records, timeout=timeout, step=manager.update)
+    assert device.faults == 0 and manager.status(name).state == "running"
+    return device
 
 
 def resumes_within(
