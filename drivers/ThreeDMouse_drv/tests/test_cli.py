@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
-import json
-
 import pytest
 
-from gadgetctl.input.testing.commands import run_gadgetctl
+from gadgetctl.input.testing.commands import (
+    doctor_finds_no_port,
+    emulated_types,
+    reported,
+    run_gadgetctl,
+)
 from gadgetctl.input.testing.configs import configuration
 
 pytestmark = pytest.mark.timeout(60)
@@ -26,7 +29,7 @@ def test_units_beyond_one_pose_and_three_buttons_are_reported(tmp_path) -> None:
     path = tmp_path / "t.jconf"
     path.write_text(CONFIG.format(port="/dev/null"))
     out = run_gadgetctl("validate", str(path))
-    problems = [line for line in out.stdout.splitlines() if "CFG034" in line]
+    problems = reported(out, "CFG034")
     assert out.returncode == 1 and len(problems) == 2, out.stdout
     assert (
         "'P1' reads position unit 1" in problems[0] and "'B3' reads digital unit 3" in problems[1]
@@ -34,13 +37,7 @@ def test_units_beyond_one_pose_and_three_buttons_are_reported(tmp_path) -> None:
 
 
 def test_emulate_lists_it_and_doctor_knows_its_serial_port(tmp_path) -> None:
-    listed = json.loads(run_gadgetctl("emulate", "--list", "--format", "json").stdout)["emulators"]
-    assert next(e for e in listed if e["plugin"] == "ThreeDMouse_drv")["element_types"] == [
-        "three_d_mouse"
-    ]
+    assert emulated_types("ThreeDMouse_drv") == ["three_d_mouse"]
     path = tmp_path / "t.jconf"
     path.write_text(CONFIG.format(port=tmp_path / "no-such-tty"))
-    out = run_gadgetctl("doctor", str(path))
-    problem = [line for line in out.stdout.splitlines() if "DRV100" in line]
-    assert len(problem) == 1 and "no-such-tty does not exist" in problem[0], out.stdout
-    assert "gadgetctl emulate ThreeDMouse_drv" in out.stdout
+    doctor_finds_no_port(path, "ThreeDMouse_drv", "no-such-tty")

@@ -55,3 +55,24 @@ def samples_of(records: list[dict], device: str | None = None) -> list[dict]:
         for r in records
         if r.get("type") == "sample" and (device is None or r.get("device") == device)
     ]
+
+
+def reported(result: subprocess.CompletedProcess[str], code: str) -> list[str]:
+    """The lines of a command's output that carry the diagnostic ``code``."""
+    return [line for line in result.stdout.splitlines() if code in line]
+
+
+def emulated_types(plugin: str) -> list[str]:
+    """The element types ``gadgetctl emulate --list`` says the emulator of ``plugin`` serves."""
+    listed = json.loads(run_gadgetctl("emulate", "--list", "--format", "json").stdout)
+    return next(e for e in listed["emulators"] if e["plugin"] == plugin)["element_types"]
+
+
+def doctor_finds_no_port(path: Path, plugin: str, port: str) -> subprocess.CompletedProcess[str]:
+    """``gadgetctl doctor`` on a configuration whose serial ``port`` does not exist: exactly one
+    DRV100 line, saying so, and the hint to start the plug-in's emulator. The result."""
+    out = run_gadgetctl("doctor", str(path))
+    problem = reported(out, "DRV100")
+    assert len(problem) == 1 and f"{port} does not exist" in problem[0], out.stdout
+    assert f"gadgetctl emulate {plugin}" in out.stdout
+    return out
