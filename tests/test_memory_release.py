@@ -16,6 +16,7 @@ from collections.abc import Callable, Iterator
 import pytest
 
 from gadgetctl.input.manager import InputManager, ManagerOptions
+from gadgetctl.input.testing import wait_until
 from gadgetctl.jccl.configload import load_configuration
 from gadgetctl.jccl.repository import default_repository
 from gadgetctl.monitor.session import MonitorSession
@@ -57,7 +58,10 @@ def measured() -> Iterator[Callable[[Callable[[], None], int, int], None]]:
         gc.collect()
         grown = tracemalloc.get_traced_memory()[0] - before
         tracemalloc.stop()
-        assert threading.active_count() == threads, [t.name for t in threading.enumerate()]
+        # joined by shutdown(); waited for only so that a loaded machine cannot fail this
+        assert wait_until(lambda: threading.active_count() == threads, timeout=10.0), [
+            t.name for t in threading.enumerate()
+        ]
         assert open_fds() == fds
         assert grown < limit, f"{grown} bytes still allocated after {times} runs"
         assert gc.get_freeze_count() == 0, "objects were left in the permanent generation"
