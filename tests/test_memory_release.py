@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import gc
 import os
+import subprocess
+import sys
 import threading
 import tracemalloc
 from collections.abc import Callable, Iterator
@@ -119,3 +121,52 @@ def test_a_monitor_session_left_mid_run_releases_everything(waveform, measured) 
                 break  # the generator is dropped, not exhausted
 
     measured(abandoned, 50, 2_000_000)
+
+
+STYLESHEETS = """
+import ctypes, gc, sys
+from gadgetctl.jccl.xslt import compile_transform
+
+class MallInfo2(ctypes.Structure):  # glibc's malloc statistics: libxslt allocates with malloc
+    _fields_ = [(name, ctypes.c_size_t) for name in (
+        "arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks",
+        "fordblks", "keepcost")]
+
+libc = ctypes.CDLL("libc.so.6")
+libc.mallinfo2.restype = MallInfo2
+
+def in_use():
+    info = libc.mallinfo2()
+    return info.uordblks + info.hblkhd
+
+def sheet(i):
+    return ('<xsl:stylesheet version="1.0" xmlns:xsl="http://www.w3.org/1999/XSL/Transform">'
+            '<xsl:template match="/*"><xsl:copy><xsl:attribute name="version">%d</xsl:attribute>'
+            '<xsl:copy-of select="node()"/></xsl:copy></xsl:template></xsl:stylesheet>' % i).encode()
+
+assert compile_transform(sheet(0)) is compile_transform(sheet(0))  # reused while in use
+for i in range(100):
+    compile_transform(sheet(i))
+gc.collect()
+before = in_use()
+for i in range(100, 100 + int(sys.argv[1])):
+    compile_transform(sheet(i))
+gc.collect()
+print(in_use() - before)
+"""
+
+
+@pytest.mark.timeout(120)
+def test_compiled_stylesheets_are_kept_within_a_bound() -> None:
+    """The sandbox child compiles the stylesheet of every definition file it is given and
+    lives as long as its parent; it kept every compiled stylesheet (12.6 KB each here)."""
+    done = subprocess.run(
+        [sys.executable, "-c", STYLESHEETS, "600"],
+        capture_output=True,
+        text=True,
+        timeout=100,
+        cwd=REPO,
+    )
+    assert done.returncode == 0, done.stderr
+    grown = int(done.stdout)
+    assert grown < 2_000_000, f"{grown} bytes of malloc still in use after 600 stylesheets"

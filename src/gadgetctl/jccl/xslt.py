@@ -9,6 +9,8 @@ entities or network.
 from __future__ import annotations
 
 import copy
+import threading
+from collections import OrderedDict
 from pathlib import Path
 
 from lxml import etree
@@ -21,17 +23,28 @@ class TransformError(Exception):
 
 
 _DENY_ALL = etree.XSLTAccessControl.DENY_ALL
-_compiled: dict[bytes, etree.XSLT] = {}
+#: Compiled stylesheets kept for reuse, the least recently used dropped first. The bundled
+#: definitions have 37; the sandbox child lives as long as its parent and is given every
+#: stylesheet of every definition file met, which it used to keep for ever.
+COMPILED_LIMIT = 64
+_compiled: OrderedDict[bytes, etree.XSLT] = OrderedDict()
+_compiled_lock = threading.Lock()
 
 
 def compile_transform(stylesheet: bytes) -> etree.XSLT:
-    found = _compiled.get(stylesheet)
-    if found is None:
-        try:
-            found = etree.XSLT(etree.fromstring(stylesheet, _safe_parser()), access_control=_DENY_ALL)
-        except (etree.XMLSyntaxError, etree.XSLTParseError) as err:
-            raise TransformError(f"the upgrade stylesheet does not compile: {err}") from None
+    with _compiled_lock:
+        found = _compiled.get(stylesheet)
+        if found is not None:
+            _compiled.move_to_end(stylesheet)
+            return found
+    try:
+        found = etree.XSLT(etree.fromstring(stylesheet, _safe_parser()), access_control=_DENY_ALL)
+    except (etree.XMLSyntaxError, etree.XSLTParseError) as err:
+        raise TransformError(f"the upgrade stylesheet does not compile: {err}") from None
+    with _compiled_lock:
         _compiled[stylesheet] = found
+        while len(_compiled) > COMPILED_LIMIT:
+            _compiled.popitem(last=False)
     return found
 
 

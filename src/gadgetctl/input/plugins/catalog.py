@@ -9,7 +9,7 @@ written for VR Juggler show where their devices come from.
 
 from __future__ import annotations
 
-from functools import cache
+from functools import cache, lru_cache
 from pathlib import Path
 
 from gadgetctl.input.plugins.metadata import read_metadata
@@ -42,7 +42,7 @@ UPSTREAM_DRIVERS: dict[str, tuple[str, ...]] = {
 }
 
 
-@cache
+@lru_cache(maxsize=8)  # keyed by folder: the bundled one, and any a caller names
 def bundled_plugins(drivers_dir: Path) -> dict[str, tuple[str, ...]]:
     """Plug-in name -> element types, for every plug-in folder under ``drivers_dir``."""
     plugins: dict[str, tuple[str, ...]] = {}
