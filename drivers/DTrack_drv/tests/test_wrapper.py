@@ -20,7 +20,13 @@ from DTrack_drv.standalone import (
 from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
 from gadgetctl.input.testing import frames_until
 from gadgetctl.input.testing.commands import monitor_ndjson
-from gadgetctl.input.testing.configs import alias, corpus_copy, free_udp_port, proxy
+from gadgetctl.input.testing.configs import (
+    alias,
+    configured_pending,
+    corpus_copy,
+    free_udp_port,
+    proxy,
+)
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -186,14 +192,7 @@ def test_unusable_elements_stay_pending_with_a_reason(build) -> None:
     taken.bind(("", 0))
     try:
         path = build.write(tracker("Huge", 70000) + tracker("Taken", taken.getsockname()[1]))
-        manager, configuration = InputManager.from_files(
-            [path], options=ManagerOptions(retry_interval=None)
-        )
-        try:
-            manager.configure(configuration)
-            reasons = {p.name: p.message for p in manager.pending()}
-        finally:
-            manager.shutdown()
+        reasons = configured_pending(path)
     finally:
         taken.close()
     assert reasons["Huge"] == "receive_port 70000 is not a UDP port (0 to 65535)"

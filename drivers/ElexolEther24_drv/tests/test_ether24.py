@@ -20,7 +20,7 @@ from ElexolEther24_drv.standalone import (
 from gadgetctl.input import DeviceKind, DigitalState
 from gadgetctl.input.testing import frames_until
 from gadgetctl.input.testing.commands import run_gadgetctl
-from gadgetctl.input.testing.configs import configuration, proxy
+from gadgetctl.input.testing.configs import configuration, pending_reasons, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -145,7 +145,7 @@ def test_find_mac_with_no_such_board_is_pending_with_the_reason(build, monkeypat
             mac_board("Other", "00:00:00:00:00:01") + mac_board("Typo", "00:0A:BC:12:34"),
             ready=False,
         )
-        reasons = {p.name: p.message for p in manager.pending()}
+        reasons = pending_reasons(manager)
     assert "no Ether I/O 24 with MAC 00:00:00:00:00:01 answered" in reasons["Other"]
     assert emu.address in reasons["Other"]
     assert "mac_address" in reasons["Typo"] and "not a MAC address" in reasons["Typo"]

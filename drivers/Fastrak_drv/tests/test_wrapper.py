@@ -11,7 +11,7 @@ from Fastrak_drv.emulator import FastrakEmulator
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.testing import hangs_up, reads_past_garbage, resumes_within, wait_until
-from gadgetctl.input.testing.configs import rewritten
+from gadgetctl.input.testing.configs import pending_reasons, rewritten
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -95,7 +95,7 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
         '<fastrak name="No Port" version="2"><port></port></fastrak>\n'
         '<fastrak name="No Tracker" version="2"><port>/nonexistent/tty</port></fastrak>\n'
     )
-    pending = {p.name: p.message for p in managers(body).pending()}
+    pending = pending_reasons(managers(body))
     assert pending["No Port"].startswith("port is empty")
     assert "/nonexistent/tty" in pending["No Tracker"]
 

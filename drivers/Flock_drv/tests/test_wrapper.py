@@ -12,7 +12,7 @@ from Flock_drv.standalone import euler_matrix
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.testing import hangs_up, reads_past_garbage, resumes_within, wait_until
 from gadgetctl.input.testing.commands import monitor_ndjson, run_gadgetctl, samples_of
-from gadgetctl.input.testing.configs import corpus_copy
+from gadgetctl.input.testing.configs import corpus_copy, pending_reasons
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -94,7 +94,7 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
         "<hemisphere>9</hemisphere></flock>\n"
         '<flock name="No Port" version="2"><port></port></flock>\n'
     )
-    pending = {p.name: p.message for p in managers(body).pending()}
+    pending = pending_reasons(managers(body))
     assert "hemisphere 9" in pending["Bad Hemisphere"]
     assert "port is empty" in pending["No Port"]
 

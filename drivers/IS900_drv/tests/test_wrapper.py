@@ -13,7 +13,7 @@ from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.testing import hangs_up, reads_past_garbage, resumes_within, wait_until
 from gadgetctl.input.testing.commands import monitor_ndjson, run_gadgetctl, samples_of
-from gadgetctl.input.testing.configs import corpus_copy, proxy
+from gadgetctl.input.testing.configs import corpus_copy, pending_reasons, proxy
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -109,7 +109,7 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
         '<intersense_station name="S" version="1"><station_index>99</station_index>'
         "</intersense_station></stations></intersense>\n"
     )
-    pending = {p.name: p.message for p in managers(body).pending()}
+    pending = pending_reasons(managers(body))
     assert "no stations" in pending["No Stations"]
     assert "station_index 99" in pending["Bad Station"]
 

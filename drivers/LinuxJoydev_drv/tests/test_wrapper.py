@@ -8,10 +8,16 @@ from pathlib import Path
 import pytest
 from LinuxJoydev_drv.emulator import AXIS_HIGH, AXIS_LOW, JoydevEmulator
 
-from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
+from gadgetctl.input import DeviceKind, DigitalState
 from gadgetctl.input.testing import frames_until
 from gadgetctl.input.testing.commands import monitor_ndjson, samples_of
-from gadgetctl.input.testing.configs import alias, configuration, corpus_copy, proxy
+from gadgetctl.input.testing.configs import (
+    alias,
+    configuration,
+    configured_pending,
+    corpus_copy,
+    proxy,
+)
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -171,12 +177,7 @@ def test_unusable_elements_stay_pending_with_a_reason(tmp_path: Path) -> None:
             + joystick("Missing", tmp_path / "nothing-here"),
         )
     )
-    manager, loaded = InputManager.from_files([path], options=ManagerOptions(retry_interval=None))
-    try:
-        manager.configure(loaded)
-        reasons = {p.name: p.message for p in manager.pending()}
-    finally:
-        manager.shutdown()
+    reasons = configured_pending(path)
     assert reasons["Empty"] == "port_name is empty"
     assert "axis_buttons: -1" in reasons["Negative"]
     assert "failed to start" in reasons["Missing"] and "nothing-here" in reasons["Missing"]

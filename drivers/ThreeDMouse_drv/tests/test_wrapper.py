@@ -11,7 +11,7 @@ from ThreeDMouse_drv.emulator import ThreeDMouseEmulator
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.testing import hangs_up, reads_past_garbage, resumes_within, wait_until
-from gadgetctl.input.testing.configs import rewritten
+from gadgetctl.input.testing.configs import pending_reasons, rewritten
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -103,7 +103,7 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
         '<three_d_mouse name="No Port" version="1"><port></port></three_d_mouse>\n'
         '<three_d_mouse name="No Mouse" version="1"><port>/nonexistent/tty</port></three_d_mouse>\n'
     )
-    pending = {p.name: p.message for p in managers(body).pending()}
+    pending = pending_reasons(managers(body))
     assert pending["No Port"].startswith("port is empty")
     assert "/nonexistent/tty" in pending["No Mouse"]
 

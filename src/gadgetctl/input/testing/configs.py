@@ -177,3 +177,22 @@ class InputManagers:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def pending_reasons(manager: InputManager) -> dict[str, str]:
+    """Why each pending element of ``manager`` is pending, by name."""
+    return {p.name: p.message for p in manager.pending()}
+
+
+def configured_pending(path: Path, options: ManagerOptions | None = None) -> dict[str, str]:
+    """:func:`pending_reasons` once ``path`` is configured in an input manager of its own
+    (``retry_interval=None`` unless ``options`` say otherwise), shut down before this returns."""
+    from gadgetctl.input.manager import InputManager, ManagerOptions
+
+    options = options or ManagerOptions(retry_interval=None)
+    manager, loaded = InputManager.from_files([path], options=options)
+    try:
+        manager.configure(loaded)
+        return pending_reasons(manager)
+    finally:
+        manager.shutdown()
