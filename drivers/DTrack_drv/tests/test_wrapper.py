@@ -20,13 +20,7 @@ from DTrack_drv.standalone import (
 from gadgetctl.input import DeviceKind, DigitalState, InputManager, ManagerOptions
 from gadgetctl.input.testing import frames_until
 from gadgetctl.input.testing.commands import monitor_ndjson
-from gadgetctl.input.testing.configs import (
-    alias,
-    configured_pending,
-    corpus_copy,
-    free_udp_port,
-    proxy,
-)
+from gadgetctl.input.testing.configs import alias, corpus_copy, free_udp_port, pending_in, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -192,7 +186,7 @@ def test_unusable_elements_stay_pending_with_a_reason(build) -> None:
     taken.bind(("", 0))
     try:
         path = build.write(tracker("Huge", 70000) + tracker("Taken", taken.getsockname()[1]))
-        reasons = configured_pending(path)
+        reasons = pending_in(path)
     finally:
         taken.close()
     assert reasons["Huge"] == "receive_port 70000 is not a UDP port (0 to 65535)"

@@ -11,13 +11,7 @@ from LinuxJoydev_drv.emulator import AXIS_HIGH, AXIS_LOW, JoydevEmulator
 from gadgetctl.input import DeviceKind, DigitalState
 from gadgetctl.input.testing import frames_until
 from gadgetctl.input.testing.commands import monitor_ndjson, samples_of
-from gadgetctl.input.testing.configs import (
-    alias,
-    configuration,
-    configured_pending,
-    corpus_copy,
-    proxy,
-)
+from gadgetctl.input.testing.configs import alias, configuration, corpus_copy, pending_in, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -177,7 +171,7 @@ def test_unusable_elements_stay_pending_with_a_reason(tmp_path: Path) -> None:
             + joystick("Missing", tmp_path / "nothing-here"),
         )
     )
-    reasons = configured_pending(path)
+    reasons = pending_in(path)
     assert reasons["Empty"] == "port_name is empty"
     assert "axis_buttons: -1" in reasons["Negative"]
     assert "failed to start" in reasons["Missing"] and "nothing-here" in reasons["Missing"]

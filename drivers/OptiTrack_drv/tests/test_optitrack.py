@@ -23,7 +23,7 @@ from OptiTrack_drv.standalone import (
 from gadgetctl.input import DeviceKind
 from gadgetctl.input.testing import frames_until, wait_until
 from gadgetctl.input.testing.commands import run_gadgetctl
-from gadgetctl.input.testing.configs import configuration, configured_pending, free_udp_port, proxy
+from gadgetctl.input.testing.configs import configuration, free_udp_port, pending_in, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
@@ -218,7 +218,7 @@ def test_multicast_through_loopback_reaches_the_receiver() -> None:
 def test_unusable_ports_stay_pending_with_a_reason(tmp_path: Path) -> None:
     path = tmp_path / "bad.jconf"
     path.write_text(configuration("Optitrack_drv", device("Huge", 70000, [1], [])))
-    reasons = configured_pending(path)
+    reasons = pending_in(path)
     assert reasons["Huge"] == "port 70000 is not a UDP port (0 to 65535)"
 
 

@@ -184,7 +184,7 @@ def pending_reasons(manager: InputManager) -> dict[str, str]:
     return {p.name: p.message for p in manager.pending()}
 
 
-def configured_pending(path: Path, options: ManagerOptions | None = None) -> dict[str, str]:
+def pending_in(path: Path, options: ManagerOptions | None = None) -> dict[str, str]:
     """:func:`pending_reasons` once ``path`` is configured in an input manager of its own
     (``retry_interval=None`` unless ``options`` say otherwise), shut down before this returns."""
     from gadgetctl.input.manager import InputManager, ManagerOptions
