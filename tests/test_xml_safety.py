@@ -48,7 +48,7 @@ def test_billion_laughs_is_bounded(tmp_path):
     path = write(tmp_path / "lol.jconf", text)
     start = time.perf_counter()
     found = validate_paths([path]).diagnostics
-    assert time.perf_counter() - start < 2
+    assert time.perf_counter() - start < 10  # expanded, the entities would be 3 GB of text
     assert any(d.code == "XML003" for d in found)
 
 
@@ -67,7 +67,7 @@ def test_huge_file_is_not_read(tmp_path):
     start = time.perf_counter()
     (diag,) = validate_paths([path]).diagnostics
     assert diag.code == "XML004"
-    assert time.perf_counter() - start < 1
+    assert time.perf_counter() - start < 5  # a hang guard; the memory bound below is the test
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 50 * 1024  # KiB
 
 
