@@ -8,6 +8,7 @@ import subprocess
 import sys
 import textwrap
 import time
+from collections import Counter
 
 import pytest
 
@@ -289,8 +290,12 @@ def test_killed_writer_leaves_a_readable_recording(tmp_path, signum, returncode,
     assert len(recording.problems) <= 1 and all(p.severity == "warning" for p in recording.problems)
     written = [r for r in records if isinstance(r, SampleRecord)]
     assert len(written) >= 4000
-    stamps = {r.timestamp for r in written}
-    assert len(stamps) * 2 == len(written)  # whole records only
+    # whole records only: each sample time has its two records (Wand, Head), once each; but
+    # SIGKILL can end a large write anywhere, so the newest time may have lost its second one
+    per_stamp = Counter(r.timestamp for r in written)
+    newest = max(per_stamp)
+    assert all(n == 2 for t, n in per_stamp.items() if t != newest), per_stamp.most_common(3)
+    assert per_stamp[newest] in (1, 2) and (per_stamp[newest] == 2 or signum == signal.SIGKILL)
     ends = [r for r in records if isinstance(r, EndRecord)]
     if reason is None:
         assert ends == []
