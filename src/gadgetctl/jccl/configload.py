@@ -39,9 +39,11 @@ class ElementReader:
 
     def __init__(self, doc: XmlDocument) -> None:
         self.doc = doc
-        # Property tags of a name seen so far on a line, over the whole document: on a file
-        # written on one line, the n-th <device> of the line is the n-th of the document.
-        self._on_line: dict[tuple[int, str], int] = {}
+        # Property tags of each name seen so far on the current line (elements are read in
+        # document order, so lines only grow): on a file written on one line, the n-th
+        # <device> of the line is the n-th of the document.
+        self._line: int | None = None
+        self._on_line: dict[str, int] = {}
 
     def location(self, node: etree._Element) -> SourceLocation:
         return SourceLocation(self.doc, node)
@@ -74,8 +76,11 @@ class ElementReader:
             else:
                 text = child.text or ""
             line = child.sourceline
-            index = on_line.get((line, prop), 0)
-            on_line[(line, prop)] = index + 1
+            if line != self._line:
+                self._line = line
+                on_line = self._on_line = {}
+            index = on_line.get(prop, 0)
+            on_line[prop] = index + 1
             value = PropertyValue(text=text, location=TagLocation(doc, line, prop, index))
             if embedded is not None:
                 value.element = self.read(embedded, element, prop)

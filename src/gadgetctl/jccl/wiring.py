@@ -296,6 +296,7 @@ class Wiring:
         waiting: list[
             tuple[ConfigElement, str, list[tuple[PointerValue, ConfigElement | None, str]]]
         ] = []
+        blocked, reasons_of = self.blocked, self._reasons
         for element in self.effective:
             if element.name in active:
                 continue
@@ -304,9 +305,9 @@ class Wiring:
                 if ours.get(element.name, "") is None
                 else ""
             )
-            blocker = self.blocked.get(id(element))
+            blocker = blocked.get(id(element))
             if blocker is None:
-                reasons = self._reasons(element, active)
+                reasons = reasons_of(element, active)
                 if reasons:  # only missing targets: reported as CFG031
                     waiting.append((element, where, reasons))
             elif blocker[0] != UNHANDLED:
