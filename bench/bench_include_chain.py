@@ -5,14 +5,12 @@ inflate; on an idle machine the wall-clock time is the same figure plus a little
 
 from __future__ import annotations
 
-import resource
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-from common import GADGETCTL, REPO, Report
+from common import GADGETCTL, REPO, Report, command_cpu
 from lxml import etree
 
 sys.path.insert(0, str(REPO / "tests"))
@@ -21,27 +19,13 @@ from test_include_chains import write_include_chain
 LENGTH = 5000
 
 
-def timed(args: list[str]) -> tuple[float, float]:
-    """Wall-clock and CPU seconds (user + system) of one run of a command."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.perf_counter()
-    done = subprocess.run(args, capture_output=True, text=True)
-    wall = time.perf_counter() - start
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    if done.returncode != 0:
-        sys.exit(
-            f"{' '.join(args)} failed ({done.returncode}): {done.stderr or done.stdout[-500:]}"
-        )
-    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-
-
 with tempfile.TemporaryDirectory() as tmp:
     first = write_include_chain(Path(tmp), LENGTH)
     files = sorted(Path(tmp).glob("*.jconf"))
     report = Report()
     print(f"include chain of {LENGTH} files")
-    timed([*GADGETCTL, "validate", str(first)])  # warm the file cache
-    runs = [timed([*GADGETCTL, "validate", str(first)]) for _ in range(3)]
+    command_cpu([*GADGETCTL, "validate", str(first)])  # warm the file cache
+    runs = [command_cpu([*GADGETCTL, "validate", str(first)]) for _ in range(3)]
     wall = sorted(r[0] for r in runs)[1]
     cpu = sorted(r[1] for r in runs)[1]
     start = time.perf_counter()
@@ -49,7 +33,7 @@ with tempfile.TemporaryDirectory() as tmp:
     for path in files:
         etree.parse(str(path), parser)
     parse = time.perf_counter() - start
-    startup = sorted(timed([*GADGETCTL, "--version"])[0] for _ in range(3))[1]
+    startup = sorted(command_cpu([*GADGETCTL, "--version"])[0] for _ in range(3))[1]
     report.figure("validate the chain (wall clock, median of 3)", wall, "s")
     report.figure("validate the chain (CPU time, user + system)", cpu, "s", target=2)
     report.figure("lxml parse of the same files (baseline)", parse, "s")

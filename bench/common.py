@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import resource
 import shutil
 import statistics
 import subprocess
@@ -60,3 +61,16 @@ class Report:
 
     def exit(self) -> None:
         sys.exit(0 if self.ok else 1)
+
+
+def command_cpu(args: list[str], ok: tuple[int, ...] = (0,)) -> tuple[float, float]:
+    """Wall-clock and CPU seconds (user + system) of one run of a command; exits the benchmark
+    when the command ends with a status outside ``ok`` or reports an internal error."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    done = subprocess.run(args, capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode not in ok or "internal error" in done.stderr:
+        sys.exit(f"{' '.join(args)} failed ({done.returncode}): {(done.stderr or done.stdout)[-500:]}")
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
