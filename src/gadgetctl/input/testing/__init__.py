@@ -137,3 +137,23 @@ def resumes_within(
     )
     assert time.monotonic() - back < within
     assert manager.status(name).state == "running"
+
+
+def faults_then_resumes(
+    manager: InputManager,
+    name: str,
+    emulator: Any,
+    restart: Callable[[], object],
+    delivered: Callable[[], int],
+    *,
+    step: Callable[[], object] | None = None,
+    more: int = 2,
+    fault_timeout: float = 3.0,
+) -> None:
+    """A lost line and its return: the emulator hangs up and device ``name`` faults (and
+    counts the fault); once ``restart()`` brings a new emulator up behind the same link,
+    :func:`resumes_within` the usual 2 s."""
+    hangs_up(manager, name, emulator, fault_timeout=fault_timeout, step=step)
+    assert manager.status(name).stats.faults >= 1
+    emulator.stop()
+    resumes_within(manager, name, restart, delivered, more=more, step=step)
