@@ -422,14 +422,28 @@ def breakdown(
     manager, configuration = InputManager.from_files([config])
     service = ServeService(manager, configuration, ServeOptions(port=0))
     service.prepare()
-    rows: list[list[float]] = []  # frame start, gathered, oldest and newest sample, frame end
+    # frame start, gathered, oldest and newest sample, this hook's own time, frame end
+    rows: list[list[float]] = []
     feed_devices: list[str] = []
 
     def gathered(session, moment: float) -> None:  # runs first: after update and gathering
         done = now()
         oldest = newest = None
+        # devices whose frame is a window of their group's shared arrays: read there, as the
+        # feed does (asking per device would make every store's frame, which serve does not)
+        grouped: set[str] = set()
+        for group in getattr(session.gathered, "groups", ()):
+            windows = group.windows
+            grouped.update(group.names)
+            for slot in group.slots[windows.fresh[group.slots]].tolist():
+                stamps = windows.arrays[slot][0]
+                t0 = float(stamps[windows.starts[slot]])
+                t1 = float(stamps[windows.stops[slot] - 1])
+                oldest = t0 if oldest is None else min(oldest, t0)
+                newest = t1 if newest is None else max(newest, t1)
         for name in feed_devices:
-            frame = session.frame_samples(name).get(DeviceKind.POSITION)
+            frames = session.gathered.get(name) if name in grouped else session.frame_samples(name)
+            frame = frames.get(DeviceKind.POSITION) if frames else None
             if frame:
                 first, last = frame.chunks[0], frame.chunks[-1]
                 t0 = first.timestamp if hasattr(first, "timestamp") else float(first.timestamps[0])
@@ -437,7 +451,7 @@ def breakdown(
                 oldest = t0 if oldest is None else min(oldest, t0)
                 newest = t1 if newest is None else max(newest, t1)
         if oldest is not None:
-            rows.append([moment, done, oldest, newest])
+            rows.append([moment, done, oldest, newest, now() - done])
 
     service.session.add_consumer(gathered)
     port = service.listen()
@@ -459,6 +473,7 @@ def breakdown(
             if rows and rows[-1][0] == frame.timestamp:
                 rows[-1].append(now())
         frame_cpu, wall = time.thread_time() - cpu0, time.perf_counter() - wall0
+        frame_cpu -= sum(row[4] for row in rows)  # the measuring hook's own time
         outcomes = [results.get(timeout=seconds + 60) for _ in procs]
         for p in procs:
             p.join(30)
@@ -466,8 +481,9 @@ def breakdown(
     finally:
         service.close()
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    table = np.array([row for row in rows[len(rows) // 10 :] if len(row) == 5])
-    start, done, oldest, newest, end = table.T
+    table = np.array([row for row in rows[len(rows) // 10 :] if len(row) == 6])
+    start, done, oldest, newest, spent, end = table.T
+    end = end - spent  # without the measuring hook's own time
     latency = np.concatenate([o["latency"] for o in outcomes]) * 1000
 
     def ms(values, label: str) -> None:

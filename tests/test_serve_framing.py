@@ -191,3 +191,70 @@ def test_windows_of_arrays_computed_ahead_give_the_bytes_of_their_batches():
         assert windowed.sent[-1] == batched.sent[-1], f"frame {frame}"
     assert outlets[0].messages == outlets[1].messages
     assert FRAME_AHEAD < 700  # the stretches did run out within the first block
+
+
+def test_shared_windows_give_the_bytes_of_their_batches():
+    """A frame group's shared windows (every slot's window at once) frame to the same bytes
+    as the same samples handed over as plain batches: across rows running out, new arrays
+    (generations), windows of several samples, several sensors, a slot not in the frame,
+    and a slot whose arrays are not float64 (framed with the frame's other trackers)."""
+    from gadgetctl.input.kinds import DeviceKind
+    from gadgetctl.input.samples import SampleStore, SharedWindows
+    from gadgetctl.serve.catalog import Role, ServedElement
+    from gadgetctl.serve.outlet import FRAME_AHEAD, VrpnOutlet
+
+    rng = np.random.default_rng(11)
+
+    def block(n: int, sensors: int, dtype=np.float64):
+        matrices = np.tile(np.eye(4), (n, sensors, 1, 1))
+        angle = rng.uniform(0, np.pi, size=(n, sensors))
+        matrices[..., 0, 0] = matrices[..., 1, 1] = np.cos(angle)
+        matrices[..., 0, 1], matrices[..., 1, 0] = -np.sin(angle), np.sin(angle)
+        matrices[..., :3, 3] = rng.normal(size=(n, sensors, 3))
+        return 50.0 + np.arange(n) * 0.001, ((DeviceKind.POSITION, matrices.astype(dtype)),)
+
+    names = ["A", "B", "C", "D"]
+    sensors = {"A": 1, "B": 3, "C": 1, "D": 2}
+    dtypes = {"D": np.float32}
+    catalog = [ServedElement(n, n, "device", "waveform_device", (Role.TRACKER,)) for n in names]
+    shared_server, batched_server = _Broadcasts(), _Broadcasts()
+    shared_outlet, batched_outlet = (
+        VrpnOutlet(shared_server, catalog),
+        VrpnOutlet(batched_server, catalog),
+    )
+    windows = SharedWindows([SampleStore([DeviceKind.POSITION]) for _ in names])
+    arrays = {n: block(900, sensors[n], dtypes.get(n, np.float64)) for n in names}
+    position = dict.fromkeys(names, 0)
+    offset = 1.7e9
+    for frame in range(300):
+        shared_outlet.audience = batched_outlet.audience = True
+        slots, starts, stops, plain = [], [], [], []
+        for slot, name in enumerate(names):
+            if name == "C" and frame % 5 == 0:
+                continue  # not in this frame
+            times, items = arrays[name]
+            start = position[name]
+            stop = min(len(times), start + 1 + (frame + slot) % 3)
+            windows.set_arrays(slot, times, items)
+            slots.append(slot)
+            starts.append(start)
+            stops.append(stop)
+            matrices = items[0][1]
+            plain.append((name, times[start:stop], np.asarray(matrices[start:stop], np.float64)))
+            if stop == len(times):
+                arrays[name] = block(900, sensors[name], dtypes.get(name, np.float64))
+                position[name] = 0
+            else:
+                position[name] = stop
+        picked = np.array(slots)
+        windows.publish(float(frame), picked, np.array(starts), np.array(stops))
+        shared_outlet.tracker_shared(
+            windows, picked, np.array([names[s] for s in slots], dtype=object), offset
+        )
+        batched_outlet.trackers(plain, offset)
+        shared_outlet.end_frame()
+        batched_outlet.end_frame()
+        # the same bytes (the float32 slot, last, is framed with the frame's other trackers)
+        assert shared_server.sent[-1] == batched_server.sent[-1], f"frame {frame}"
+    assert shared_outlet.messages == batched_outlet.messages
+    assert FRAME_AHEAD < 900 * 3  # rows ran out within an array

@@ -591,8 +591,7 @@ class InputManager:
         frame = self.frame
         order = self._frame_order
         if order is None:  # sorted once per change of what is configured, not every frame
-            order = self._frame_order = (_frame_groups([self._device_objects[n] for n in sorted(self._device_objects)]),
-                                         [self._proxies[n] for n in sorted(self._proxies)])
+            order = self.arrangement
         for device in order[0]:
             if type(device) is tuple:  # devices updated together (Input.FRAME_GROUP)
                 device[0].update_frame_group(device[1], frame)
@@ -667,6 +666,15 @@ class InputManager:
         self._scheduler.shutdown()
 
     # -- lookups ----------------------------------------------------------------------------
+
+    @property
+    def arrangement(self) -> object:
+        """An object that is replaced whenever the devices or proxies updated each frame
+        change (a consumer that planned per device knows its plan holds while it is the same)."""
+        if self._frame_order is None:
+            self._frame_order = (_frame_groups([self._device_objects[n] for n in sorted(self._device_objects)]),
+                                 [self._proxies[n] for n in sorted(self._proxies)])
+        return self._frame_order
 
     @property
     def devices(self) -> Mapping[str, Input]:

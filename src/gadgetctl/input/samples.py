@@ -10,14 +10,24 @@ latched when a frame brings nothing new).
 
 At most ``cap`` samples per kind are kept between two swaps; older ones are dropped and
 counted, so a stalled frame loop costs memory for one frame at most.
+
+Devices updated together (a frame group) may share one :class:`SharedWindows`: in the usual
+frame each device's samples are one window of arrays it computed ahead, and the group writes
+every device's window bounds into the shared arrays at once instead of swapping each store.
+A store then makes its frame from its slot when it is first read or written (so proxies,
+recorders and statistics see exactly what a swap would have given them), and consumers of
+every device (the monitor session, `serve`) read the shared arrays without touching the
+stores.
 """
 
 from __future__ import annotations
 
 import threading
 from collections import deque
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any, NamedTuple
+
+import numpy as np
 
 from gadgetctl.input.clock import now
 from gadgetctl.input.kinds import DeviceKind
@@ -178,6 +188,56 @@ def _window_frame(timestamps: Any, values: Any, start: int, stop: int) -> FrameS
 _new = object.__new__
 
 
+class SharedWindows:
+    """The frames of a frame group's devices whose usual frame is one window of arrays they
+    computed ahead, side by side (one slot per device).
+
+    Each group frame (:meth:`publish`) increments ``serial``; a slot marked ``fresh`` then has
+    as its current frame samples ``starts[slot]`` .. ``stops[slot] - 1`` of
+    ``arrays[slot]`` (``(timestamps, ((kind, values), ...))``), swapped at ``moment``; the
+    frame of a slot that is not fresh is in its store as usual. ``delivered`` counts each
+    slot's samples published this way (the stores' totals). A group changes a slot's
+    ``arrays`` only after its store took its pending window (:meth:`SampleStore.sync`).
+    """
+
+    def __init__(self, stores: Sequence[SampleStore]) -> None:
+        count = len(stores)
+        self.serial = 0
+        self.moment = 0.0
+        self.fresh = np.zeros(count, dtype=bool)
+        self.starts = np.zeros(count, dtype=np.int64)
+        self.stops = np.zeros(count, dtype=np.int64)
+        self.delivered = np.zeros(count, dtype=np.int64)
+        #: Per slot, how many times its arrays were replaced (a consumer that converted a
+        #: stretch of them knows it from this number).
+        self.generation = np.zeros(count, dtype=np.int64)
+        self.arrays: list[tuple[Any, tuple[tuple[DeviceKind, Any], ...]] | None] = [None] * count
+        self.stores = tuple(stores)
+        for slot, store in enumerate(self.stores):
+            store.share(self, slot)
+
+    def publish(self, moment: float, slots: np.ndarray, starts: np.ndarray, stops: np.ndarray) -> None:
+        """A group frame at ``moment``: ``slots`` get the windows ``starts`` .. ``stops``
+        (each at least one sample, within the slot's arrays); every other slot is not fresh
+        (its device swapped its own store this frame, before this call)."""
+        self.serial += 1
+        self.moment = moment
+        fresh = self.fresh
+        fresh[:] = False
+        fresh[slots] = True
+        self.starts[slots] = starts
+        self.stops[slots] = stops
+        self.delivered[slots] += stops - starts
+
+    def set_arrays(self, slot: int, timestamps: Any, items: tuple[tuple[DeviceKind, Any], ...]) -> None:
+        """The arrays slot ``slot``'s windows are cut from from now on (its store has taken
+        its pending window)."""
+        current = self.arrays[slot]
+        if current is None or current[0] is not timestamps or current[1] is not items:
+            self.arrays[slot] = (timestamps, items)
+            self.generation[slot] += 1
+
+
 class _Channel:
     """The buffers of one kind of data."""
 
@@ -218,11 +278,70 @@ class SampleStore:
         self._lock = threading.Lock()
         self._channels: dict[DeviceKind, _Channel] = {DeviceKind(k): _Channel() for k in kinds}
         self._pairs = tuple(self._channels.items())
-        self.swapped_at: float | None = None  # when the current frame's samples were taken over
+        self._swapped_at: float | None = None
         self._waiting = False  # samples were added since the last swap
-        #: The current frame's samples of each kind that has any (read-only; replaced, never
-        #: changed, by each swap): what a consumer of every sample reads without asking per kind.
-        self.current: Mapping[DeviceKind, FrameSamples] = {}
+        self._current: Mapping[DeviceKind, FrameSamples] = {}
+        # a frame group's shared windows this store takes its usual frames from (see
+        # SharedWindows), its slot there, the serial taken last and the samples counted
+        self._shared: SharedWindows | None = None
+        self._slot = 0
+        self._synced = 0
+        self._delivered = 0
+
+    @property
+    def swapped_at(self) -> float | None:
+        """When the current frame's samples were taken over."""
+        if self._shared is not None and self._shared.serial != self._synced:
+            self.sync()
+        return self._swapped_at
+
+    @property
+    def current(self) -> Mapping[DeviceKind, FrameSamples]:
+        """The current frame's samples of each kind that has any (read-only; replaced, never
+        changed, by each swap): what a consumer of every sample reads without asking per kind."""
+        if self._shared is not None and self._shared.serial != self._synced:
+            self.sync()
+        return self._current
+
+    # -- shared windows ---------------------------------------------------------------
+
+    @property
+    def shared(self) -> tuple[SharedWindows, int] | None:
+        """The shared windows this store takes its usual frames from, and its slot there."""
+        return None if self._shared is None else (self._shared, self._slot)
+
+    def share(self, shared: SharedWindows | None, slot: int = 0) -> None:
+        """Take usual frames from ``shared`` at ``slot`` from now on (None: no longer); what
+        the previous one left pending is taken first."""
+        self.sync()
+        with self._lock:
+            self._shared, self._slot = shared, slot
+            self._synced = shared.serial if shared is not None else 0
+            self._delivered = int(shared.delivered[slot]) if shared is not None else 0
+
+    def sync(self) -> None:
+        """Make the shared windows' latest frame of this store's slot current (when fresh)
+        and count the samples published there; a no-op when nothing is pending."""
+        shared = self._shared
+        if shared is None or shared.serial == self._synced:
+            return
+        with self._lock:
+            serial = shared.serial
+            if serial == self._synced:
+                return
+            self._synced = serial
+            slot = self._slot
+            delivered = int(shared.delivered[slot])
+            counted, self._delivered = delivered - self._delivered, delivered
+            if not shared.fresh[slot]:
+                return
+            timestamps, items = shared.arrays[slot]
+            channels = self._channels
+            if counted:
+                for kind, _ in items:
+                    channels[kind].total += counted
+            self._window_frames(timestamps, items, int(shared.starts[slot]), int(shared.stops[slot]))
+            self._swapped_at = shared.moment
 
     @property
     def kinds(self) -> tuple[DeviceKind, ...]:
@@ -239,6 +358,8 @@ class SampleStore:
     def add(self, kind: DeviceKind, timestamp: float, values: Any) -> None:
         """Append one sample."""
         channel = self._channel(kind)
+        if self._shared is not None:
+            self.sync()
         with self._lock:
             self._waiting = True
             channel.ready.append(Sample(timestamp, values))
@@ -265,6 +386,8 @@ class SampleStore:
         except KeyError as err:
             raise KeyError(f"this device provides no {err.args[0]} data") from None
         cap = self.cap
+        if self._shared is not None:
+            self.sync()
         with self._lock:
             self._waiting = True
             for channel, batch in chunks:
@@ -278,6 +401,8 @@ class SampleStore:
         """Append samples ``start`` .. ``stop - 1`` of arrays computed ahead (``timestamps``
         and, per kind, ``values`` of shape (n, units, ...)) without slicing them now."""
         if stop > start:
+            if self._shared is not None:
+                self.sync()
             with self._lock:
                 self._add_slices(timestamps, values, start, stop)
 
@@ -304,10 +429,12 @@ class SampleStore:
     def swap(self, moment: float | None = None) -> None:
         """Make everything added since the previous swap the current frame's samples;
         ``moment``: the swap's time when the caller has it."""
-        self.swapped_at = now() if moment is None else moment
+        if self._shared is not None:
+            self.sync()
+        self._swapped_at = now() if moment is None else moment
         with self._lock:
             taken = self._take()
-        self._current(taken)
+        self._make_current(taken)
 
     def add_slices_and_swap(self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]],
                             start: int, stop: int, moment: float | None = None) -> None:
@@ -316,29 +443,39 @@ class SampleStore:
 
         When nothing else waits (the usual frame of a device that publishes only here), each
         kind's frame is its one window, made without the general bookkeeping."""
-        self.swapped_at = now() if moment is None else moment
+        if self._shared is not None:
+            self.sync()
+        self._swapped_at = now() if moment is None else moment
         size = stop - start
         with self._lock:
             if not self._waiting and 0 < size <= self.cap:
-                current = {}
                 channels = self._channels
-                for kind, data in values:
-                    channel = channels[kind]
-                    channel.total += size
-                    channel.frame = current[kind] = _window_frame(timestamps, data, start, stop)
-                    channel.latest = None  # the frame's newest, computed when asked
-                for kind in self.current:  # kinds that had samples and have none now
-                    if kind not in current:
-                        channel = channels[kind]
-                        if channel.latest is None:  # keep the newest latched
-                            channel.latest = channel.frame.newest
-                        channel.frame = EMPTY_FRAME
-                self.current = current
+                for kind, _ in values:
+                    channels[kind].total += size
+                self._window_frames(timestamps, values, start, stop)
                 return
             if size > 0:
                 self._add_slices(timestamps, values, start, stop)
             taken = self._take()
-        self._current(taken)
+        self._make_current(taken)
+
+    def _window_frames(self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]], start: int,
+                       stop: int) -> None:
+        """Make each kind's window ``start`` .. ``stop - 1`` the current frame (nothing else
+        waits; the caller holds the lock and counted the samples)."""
+        current = {}
+        channels = self._channels
+        for kind, data in values:
+            channel = channels[kind]
+            channel.frame = current[kind] = _window_frame(timestamps, data, start, stop)
+            channel.latest = None  # the frame's newest, computed when asked
+        for kind in self._current:  # kinds that had samples and have none now
+            if kind not in current:
+                channel = channels[kind]
+                if channel.latest is None:  # keep the newest latched
+                    channel.latest = channel.frame.newest
+                channel.frame = EMPTY_FRAME
+        self._current = current
 
     def _take(self) -> list[tuple[DeviceKind, _Channel, deque[Chunk], int]]:
         self._waiting = False
@@ -354,18 +491,22 @@ class SampleStore:
                 channel.frame = EMPTY_FRAME
         return taken
 
-    def _current(self, taken: list[tuple[DeviceKind, _Channel, deque[Chunk], int]]) -> None:
+    def _make_current(self, taken: list[tuple[DeviceKind, _Channel, deque[Chunk], int]]) -> None:
         current = {}
         for kind, channel, chunks, count in taken:
             channel.frame = current[kind] = FrameSamples(chunks, count)
             channel.latest = None  # the frame's newest, computed when asked
-        self.current = current
+        self._current = current
 
     def frame(self, kind: DeviceKind) -> FrameSamples:
+        if self._shared is not None:
+            self.sync()
         return self._channel(kind).frame
 
     def latest(self, kind: DeviceKind) -> Sample | None:
         """The newest sample ever received (it stays when a frame brings nothing new)."""
+        if self._shared is not None:
+            self.sync()
         channel = self._channel(kind)
         if channel.frame.count:
             if channel.latest is None:
@@ -375,6 +516,8 @@ class SampleStore:
 
     def total(self, kind: DeviceKind | None = None) -> int:
         """Samples added so far (dropped ones included)."""
+        if self._shared is not None:
+            self.sync()
         if kind is not None:
             return self._channel(kind).total
         return sum(c.total for c in self._channels.values())

@@ -12,8 +12,16 @@ whose time has not come), by whichever comes first: each frame publishes, just b
 swap, every sample that has come due (so a frame carries samples up to its own instant,
 however fast frames run), and the shared scheduler publishes what is due when no frame did
 for ``FRAME_GRACE`` seconds (so a stalled frame loop still finds every sample, or the
-store's count of those dropped over its cap). While frames run, the scheduler thus wakes a
-device about every ``FRAME_GRACE`` rather than every ``sample_interval``.
+store's count of those dropped over its cap). While frames run, the scheduler leaves the
+devices alone: it looks in once per ``FRAME_GRACE`` (every device at the same instants, one
+pass) and finds the frames publishing.
+
+The input manager updates the waveform devices of a frame together (:attr:`FRAME_GROUP`):
+one clock reading, then, with numpy over all of them at once, each device's window of its
+block that came due; those windows go to the group's
+:class:`~gadgetctl.input.samples.SharedWindows` (each store makes its frame from it when
+read). Only a device whose frame is not that usual one (its block runs out, no sample came
+due, it is not running, its block has events) is updated alone.
 """
 
 from __future__ import annotations
@@ -32,6 +40,7 @@ from gadgetctl.input.device import DeviceState, SamplingMode
 from gadgetctl.input.devicetypes import Analog, Command, Digital, Hat, HatState, Position, String
 from gadgetctl.input.errors import DeviceConfigError
 from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.samples import SharedWindows
 from gadgetctl.jccl.access import ElementAccess, read_float
 
 MAX_RATE = 100_000.0
@@ -41,6 +50,9 @@ BLOCK_SECONDS = 0.5
 #: scheduler thread for the GIL; a frame publishes, and counts over the cap, what came due.
 FRAME_GRACE = 0.25
 _RUNNING = DeviceState.RUNNING
+#: Held while a waveform device publishes (its frame, the scheduler's stand-in) and while a
+#: frame group is updated: one lock for all of them, so that a group frame takes it once.
+_PUBLISHING = threading.Lock()
 HAT_SEQUENCE = (HatState.CENTERED, HatState.UP, HatState.RIGHT, HatState.DOWN, HatState.LEFT)
 
 
@@ -118,12 +130,28 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         self.center = (0.0, 1.5, 0.0)
         self.event_period = 0.0
         self.t0 = 0.0
-        self.next_index = 0
+        self._group: _FrameGroup | None = None  # the frame group updating it, once it runs
+        self._slot = 0  # its place in the group's arrays
+        self._next = 0
         self._block: Block | None = None
         self._noise_streams: dict[int, tuple[np.random.Generator, int]] = {}
-        # the scheduler's sample() and the frame's update_data() publish one at a time
-        self._publishing = threading.Lock()
+        # the scheduler's sample() and the frames publish one at a time
+        self._publishing = _PUBLISHING
         self._frame_published = -math.inf  # when a frame last published (input-manager clock)
+
+    @property
+    def next_index(self) -> int:
+        """The number of the next sample to publish (kept in the group's arrays while grouped)."""
+        group = self._group
+        return int(group.next[self._slot]) if group is not None else self._next
+
+    @next_index.setter
+    def next_index(self, value: int) -> None:
+        group = self._group
+        if group is not None:
+            group.next[self._slot] = value
+        else:
+            self._next = value
 
     # -- configuration ------------------------------------------------------------------
 
@@ -155,50 +183,73 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
             self.next_index = 0
             self._block = None
             self._frame_published = -math.inf
+            self._mirror()
+
+    def _last_frame(self) -> float:
+        """When a frame last published this device's samples."""
+        group = self._group
+        return self._frame_published if group is None else max(self._frame_published, group.moment)
 
     def next_sample_due(self) -> float:
-        # while frames publish, the scheduler only stands in when they stop
-        return max(self.t0 + self.next_index / self.rate, self._frame_published + FRAME_GRACE)
+        # while frames publish, the scheduler only stands in when they stop; it looks again
+        # at instants on a grid shared by every device (one scheduler pass for all of them)
+        due = self.t0 + self.next_index / self.rate
+        last = self._last_frame()
+        if last == -math.inf:
+            return due
+        return max(due, (math.floor(last / FRAME_GRACE) + 2) * FRAME_GRACE)
 
     def sample(self) -> None:
         with self._publishing:
-            self._publish_due(now())
+            moment = now()
+            if moment - self._last_frame() < FRAME_GRACE:
+                return  # frames publish
+            self._publish_due(moment)
+            self._mirror()
 
     FRAME_GROUP = True
 
     @classmethod
     def update_frame_group(cls, devices: Sequence[WaveformDevice], frame: int) -> None:
-        """Every waveform device's frame at one instant: one clock reading for all of them,
-        and for each the window of its block that came due, published and swapped."""
-        moment = now()
-        for device in devices:
-            if device._updated_frame == frame:
-                continue
-            device._updated_frame = frame
-            try:
-                device._update_at(moment)
-            except Exception as err:  # a faulty device must not stop the frame loop
-                device.frame_fault(err)
+        """Every waveform device's frame at one instant (see the module documentation)."""
+        if not devices:
+            return
+        group = devices[0]._group
+        if group is None or group.devices is not devices:
+            group = _FrameGroup(devices)
+        group.update(frame)
+
+    def update_for_frame(self, frame: int) -> None:
+        group = self._group
+        if group is not None and group.frame == frame:
+            return  # its group updated it this frame
+        super().update_for_frame(frame)
 
     def update_data(self) -> None:
         """Publish what has come due, then swap: the frame gets samples up to its instant."""
-        self._update_at(now())
+        with self._publishing:
+            self._update_at(now())
+            self._mirror()
+
+    def _mirror(self) -> None:
+        if self._group is not None:
+            self._group.mirror(self._slot)
 
     def _update_at(self, moment: float) -> None:
+        """The frame of this device alone (the caller holds the publishing lock)."""
         if self.state is _RUNNING:
-            with self._publishing:
-                self._frame_published = moment
-                end = int((moment - self.t0) * self.rate) + 1  # samples whose time has come
-                first = self.next_index
-                block = self._block
-                if block is not None and block.start <= first < end <= block.end and not block.events:
-                    # the usual frame: one more window of the current block, and the swap
-                    self.next_index = end
-                    self.store.add_slices_and_swap(
-                        block.timestamps, block.items, first - block.start, end - block.start, moment
-                    )
-                    return
-                self._publish_due(moment)
+            self._frame_published = moment
+            end = int((moment - self.t0) * self.rate) + 1  # samples whose time has come
+            first = self.next_index
+            block = self._block
+            if block is not None and block.start <= first < end <= block.end and not block.events:
+                # the usual frame: one more window of the current block, and the swap
+                self.next_index = end
+                self.store.add_slices_and_swap(
+                    block.timestamps, block.items, first - block.start, end - block.start, moment
+                )
+                return
+            self._publish_due(moment)
         self.store.swap(moment)
 
     def _publish_due(self, moment: float) -> None:
@@ -290,3 +341,77 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
             x, y, z = np.full_like(t, cx), np.full_like(t, cy), np.full_like(t, cz)
         matrices[:, 0, 3], matrices[:, 1, 3], matrices[:, 2, 3] = x, y, z
         return matrices
+
+
+class _FrameGroup:
+    """The waveform devices a manager updates together, their sampling state side by side in
+    arrays (the devices' own ``next_index`` lives here while they belong to it), and the
+    :class:`SharedWindows` their usual frames go to.
+
+    A device's ``t0``, ``rate`` and current block are mirrored here (:meth:`mirror`) whenever
+    they change outside the usual frame (its own update, the scheduler's stand-in, a
+    restart): the usual frame then needs no Python per device."""
+
+    def __init__(self, devices: Sequence[WaveformDevice]) -> None:
+        with _PUBLISHING:
+            self.devices = devices
+            count = len(devices)
+            self.next = np.array([d.next_index for d in devices], dtype=np.int64)
+            self.t0 = np.zeros(count)
+            self.rate = np.ones(count)
+            self.first = np.zeros(count, dtype=np.int64)  # the current block's first sample
+            self.last = np.zeros(count, dtype=np.int64)  # one past its last
+            self.cap = np.array([d.store.cap for d in devices], dtype=np.int64)
+            self.usual = np.zeros(count, dtype=bool)  # the usual frame may be taken
+            self.moment = -math.inf  # when the group last published
+            self.frame = -1  # the frame it last updated
+            self.windows = SharedWindows([d.store for d in devices])
+            for slot, device in enumerate(devices):
+                device._group, device._slot = self, slot
+                self.mirror(slot)
+
+    def mirror(self, slot: int) -> None:
+        """Take device ``slot``'s sampling state (the caller holds the publishing lock)."""
+        device = self.devices[slot]
+        store = device.store
+        store.sync()  # its pending window is taken before its arrays change
+        self.t0[slot] = device.t0
+        self.rate[slot] = device.rate
+        block = device._block
+        if block is None or block.events or store._waiting:
+            self.usual[slot] = False
+            return
+        self.first[slot], self.last[slot] = block.start, block.end
+        self.windows.set_arrays(slot, block.timestamps, block.items)
+        self.usual[slot] = True
+
+    def update(self, frame: int) -> None:
+        """One frame of every device: with numpy for all of them, the samples that came due
+        and whether they are one window of the device's current block (the usual frame);
+        the others are updated alone, a device that raises is faulted alone."""
+        devices = self.devices
+        with _PUBLISHING:
+            moment = now()
+            ends = ((moment - self.t0) * self.rate).astype(np.int64) + 1  # samples whose time has come
+            nexts = self.next
+            usual = self.usual & (self.first <= nexts) & (nexts < ends) & (ends <= self.last)
+            usual &= ends - nexts <= self.cap
+            usual &= np.fromiter((d.state is _RUNNING and d._updated_frame != frame for d in devices),
+                                 dtype=bool, count=len(devices))
+            if not usual.all():
+                for slot in np.flatnonzero(~usual).tolist():
+                    device = devices[slot]
+                    if device._updated_frame == frame:
+                        continue
+                    device._updated_frame = frame
+                    try:
+                        device._update_at(moment)
+                    except Exception as err:  # a faulty device must not stop the frame loop
+                        device.frame_fault(err)
+                    self.mirror(slot)
+            slots = np.flatnonzero(usual)
+            first = self.first[slots]
+            self.windows.publish(moment, slots, nexts[slots] - first, ends[slots] - first)
+            nexts[slots] = ends[slots]
+            self.moment = moment
+            self.frame = frame

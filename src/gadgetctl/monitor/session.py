@@ -43,7 +43,7 @@ from gadgetctl.input.proxies import (
     PositionProxy,
     Proxy,
 )
-from gadgetctl.input.samples import FrameSamples, Sample
+from gadgetctl.input.samples import FrameSamples, Sample, SharedWindows
 from gadgetctl.input.status import UNKNOWN_TYPE, ElementKind, ElementStatus
 from gadgetctl.jccl.configuration import Configuration
 from gadgetctl.monitor.poses import MATRIX, pose_values
@@ -195,6 +195,75 @@ def _rows(values: Any) -> np.ndarray:
     return array.reshape(len(array), -1) if array.ndim != 2 else array
 
 
+class SharedGroup:
+    """The watched devices of one frame group that share windows (see
+    :class:`~gadgetctl.input.samples.SharedWindows`): their slots and names, in watch order."""
+
+    __slots__ = ("names", "slots", "windows")
+
+    def __init__(self, windows: SharedWindows, slots: list[int], names: list[str]) -> None:
+        self.windows = windows
+        self.slots = np.array(slots, dtype=np.int64)
+        self.names = names
+
+
+class GatheredFrames(Mapping[str, Mapping[DeviceKind, FrameSamples]]):
+    """A frame's samples by device name (:attr:`MonitorSession.gathered`): those gathered per
+    device, and those of the devices whose frame is a window of their group's shared arrays,
+    made per device only when asked. ``groups``: the latter, for a consumer that reads the
+    shared arrays of every device at once (a slot is in this frame when ``fresh``)."""
+
+    __slots__ = ("_own", "_shared", "groups")
+
+    def __init__(self, own: dict[str, Mapping[DeviceKind, FrameSamples]],
+                 shared: Mapping[str, tuple[SharedWindows, int, Input]] = _NOTHING,
+                 groups: Sequence[SharedGroup] = ()) -> None:
+        self._own = own
+        self._shared = shared
+        self.groups = groups
+
+    def __getitem__(self, name: str) -> Mapping[DeviceKind, FrameSamples]:
+        frames = self._own.get(name)
+        if frames is not None:
+            return frames
+        entry = self._shared.get(name)
+        if entry is not None and entry[0].fresh[entry[1]]:
+            return entry[2].store.current
+        raise KeyError(name)
+
+    def get(self, name: str, default: Any = None) -> Any:
+        try:
+            return self[name]
+        except KeyError:
+            return default
+
+    def __contains__(self, name: object) -> bool:
+        return self.get(name) is not None  # type: ignore[arg-type]
+
+    def __iter__(self) -> Iterator[str]:
+        yield from self._own
+        for name, (windows, slot, _) in self._shared.items():
+            if windows.fresh[slot]:
+                yield name
+
+    def __len__(self) -> int:
+        return len(self._own) + sum(1 for w, slot, _ in self._shared.values() if w.fresh[slot])
+
+
+class _GatherPlan:
+    """How a session without statistics gathers: the watched devices read per device, and
+    per frame group sharing windows, the watched members read at once."""
+
+    __slots__ = ("arrangement", "groups", "own", "shared", "watch")
+
+    def __init__(self, arrangement: object, watch: list[str], own: list[str],
+                 shared: dict[str, tuple[SharedWindows, int, Input]], groups: list[SharedGroup]) -> None:
+        self.arrangement, self.watch, self.own, self.shared, self.groups = arrangement, watch, own, shared, groups
+
+
+_NO_GATHERING = GatheredFrames({})
+
+
 class DeviceTrack:
     """What a session keeps about one device between frames."""
 
@@ -206,6 +275,7 @@ class DeviceTrack:
         self.history_length = history
         self.frames: dict[DeviceKind, FrameSamples] = {}
         self.count = 0
+        self.frame_seen = -1  # the manager frame whose samples ``frames`` holds
         self.units: dict[str, int] = {}
         self._dropped_seen = self._dropped_now()
         # a device is new to its manager, and the session started it: a fault before the first
@@ -538,7 +608,8 @@ class MonitorSession:
         self._samples_written = 0
         self._watch: list[str] = []
         self._consumers: list[FrameConsumer] = []
-        self._gathered: Mapping[str, Mapping[DeviceKind, FrameSamples]] = _NOTHING
+        self._gathered: Mapping[str, Mapping[DeviceKind, FrameSamples]] = _NO_GATHERING
+        self._plan: _GatherPlan | None = None
 
     # -- setting up ---------------------------------------------------------------------
 
@@ -769,26 +840,90 @@ class MonitorSession:
         self.frame_timestamp = moment
         if len(manager.devices) + len(manager.proxies) != configured or not self._watch:
             self._watch = self._names_with_targets()
-        samples = 0
-        tracks = self._tracks
-        device_named = manager.devices.get
-        self._gathered = gathered = {}
-        for name in self._watch:
-            device = device_named(name)
-            if device is None:
-                continue
-            track = tracks.get(name)
-            if track is None or track.device is not device:
-                track = tracks[name] = DeviceTrack(name, device, self.history, self.statistics)
-            samples += track.update()
-            if track.frames:
-                gathered[name] = track.frames
+        gathered: dict[str, Mapping[DeviceKind, FrameSamples]] = {}
+        if self.statistics or self._sinks:
+            samples = self._gather(self._watch, gathered)
+            self._gathered = GatheredFrames(gathered)
+        else:  # gathering only: frame groups' shared windows are read at once
+            plan = self._gather_plan()
+            samples = self._gather(plan.own, gathered)
+            for group in plan.groups:
+                windows, slots = group.windows, group.slots
+                fresh = windows.fresh[slots]
+                sizes = windows.stops[slots] - windows.starts[slots]
+                if fresh.all():
+                    samples += int(sizes.sum())
+                else:
+                    samples += int(sizes[fresh].sum())
+                    self._gather([group.names[i] for i in np.flatnonzero(~fresh).tolist()], gathered)
+            self._gathered = GatheredFrames(gathered, plan.shared, plan.groups)
         if self.source is not None:
             for marker in self.source.drain_markers():
                 self._note_marker(marker)
         for consumer in self._consumers:
             consumer(self, moment)
         return Frame(self.frame, moment, moment - self.started_at, samples)
+
+    def _track(self, name: str, device: Input) -> DeviceTrack:
+        track = self._tracks.get(name)
+        if track is None or track.device is not device:
+            track = self._tracks[name] = DeviceTrack(name, device, self.history, self.statistics)
+        return track
+
+    def _gather(self, names: Iterable[str], gathered: dict[str, Mapping[DeviceKind, FrameSamples]]) -> int:
+        """Update the tracks of ``names`` (watched devices) and put what each delivered this
+        frame in ``gathered``; returns the samples (sampling instants)."""
+        samples = 0
+        device_named = self.manager.devices.get
+        frame = self.frame
+        for name in names:
+            device = device_named(name)
+            if device is None:
+                continue
+            track = self._track(name, device)
+            samples += track.update()
+            track.frame_seen = frame
+            if track.frames:
+                gathered[name] = track.frames
+        return samples
+
+    def _gather_plan(self) -> _GatherPlan:
+        """The plan of :meth:`step` without statistics, made again when the watched names or
+        what the manager updates change."""
+        manager = self.manager
+        arrangement = manager.arrangement
+        plan = self._plan
+        if plan is not None and plan.arrangement is arrangement and plan.watch is self._watch:
+            return plan
+        own: list[str] = []
+        shared: dict[str, tuple[SharedWindows, int, Input]] = {}
+        members: dict[int, tuple[SharedWindows, list[int], list[str]]] = {}
+        for name in self._watch:
+            device = manager.devices.get(name)
+            if device is None:
+                continue
+            self._track(name, device)
+            place = device.store.shared
+            if place is None:
+                own.append(name)
+                continue
+            windows, slot = place
+            shared[name] = (windows, slot, device)
+            entry = members.setdefault(id(windows), (windows, [], []))
+            entry[1].append(slot)
+            entry[2].append(name)
+        groups = [SharedGroup(windows, slots, names) for windows, slots, names in members.values()]
+        self._plan = _GatherPlan(arrangement, self._watch, own, shared, groups)
+        return self._plan
+
+    def _current_track(self, name: str) -> DeviceTrack | None:
+        """The track of ``name`` with this frame's samples (a device gathered from shared
+        windows has its track brought up to date when it is read)."""
+        track = self._tracks.get(name)
+        if track is not None and track.frame_seen != self.frame and not self.statistics:
+            track.update()
+            track.frame_seen = self.frame
+        return track
 
     # -- writing ------------------------------------------------------------------------
 
@@ -871,7 +1006,7 @@ class MonitorSession:
         count = 0
         stream_proxies = bool(self.selectors)
         for name in self._selected:
-            track = self._tracks.get(name)
+            track = self._current_track(name)
             if track is not None and manager.device(name) is track.device:
                 for kind, samples in track.frames.items():
                     text, n = encode_frame(name, kind, samples, track.device, pose)
@@ -900,7 +1035,7 @@ class MonitorSession:
         manager = self.manager
         devices: dict[str, FrameDevice] = {}
         for name in self._selected:
-            track = self._tracks.get(name)
+            track = self._current_track(name)
             if track is not None and manager.device(name) is track.device:
                 values: dict[str, dict[int, object]] = {}
                 store = track.device.store
@@ -1054,7 +1189,7 @@ class MonitorSession:
                            note=manager.vrjuggler_difference(name))
         device = manager.device(name)
         if device is not None:
-            track = self._tracks.get(name)
+            track = self._current_track(name)
             if track is not None and track.device is device:
                 self._fill_from_track(view, track, moment)
                 view.values = track.unit_views()
@@ -1067,7 +1202,7 @@ class MonitorSession:
             return view
         view.target = manager.aliases.get(name) if element == ALIAS else proxy.device_name
         view.unit = proxy.unit if proxy.HAS_UNIT else None
-        track = self._tracks.get(proxy.device_name)
+        track = self._current_track(proxy.device_name)
         live = track is not None and track.device is proxy.device
         if live:
             self._fill_from_track(view, track, moment)

@@ -56,6 +56,18 @@ class BatchOutlet(Outlet, Protocol):
         time (added once for the whole frame, not per batch)."""
 
 
+class SharedOutlet(Protocol):
+    """An outlet that also takes a frame group's tracker windows from its shared arrays."""
+
+    def tracker_shared(
+        self, windows: Any, slots: np.ndarray, senders: np.ndarray, offset: float
+    ) -> None:
+        """The windows of ``slots`` of ``windows`` (a
+        :class:`~gadgetctl.input.samples.SharedWindows`; fresh slots whose arrays hold
+        position data only), served as ``senders``; times on the input manager's clock plus
+        ``offset``."""
+
+
 class WindowOutlet(BatchOutlet, Protocol):
     """An outlet that also takes tracker samples as windows of arrays computed ahead."""
 
@@ -108,6 +120,31 @@ class _ButtonState:
         return result
 
 
+class _GroupPlan:
+    """The served devices of one shared group (see :meth:`ServeFeed._group`): their slots,
+    sender names, and whether each slot's arrays hold position data only (checked again when
+    the arrays change)."""
+
+    def __init__(self, group: Any, picked: list[tuple[int, ServedElement]]) -> None:
+        self.group = group
+        self.entries = [entry for _, entry in picked]
+        self.slots = group.slots[[index for index, _ in picked]]
+        self.senders = np.array([entry.vrpn_name for entry in self.entries], dtype=object)
+        self.generation = np.full(len(picked), -1, dtype=np.int64)
+        self.poses_only = np.zeros(len(picked), dtype=bool)
+
+    def recheck(self, windows: Any, indices: np.ndarray) -> None:
+        for index in indices.tolist():
+            slot = int(self.slots[index])
+            arrays = windows.arrays[slot]
+            self.poses_only[index] = (
+                arrays is not None
+                and len(arrays[1]) == 1
+                and arrays[1][0][0] is DeviceKind.POSITION
+            )
+            self.generation[index] = windows.generation[slot]
+
+
 class ServeFeed:
     """A :data:`~gadgetctl.monitor.session.FrameConsumer` that serves ``catalog``."""
 
@@ -125,19 +162,43 @@ class ServeFeed:
         # this frame's tracker windows of arrays computed ahead (see WindowOutlet)
         self._windows: list[tuple[str, np.ndarray, np.ndarray, int, int]] = []
         self._proxy_stamps: dict[str, float | None] = {}
+        self._shared = callable(getattr(outlet, "tracker_shared", None))
+        # per list of shared groups (GatheredFrames.groups): the devices served from them
+        self._plan: tuple[object, list[ServedElement], list[_GroupPlan]] | None = None
         #: Reports handed to the outlet (one per sensor, button change, analog row, text);
         #: tracker windows are counted by the outlet that takes them (its ``messages``).
         self.reports = 0
+
+    def _plan_for(self, groups: Any) -> tuple[list[ServedElement], list[_GroupPlan]]:
+        """The served devices read per device, and those read from each shared group."""
+        plan = self._plan
+        if plan is not None and plan[0] is groups:
+            return plan[1], plan[2]
+        served = {e.element: e for e in self.devices}
+        plans = []
+        for group in groups:
+            picked = [(i, served.pop(name)) for i, name in enumerate(group.names) if name in served]
+            if picked:
+                plans.append(_GroupPlan(group, picked))
+        own = [e for e in self.devices if e.element in served]
+        self._plan = (groups, own, plans)
+        return own, plans
 
     def __call__(self, session: Any, moment: float) -> None:
         gathered = getattr(session, "gathered", None)
         if gathered is None:  # a session without the gathered map: ask per device
             frame_samples = session.frame_samples
             gathered = {e.element: f for e in self.devices if (f := frame_samples(e.element))}
+        groups = getattr(gathered, "groups", ()) if self._shared else ()
+        entries = self.devices
+        if groups:
+            entries, plans = self._plan_for(groups)
+            for plan in plans:
+                self._group(plan, gathered)
         windows = self._windows
         windowed = self._windowed
         position = DeviceKind.POSITION
-        for entry in self.devices:
+        for entry in entries:
             frames = gathered.get(entry.element)
             if not frames:
                 continue
@@ -170,6 +231,27 @@ class ServeFeed:
                 self._proxy(entry, proxy)
 
     # -- devices ------------------------------------------------------------------------
+
+    def _group(self, plan: _GroupPlan, gathered: Any) -> None:
+        """The served devices of one shared group: those whose frame is a window of position
+        data only, at once (:meth:`SharedOutlet.tracker_shared`); the others one by one."""
+        windows = plan.group.windows
+        slots = plan.slots
+        fresh = windows.fresh[slots]
+        stale = plan.generation != windows.generation[slots]
+        if stale.any():
+            plan.recheck(windows, np.flatnonzero(stale))
+        bulk = fresh & plan.poses_only
+        if bulk.all():
+            self.outlet.tracker_shared(windows, slots, plan.senders, self.offset)
+            return
+        if bulk.any():
+            self.outlet.tracker_shared(windows, slots[bulk], plan.senders[bulk], self.offset)
+        for index in np.flatnonzero(~bulk).tolist():
+            entry = plan.entries[index]
+            frames = gathered.get(entry.element)
+            if frames:
+                self._device(entry, frames)
 
     def _device(self, entry: ServedElement, frames: dict[DeviceKind, FrameSamples]) -> None:
         sender = entry.vrpn_name

@@ -36,6 +36,26 @@ ROLE_TYPES: dict[Role, tuple[str, ...]] = {
 }
 
 
+_RECORD = np.dtype((np.void, POSE_SIZE))
+
+
+class _SharedStretches:
+    """What a :class:`VrpnOutlet` framed ahead for the slots of one
+    :class:`~gadgetctl.input.samples.SharedWindows`: per slot a row of :data:`FRAME_AHEAD`
+    framed messages (samples ``first`` .. ``last - 1`` of the slot's arrays of generation
+    ``generation``, ``sensors`` messages each), so that a frame's messages of every slot are
+    cut from the rows in one numpy gather."""
+
+    def __init__(self, windows: object, slots: int) -> None:
+        self.windows = windows
+        self.records = np.zeros(slots * FRAME_AHEAD, dtype=_RECORD)
+        self.generation = np.full(slots, -1, dtype=np.int64)
+        self.first = np.zeros(slots, dtype=np.int64)
+        self.last = np.zeros(slots, dtype=np.int64)
+        self.sensors = np.ones(slots, dtype=np.int64)
+        self.offset = 0.0
+
+
 def _framable(matrices: object) -> bool:
     """Whether ``matrices`` is a float64 array of (samples, sensors, 4, 4), sensors > 0."""
     shape = getattr(matrices, "shape", None)
@@ -76,7 +96,8 @@ class VrpnOutlet:
         # per sender: a stretch of a window's arrays framed ahead, (matrices, first, last,
         # bytes, bytes per sample, offset), and this frame's pieces cut from such stretches
         self._framed: dict[int, tuple[np.ndarray, int, int, memoryview, int, float]] = {}
-        self._pieces: list[memoryview] = []
+        self._pieces: list[memoryview | bytes] = []
+        self._shared: dict[int, _SharedStretches] = {}  # by id of the shared windows
         # whether a client is connected (refreshed every frame and on connection): with
         # nobody to send to, reports are not framed at all
         self.audience = False
@@ -133,6 +154,86 @@ class VrpnOutlet:
         if refill:
             count += self._frame_ahead(refill, offset)
         self.messages += count
+
+    def tracker_shared(
+        self, windows, slots: np.ndarray, senders: np.ndarray, offset: float
+    ) -> None:
+        """A frame's tracker windows of a frame group's shared windows
+        (:class:`~gadgetctl.input.samples.SharedWindows`): ``slots`` (fresh, each with position
+        data only) served as ``senders`` (VRPN sender names), times on the input manager's
+        clock plus ``offset``. The slots' messages are cut from rows framed ahead
+        (:data:`FRAME_AHEAD` messages a slot, framed again when a window leaves its row), in
+        one numpy gather for all of them, in the order of ``slots``."""
+        if not self.audience or not len(slots):
+            return
+        state = self._shared.get(id(windows))
+        if state is None or state.windows is not windows:
+            state = self._shared[id(windows)] = _SharedStretches(windows, len(windows.stores))
+        starts = windows.starts[slots]
+        stops = windows.stops[slots]
+        stale = (
+            (state.generation[slots] != windows.generation[slots])
+            | (starts < state.first[slots])
+            | (stops > state.last[slots])
+        )
+        if state.offset != offset:
+            stale[:] = True
+            state.offset = offset
+        if stale.any():
+            keep = np.ones(len(slots), dtype=bool)
+            for index in np.flatnonzero(stale).tolist():
+                keep[index] = self._frame_row(
+                    state, int(slots[index]), senders[index], int(starts[index]), int(stops[index])
+                )
+            if not keep.all():
+                slots, starts, stops = slots[keep], starts[keep], stops[keep]
+                if not len(slots):
+                    return
+        sensors = state.sensors[slots]
+        begins = slots * FRAME_AHEAD + (starts - state.first[slots]) * sensors
+        counts = (stops - starts) * sensors
+        size = int(counts[0])
+        if (counts == size).all():
+            picks = (begins[:, None] + np.arange(size)).ravel()
+        else:
+            picks = np.repeat(begins - (np.cumsum(counts) - counts), counts) + np.arange(
+                int(counts.sum())
+            )
+        self._pieces.append(state.records[picks].tobytes())
+        self.messages += len(picks)
+
+    def _frame_row(
+        self, state: _SharedStretches, slot: int, name: str, start: int, stop: int
+    ) -> bool:
+        """Frame slot ``slot``'s row from ``start`` (its window and what follows it in its
+        arrays, up to :data:`FRAME_AHEAD` messages); False when the window cannot be cut from
+        a row (framed with the frame's other trackers instead, or ignored, as
+        :meth:`Outlet.tracker` would)."""
+        windows = state.windows
+        times, items = windows.arrays[slot]
+        matrices = items[0][1]
+        sender = self.senders[name]
+        if not _framable(matrices) or (stop - start) * matrices.shape[1] > FRAME_AHEAD:
+            self._other_window(sender, times, matrices, start, stop, state.offset)
+            state.generation[slot] = -1
+            return False
+        sensors = matrices.shape[1]
+        last = min(len(matrices), start + FRAME_AHEAD // sensors)
+        flat = matrices[start:last].reshape(-1, 4, 4)
+        count = len(flat)
+        data = pack_poses(
+            sender,
+            self._pose,
+            np.repeat(np.asarray(times[start:last], dtype=np.float64) + state.offset, sensors),
+            np.tile(np.arange(sensors), last - start),
+            flat[:, :3, 3],
+            quaternions_xyzw(flat),
+        )
+        base = slot * FRAME_AHEAD
+        state.records[base : base + count] = np.frombuffer(data, dtype=_RECORD)
+        state.generation[slot] = windows.generation[slot]
+        state.first[slot], state.last[slot], state.sensors[slot] = start, last, sensors
+        return True
 
     def _frame_ahead(
         self, refill: list[tuple[int, int, np.ndarray, np.ndarray, int, int]], offset: float
