@@ -91,41 +91,67 @@ def _expected(device, first: int, stop: int):
 
 
 @pytest.mark.timeout(60)
-def test_a_group_frame_gives_each_device_exactly_its_own_samples(make):
+@pytest.mark.parametrize("ahead", [False, True], ids=["blocks-at-the-frame", "blocks-computed-ahead"])
+def test_a_group_frame_gives_each_device_exactly_its_own_samples(make, ahead):
+    """With or without the next blocks computed between frames (InputManager.prepare), and
+    with frames that bring nothing new (two at once), every device's frames hold exactly
+    its samples, in order, once each."""
     m = make(_config())
     devices = [m.device(f"Poses {i}") for i in range(4)] + [m.device(f"Mixed {i}") for i in range(2)]
     seen = {d.name: 0 for d in devices}  # the next sample number each device must deliver
-    shared_frames = 0
-    for _ in range(400):  # across the end of the first (shorter) blocks
-        time.sleep(0.0015)
-        m.update()
+    shared_frames = switches = empties = 0
+    generations = {}
+    kept = {d.name: [] for d in devices}  # per frame: first sample number, stamps, values
+
+    def check() -> None:  # cheap, so that two frames can follow at once
+        nonlocal shared_frames, switches, empties
         for device in devices:
             store = device.store
             place = store.shared
             assert place is not None  # grouped: usual frames come from the shared windows
             windows, slot = place
             shared_frames += bool(windows.fresh[slot])
+            empties += bool(windows.emptied[slot])
+            generation = int(windows.generation[slot])
+            switches += bool(windows.fresh[slot]) and generations.get(device.name, generation) != generation
+            generations[device.name] = generation
             frames = store.current
             if not frames:
                 continue
             stamps = frames[DeviceKind.POSITION].timestamps()
-            first = seen[device.name]
-            stop = first + len(stamps)
-            block = _expected(device, first, stop)
-            np.testing.assert_array_equal(stamps, block.timestamps)
             assert stamps[-1] <= store.swapped_at  # never a sample from the future
+            values = {}
             for kind, frame in frames.items():
-                values = np.concatenate([np.asarray(c.values) for c in frame.chunks])
-                np.testing.assert_array_equal(values, block.data[kind])
+                values[kind] = np.concatenate([np.asarray(c.values) for c in frame.chunks])
                 newest = store.latest(kind)
                 assert newest.timestamp == stamps[-1]
-                np.testing.assert_array_equal(newest.values, block.data[kind][-1])
-            seen[device.name] = stop
-            assert store.total(DeviceKind.POSITION) == stop
-    assert shared_frames > 1000  # most frames were the shared usual ones
+                np.testing.assert_array_equal(newest.values, values[kind][-1])
+            kept[device.name].append((seen[device.name], stamps, values))
+            seen[device.name] += len(stamps)
+            assert store.total(DeviceKind.POSITION) == seen[device.name]
+
+    for count in range(400):  # across the end of the first (shorter) blocks
+        time.sleep(0.0015)
+        for _ in range(1 if count % 7 else 2):  # two frames at once: the second brings little
+            m.update()
+            if ahead:
+                m.prepare()
+            check()
     for device in devices:
-        assert seen[device.name] > 300 and device.store.dropped() == 0
-        assert device.next_index == seen[device.name]
+        assert device.next_index == seen[device.name] and device.store.dropped() == 0
+    m.shutdown()  # the devices stop: their own computation is asked alone
+    for device in devices:  # what the device's own computation gives for those samples
+        block = _expected(device, 0, seen[device.name])
+        for first, stamps, values in kept[device.name]:
+            stop = first + len(stamps)
+            np.testing.assert_array_equal(stamps, block.timestamps[first:stop])
+            for kind, got in values.items():
+                np.testing.assert_array_equal(got, block.data[kind][first:stop])
+    assert shared_frames > 1000  # most frames were the shared usual ones
+    assert empties > 0  # frames right after another brought nothing new
+    if ahead:  # the frames reaching past a block took the window from the next one, usual
+        assert switches >= len(devices)
+    assert all(seen[device.name] > 300 for device in devices)
 
 
 @pytest.mark.timeout(60)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import socket
 
 import numpy as np
+import pytest
 
 from gadgetctl.serve.framing import (
     CHANGE_SIZE,
@@ -193,11 +194,13 @@ def test_windows_of_arrays_computed_ahead_give_the_bytes_of_their_batches():
     assert FRAME_AHEAD < 700  # the stretches did run out within the first block
 
 
-def test_shared_windows_give_the_bytes_of_their_batches():
+@pytest.mark.parametrize("upcoming", [False, True], ids=["framed-at-the-frame", "framed-ahead"])
+def test_shared_windows_give_the_bytes_of_their_batches(upcoming):
     """A frame group's shared windows (every slot's window at once) frame to the same bytes
     as the same samples handed over as plain batches: across rows running out, new arrays
     (generations), windows of several samples, several sensors, a slot not in the frame,
-    and a slot whose arrays are not float64 (framed with the frame's other trackers)."""
+    and a slot whose arrays are not float64 (framed with the frame's other trackers); with
+    the arrays to come offered ahead, their rows are framed between frames (prepare)."""
     from gadgetctl.input.kinds import DeviceKind
     from gadgetctl.input.samples import SampleStore, SharedWindows
     from gadgetctl.serve.catalog import Role, ServedElement
@@ -223,8 +226,12 @@ def test_shared_windows_give_the_bytes_of_their_batches():
         VrpnOutlet(batched_server, catalog),
     )
     windows = SharedWindows([SampleStore([DeviceKind.POSITION]) for _ in names])
-    arrays = {n: block(900, sensors[n], dtypes.get(n, np.float64)) for n in names}
+    arrays = {n: block(300, sensors[n], dtypes.get(n, np.float64)) for n in names}
     position = dict.fromkeys(names, 0)
+    following = {}  # the next arrays of a slot near its end, offered ahead
+    spares = []
+    take_spare = shared_outlet._take_spare
+    shared_outlet._take_spare = lambda *args: spares.append(take_spare(*args)) or spares[-1]
     offset = 1.7e9
     for frame in range(300):
         shared_outlet.audience = batched_outlet.audience = True
@@ -242,10 +249,15 @@ def test_shared_windows_give_the_bytes_of_their_batches():
             matrices = items[0][1]
             plain.append((name, times[start:stop], np.asarray(matrices[start:stop], np.float64)))
             if stop == len(times):
-                arrays[name] = block(900, sensors[name], dtypes.get(name, np.float64))
+                arrays[name] = following.pop(name, None) or block(
+                    300, sensors[name], dtypes.get(name, np.float64)
+                )
                 position[name] = 0
             else:
                 position[name] = stop
+                if upcoming and len(times) - stop < 40 and name not in following:
+                    following[name] = block(300, sensors[name], dtypes.get(name, np.float64))
+                    windows.set_upcoming(slot, *following[name])
         picked = np.array(slots)
         windows.publish(float(frame), picked, np.array(starts), np.array(stops))
         shared_outlet.tracker_shared(
@@ -254,7 +266,10 @@ def test_shared_windows_give_the_bytes_of_their_batches():
         batched_outlet.trackers(plain, offset)
         shared_outlet.end_frame()
         batched_outlet.end_frame()
+        shared_outlet.audience = True
+        shared_outlet.prepare()
         # the same bytes (the float32 slot, last, is framed with the frame's other trackers)
         assert shared_server.sent[-1] == batched_server.sent[-1], f"frame {frame}"
     assert shared_outlet.messages == batched_outlet.messages
-    assert FRAME_AHEAD < 900 * 3  # rows ran out within an array
+    assert FRAME_AHEAD < 300 * 3  # rows ran out within an array
+    assert any(spares) == upcoming  # rows framed ahead were used when arrays were offered

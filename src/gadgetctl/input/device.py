@@ -199,6 +199,12 @@ class Input:
         for device in devices:
             device.update_for_frame(frame)
 
+    @classmethod
+    def prepare_frame_group(cls, devices: Sequence[Input]) -> None:
+        """Between frames (after the frame's consumers, before the pause): work a class with
+        :attr:`FRAME_GROUP` can do ahead for ``devices`` so that the frames need not (the
+        default: nothing)."""
+
     def transport_dropped(self) -> int:
         """What the transport lost before the driver could read it (a UDP socket's receive
         buffer overflowing, counted by the kernel), added to the dropped samples. A driver that

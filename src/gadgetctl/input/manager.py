@@ -601,6 +601,15 @@ class InputManager:
             proxy.update_for_frame(frame)
         return frame
 
+    def prepare(self) -> None:
+        """Work done ahead between frames, after a frame's consumers: what frame groups
+        prepare for the coming frames (:meth:`Input.prepare_frame_group`)."""
+        order = self._frame_order
+        if order is not None:
+            for device in order[0]:
+                if type(device) is tuple:
+                    device[0].prepare_frame_group(device[1])
+
     def run(self, rate: float = 60.0, *, frames: int | None = None, duration: float | None = None,
             on_frame: Callable[[InputManager], bool | None] | None = None,
             stop: threading.Event | None = None) -> int:
@@ -627,6 +636,7 @@ class InputManager:
                 count += 1
                 if on_frame is not None and on_frame(self) is False:
                     break
+                self.prepare()
                 delay = start + count * period - now()
                 if delay > 0:
                     if stop is not None:

@@ -195,7 +195,8 @@ class SharedWindows:
     Each group frame (:meth:`publish`) increments ``serial``; a slot marked ``fresh`` then has
     as its current frame samples ``starts[slot]`` .. ``stops[slot] - 1`` of
     ``arrays[slot]`` (``(timestamps, ((kind, values), ...))``), swapped at ``moment``; the
-    frame of a slot that is not fresh is in its store as usual. ``delivered`` counts each
+    frame of a slot that is not fresh is empty when ``emptied`` (the store swaps with nothing
+    new), else in its store as usual. ``delivered`` counts each
     slot's samples published this way (the stores' totals). A group changes a slot's
     ``arrays`` only after its store took its pending window (:meth:`SampleStore.sync`).
     """
@@ -205,6 +206,8 @@ class SharedWindows:
         self.serial = 0
         self.moment = 0.0
         self.fresh = np.zeros(count, dtype=bool)
+        self.emptied = np.zeros(count, dtype=bool)  # swapped with nothing new
+        self.window_serial = np.zeros(count, dtype=np.int64)  # when its window was published
         self.starts = np.zeros(count, dtype=np.int64)
         self.stops = np.zeros(count, dtype=np.int64)
         self.delivered = np.zeros(count, dtype=np.int64)
@@ -212,21 +215,31 @@ class SharedWindows:
         #: stretch of them knows it from this number).
         self.generation = np.zeros(count, dtype=np.int64)
         self.arrays: list[tuple[Any, tuple[tuple[DeviceKind, Any], ...]] | None] = [None] * count
+        #: Per slot, the arrays its windows will be cut from next, when known ahead (a
+        #: consumer may convert some of them between frames), and how many times they were set.
+        self.upcoming: list[tuple[Any, tuple[tuple[DeviceKind, Any], ...]] | None] = [None] * count
+        self.upcoming_generation = np.zeros(count, dtype=np.int64)
         self.stores = tuple(stores)
         for slot, store in enumerate(self.stores):
             store.share(self, slot)
 
-    def publish(self, moment: float, slots: np.ndarray, starts: np.ndarray, stops: np.ndarray) -> None:
+    def publish(self, moment: float, slots: np.ndarray, starts: np.ndarray, stops: np.ndarray,
+                empty: np.ndarray | None = None) -> None:
         """A group frame at ``moment``: ``slots`` get the windows ``starts`` .. ``stops``
-        (each at least one sample, within the slot's arrays); every other slot is not fresh
-        (its device swapped its own store this frame, before this call)."""
+        (each at least one sample, within the slot's arrays); the slots ``empty`` swap with
+        nothing new (their newest sample stays); every other slot is not fresh (its device
+        swapped its own store this frame, before this call)."""
         self.serial += 1
         self.moment = moment
         fresh = self.fresh
         fresh[:] = False
         fresh[slots] = True
+        self.emptied[:] = False
+        if empty is not None:
+            self.emptied[empty] = True
         self.starts[slots] = starts
         self.stops[slots] = stops
+        self.window_serial[slots] = self.serial
         self.delivered[slots] += stops - starts
 
     def set_arrays(self, slot: int, timestamps: Any, items: tuple[tuple[DeviceKind, Any], ...]) -> None:
@@ -236,6 +249,14 @@ class SharedWindows:
         if current is None or current[0] is not timestamps or current[1] is not items:
             self.arrays[slot] = (timestamps, items)
             self.generation[slot] += 1
+            upcoming = self.upcoming[slot]
+            if upcoming is not None and upcoming[0] is timestamps:
+                self.upcoming[slot] = None
+
+    def set_upcoming(self, slot: int, timestamps: Any, items: tuple[tuple[DeviceKind, Any], ...]) -> None:
+        """The arrays slot ``slot``'s windows will be cut from after its current ones."""
+        self.upcoming[slot] = (timestamps, items)
+        self.upcoming_generation[slot] += 1
 
 
 class _Channel:
@@ -287,6 +308,7 @@ class SampleStore:
         self._slot = 0
         self._synced = 0
         self._delivered = 0
+        self._applied = 0  # the serial of the last shared window made current
 
     @property
     def swapped_at(self) -> float | None:
@@ -318,6 +340,7 @@ class SampleStore:
             self._shared, self._slot = shared, slot
             self._synced = shared.serial if shared is not None else 0
             self._delivered = int(shared.delivered[slot]) if shared is not None else 0
+            self._applied = int(shared.window_serial[slot]) if shared is not None else 0
 
     def sync(self) -> None:
         """Make the shared windows' latest frame of this store's slot current (when fresh)
@@ -333,14 +356,20 @@ class SampleStore:
             slot = self._slot
             delivered = int(shared.delivered[slot])
             counted, self._delivered = delivered - self._delivered, delivered
-            if not shared.fresh[slot]:
+            fresh = shared.fresh[slot]
+            if not fresh and not shared.emptied[slot]:
                 return
             timestamps, items = shared.arrays[slot]
             channels = self._channels
             if counted:
                 for kind, _ in items:
                     channels[kind].total += counted
-            self._window_frames(timestamps, items, int(shared.starts[slot]), int(shared.stops[slot]))
+            window = int(shared.window_serial[slot])
+            if fresh or window > self._applied:  # a window not made current yet comes first
+                self._applied = window
+                self._window_frames(timestamps, items, int(shared.starts[slot]), int(shared.stops[slot]))
+            if not fresh:  # then the empty frame of this serial
+                self._make_current(self._take())
             self._swapped_at = shared.moment
 
     @property

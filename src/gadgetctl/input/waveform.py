@@ -49,6 +49,12 @@ BLOCK_SECONDS = 0.5
 #: Long enough that a frame loop falling behind under load is not also fighting the
 #: scheduler thread for the GIL; a frame publishes, and counts over the cap, what came due.
 FRAME_GRACE = 0.25
+#: Seconds before a device's block ends when the next block is computed ahead, between frames.
+AHEAD_SECONDS = 0.1
+#: Blocks computed ahead between two frames: at most one per this many seconds since the
+#: previous time (one per frame at 1 kHz, more at lower frame rates), so that the work done
+#: ahead does not make the next frame late.
+PREPARE_PACE = 0.001
 _RUNNING = DeviceState.RUNNING
 #: Held while a waveform device publishes (its frame, the scheduler's stand-in) and while a
 #: frame group is updated: one lock for all of them, so that a group frame takes it once.
@@ -134,6 +140,8 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         self._slot = 0  # its place in the group's arrays
         self._next = 0
         self._block: Block | None = None
+        self._ahead: Block | None = None  # the next block, computed ahead between frames
+        self._ahead_tried = False  # a next block was computed ahead (it may have events)
         self._noise_streams: dict[int, tuple[np.random.Generator, int]] = {}
         # the scheduler's sample() and the frames publish one at a time
         self._publishing = _PUBLISHING
@@ -182,6 +190,7 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
             self.t0 = now()
             self.next_index = 0
             self._block = None
+            self._ahead, self._ahead_tried = None, False
             self._frame_published = -math.inf
             self._mirror()
 
@@ -221,9 +230,45 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
 
     def update_for_frame(self, frame: int) -> None:
         group = self._group
-        if group is not None and group.frame == frame:
-            return  # its group updated it this frame
+        if group is not None:
+            if group.frame == frame:
+                return  # its group updated it this frame
+            group.alone[self._slot] = frame  # the group leaves it alone this frame
         super().update_for_frame(frame)
+
+    @property
+    def state(self) -> DeviceState:
+        return self._state
+
+    @state.setter
+    def state(self, value: DeviceState) -> None:
+        self._state = value
+        group = self.__dict__.get("_group")
+        if group is not None:
+            group.running[self._slot] = value is _RUNNING
+
+    @classmethod
+    def prepare_frame_group(cls, devices: Sequence[WaveformDevice]) -> None:
+        """Between frames: the next blocks of the devices whose blocks end soon."""
+        group = devices[0]._group if devices else None
+        if group is not None and group.devices is devices:
+            group.prepare()
+
+    def _compute_ahead(self) -> None:
+        """The block after the current one, starting some samples before its end (the caller
+        holds the publishing lock); kept only without events."""
+        block = self._block
+        size = max(1, math.ceil(self.rate * BLOCK_SECONDS))
+        overlap = min(size - 1, max(64, math.ceil(self.rate * 0.05)))
+        ahead = self.compute(max(block.start, block.end - overlap), size)
+        self._ahead, self._ahead_tried = (None if ahead.events else ahead), True
+
+    def _take_ahead(self) -> None:
+        """Make the block computed ahead the current one (the caller holds the publishing
+        lock; the group saw that this frame's window lies in it)."""
+        self.store.sync()  # the pending window of the current block is taken first
+        self._block, self._ahead, self._ahead_tried = self._ahead, None, False
+        self._mirror()
 
     def update_data(self) -> None:
         """Publish what has come due, then swap: the frame gets samples up to its instant."""
@@ -256,7 +301,13 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         end = int((moment - self.t0) * self.rate) + 1  # samples whose time has come
         while self.next_index < end:
             block = self._block
+            ahead = self._ahead
+            if (block is None or not block.start <= self.next_index < block.end) and ahead is not None \
+                    and ahead.start <= self.next_index < ahead.end:
+                block = self._block = ahead
+                self._ahead, self._ahead_tried = None, False
             if block is None or not block.start <= self.next_index < block.end:
+                self._ahead, self._ahead_tried = None, False
                 size = max(1, math.ceil(self.rate * BLOCK_SECONDS))
                 if block is None:  # a shorter first block spreads the devices' block computations out
                     size = max(1, size - zlib.crc32(self.name.encode()) % size)
@@ -348,9 +399,12 @@ class _FrameGroup:
     arrays (the devices' own ``next_index`` lives here while they belong to it), and the
     :class:`SharedWindows` their usual frames go to.
 
-    A device's ``t0``, ``rate`` and current block are mirrored here (:meth:`mirror`) whenever
-    they change outside the usual frame (its own update, the scheduler's stand-in, a
-    restart): the usual frame then needs no Python per device."""
+    A device's ``t0``, ``rate``, state and current block are mirrored here (:meth:`mirror`)
+    whenever they change outside the usual frame (its own update, the scheduler's stand-in, a
+    restart): the usual frame then needs no Python per device. Between frames
+    (:meth:`prepare`) the next block of a device whose block ends soon is computed ahead,
+    starting ``overlap`` samples before the current one ends: the frame whose window reaches
+    past the end takes the window from the next block (the same samples) and stays usual."""
 
     def __init__(self, devices: Sequence[WaveformDevice]) -> None:
         with _PUBLISHING:
@@ -361,13 +415,21 @@ class _FrameGroup:
             self.rate = np.ones(count)
             self.first = np.zeros(count, dtype=np.int64)  # the current block's first sample
             self.last = np.zeros(count, dtype=np.int64)  # one past its last
+            self.ahead_first = np.zeros(count, dtype=np.int64)  # the block computed ahead's
+            self.ahead_last = np.zeros(count, dtype=np.int64)
+            self.ahead = np.zeros(count, dtype=bool)  # a next block was computed (or tried)
             self.cap = np.array([d.store.cap for d in devices], dtype=np.int64)
             self.usual = np.zeros(count, dtype=bool)  # the usual frame may be taken
+            self.running = np.zeros(count, dtype=bool)
+            self.alone = np.full(count, -1, dtype=np.int64)  # frame a device was updated alone
             self.moment = -math.inf  # when the group last published
             self.frame = -1  # the frame it last updated
+            self.prepare_after = 0.0  # no block to compute ahead before then (a hint)
+            self.prepared_at = now()
             self.windows = SharedWindows([d.store for d in devices])
             for slot, device in enumerate(devices):
                 device._group, device._slot = self, slot
+                self.running[slot] = device.state is _RUNNING
                 self.mirror(slot)
 
     def mirror(self, slot: int) -> None:
@@ -377,6 +439,13 @@ class _FrameGroup:
         store.sync()  # its pending window is taken before its arrays change
         self.t0[slot] = device.t0
         self.rate[slot] = device.rate
+        self.prepare_after = 0.0
+        ahead = device._ahead
+        self.ahead[slot] = device._ahead_tried
+        if ahead is not None:
+            self.ahead_first[slot], self.ahead_last[slot] = ahead.start, ahead.end
+        else:
+            self.ahead_first[slot] = self.ahead_last[slot] = 0
         block = device._block
         if block is None or block.events or store._waiting:
             self.usual[slot] = False
@@ -387,19 +456,25 @@ class _FrameGroup:
 
     def update(self, frame: int) -> None:
         """One frame of every device: with numpy for all of them, the samples that came due
-        and whether they are one window of the device's current block (the usual frame);
-        the others are updated alone, a device that raises is faulted alone."""
+        and whether they are one window of the device's current block, or of the block
+        computed ahead (the usual frame); the others are updated alone, a device that raises
+        is faulted alone."""
         devices = self.devices
         with _PUBLISHING:
             moment = now()
             ends = ((moment - self.t0) * self.rate).astype(np.int64) + 1  # samples whose time has come
             nexts = self.next
-            usual = self.usual & (self.first <= nexts) & (nexts < ends) & (ends <= self.last)
-            usual &= ends - nexts <= self.cap
-            usual &= np.fromiter((d.state is _RUNNING and d._updated_frame != frame for d in devices),
-                                 dtype=bool, count=len(devices))
-            if not usual.all():
-                for slot in np.flatnonzero(~usual).tolist():
+            ready = self.usual & self.running & (self.alone != frame) & (ends - nexts <= self.cap)
+            empty = ready & (ends <= nexts)  # nothing came due: an empty frame
+            ready &= ~empty
+            usual = ready & (self.first <= nexts) & (ends <= self.last)
+            if not (usual | empty).all():
+                switch = ready & ~usual & (self.ahead_first <= nexts) & (ends <= self.ahead_last)
+                if switch.any():
+                    for slot in np.flatnonzero(switch).tolist():
+                        devices[slot]._take_ahead()
+                    usual |= switch
+                for slot in np.flatnonzero(~(usual | empty)).tolist():
                     device = devices[slot]
                     if device._updated_frame == frame:
                         continue
@@ -411,7 +486,35 @@ class _FrameGroup:
                     self.mirror(slot)
             slots = np.flatnonzero(usual)
             first = self.first[slots]
-            self.windows.publish(moment, slots, nexts[slots] - first, ends[slots] - first)
+            self.windows.publish(moment, slots, nexts[slots] - first, ends[slots] - first,
+                                 np.flatnonzero(empty) if empty.any() else None)
             nexts[slots] = ends[slots]
             self.moment = moment
             self.frame = frame
+
+    def prepare(self) -> None:
+        """Between frames: compute the next block of devices whose block ends within
+        :data:`AHEAD_SECONDS` (paced by :data:`PREPARE_PACE`), and offer it to the shared
+        windows' readers."""
+        moment = now()
+        limit = max(1, int((moment - self.prepared_at) / PREPARE_PACE))
+        self.prepared_at = moment
+        if moment < self.prepare_after:
+            return
+        with _PUBLISHING:
+            left = (self.last - self.next) / self.rate - AHEAD_SECONDS  # seconds until "soon"
+            waiting = self.usual & self.running & ~self.ahead
+            soon = waiting & (left < 0)
+            if not soon.any():  # nothing to do before the first of them comes near its end
+                self.prepare_after = now() + float(left[waiting].min()) if waiting.any() else 0.0
+                return
+            for slot in np.flatnonzero(soon)[:limit].tolist():
+                device = self.devices[slot]
+                try:
+                    device._compute_ahead()
+                except Exception:  # the frame that needs the block computes it, and faults
+                    device._ahead, device._ahead_tried = None, True
+                self.mirror(slot)
+                ahead = device._ahead
+                if ahead is not None:
+                    self.windows.set_upcoming(slot, ahead.timestamps, ahead.items)

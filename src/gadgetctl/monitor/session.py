@@ -799,6 +799,7 @@ class MonitorSession:
                 count += 1
                 self.frames_run, self.run_seconds = count, now() - began
                 yield frame
+                self.manager.prepare()  # work done ahead, between this frame and the next
                 if source_done and not self.finished:  # the feeder had finished before this frame swapped
                     self.finished = True
                     if stop_at_end:
@@ -853,9 +854,11 @@ class MonitorSession:
                 sizes = windows.stops[slots] - windows.starts[slots]
                 if fresh.all():
                     samples += int(sizes.sum())
-                else:
-                    samples += int(sizes[fresh].sum())
-                    self._gather([group.names[i] for i in np.flatnonzero(~fresh).tolist()], gathered)
+                    continue
+                samples += int(sizes[fresh].sum())
+                alone = ~(fresh | windows.emptied[slots])  # neither a window nor empty
+                if alone.any():
+                    self._gather([group.names[i] for i in np.flatnonzero(alone).tolist()], gathered)
             self._gathered = GatheredFrames(gathered, plan.shared, plan.groups)
         if self.source is not None:
             for marker in self.source.drain_markers():

@@ -247,7 +247,8 @@ class ServeFeed:
             return
         if bulk.any():
             self.outlet.tracker_shared(windows, slots[bulk], plan.senders[bulk], self.offset)
-        for index in np.flatnonzero(~bulk).tolist():
+        alone = ~(bulk | windows.emptied[slots])  # empty frames have nothing to serve
+        for index in np.flatnonzero(alone).tolist():
             entry = plan.entries[index]
             frames = gathered.get(entry.element)
             if frames:

@@ -9,6 +9,7 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
+from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.transforms import quaternions_xyzw
 from gadgetctl.serve.catalog import Role, ServedElement
 from gadgetctl.serve.framing import (
@@ -44,16 +45,23 @@ class _SharedStretches:
     :class:`~gadgetctl.input.samples.SharedWindows`: per slot a row of :data:`FRAME_AHEAD`
     framed messages (samples ``first`` .. ``last - 1`` of the slot's arrays of generation
     ``generation``, ``sensors`` messages each), so that a frame's messages of every slot are
-    cut from the rows in one numpy gather."""
+    cut from the rows in one numpy gather; and a spare row per slot, framed between frames
+    from the arrays the slot will use next (``spare_for``: their timestamps array)."""
 
     def __init__(self, windows: object, slots: int) -> None:
         self.windows = windows
-        self.records = np.zeros(slots * FRAME_AHEAD, dtype=_RECORD)
+        self.records = np.zeros(2 * slots * FRAME_AHEAD, dtype=_RECORD)
+        self.row = np.arange(slots, dtype=np.int64) * 2  # each slot's current row
         self.generation = np.full(slots, -1, dtype=np.int64)
         self.first = np.zeros(slots, dtype=np.int64)
         self.last = np.zeros(slots, dtype=np.int64)
         self.sensors = np.ones(slots, dtype=np.int64)
         self.offset = 0.0
+        self.names: list[str | None] = [None] * slots  # the sender each slot is served as
+        self.upcoming_seen = np.zeros(slots, dtype=np.int64)
+        self.spare_for: list[object | None] = [None] * slots
+        self.spare = np.zeros((slots, 3), dtype=np.int64)  # first, last, sensors
+        self.spare_offset = np.zeros(slots)
 
 
 def _framable(matrices: object) -> bool:
@@ -162,8 +170,9 @@ class VrpnOutlet:
         (:class:`~gadgetctl.input.samples.SharedWindows`): ``slots`` (fresh, each with position
         data only) served as ``senders`` (VRPN sender names), times on the input manager's
         clock plus ``offset``. The slots' messages are cut from rows framed ahead
-        (:data:`FRAME_AHEAD` messages a slot, framed again when a window leaves its row), in
-        one numpy gather for all of them, in the order of ``slots``."""
+        (:data:`FRAME_AHEAD` messages a slot, framed again when a window leaves its row, or
+        taken from the spare row :meth:`prepare` framed), in one numpy gather for all of
+        them, in the order of ``slots``."""
         if not self.audience or not len(slots):
             return
         state = self._shared.get(id(windows))
@@ -182,15 +191,16 @@ class VrpnOutlet:
         if stale.any():
             keep = np.ones(len(slots), dtype=bool)
             for index in np.flatnonzero(stale).tolist():
-                keep[index] = self._frame_row(
-                    state, int(slots[index]), senders[index], int(starts[index]), int(stops[index])
-                )
+                slot, start, stop = int(slots[index]), int(starts[index]), int(stops[index])
+                state.names[slot] = senders[index]
+                if not self._take_spare(state, slot, start, stop):
+                    keep[index] = self._frame_row(state, slot, start, stop)
             if not keep.all():
                 slots, starts, stops = slots[keep], starts[keep], stops[keep]
                 if not len(slots):
                     return
         sensors = state.sensors[slots]
-        begins = slots * FRAME_AHEAD + (starts - state.first[slots]) * sensors
+        begins = state.row[slots] * FRAME_AHEAD + (starts - state.first[slots]) * sensors
         counts = (stops - starts) * sensors
         size = int(counts[0])
         if (counts == size).all():
@@ -202,9 +212,55 @@ class VrpnOutlet:
         self._pieces.append(state.records[picks].tobytes())
         self.messages += len(picks)
 
-    def _frame_row(
-        self, state: _SharedStretches, slot: int, name: str, start: int, stop: int
-    ) -> bool:
+    def _take_spare(self, state: _SharedStretches, slot: int, start: int, stop: int) -> bool:
+        """Make slot ``slot``'s spare row its row when it was framed from the slot's current
+        arrays and holds the window ``start`` .. ``stop``."""
+        windows = state.windows
+        first, last, sensors = state.spare[slot].tolist()
+        if (
+            state.spare_for[slot] is not windows.arrays[slot][0]
+            or state.spare_offset[slot] != state.offset
+            or not first <= start < stop <= last
+        ):
+            return False
+        state.row[slot] ^= 1
+        state.first[slot], state.last[slot], state.sensors[slot] = first, last, sensors
+        state.generation[slot] = windows.generation[slot]
+        state.spare_for[slot] = None
+        return True
+
+    def prepare(self, limit: int = 1) -> None:
+        """Between frames: frame the spare rows of (at most ``limit``) served slots whose
+        arrays to come became known (:attr:`SharedWindows.upcoming`), so that the frame that
+        moves to them finds their messages framed (one a frame keeps up with a hundred
+        1 kHz devices' half-second blocks, known a tenth of a second ahead)."""
+        if not self.audience:
+            return
+        for state in self._shared.values():
+            windows = state.windows
+            stale = windows.upcoming_generation != state.upcoming_seen
+            if not stale.any():
+                continue
+            for slot in np.flatnonzero(stale)[:limit].tolist():
+                state.upcoming_seen[slot] = windows.upcoming_generation[slot]
+                upcoming, name = windows.upcoming[slot], state.names[slot]
+                if upcoming is None or name is None:
+                    continue
+                times, items = upcoming
+                if len(items) == 1 and items[0][0] is DeviceKind.POSITION:
+                    matrices = items[0][1]
+                    if _framable(matrices):
+                        first, last, sensors = self._frame_into(
+                            state, int(state.row[slot] ^ 1), name, times, matrices, 0
+                        )
+                        state.spare[slot] = first, last, sensors
+                        state.spare_for[slot] = times
+                        state.spare_offset[slot] = state.offset
+                limit -= 1
+            if limit <= 0:
+                return
+
+    def _frame_row(self, state: _SharedStretches, slot: int, start: int, stop: int) -> bool:
         """Frame slot ``slot``'s row from ``start`` (its window and what follows it in its
         arrays, up to :data:`FRAME_AHEAD` messages); False when the window cannot be cut from
         a row (framed with the frame's other trackers instead, or ignored, as
@@ -212,28 +268,37 @@ class VrpnOutlet:
         windows = state.windows
         times, items = windows.arrays[slot]
         matrices = items[0][1]
-        sender = self.senders[name]
+        name = state.names[slot]
         if not _framable(matrices) or (stop - start) * matrices.shape[1] > FRAME_AHEAD:
-            self._other_window(sender, times, matrices, start, stop, state.offset)
+            self._other_window(self.senders[name], times, matrices, start, stop, state.offset)
             state.generation[slot] = -1
             return False
+        first, last, sensors = self._frame_into(
+            state, int(state.row[slot]), name, times, matrices, start
+        )
+        state.generation[slot] = windows.generation[slot]
+        state.first[slot], state.last[slot], state.sensors[slot] = first, last, sensors
+        return True
+
+    def _frame_into(
+        self, state: _SharedStretches, row: int, name: str, times, matrices, start: int
+    ) -> tuple[int, int, int]:
+        """Frame samples ``start`` .. (up to :data:`FRAME_AHEAD` messages) of ``times`` and
+        ``matrices`` as ``name``'s into row ``row``; returns (first, last, sensors)."""
         sensors = matrices.shape[1]
         last = min(len(matrices), start + FRAME_AHEAD // sensors)
         flat = matrices[start:last].reshape(-1, 4, 4)
-        count = len(flat)
         data = pack_poses(
-            sender,
+            self.senders[name],
             self._pose,
             np.repeat(np.asarray(times[start:last], dtype=np.float64) + state.offset, sensors),
             np.tile(np.arange(sensors), last - start),
             flat[:, :3, 3],
             quaternions_xyzw(flat),
         )
-        base = slot * FRAME_AHEAD
-        state.records[base : base + count] = np.frombuffer(data, dtype=_RECORD)
-        state.generation[slot] = windows.generation[slot]
-        state.first[slot], state.last[slot], state.sensors[slot] = start, last, sensors
-        return True
+        base = row * FRAME_AHEAD
+        state.records[base : base + len(flat)] = np.frombuffer(data, dtype=_RECORD)
+        return start, last, sensors
 
     def _frame_ahead(
         self, refill: list[tuple[int, int, np.ndarray, np.ndarray, int, int]], offset: float
