@@ -220,6 +220,9 @@ class SharedWindows:
         self.upcoming: list[tuple[Any, tuple[tuple[DeviceKind, Any], ...]] | None] = [None] * count
         self.upcoming_generation = np.zeros(count, dtype=np.int64)
         self.stores = tuple(stores)
+        #: Every slot in order: a reader that passes this very array for its slots means all
+        #: of them (``select`` turns it into a slice, no gathering copy).
+        self.every = np.arange(count, dtype=np.int64)
         for slot, store in enumerate(self.stores):
             store.share(self, slot)
 
@@ -232,6 +235,7 @@ class SharedWindows:
         self.serial += 1
         self.moment = moment
         fresh = self.fresh
+        slots = self.select(slots)
         fresh[:] = False
         fresh[slots] = True
         self.emptied[:] = False
@@ -241,6 +245,10 @@ class SharedWindows:
         self.stops[slots] = stops
         self.window_serial[slots] = self.serial
         self.delivered[slots] += stops - starts
+
+    def select(self, slots: np.ndarray) -> np.ndarray | slice:
+        """``slots`` as an index of the per-slot arrays: a slice when it is :attr:`every`."""
+        return slice(None) if slots is self.every else slots
 
     def set_arrays(self, slot: int, timestamps: Any, items: tuple[tuple[DeviceKind, Any], ...]) -> None:
         """The arrays slot ``slot``'s windows are cut from from now on (its store has taken

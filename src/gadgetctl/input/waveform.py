@@ -484,11 +484,15 @@ class _FrameGroup:
                     except Exception as err:  # a faulty device must not stop the frame loop
                         device.frame_fault(err)
                     self.mirror(slot)
-            slots = np.flatnonzero(usual)
-            first = self.first[slots]
-            self.windows.publish(moment, slots, nexts[slots] - first, ends[slots] - first,
-                                 np.flatnonzero(empty) if empty.any() else None)
-            nexts[slots] = ends[slots]
+            windows = self.windows
+            if usual.all():  # the usual frame of every device
+                slots, taken = windows.every, slice(None)
+            else:
+                slots = taken = np.flatnonzero(usual)
+            first = self.first[taken]
+            windows.publish(moment, slots, nexts[taken] - first, ends[taken] - first,
+                            np.flatnonzero(empty) if empty.any() else None)
+            nexts[taken] = ends[taken]
             self.moment = moment
             self.frame = frame
 

@@ -197,14 +197,18 @@ def _rows(values: Any) -> np.ndarray:
 
 class SharedGroup:
     """The watched devices of one frame group that share windows (see
-    :class:`~gadgetctl.input.samples.SharedWindows`): their slots and names, in watch order."""
+    :class:`~gadgetctl.input.samples.SharedWindows`): their slots and names, in slot order
+    (``slots`` is the windows' ``every`` when they are all of them)."""
 
     __slots__ = ("names", "slots", "windows")
 
     def __init__(self, windows: SharedWindows, slots: list[int], names: list[str]) -> None:
+        order = sorted(range(len(slots)), key=slots.__getitem__)  # in slot order
         self.windows = windows
-        self.slots = np.array(slots, dtype=np.int64)
-        self.names = names
+        self.slots = np.array([slots[i] for i in order], dtype=np.int64)
+        self.names = [names[i] for i in order]
+        if np.array_equal(self.slots, windows.every):
+            self.slots = windows.every  # all of them: read with slices
 
 
 class GatheredFrames(Mapping[str, Mapping[DeviceKind, FrameSamples]]):
@@ -849,7 +853,8 @@ class MonitorSession:
             plan = self._gather_plan()
             samples = self._gather(plan.own, gathered)
             for group in plan.groups:
-                windows, slots = group.windows, group.slots
+                windows = group.windows
+                slots = windows.select(group.slots)
                 fresh = windows.fresh[slots]
                 sizes = windows.stops[slots] - windows.starts[slots]
                 if fresh.all():

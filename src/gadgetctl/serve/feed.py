@@ -129,6 +129,8 @@ class _GroupPlan:
         self.group = group
         self.entries = [entry for _, entry in picked]
         self.slots = group.slots[[index for index, _ in picked]]
+        if np.array_equal(self.slots, group.windows.every):
+            self.slots = group.windows.every  # all of them: read with slices
         self.senders = np.array([entry.vrpn_name for entry in self.entries], dtype=object)
         self.generation = np.full(len(picked), -1, dtype=np.int64)
         self.poses_only = np.zeros(len(picked), dtype=bool)
@@ -237,8 +239,9 @@ class ServeFeed:
         data only, at once (:meth:`SharedOutlet.tracker_shared`); the others one by one."""
         windows = plan.group.windows
         slots = plan.slots
-        fresh = windows.fresh[slots]
-        stale = plan.generation != windows.generation[slots]
+        taken = windows.select(slots)
+        fresh = windows.fresh[taken]
+        stale = plan.generation != windows.generation[taken]
         if stale.any():
             plan.recheck(windows, np.flatnonzero(stale))
         bulk = fresh & plan.poses_only
@@ -247,7 +250,7 @@ class ServeFeed:
             return
         if bulk.any():
             self.outlet.tracker_shared(windows, slots[bulk], plan.senders[bulk], self.offset)
-        alone = ~(bulk | windows.emptied[slots])  # empty frames have nothing to serve
+        alone = ~(bulk | windows.emptied[taken])  # empty frames have nothing to serve
         for index in np.flatnonzero(alone).tolist():
             entry = plan.entries[index]
             frames = gathered.get(entry.element)

@@ -178,12 +178,13 @@ class VrpnOutlet:
         state = self._shared.get(id(windows))
         if state is None or state.windows is not windows:
             state = self._shared[id(windows)] = _SharedStretches(windows, len(windows.stores))
-        starts = windows.starts[slots]
-        stops = windows.stops[slots]
+        taken = windows.select(slots)  # a slice when they are all the slots
+        starts = windows.starts[taken]
+        stops = windows.stops[taken]
         stale = (
-            (state.generation[slots] != windows.generation[slots])
-            | (starts < state.first[slots])
-            | (stops > state.last[slots])
+            (state.generation[taken] != windows.generation[taken])
+            | (starts < state.first[taken])
+            | (stops > state.last[taken])
         )
         if state.offset != offset:
             stale[:] = True
@@ -197,10 +198,11 @@ class VrpnOutlet:
                     keep[index] = self._frame_row(state, slot, start, stop)
             if not keep.all():
                 slots, starts, stops = slots[keep], starts[keep], stops[keep]
+                taken = slots
                 if not len(slots):
                     return
-        sensors = state.sensors[slots]
-        begins = state.row[slots] * FRAME_AHEAD + (starts - state.first[slots]) * sensors
+        sensors = state.sensors[taken]
+        begins = state.row[taken] * FRAME_AHEAD + (starts - state.first[taken]) * sensors
         counts = (stops - starts) * sensors
         size = int(counts[0])
         if (counts == size).all():
