@@ -65,6 +65,11 @@ PENDING = "pending"
 DEFAULT_HISTORY_SECONDS = 5.0
 STATS_REFRESH = 0.25  # seconds between recomputations of interval percentiles and jitter
 SINK_WARMUP = 0.5  # seconds a session waits for every device's first sample before its header
+#: Work done ahead between frames (InputManager.prepare, serve's rows framed ahead) waits for
+#: a later pause when less than this share of a frame period is left before the next frame
+#: (0: only when the next frame is already due; skipped work is done by a later pause, or by
+#: the frame that needs it).
+PREPARE_SLACK = 0.0
 
 
 _NOTHING: Mapping = MappingProxyType({})
@@ -603,6 +608,8 @@ class MonitorSession:
         self._proxy_stamps: dict[str, float | None] = {}
         self._frame_interval = 1.0 / rate
         self._last_frame_at: float | None = None
+        #: When the next frame of :meth:`frames` is due (None outside it).
+        self.next_frame_due: float | None = None
         #: Frames run by :meth:`frames` and the seconds they took (wall clock).
         self.frames_run = 0
         self.run_seconds = 0.0
@@ -799,11 +806,13 @@ class MonitorSession:
                 if duration is not None and now() - began >= duration:
                     break
                 source_done = self.source is not None and self.source.done
+                self.next_frame_due = start + (count + 1) * period
                 frame = self.step()
                 count += 1
                 self.frames_run, self.run_seconds = count, now() - began
                 yield frame
-                self.manager.prepare()  # work done ahead, between this frame and the next
+                if self.has_slack():  # work done ahead, when it does not make the next frame late
+                    self.manager.prepare()
                 if source_done and not self.finished:  # the feeder had finished before this frame swapped
                     self.finished = True
                     if stop_at_end:
@@ -817,9 +826,16 @@ class MonitorSession:
                     start = now() - count * period
         finally:
             gc.unfreeze()
+            self.next_frame_due = None
             self.frames_run, self.run_seconds = count, now() - began
             if self.rate_shortfall is None and self.run_seconds >= RATE_CHECK_MIN:
                 self._check_rate(count, self.run_seconds)
+
+    def has_slack(self) -> bool:
+        """Whether the next frame is due in more than :data:`PREPARE_SLACK` of a frame period
+        (or no frames run): time for work done ahead (it waits for a later pause otherwise)."""
+        due = self.next_frame_due
+        return due is None or due - now() > PREPARE_SLACK / self.rate
 
     @property
     def achieved_rate(self) -> float:

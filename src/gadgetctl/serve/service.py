@@ -135,7 +135,8 @@ class ServeService:
         # frame loop has no waits left, and clients must still be accepted and heard
         self.outlet.end_frame()
         self.server.poll(0.0)
-        self.outlet.prepare()  # after the frame's writes: rows the coming frames will need
+        if session.has_slack():  # after the frame's writes: rows the coming frames will need
+            self.outlet.prepare()
 
     def _wait(self, delay: float) -> None:
         """The frame loop's sleep: the server's I/O until the next frame is due."""
