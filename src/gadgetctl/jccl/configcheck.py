@@ -60,7 +60,7 @@ class Session:
         when it needs them, the definitions its driver plug-ins carry."""
         entries = self.definition_entries(config)
         repo = self._extended(entries)
-        if self.plugin_definitions is not None and any(e.type not in repo for e in config.all_elements()):
+        if self.plugin_definitions is not None and _uses_unknown_type(config, repo):
             known = {e.path.resolve() for e in repo.entries}
             extra = [SearchPathEntry(raw=str(d), path=d, origin="driver plug-in")
                      for d in self.plugin_definitions(config) if d.resolve() not in known]
@@ -102,6 +102,11 @@ def check_configuration(config: Configuration, session: Session, scope: Scope) -
     found += check_wiring(config, reports, checker.index, scope)
     found += proxy_unit_problems(config.elements, repo)
     return found
+
+
+def _uses_unknown_type(config: Configuration, repo: DefinitionRepository) -> bool:
+    elements = config.all_elements() if config.may_embed() else config.elements
+    return any(type_name not in repo for type_name in {e.type for e in elements})
 
 
 def _definition_path_findings(entries: list[SearchPathEntry]) -> list[Diagnostic]:

@@ -44,6 +44,7 @@ class ElementReader:
         # <device> of the line is the n-th of the document.
         self._line: int | None = None
         self._on_line: dict[str, int] = {}
+        self.embedded = 0  # embedded elements read
 
     def location(self, node: etree._Element) -> SourceLocation:
         return SourceLocation(self.doc, node)
@@ -83,6 +84,7 @@ class ElementReader:
             on_line[prop] = index + 1
             value = PropertyValue(text=text, location=TagLocation(doc, line, prop, index))
             if embedded is not None:
+                self.embedded += 1
                 value.element = self.read(embedded, element, prop)
             values = properties.get(prop)
             if values is None:
@@ -110,6 +112,7 @@ def read_config_file(doc: XmlDocument, path: Path) -> ConfigFile:
                     config.definition_dirs.append(((entry.text or "").strip(), reader.location(entry).resolved()))
         elif tag == "elements":
             config.elements.extend(reader.read(e) for e in child if isinstance(e.tag, str))
+    config.embedded = reader.embedded
     return config
 
 

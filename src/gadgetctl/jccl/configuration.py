@@ -146,6 +146,7 @@ class ConfigFile:
     definition_dirs: list[tuple[str, Location]] = field(default_factory=list)
     elements: list[ConfigElement] = field(default_factory=list)
     name: str | None = None
+    embedded: int = 0  # how many embedded elements (at any depth) its elements hold
 
 
 @dataclass
@@ -205,6 +206,13 @@ class Configuration:
 
     def by_type(self, type_name: str) -> list[ConfigElement]:
         return [e for e in self.elements if e.type == type_name]
+
+    def may_embed(self) -> bool:
+        """Whether some top-level element may hold embedded elements: false only when every
+        loaded element was read from a file and none of those files had any, which spares
+        checks of 50,000 elements a look into each."""
+        files = self.files
+        return any(f.embedded for f in files) or len(self.loaded) != sum(len(f.elements) for f in files)
 
     def all_elements(self) -> Iterator[ConfigElement]:
         """Effective top-level elements and, after each, its embedded elements."""

@@ -7,6 +7,7 @@ on the way for :mod:`gadgetctl.jccl.wiring`.
 
 from __future__ import annotations
 
+from functools import partial
 from typing import NamedTuple
 
 from gadgetctl.diagnostics import Diagnostic
@@ -27,6 +28,10 @@ class PointerValue(NamedTuple):
     prop: PropertyDefinition
     value: PropertyValue
     target: str  # the value without surrounding white space: the name pointed at
+
+
+#: PointerValue(...) without the named tuple's Python-level ``__new__``.
+_pointer = partial(tuple.__new__, PointerValue)
 
 
 class ElementReport:
@@ -307,7 +312,7 @@ class ElementChecker:
         if prop.valuetype is ValueType.POINTER:
             target = value.text.strip()
             if target:
-                report.pointers.append(PointerValue(element, prop, value, target))
+                report.pointers.append(_pointer((element, prop, value, target)))
             return
         key = (id(prop), value.text)
         try:

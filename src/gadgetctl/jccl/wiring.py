@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections import defaultdict
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 from lxml import etree
@@ -29,6 +30,11 @@ from gadgetctl.suggest import CloseNames
 from gadgetctl.wording import with_article
 
 UNHANDLED = "unhandled"
+_UNJUDGED = object()  # a kind whose blocking is not worked out yet (None: it blocks nothing)
+_NOT_BLOCKED = ("",)
+_node = partial(tuple.__new__, Node)  # Node(...) without its Python-level __new__ (50,000 per check)
+#: A pending element, why it is pending where (the run time wording) and its unmet pointers.
+_Waiting = tuple[ConfigElement, str, list[tuple[PointerValue, "ConfigElement | None", str]]]
 #: Said of an element VR Juggler leaves pending where gadgetctl deliberately runs it.
 GADGETCTL_RUNS_IT = "gadgetctl runs it"
 
@@ -63,7 +69,7 @@ class Wiring:
         self.scope = scope
         self.effective = config.elements
         self.by_name = {e.name: e for e in self.effective}
-        self.embedded = embedded_by_name(self.effective)
+        self.embedded = embedded_by_name(self.effective) if config.may_embed() else {}
         self._severities: dict[Severity, set[int]] | None = None
         self._suggesters: dict[bool, CloseNames] = {}
         self._taken: dict[tuple[int, str], bool] = {}  # (property, target type) -> allowed
@@ -74,23 +80,79 @@ class Wiring:
     def check(self) -> list[Diagnostic]:
         found = self.duplicates()
         wrong: list[tuple[PointerValue, ConfigElement]] = []  # pointers at a type not allowed
-        by_name, reports, taken = self.by_name, self.reports, self._taken
-        for element in self.config.loaded:
+        nodes = self._walk(found, wrong)
+        found.extend(self._wrong_types(wrong))
+        found.extend(self.pending(nodes))
+        return found
+
+    def _walk(
+        self, found: list[Diagnostic], wrong: list[tuple[PointerValue, ConfigElement]]
+    ) -> list[Node]:
+        """Every pointer of every loaded element checked (CFG031 into ``found``, pointers at
+        a type their property does not take into ``wrong``), and the effective elements as
+        the activation rules see them (filling :attr:`blocked`). When every name occurs once
+        the loaded elements are the effective ones, and both are done in one pass."""
+        loaded = self.config.loaded
+        unique = len(self.by_name) == len(loaded)
+        if not unique:
+            self._pointers(loaded, found, wrong)
+        by_name, reports, taken, kind_blocked = (
+            self.by_name, self.reports, self._taken, self._kind_blocked
+        )
+        blocked = self.blocked = {}
+        nodes: list[Node] = []
+        add = nodes.append
+        for element in self.effective:
+            key = id(element)
+            type_name, version = element.type, element.version
+            blocker = kind_blocked.get((type_name, version), _UNJUDGED)
+            if blocker is _UNJUDGED:
+                blocker = self._blocked(element)
+            refused = None
+            if blocker is not None:
+                blocked[key] = blocker
+                if blocker[0] == UNHANDLED:
+                    refused = UNHANDLED
+            pointers = reports[key].pointers
+            if not pointers:
+                add(_node((element.name, type_name, version, (), refused)))
+                continue
+            if unique:
+                for pointer in pointers:
+                    target = by_name.get(pointer.target)
+                    if target is None:
+                        missing = self.pointer(pointer, element)
+                        if missing is not None:
+                            found.append(missing)
+                        continue
+                    takes = taken.get((id(pointer.prop), target.type))
+                    if takes is None:
+                        takes = self._takes(pointer.prop, target.type)
+                    if not takes:
+                        wrong.append((pointer, target))
+            targets = (
+                (pointers[0].target,) if len(pointers) == 1 else tuple([p.target for p in pointers])
+            )
+            add(_node((element.name, type_name, version, targets, refused)))
+        return nodes
+
+    def _pointers(
+        self,
+        elements: list[ConfigElement],
+        found: list[Diagnostic],
+        wrong: list[tuple[PointerValue, ConfigElement]],
+    ) -> None:
+        """The pointer checks of :meth:`_walk` alone, for ``elements``."""
+        by_name, reports = self.by_name, self.reports
+        for element in elements:
             for pointer in reports[id(element)].pointers:
                 target = by_name.get(pointer.target)
                 if target is None:
                     missing = self.pointer(pointer, element)
                     if missing is not None:
                         found.append(missing)
-                    continue
-                takes = taken.get((id(pointer.prop), target.type))
-                if takes is None:
-                    takes = self._takes(pointer.prop, target.type)
-                if not takes:
+                elif not self._takes(pointer.prop, target.type):
                     wrong.append((pointer, target))
-        found.extend(self._wrong_types(wrong))
-        found.extend(self.pending())
-        return found
 
     # -- names -----------------------------------------------------------------------
 
@@ -266,104 +328,78 @@ class Wiring:
         self._kind_blocked[kind] = found
         return found
 
-    def _nodes(self) -> list[Node]:
-        """The effective elements as the activation rules see them; fills :attr:`blocked`."""
-        blocked = self.blocked = {}
-        reports = self.reports
-        nodes = []
-        for element in self.effective:
-            key = id(element)
-            blocker = self._blocked(element)
-            refused = None
-            if blocker is not None:
-                blocked[key] = blocker
-                if blocker[0] == UNHANDLED:
-                    refused = UNHANDLED
-            pointers = reports[key].pointers
-            targets = tuple([p.target for p in pointers]) if pointers else ()
-            nodes.append(Node(element.name, element.type, element.version, targets, refused))
-        return nodes
-
-    def pending(self) -> list[Diagnostic]:
-        nodes = self._nodes()
-        fate = settle(nodes, RunTime.VRJUGGLER, self.index.versions)
+    def pending(self, nodes: list[Node] | None = None) -> list[Diagnostic]:
+        """CFG041 for the effective elements VR Juggler would leave pending (``nodes``: the
+        elements as :meth:`_walk` gave them; worked out when not given)."""
+        if nodes is None:
+            nodes = self._walk([], [])
+        versions = self.index.versions
+        fate = settle(nodes, RunTime.VRJUGGLER, versions)
         active = {name for name, why in fate.items() if why is None}
         # The run times' rules differ only for the types of DIFFERENCES: without any, their
         # fates are the same.
-        differ = any(node.type in DIFFERENCES for node in nodes)
-        ours = settle(nodes, RunTime.GADGETCTL, self.index.versions) if differ else fate
+        differ = any(node[1] in DIFFERENCES for node in nodes)
+        ours = settle(nodes, RunTime.GADGETCTL, versions) if differ else fate
         found = []
-        waiting: list[
-            tuple[ConfigElement, str, list[tuple[PointerValue, ConfigElement | None, str]]]
-        ] = []
-        blocked, reasons_of = self.blocked, self._reasons
+        waiting: list[_Waiting] = []
+        position: dict[int, int] = {}  # element -> its place in waiting
+        blocked, by_name, embedded, reports = self.blocked, self.by_name, self.embedded, self.reports
         for element in self.effective:
-            if element.name in active:
-                continue
-            where = (
-                f" in VR Juggler ({GADGETCTL_RUNS_IT})"
-                if ours.get(element.name, "") is None
-                else ""
-            )
-            blocker = blocked.get(id(element))
-            if blocker is None:
-                reasons = reasons_of(element, active)
-                if reasons:  # only missing targets: reported as CFG031
-                    waiting.append((element, where, reasons))
-            elif blocker[0] != UNHANDLED:
-                found.append(
-                    at(
-                        "CFG041",
-                        f"{describe(element)} would stay pending{where}: {blocker[0]}",
-                        element.location,
-                        severity=blocker[1],
-                    )
-                )
-        found.extend(self._waiting(waiting, active))
-        return found
-
-    def _reasons(
-        self, element: ConfigElement, active: set[str]
-    ) -> list[tuple[PointerValue, ConfigElement | None, str]]:
-        """The unmet pointers of a pending element that name an element: (pointer, target,
-        why it is never met)."""
-        reasons = []
-        for pointer in self.reports[id(element)].pointers:
-            name = pointer.target
+            name = element.name
             if name in active:
                 continue
-            target = self.by_name.get(name)
-            if target is None and name in self.embedded:
-                reasons.append(
-                    (
-                        pointer,
-                        None,
-                        f"{pointer.prop.name} names the embedded element {name!r}, "
-                        "and VR Juggler only looks for top-level elements",
+            where = f" in VR Juggler ({GADGETCTL_RUNS_IT})" if ours.get(name, "") is None else ""
+            key = id(element)
+            blocker = blocked.get(key)
+            if blocker is not None:
+                if blocker[0] != UNHANDLED:
+                    found.append(
+                        at(
+                            "CFG041",
+                            f"{describe(element)} would stay pending{where}: {blocker[0]}",
+                            element.location,
+                            severity=blocker[1],
+                        )
                     )
-                )
-            elif target is not None:
-                why = "which stays pending itself"
-                if self.blocked.get(id(target), ("",))[0] == UNHANDLED:
-                    why = (
-                        "whose type VR Juggler does not handle"
-                        if self.index.known(target.type)
-                        else "which VR Juggler drops because its type has no definition"
+                continue
+            # the unmet pointers that name an element: (pointer, target, why never met)
+            reasons = []
+            for pointer in reports[key].pointers:
+                target_name = pointer.target
+                if target_name in active:
+                    continue
+                target = by_name.get(target_name)
+                if target is not None:
+                    reasons.append((pointer, target, self._never_met(target)))
+                elif target_name in embedded:
+                    reasons.append(
+                        (
+                            pointer,
+                            None,
+                            f"{pointer.prop.name} names the embedded element {target_name!r}, "
+                            "and VR Juggler only looks for top-level elements",
+                        )
                     )
-                reasons.append((pointer, target, why))
-        return reasons
+            if reasons:  # (only missing targets: reported as CFG031)
+                position[key] = len(waiting)
+                waiting.append((element, where, reasons))
+        found.extend(self._waiting(waiting, position, active))
+        return found
+
+    def _never_met(self, target: ConfigElement) -> str:
+        """Why a pointer at ``target``, a pending top-level element, is never met."""
+        if self.blocked.get(id(target), _NOT_BLOCKED)[0] != UNHANDLED:
+            return "which stays pending itself"
+        if self.index.known(target.type):
+            return "whose type VR Juggler does not handle"
+        return "which VR Juggler drops because its type has no definition"
 
     def _waiting(
-        self,
-        waiting: list[
-            tuple[ConfigElement, str, list[tuple[PointerValue, ConfigElement | None, str]]]
-        ],
-        active: set[str],
+        self, waiting: list[_Waiting], position: dict[int, int], active: set[str]
     ) -> list[Diagnostic]:
         """CFG041 for elements pending because what they point at stays pending. A chain of
         elements of one type each waiting only for the one before (aliases naming aliases)
         is one finding at its head, with a count: the cause is the same for all of them."""
-        position = {id(element): i for i, (element, _, _) in enumerate(waiting)}
         leader: dict[int, int] = {}
         for i, (element, where, reasons) in enumerate(waiting):
             if len(reasons) != 1:
