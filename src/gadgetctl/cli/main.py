@@ -17,8 +17,11 @@ def main(argv: list[str] | None = None) -> None:
         from gadgetctl.cli.candidates import main as complete
 
         sys.exit(complete(args[1:]))
+    from gadgetctl.cli import exiting
     from gadgetctl.cli.app import build_app
     from gadgetctl.errors import GadgetctlError
+
+    exiting.own_process = True
 
     app = build_app()
     try:

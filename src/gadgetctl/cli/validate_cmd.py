@@ -6,6 +6,7 @@ from pathlib import Path
 
 import typer
 
+from gadgetctl.cli.exiting import finish
 from gadgetctl.cli.options import (
     BUNDLED_OPTION,
     COLOR_OPTION,
@@ -47,4 +48,4 @@ def validate(
     result = validate_paths(paths, options)
     emit(render(fmt.value, result.diagnostics, files_checked=len(result.files),
                 color=use_color(color), hints=hints))
-    raise typer.Exit(exit_code_for(result.diagnostics, strict=strict))
+    finish(exit_code_for(result.diagnostics, strict=strict))
