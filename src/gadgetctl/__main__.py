@@ -1,3 +1,3 @@
-from gadgetctl.cli.main import main
+from gadgetctl.cli.main import run
 
-main()
+run()

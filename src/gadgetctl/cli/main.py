@@ -6,6 +6,15 @@ import os
 import sys
 
 
+def run() -> None:
+    """The console script (and ``python -m gadgetctl``): gadgetctl owns its process, so a
+    finished command may end it at once (see :mod:`gadgetctl.cli.exiting`)."""
+    from gadgetctl.cli import exiting
+
+    exiting.own_process = True
+    main()
+
+
 def main(argv: list[str] | None = None) -> None:
     args = sys.argv[1:] if argv is None else argv
     if args in (["--version"], ["-V"]):  # answered without loading the CLI framework
@@ -17,11 +26,8 @@ def main(argv: list[str] | None = None) -> None:
         from gadgetctl.cli.candidates import main as complete
 
         sys.exit(complete(args[1:]))
-    from gadgetctl.cli import exiting
     from gadgetctl.cli.app import build_app
     from gadgetctl.errors import GadgetctlError
-
-    exiting.own_process = True
 
     app = build_app()
     try:

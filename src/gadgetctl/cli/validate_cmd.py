@@ -39,10 +39,14 @@ def validate(
 
     Exit status: 0 clean (warnings allowed unless --strict), 1 errors found, 2 usage or tool error.
     """
+    from gadgetctl.cli import exiting
     from gadgetctl.diagnostics import exit_code_for
+    from gadgetctl.perf import retain_until_exit
     from gadgetctl.report import render
     from gadgetctl.validate import ValidateOptions, validate_paths
 
+    if exiting.own_process:  # validate ends with finish(): what it builds need not be freed
+        retain_until_exit()
     options = ValidateOptions(max_size=max_size, level=level.value, bundled=bundled, definition_dirs=list(definitions),
                               together=together)
     result = validate_paths(paths, options)

@@ -12,31 +12,39 @@ def fold_chains(count: int, leader: Mapping[int, int]) -> dict[int, list[int]]:
     head (a position without a leader) with the positions that follow it, directly or in
     turn, nearest first; heads in order (those of cycles last). Every position is either a head or a follower of
     exactly one head; in a cycle the first position of it is its head. Linear in ``count``."""
-    behind: dict[int, list[int]] = {}
-    for key in sorted(leader):
-        ahead = leader[key]
-        if 0 <= ahead < count and ahead != key:
-            behind.setdefault(ahead, []).append(key)
-    assigned = bytearray(count)
+    behind: dict[int, list[int]] = {}  # position -> the positions following it, in order
     heads: dict[int, list[int]] = {}
+    starts = []  # positions whose leader is out of range or themselves: heads too
+    for key, ahead in sorted(leader.items()):
+        if 0 <= ahead < count and ahead != key:
+            followers = behind.get(ahead)
+            if followers is None:
+                behind[ahead] = [key]
+            else:
+                followers.append(key)
+        else:
+            starts.append(key)
+    assigned = bytearray(count)
+    following = behind.get
 
     def gather(head: int) -> None:
         assigned[head] = 1
-        followers: list[int] = []
         queue = [head]
         for current in queue:  # the list grows as followers are found: breadth first
-            for follower in behind.get(current, ()):
+            for follower in following(current, ()):
                 if not assigned[follower]:
                     assigned[follower] = 1
-                    followers.append(follower)
                     queue.append(follower)
-        heads[head] = followers
+        heads[head] = queue[1:]
 
-    for key in range(count):
-        ahead = leader.get(key)
-        if ahead is None or not 0 <= ahead < count or ahead == key:
-            gather(key)
-    for key in range(count):  # what is left hangs on cycles
-        if not assigned[key]:
-            gather(key)
+    if starts:
+        chosen = sorted(set(starts).union(k for k in range(count) if k not in leader))
+    else:
+        chosen = [k for k in range(count) if k not in leader]
+    for key in chosen:
+        gather(key)
+    left = assigned.find(0)
+    while left != -1:  # what is left hangs on cycles
+        gather(left)
+        left = assigned.find(0, left + 1)
     return heads

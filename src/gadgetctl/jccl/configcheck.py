@@ -28,6 +28,7 @@ from gadgetctl.jccl.typeindex import TypeIndex
 from gadgetctl.jccl.units import proxy_unit_problems
 from gadgetctl.jccl.wiring import Scope, check_wiring
 from gadgetctl.jccl.xmlload import FileKind, XmlDocument
+from gadgetctl.perf import retain
 
 
 @dataclass
@@ -99,6 +100,7 @@ def check_configuration(config: Configuration, session: Session, scope: Scope) -
         found += report.diagnostics
         if element.type in _PATH_TYPES:
             found += _path_variables(element, session.environ)
+    retain(reports)
     found += check_wiring(config, reports, checker.index, scope)
     found += proxy_unit_problems(config.elements, repo)
     return found
@@ -179,11 +181,13 @@ def check_documents(documents: Iterable[XmlDocument], base: DefinitionRepository
             session.documents[_real_path(doc.path)] = doc
     if not given:
         return []
+    retain(session)  # (the loaded configurations: kept to the end when nothing is freed then)
     if together:
         config = session.load(given)
         names = ", ".join(Path(p).name for p in given)
         return _unique(check_configuration(config, session, Scope(True, names)))
     configs = {path: session.load([path]) for path in given}
+    retain(configs)
     found: list[Diagnostic] = []
     reported: set[tuple] = set()
     for path in _roots(configs):

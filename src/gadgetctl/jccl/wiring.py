@@ -26,6 +26,7 @@ from gadgetctl.jccl.definitions import PropertyDefinition
 from gadgetctl.jccl.elementcheck import ElementReport, PointerValue, at, describe
 from gadgetctl.jccl.runtime import missing_target_effect
 from gadgetctl.jccl.typeindex import TypeIndex
+from gadgetctl.perf import retain
 from gadgetctl.suggest import CloseNames
 from gadgetctl.wording import with_article
 
@@ -257,20 +258,23 @@ class Wiring:
         """CFG032 for each pointer at an element of a type the property does not take; a
         chain of elements of one type each naming the one before through the same property
         (aliases naming aliases) is one finding at its head, with a count."""
-        wrongs_of: dict[int, int] = defaultdict(int)  # element -> its pointers at a wrong type
-        position: dict[int, int] = {}
+        position: dict[int, int] = {}  # element -> the place of its (last) wrong pointer
+        several: set[int] = set()  # elements with more than one
         for i, (pointer, _) in enumerate(wrong):
-            wrongs_of[id(pointer.element)] += 1
-            position[id(pointer.element)] = i
+            key = id(pointer[0])
+            if key in position:
+                several.add(key)
+            position[key] = i
         leader: dict[int, int] = {}
         for i, (pointer, target) in enumerate(wrong):
             ahead = position.get(id(target))
+            if ahead is None:
+                continue
+            element, prop = pointer[0], pointer[1]
             if (
-                ahead is not None
-                and target.type == pointer.element.type
-                and wrongs_of[id(pointer.element)] == 1
-                and wrongs_of[id(target)] == 1
-                and wrong[ahead][0].prop.name == pointer.prop.name
+                target.type == element.type
+                and (not several or (id(element) not in several and id(target) not in several))
+                and wrong[ahead][0][1].name == prop.name
             ):
                 leader[i] = ahead
         heads = fold_chains(len(wrong), leader)
@@ -556,7 +560,9 @@ def _same_text(one: ConfigElement, other: ConfigElement) -> bool:
 def check_wiring(
     config: Configuration, reports: dict[int, ElementReport], index: TypeIndex, scope: Scope
 ) -> list[Diagnostic]:
-    return Wiring(config, reports, index, scope).check()
+    wiring = Wiring(config, reports, index, scope)
+    retain(wiring)
+    return wiring.check()
 
 
 def embedded_by_name(elements: list[ConfigElement]) -> dict[str, ConfigElement]:
