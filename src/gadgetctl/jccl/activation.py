@@ -109,10 +109,12 @@ def settle(
     versions: Callable[[str], Sequence[int]],
     *,
     refused: Collection[str] = (),
+    active: set[str] | None = None,
 ) -> dict[str, str | None]:
     """Every node's fate once nothing more can change: None when active, else why it stays
     pending (its refusal, or ``"waiting"`` for elements that wait on pointers that never
-    become active). ``refused`` names more elements that never become active."""
+    become active). ``refused`` names more elements that never become active; ``active``,
+    when given, receives the names of the active ones."""
     fate: dict[str, str | None] = {}
     waiting: dict[str, list[str]] = {}  # target name -> names of the nodes waiting for it
     unmet: dict[str, int] = {}
@@ -162,6 +164,8 @@ def settle(
         if fate[name] is None:
             continue
         fate[name] = None
+        if active is not None:
+            active.add(name)
         for dependent in waiting.get(name, ()):
             left = unmet[dependent] - 1
             unmet[dependent] = left

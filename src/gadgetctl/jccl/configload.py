@@ -53,7 +53,7 @@ class ElementReader:
              parent_property: str | None = None) -> ConfigElement:
         name = node.get("name")
         element = ConfigElement(
-            _local(node) or "",
+            node.tag.rpartition("}")[2],  # (an element: the caller skips comments)
             "" if name is None else name,
             node.get("version"),
             SourceLocation(self.doc, node),

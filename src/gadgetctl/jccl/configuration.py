@@ -93,22 +93,50 @@ def _version_number(text: str | None) -> int | None:
         return None
 
 
-@dataclass(eq=False, slots=True)
+#: The number of each version attribute text seen (a file holds a handful of them).
+_VERSION_NUMBERS: dict[str | None, int | None] = {}
+
+
+@dataclass(eq=False, slots=True, init=False)
 class ConfigElement:
     type: str
     name: str
     version_text: str | None
     location: Location | SourceLocation
-    properties: dict[str, list[PropertyValue]] = field(default_factory=dict)
-    parent: ConfigElement | None = None
-    parent_property: str | None = None
-    node: etree._Element | None = field(default=None, repr=False)
+    properties: dict[str, list[PropertyValue]]
+    parent: ConfigElement | None
+    parent_property: str | None
+    node: etree._Element | None = field(repr=False)
     #: The version attribute as a number (None when missing or not a number), read once: a
     #: configuration of 50,000 elements asks for it several times per element.
     version: int | None = field(init=False, repr=False)
 
-    def __post_init__(self) -> None:
-        self.version = _version_number(self.version_text)
+    def __init__(
+        self,
+        type: str,
+        name: str,
+        version_text: str | None,
+        location: Location | SourceLocation,
+        properties: dict[str, list[PropertyValue]] | None = None,
+        parent: ConfigElement | None = None,
+        parent_property: str | None = None,
+        node: etree._Element | None = None,
+    ) -> None:
+        # (written out rather than generated: 50,000 elements are made per large check)
+        self.type = type
+        self.name = name
+        self.version_text = version_text
+        self.location = location
+        self.properties = {} if properties is None else properties
+        self.parent = parent
+        self.parent_property = parent_property
+        self.node = node
+        try:
+            self.version = _VERSION_NUMBERS[version_text]
+        except KeyError:
+            self.version = _version_number(version_text)
+            if len(_VERSION_NUMBERS) < 1024:
+                _VERSION_NUMBERS[version_text] = self.version
 
     @property
     def file(self) -> str:

@@ -64,6 +64,7 @@ class ElementChecker:
         self._values: dict[tuple[int, str], ValueProblem | None] = {}
         self._clean_views: dict[tuple[str, int | None], TypeView] = {}
         self._required_cache: dict[tuple[str, int], list[tuple[PropertyDefinition, str]]] = {}
+        self._plans: dict[int, tuple] = {}  # id of a view -> see _plan (which holds the view)
 
     def check(self, element: ConfigElement) -> ElementReport:
         cached = self._cache.get(id(element))
@@ -81,17 +82,50 @@ class ElementChecker:
         report.views[id(element)] = view
         if view is None:
             return
+        plan = self._plans.get(id(view))
+        if plan is None or plan[0] is not view:
+            plan = self._plans[id(view)] = self._plan(view)
+        _, definitions, required = plan
         for prop_name, values in element.properties.items():
-            prop = view.get(prop_name)
-            if prop is None:
+            found = definitions.get(prop_name)
+            if found is None:
                 report.diagnostics.append(
                     self._unknown_property(element, view, prop_name, values[0])
                 )
                 continue
-            self._check_count(element, prop, values, report)
+            prop, slots = found
+            if slots is not None and len(values) != slots:
+                self._check_count(element, prop, values, report)
+            if prop.valuetype is ValueType.POINTER:  # the usual case of a large configuration
+                for value in values:
+                    if value.element is None:
+                        target = value.text.strip()
+                        if target:
+                            report.pointers.append(_pointer((element, prop, value, target)))
+                    else:
+                        self._check_value(element, prop, value, report)
+                continue
             for value in values:
                 self._check_value(element, prop, value, report)
-        self._check_required(element, view, report)
+        if required:
+            self._check_required(element, required, report)
+
+    def _plan(
+        self, view: TypeView
+    ) -> tuple[
+        TypeView,
+        dict[str, tuple[PropertyDefinition, int | None]],
+        list[tuple[PropertyDefinition, str]],
+    ]:
+        """What checking an element of a view needs, worked out once per view:
+        each property's definition with its fixed number of values (None when variable or
+        undefined, see :meth:`_check_count`), and the pointers it must set."""
+        definitions = {}
+        for name, effective in view.properties.items():
+            prop = effective.definition
+            fixed = None if prop.variable or not prop.values else len(prop.values)
+            definitions[name] = (prop, fixed)
+        return view, definitions, self._required(view)
 
     def _judged_view(self, element: ConfigElement, report: ElementReport) -> TypeView | None:
         """The definition version the element is judged by; version and type findings."""
@@ -372,9 +406,12 @@ class ElementChecker:
         return found
 
     def _check_required(
-        self, element: ConfigElement, view: TypeView, report: ElementReport
+        self,
+        element: ConfigElement,
+        required: list[tuple[PropertyDefinition, str]],
+        report: ElementReport,
     ) -> None:
-        for prop, effect in self._required(view):
+        for prop, effect in required:
             prop_name = prop.name
             values = element.properties.get(prop_name)
             if values and _any_set(values):

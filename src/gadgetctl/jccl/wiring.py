@@ -33,6 +33,7 @@ from gadgetctl.wording import with_article
 UNHANDLED = "unhandled"
 _UNJUDGED = object()  # a kind whose blocking is not worked out yet (None: it blocks nothing)
 _NOT_BLOCKED = ("",)
+_STAYS = "which stays pending itself"
 _node = partial(tuple.__new__, Node)  # Node(...) without its Python-level __new__ (50,000 per check)
 #: A pending element, why it is pending where (the run time wording) and its unmet pointers.
 _Waiting = tuple[ConfigElement, str, list[tuple[PointerValue, "ConfigElement | None", str]]]
@@ -97,18 +98,23 @@ class Wiring:
         unique = len(self.by_name) == len(loaded)
         if not unique:
             self._pointers(loaded, found, wrong)
-        by_name, reports, taken, kind_blocked = (
-            self.by_name, self.reports, self._taken, self._kind_blocked
-        )
+        by_name, reports, kind_blocked = self.by_name, self.reports, self._kind_blocked
         blocked = self.blocked = {}
         nodes: list[Node] = []
         add = nodes.append
+        # the kind of the element before, and the property and target type of the pointer
+        # before, with their answers: a large configuration repeats them element after element
+        last_kind: tuple[str, int | None] | None = None
+        blocker = None
+        last_takes: tuple[PropertyDefinition, str, bool] | None = None
         for element in self.effective:
             key = id(element)
             type_name, version = element.type, element.version
-            blocker = kind_blocked.get((type_name, version), _UNJUDGED)
-            if blocker is _UNJUDGED:
-                blocker = self._blocked(element)
+            if last_kind is None or last_kind[0] != type_name or last_kind[1] != version:
+                last_kind = (type_name, version)
+                blocker = kind_blocked.get(last_kind, _UNJUDGED)
+                if blocker is _UNJUDGED:
+                    blocker = self._blocked(element)
             refused = None
             if blocker is not None:
                 blocked[key] = blocker
@@ -120,19 +126,19 @@ class Wiring:
                 continue
             if unique:
                 for pointer in pointers:
-                    target = by_name.get(pointer.target)
+                    target = by_name.get(pointer[3])  # (.target)
                     if target is None:
                         missing = self.pointer(pointer, element)
                         if missing is not None:
                             found.append(missing)
                         continue
-                    takes = taken.get((id(pointer.prop), target.type))
-                    if takes is None:
-                        takes = self._takes(pointer.prop, target.type)
-                    if not takes:
+                    prop = pointer[1]
+                    if last_takes is None or last_takes[0] is not prop or last_takes[1] != target.type:
+                        last_takes = (prop, target.type, self._takes(prop, target.type))
+                    if not last_takes[2]:
                         wrong.append((pointer, target))
             targets = (
-                (pointers[0].target,) if len(pointers) == 1 else tuple([p.target for p in pointers])
+                (pointers[0][3],) if len(pointers) == 1 else tuple([p.target for p in pointers])
             )
             add(_node((element.name, type_name, version, targets, refused)))
         return nodes
@@ -338,43 +344,51 @@ class Wiring:
         if nodes is None:
             nodes = self._walk([], [])
         versions = self.index.versions
-        fate = settle(nodes, RunTime.VRJUGGLER, versions)
-        active = {name for name, why in fate.items() if why is None}
+        active: set[str] = set()
+        fate = settle(nodes, RunTime.VRJUGGLER, versions, active=active)
         # The run times' rules differ only for the types of DIFFERENCES: without any, their
-        # fates are the same.
-        differ = any(node[1] in DIFFERENCES for node in nodes)
+        # fates are the same (and no element pending in VR Juggler is active in gadgetctl).
+        differ = not DIFFERENCES.keys().isdisjoint(kind[0] for kind in self._kind_blocked)
         ours = settle(nodes, RunTime.GADGETCTL, versions) if differ else fate
         found = []
         waiting: list[_Waiting] = []
         position: dict[int, int] = {}  # element -> its place in waiting
+        leader: dict[int, int] = {}  # place in waiting -> the place it follows in a chain
+        later: list[int] = []  # places whose leader is found after the walk
         blocked, by_name, embedded, reports = self.blocked, self.by_name, self.embedded, self.reports
         for element in self.effective:
             name = element.name
             if name in active:
                 continue
-            where = f" in VR Juggler ({GADGETCTL_RUNS_IT})" if ours.get(name, "") is None else ""
+            where = (
+                f" in VR Juggler ({GADGETCTL_RUNS_IT})"
+                if differ and ours.get(name, "") is None
+                else ""
+            )
             key = id(element)
-            blocker = blocked.get(key)
-            if blocker is not None:
-                if blocker[0] != UNHANDLED:
-                    found.append(
-                        at(
-                            "CFG041",
-                            f"{describe(element)} would stay pending{where}: {blocker[0]}",
-                            element.location,
-                            severity=blocker[1],
+            if blocked:
+                blocker = blocked.get(key)
+                if blocker is not None:
+                    if blocker[0] != UNHANDLED:
+                        found.append(
+                            at(
+                                "CFG041",
+                                f"{describe(element)} would stay pending{where}: {blocker[0]}",
+                                element.location,
+                                severity=blocker[1],
+                            )
                         )
-                    )
-                continue
+                    continue
             # the unmet pointers that name an element: (pointer, target, why never met)
             reasons = []
             for pointer in reports[key].pointers:
-                target_name = pointer.target
+                target_name = pointer[3]  # (.target)
                 if target_name in active:
                     continue
                 target = by_name.get(target_name)
                 if target is not None:
-                    reasons.append((pointer, target, self._never_met(target)))
+                    why = self._never_met(target) if blocked and id(target) in blocked else _STAYS
+                    reasons.append((pointer, target, why))
                 elif target_name in embedded:
                     reasons.append(
                         (
@@ -384,34 +398,43 @@ class Wiring:
                             "and VR Juggler only looks for top-level elements",
                         )
                     )
-            if reasons:  # (only missing targets: reported as CFG031)
-                position[key] = len(waiting)
-                waiting.append((element, where, reasons))
-        found.extend(self._waiting(waiting, position, active))
+            if not reasons:  # (only missing targets: reported as CFG031)
+                continue
+            here = position[key] = len(waiting)
+            entry = (element, where, reasons)
+            waiting.append(entry)
+            if len(reasons) == 1 and reasons[0][1] is not None:
+                # follows the one it waits for if that one waits already (most chains run
+                # backwards); the others are settled once every place is known
+                ahead = position.get(id(reasons[0][1]), -1)
+                if ahead < 0:
+                    later.append(here)
+                else:
+                    before = waiting[ahead]  # (_follows, written out: once per element)
+                    if before[0].type == element.type and before[1] == where:
+                        leader[here] = ahead
+        for here in later:
+            ahead = position.get(id(waiting[here][2][0][1]), -1)
+            if ahead >= 0 and _follows(waiting[here], waiting[ahead]):
+                leader[here] = ahead
+        found.extend(self._waiting(waiting, leader, active))
         return found
 
     def _never_met(self, target: ConfigElement) -> str:
         """Why a pointer at ``target``, a pending top-level element, is never met."""
         if self.blocked.get(id(target), _NOT_BLOCKED)[0] != UNHANDLED:
-            return "which stays pending itself"
+            return _STAYS
         if self.index.known(target.type):
             return "whose type VR Juggler does not handle"
         return "which VR Juggler drops because its type has no definition"
 
     def _waiting(
-        self, waiting: list[_Waiting], position: dict[int, int], active: set[str]
+        self, waiting: list[_Waiting], leader: dict[int, int], active: set[str]
     ) -> list[Diagnostic]:
         """CFG041 for elements pending because what they point at stays pending. A chain of
-        elements of one type each waiting only for the one before (aliases naming aliases)
-        is one finding at its head, with a count: the cause is the same for all of them."""
-        leader: dict[int, int] = {}
-        for i, (element, where, reasons) in enumerate(waiting):
-            if len(reasons) != 1:
-                continue
-            target = reasons[0][1]
-            ahead = position.get(id(target)) if target is not None else None
-            if ahead is not None and target.type == element.type and waiting[ahead][1] == where:
-                leader[i] = ahead
+        elements of one type each waiting only for the one before (aliases naming aliases,
+        ``leader``: see :func:`_follows`) is one finding at its head, with a count: the
+        cause is the same for all of them."""
         heads = fold_chains(len(waiting), leader)
         self._severities = self._root_severities(active, [waiting[h][0] for h in heads])
         found = []
@@ -513,6 +536,12 @@ class Wiring:
                     if target is not None and id(target) not in seen:
                         stack.append(target)
         return order
+
+
+def _follows(waiting: _Waiting, ahead: _Waiting) -> bool:
+    """Whether a pending element, waiting only for ``ahead``'s element, continues its chain:
+    of the same type, pending in the same run times."""
+    return waiting[0].type == ahead[0].type and waiting[1] == ahead[1]
 
 
 class _FileRelation:
