@@ -79,9 +79,13 @@ class CloseNames:
 
     def __init__(self, candidates: Iterable[str], *, ignore_case: bool = True) -> None:
         self._ignore_case = ignore_case
-        spelled: dict[str, str] = {}
-        for candidate in candidates:
-            spelled.setdefault(self._fold(candidate), candidate)
+        names = list(candidates)
+        folded = [name.lower() for name in names] if ignore_case else names
+        spelled = dict(zip(folded, names, strict=True))
+        if len(spelled) != len(names):  # some fold alike: the first one spelled wins
+            spelled = {}
+            for key, name in zip(folded, names, strict=True):
+                spelled.setdefault(key, name)
         self._spelled = spelled
         self._keys = sorted(spelled, key=len)  # by length: a feasible length range is a slice
         self._key_lengths = [len(k) for k in self._keys]
