@@ -54,3 +54,14 @@ def test_in_process_callers_get_typer_exit_and_keep_their_memory():
     kept = object()
     perf.retain(kept)
     assert perf._retained is None  # nothing is held back for a process that goes on
+
+
+def test_the_collector_comes_back_on_after_bulk_work_in_a_process_that_goes_on():
+    import gc
+
+    from gadgetctl.perf import collector_paused
+
+    assert gc.isenabled()
+    with collector_paused():
+        assert not gc.isenabled()
+    assert gc.isenabled()

@@ -21,7 +21,10 @@ def collector_paused() -> Iterator[None]:
     try:
         yield
     finally:
-        if was_enabled:
+        # Switched back on, the collector would soon walk everything built meanwhile (a
+        # tenth of a second after a check of 50,000 elements). A process that ends without
+        # teardown (see retain_until_exit) frees nothing more that matters: left off there.
+        if was_enabled and _retained is None:
             gc.enable()
 
 
