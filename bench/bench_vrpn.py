@@ -442,8 +442,9 @@ def breakdown(
                 oldest = t0 if oldest is None else min(oldest, t0)
                 newest = t1 if newest is None else max(newest, t1)
         for name in feed_devices:
-            frames = session.gathered.get(name) if name in grouped else session.frame_samples(name)
-            frame = frames.get(DeviceKind.POSITION) if frames else None
+            if name in grouped:
+                continue
+            frame = session.frame_samples(name).get(DeviceKind.POSITION)
             if frame:
                 first, last = frame.chunks[0], frame.chunks[-1]
                 t0 = first.timestamp if hasattr(first, "timestamp") else float(first.timestamps[0])
