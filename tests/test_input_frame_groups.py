@@ -128,7 +128,9 @@ def test_a_group_frame_gives_each_device_exactly_its_own_samples(make, ahead):
                 np.testing.assert_array_equal(newest.values, values[kind][-1])
             kept[device.name].append((seen[device.name], stamps, values))
             seen[device.name] += len(stamps)
-            assert store.total(DeviceKind.POSITION) == seen[device.name]
+            # more when the scheduler stood in for frames late by over FRAME_GRACE (load):
+            # they wait for the next frame
+            assert store.total(DeviceKind.POSITION) >= seen[device.name]
 
     for count in range(400):  # across the end of the first (shorter) blocks
         time.sleep(0.0015)
@@ -137,9 +139,12 @@ def test_a_group_frame_gives_each_device_exactly_its_own_samples(make, ahead):
             if ahead:
                 m.prepare()
             check()
+    m.shutdown()  # nothing publishes any more; a last frame takes what waits
+    m.update()
+    check()
     for device in devices:
-        assert device.next_index == seen[device.name] and device.store.dropped() == 0
-    m.shutdown()  # the devices stop: their own computation is asked alone
+        assert device.store.total(DeviceKind.POSITION) == device.next_index == seen[device.name]
+        assert device.store.dropped() == 0
     for device in devices:  # what the device's own computation gives for those samples
         block = _expected(device, 0, seen[device.name])
         for first, stamps, values in kept[device.name]:
@@ -162,13 +167,15 @@ def test_frames_skipped_by_readers_still_count_and_the_newest_stays_latched(make
     for _ in range(30):  # nobody reads the store during these frames
         time.sleep(0.0015)
         m.update()
+    m.shutdown()  # nothing publishes any more; a last frame takes what waits
+    m.update()
     total = device.store.total(DeviceKind.POSITION)
     newest = device.store.latest(DeviceKind.POSITION)
     assert total == device.next_index  # every published sample counted, read or not
     assert newest.timestamp == device.t0 + (total - 1) / 1000.0
-    m.update()  # at once: no sample came due, the frame is empty and the newest stays
-    if not device.store.frame(DeviceKind.POSITION):
-        assert device.store.latest(DeviceKind.POSITION).timestamp == newest.timestamp
+    m.update()  # nothing new: the frame is empty and the newest stays
+    assert not device.store.frame(DeviceKind.POSITION)
+    assert device.store.latest(DeviceKind.POSITION).timestamp == newest.timestamp
 
 
 @pytest.mark.timeout(60)
