@@ -35,15 +35,29 @@ def _children(node: etree._Element, name: str) -> list[etree._Element]:
     return [c for c in node if _local(c) == name]
 
 
+def _grouped(node: etree._Element) -> dict[str, list[etree._Element]]:
+    """The child elements of ``node`` by local name, in document order (one pass over the
+    children instead of one per name asked for)."""
+    groups: dict[str, list[etree._Element]] = {}
+    for child in node:
+        tag = child.tag
+        if isinstance(tag, str):
+            local = tag.rpartition("}")[2]
+            found = groups.get(local)
+            if found is None:
+                groups[local] = [child]
+            else:
+                found.append(child)
+    return groups
+
+
+def _only(groups: dict[str, list[etree._Element]], name: str) -> etree._Element | None:
+    found = groups.get(name)
+    return found[0] if found else None
+
+
 def _text(node: etree._Element | None) -> str:
     return "" if node is None else "".join(node.itertext()).strip()
-
-
-def _first(node: etree._Element, name: str) -> etree._Element | None:
-    for child in node:
-        if _local(child) == name:
-            return child
-    return None
 
 
 def _bool(text: str | None, default: bool = False) -> bool:
@@ -86,7 +100,8 @@ class DefinitionReader:
         except ValueError:
             return None
         transform = None
-        upgrade = _first(node, "upgrade_transform")
+        children = _grouped(node)
+        upgrade = _only(children, "upgrade_transform")
         if upgrade is not None:
             sheets = [c for c in upgrade if isinstance(c.tag, str)]
             if sheets:
@@ -95,11 +110,11 @@ class DefinitionReader:
             name=name,
             version=number,
             label=(node.get("label") or "").strip(),
-            abstract=_bool(_text(_first(node, "abstract")) or None),
-            help=_text(_first(node, "help")),
-            parents=tuple(t for t in (_text(p) for p in _children(node, "parent")) if t),
-            categories=tuple(t for t in (_text(c) for c in _children(node, "category")) if t),
-            properties=tuple(self.read_property(p) for p in _children(node, "property")
+            abstract=_bool(_text(_only(children, "abstract")) or None),
+            help=_text(_only(children, "help")),
+            parents=tuple(t for t in (_text(p) for p in children.get("parent", ())) if t),
+            categories=tuple(t for t in (_text(c) for c in children.get("category", ())) if t),
+            properties=tuple(self.read_property(p) for p in children.get("property", ())
                              if (p.get("valuetype") or "") in _VALUETYPES and p.get("name")),
             upgrade_transform=transform,
             location=self.location(node),
@@ -107,7 +122,8 @@ class DefinitionReader:
 
     def read_property(self, node: etree._Element) -> PropertyDefinition:
         enumeration = None
-        enum_node = _first(node, "enumeration")
+        children = _grouped(node)
+        enum_node = _only(children, "enumeration")
         if enum_node is not None:
             enumeration = Enumeration(
                 editable=_bool(enum_node.get("editable")),
@@ -118,10 +134,10 @@ class DefinitionReader:
             name=node.get("name") or "",
             valuetype=_VALUETYPES[node.get("valuetype") or ""],
             variable=_bool(node.get("variable")),
-            help=_text(_first(node, "help")),
+            help=_text(_only(children, "help")),
             values=tuple(ValueSlot(v.get("label") or "", v.get("defaultvalue"))
-                         for v in _children(node, "value")),
-            allowed_types=tuple(t for t in (_text(a) for a in _children(node, "allowed_type")) if t),
+                         for v in children.get("value", ())),
+            allowed_types=tuple(t for t in (_text(a) for a in children.get("allowed_type", ())) if t),
             enumeration=enumeration,
             location=self.location(node),
         )
