@@ -30,7 +30,9 @@ load_and_resolve()  # warm the file cache
 report = Report()
 repo = load_and_resolve()
 versions = sum(len(repo.versions(n)) for n in repo.names())
-print(f"bundled repository: {len(files)} files, {len(repo.names())} definitions, {versions} versions")
+print(
+    f"bundled repository: {len(files)} files, {len(repo.names())} definitions, {versions} versions"
+)
 ours = median_time(load_and_resolve, repeat=11)
 base = median_time(parse_only, repeat=11)
 report.figure("load + resolve all versions and inheritance", ours * 1000, "ms", target=50)

@@ -58,7 +58,9 @@ HEAD = """<?xml version="1.0" encoding="UTF-8"?>
 # -- the senders (child processes of this script) -----------------------------------------------
 
 
-def paced(rate: float, seconds: float, send: Callable[[int], None], burst_limit: int = 200) -> tuple[int, float]:
+def paced(
+    rate: float, seconds: float, send: Callable[[int], None], burst_limit: int = 200
+) -> tuple[int, float]:
     """Call ``send(i)`` ``rate`` times a second for ``seconds``; returns (count, elapsed)."""
     total = int(rate * seconds)
     start = time.perf_counter()
@@ -100,7 +102,9 @@ def send_joystick(path: str, rate: float, seconds: float) -> None:
     """The initial burst, then axis motion and button toggles, into the FIFO at ``path``."""
     pack = struct.Struct(EVENT_FORMAT).pack
     base = 5_000_000
-    burst = [pack(base, 0, 0x81, b) for b in range(BUTTONS)] + [pack(base, 0, 0x82, a) for a in range(AXES)]
+    burst = [pack(base, 0, 0x81, b) for b in range(BUTTONS)] + [
+        pack(base, 0, 0x82, a) for a in range(AXES)
+    ]
     chunk: list[bytes] = []
     handshake()
     fd = os.open(path, os.O_WRONLY)  # the device has the FIFO open for reading by now
@@ -131,8 +135,12 @@ class Run:
     """A configured input manager, and a sender process that waits for the go."""
 
     def __init__(self, driver: str, device: str, kind: DeviceKind, sender: list[str]) -> None:
-        self.child = subprocess.Popen([sys.executable, __file__, *sender], stdin=subprocess.PIPE,
-                                      stdout=subprocess.PIPE, text=True)
+        self.child = subprocess.Popen(
+            [sys.executable, __file__, *sender],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
         assert self.child.stdout.readline().strip() == "ready"  # before the device listens
         self.tmp = tempfile.TemporaryDirectory()
         path = Path(self.tmp.name) / "bench.jconf"
@@ -151,7 +159,9 @@ class Run:
     def measure(self) -> tuple[int, float, float, float]:
         """Run frames while the sender sends; returns (sent, its seconds, our CPU, wall)."""
         reported: list[str] = []
-        reader = threading.Thread(target=lambda: reported.append(self.child.stdout.readline()), daemon=True)
+        reader = threading.Thread(
+            target=lambda: reported.append(self.child.stdout.readline()), daemon=True
+        )
         # a first run() collects and freezes the garbage collector's generations; that pause
         # must come before the stream, as in an application that starts its frame loop once
         self.manager.run(FRAME_RATE, frames=1, on_frame=self.count)
@@ -198,7 +208,12 @@ def free_port() -> int:
 def bench_dtrack(report: Report, seconds: float) -> None:
     port = free_port()
     device = f'<dtrack name="Bench" version="1"><receive_port>{port}</receive_port></dtrack>'
-    run = Run("DTrack_drv", device, DeviceKind.POSITION, ["--send-dtrack", str(port), str(DTRACK_RATE), str(seconds)])
+    run = Run(
+        "DTrack_drv",
+        device,
+        DeviceKind.POSITION,
+        ["--send-dtrack", str(port), str(DTRACK_RATE), str(seconds)],
+    )
     try:
         sent, elapsed, cpu, wall = run.measure()
         run.settle(lambda: run.device.counters["datagrams"], sent)
@@ -208,15 +223,31 @@ def bench_dtrack(report: Report, seconds: float) -> None:
         error = run.device.error
     finally:
         run.close()
-    print(f"DTrack: {sent:,} datagrams of {BODIES} bodies and a Flystick in {elapsed:.2f} s, frames at {FRAME_RATE:g} Hz")
-    report.figure("DTrack: datagrams sent per second", sent / elapsed, "/s", target=DTRACK_RATE * 0.99,
-                  higher_is_better=True)
-    report.figure("DTrack: datagrams lost at the driver (sent - received)", sent - counters["datagrams"], "", target=0)
+    print(
+        f"DTrack: {sent:,} datagrams of {BODIES} bodies and a Flystick in {elapsed:.2f} s, frames at {FRAME_RATE:g} Hz"
+    )
+    report.figure(
+        "DTrack: datagrams sent per second",
+        sent / elapsed,
+        "/s",
+        target=DTRACK_RATE * 0.99,
+        higher_is_better=True,
+    )
+    report.figure(
+        "DTrack: datagrams lost at the driver (sent - received)",
+        sent - counters["datagrams"],
+        "",
+        target=0,
+    )
     report.figure("DTrack: gaps in the frame counter", counters["missed_frames"], "", target=0)
     report.figure("DTrack: bad datagrams", counters["bad_datagrams"], "", target=0)
-    report.figure("DTrack: decoded samples that never reached a frame", samples - in_frames, "", target=0)
+    report.figure(
+        "DTrack: decoded samples that never reached a frame", samples - in_frames, "", target=0
+    )
     report.figure("DTrack: samples dropped over the per-frame cap", dropped, "", target=0)
-    report.figure("DTrack: datagrams not decoded into samples", counters["datagrams"] - samples, "", target=0)
+    report.figure(
+        "DTrack: datagrams not decoded into samples", counters["datagrams"] - samples, "", target=0
+    )
     report.figure("DTrack: device faults", faults, "", target=0)
     if error:
         print(f"  last fault: {error}")
@@ -250,10 +281,19 @@ def bench_joystick(report: Report, seconds: float) -> None:
     finally:
         run.close()
         tmp.cleanup()
-    print(f"Linux joystick: {sent:,} events through a FIFO in {elapsed:.2f} s, frames at {FRAME_RATE:g} Hz")
-    report.figure("joystick: events written per second", sent / elapsed, "/s", target=JOYSTICK_RATE * 0.99,
-                  higher_is_better=True)
-    report.figure("joystick: events without a sample (sent - received)", sent + 1 - samples, "", target=0)
+    print(
+        f"Linux joystick: {sent:,} events through a FIFO in {elapsed:.2f} s, frames at {FRAME_RATE:g} Hz"
+    )
+    report.figure(
+        "joystick: events written per second",
+        sent / elapsed,
+        "/s",
+        target=JOYSTICK_RATE * 0.99,
+        higher_is_better=True,
+    )
+    report.figure(
+        "joystick: events without a sample (sent - received)", sent + 1 - samples, "", target=0
+    )
     report.figure("joystick: samples that never reached a frame", samples - in_frames, "", target=0)
     report.figure("joystick: samples dropped over the per-frame cap", dropped, "", target=0)
     report.figure("joystick: bytes skipped as garbage", counters["skipped_bytes"], "", target=0)
@@ -262,8 +302,12 @@ def bench_joystick(report: Report, seconds: float) -> None:
     report.figure("joystick: CPU per event", cpu / max(1, sent) * 1e6, "us")
 
     pack = struct.Struct(EVENT_FORMAT).pack
-    burst = b"".join([pack(0, 0, 0x81, b) for b in range(BUTTONS)] + [pack(0, 0, 0x82, a) for a in range(AXES)])
-    stream = b"".join(pack(1 + i // 20, (i * 37) % 65535 - 32767, 0x02, i % AXES) for i in range(20_000))
+    burst = b"".join(
+        [pack(0, 0, 0x81, b) for b in range(BUTTONS)] + [pack(0, 0, 0x82, a) for a in range(AXES)]
+    )
+    stream = b"".join(
+        pack(1 + i // 20, (i * 37) % 65535 - 32767, 0x02, i % AXES) for i in range(20_000)
+    )
 
     def decode() -> None:
         decoder = EventDecoder()
@@ -289,8 +333,12 @@ def _rate(fn: Callable[[], object], items: int, repeat: int = 5) -> float:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=3.0, help="length of each run (default 3)")
-    parser.add_argument("--send-dtrack", nargs=3, metavar=("PORT", "RATE", "SECONDS"), help=argparse.SUPPRESS)
-    parser.add_argument("--send-joystick", nargs=3, metavar=("FIFO", "RATE", "SECONDS"), help=argparse.SUPPRESS)
+    parser.add_argument(
+        "--send-dtrack", nargs=3, metavar=("PORT", "RATE", "SECONDS"), help=argparse.SUPPRESS
+    )
+    parser.add_argument(
+        "--send-joystick", nargs=3, metavar=("FIFO", "RATE", "SECONDS"), help=argparse.SUPPRESS
+    )
     args = parser.parse_args(argv)
     if args.send_dtrack:
         port, rate, seconds = args.send_dtrack

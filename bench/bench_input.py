@@ -63,7 +63,11 @@ def repository():
 
 
 def bench_throughput(devices: int, rate: float, seconds: float, frame_rate: float = 60.0) -> bool:
-    text = HEAD + "".join(DEVICE.format(i=i, rate=rate) for i in range(devices)) + "   </elements>\n</configuration>\n"
+    text = (
+        HEAD
+        + "".join(DEVICE.format(i=i, rate=rate) for i in range(devices))
+        + "   </elements>\n</configuration>\n"
+    )
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "bench.jconf"
         path.write_text(text)
@@ -73,7 +77,9 @@ def bench_throughput(devices: int, rate: float, seconds: float, frame_rate: floa
     assert not manager.pending(), [p.message for p in manager.pending()]
     waves = [manager.device(f"Wave {i}") for i in range(devices)]
     period = 1.0 / rate
-    frames_seen: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # per frame: device, swap time, stamp
+    frames_seen: list[
+        tuple[np.ndarray, np.ndarray, np.ndarray]
+    ] = []  # per frame: device, swap time, stamp
 
     def on_frame(_: InputManager) -> None:  # keep the frame loop's own work small; analyse later
         indices, swaps, parts = [], [], []
@@ -86,7 +92,9 @@ def bench_throughput(devices: int, rate: float, seconds: float, frame_rate: floa
                     swaps.append(device.store.swapped_at)
         if parts:
             lengths = [len(p) for p in parts]
-            frames_seen.append((np.repeat(indices, lengths), np.repeat(swaps, lengths), np.concatenate(parts)))
+            frames_seen.append(
+                (np.repeat(indices, lengths), np.repeat(swaps, lengths), np.concatenate(parts))
+            )
 
     manager.update()  # warm-up frame, not measured
     measured_from = [d.next_index for d in waves]
@@ -115,15 +123,23 @@ def bench_throughput(devices: int, rate: float, seconds: float, frame_rate: floa
     limit_latency = 1000.0 / frame_rate + 2.0
     core = cpu / wall
     rusage_core = ((usage1.ru_utime + usage1.ru_stime) - (usage0.ru_utime + usage0.ru_stime)) / wall
-    print(f"throughput: {devices} waveform devices x {rate:g} Hz, frames at {frame_rate:g} Hz, {wall:.1f} s, "
-          f"{configured} elements configured")
+    print(
+        f"throughput: {devices} waveform devices x {rate:g} Hz, frames at {frame_rate:g} Hz, {wall:.1f} s, "
+        f"{configured} elements configured"
+    )
     print(f"  frames run           {frames} ({frames / wall:.1f} per second)")
-    print(f"  samples received     {total} ({total / wall:,.0f} per second; position kind, one per sample)")
+    print(
+        f"  samples received     {total} ({total / wall:,.0f} per second; position kind, one per sample)"
+    )
     print(f"  samples lost         {gaps} gaps, {dropped} dropped over the cap (target 0)")
-    print(f"  latency p50/p99/max  {p50:.2f} / {p99:.2f} / {worst:.2f} ms  "
-          f"(target p99 <= {limit_latency:.2f} ms, ratio {p99 / limit_latency:.2f})")
-    print(f"  CPU                  {core * 100:.1f} % of one core (getrusage {rusage_core * 100:.1f} %) "
-          f"(target <= 60 %, ratio {core / 0.60:.2f})")
+    print(
+        f"  latency p50/p99/max  {p50:.2f} / {p99:.2f} / {worst:.2f} ms  "
+        f"(target p99 <= {limit_latency:.2f} ms, ratio {p99 / limit_latency:.2f})"
+    )
+    print(
+        f"  CPU                  {core * 100:.1f} % of one core (getrusage {rusage_core * 100:.1f} %) "
+        f"(target <= 60 %, ratio {core / 0.60:.2f})"
+    )
     print(f"  produced vs received {produced} produced in the measured window")
     return gaps == 0 and dropped == 0 and p99 <= limit_latency and core <= 0.60
 
@@ -132,11 +148,17 @@ def bench_filters(samples: int = 200_000) -> bool:
     from gadgetctl.input.filters import FilterChain, PositionFilter
     from gadgetctl.input.transforms import euler_xyz_degrees, translation
 
-    chain = FilterChain((
-        PositionFilter("a", translation(0, 0.1, 0) @ euler_xyz_degrees(0, 90, 0),
-                       translation(0.02, 0, 0) @ euler_xyz_degrees(10, 0, 0), 0.0254),
-        PositionFilter("b", euler_xyz_degrees(0, 0, 5), np.eye(4), 1.0),
-    ))
+    chain = FilterChain(
+        (
+            PositionFilter(
+                "a",
+                translation(0, 0.1, 0) @ euler_xyz_degrees(0, 90, 0),
+                translation(0.02, 0, 0) @ euler_xyz_degrees(10, 0, 0),
+                0.0254,
+            ),
+            PositionFilter("b", euler_xyz_degrees(0, 0, 5), np.eye(4), 1.0),
+        )
+    )
     rng = np.random.default_rng(1)
     matrices = np.tile(np.eye(4), (samples, 1, 1))
     matrices[:, :3, 3] = rng.random((samples, 3))
@@ -161,7 +183,9 @@ def bench_filters(samples: int = 200_000) -> bool:
         sequential = f.apply(sequential)
     assert np.allclose(check, sequential)
     print(f"position filters: chain of {len(chain)} filters, batches of {samples:,} samples")
-    print(f"  batched numpy        {batched / 1e6:.2f} M transforms/s (target >= 1.00 M/s, ratio {batched / 1e6:.2f})")
+    print(
+        f"  batched numpy        {batched / 1e6:.2f} M transforms/s (target >= 1.00 M/s, ratio {batched / 1e6:.2f})"
+    )
     print(f"  per-sample loop      {loop / 1e6:.3f} M transforms/s (baseline)")
     print(f"  speed-up             x{batched / loop:.0f}")
     return batched >= 1e6

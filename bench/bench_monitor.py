@@ -59,7 +59,11 @@ TERMINAL = (200, 50)
 
 
 def configuration(devices: int, rate: float):
-    text = HEAD + "".join(DEVICE.format(i=i, rate=rate) for i in range(devices)) + "   </elements>\n</configuration>\n"
+    text = (
+        HEAD
+        + "".join(DEVICE.format(i=i, rate=rate) for i in range(devices))
+        + "   </elements>\n</configuration>\n"
+    )
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "bench.jconf"
         path.write_text(text)
@@ -69,8 +73,16 @@ def configuration(devices: int, rate: float):
 class Run:
     """One monitored run: CPU seconds of the whole process, wall seconds, losses."""
 
-    def __init__(self, devices: int, rate: float, seconds: float, *, view: bool = False,
-                 ndjson: Path | None = None, events: bool = False) -> None:
+    def __init__(
+        self,
+        devices: int,
+        rate: float,
+        seconds: float,
+        *,
+        view: bool = False,
+        ndjson: Path | None = None,
+        events: bool = False,
+    ) -> None:
         manager = InputManager(default_repository(), ManagerOptions(retry_interval=None))
         session = MonitorSession(manager, configuration(devices, rate), rate=60.0)
         session.start()
@@ -91,8 +103,14 @@ class Run:
             from gadgetctl.cli.monitor_live import LiveView
 
             width, height = TERMINAL
-            console = Console(file=io.StringIO(), width=width, height=height, force_terminal=True,
-                              color_system="truecolor", legacy_windows=False)
+            console = Console(
+                file=io.StringIO(),
+                width=width,
+                height=height,
+                force_terminal=True,
+                color_system="truecolor",
+                legacy_windows=False,
+            )
             live = LiveView(session, console, title="bench").__enter__()
         frames = 0
         wall0, cpu0 = time.perf_counter(), time.process_time()
@@ -116,7 +134,9 @@ class Run:
         # a sample is lost when it never reached a frame: the count must match the rate
         spans = [(s["newest_timestamp"] - s["first_timestamp"]) * rate + 1 for s in stats.values()]
         self.missing = max(0, round(sum(spans)) - self.samples)
-        self.written = session.recorders[0].samples if ndjson is not None and session.recorders else 0
+        self.written = (
+            session.recorders[0].samples if ndjson is not None and session.recorders else 0
+        )
         self.lines = printer.lines if events else 0
         if sink is not None:
             sink.close()
@@ -136,15 +156,19 @@ def main() -> None:
     args = parser.parse_args()
     report = Report()
     offered = args.devices * args.rate
-    print(f"{args.devices} waveform devices at {args.rate:g} Hz ({offered:,.0f} samples/s, "
-          f"{offered * UNITS_PER_SAMPLE:,.0f} unit values/s), frames at 60 Hz, {args.seconds:g} s per run")
+    print(
+        f"{args.devices} waveform devices at {args.rate:g} Hz ({offered:,.0f} samples/s, "
+        f"{offered * UNITS_PER_SAMPLE:,.0f} unit values/s), frames at 60 Hz, {args.seconds:g} s per run"
+    )
 
     base = Run(args.devices, args.rate, args.seconds)
     report.figure("without view: samples lost", base.lost, "samples", target=0)
     report.figure("without view: CPU of the process", base.cpu / base.wall * 100, "% of a core")
     viewed = Run(args.devices, args.rate, args.seconds, view=True)
     width, height = TERMINAL
-    report.figure(f"live view ({width}x{height}, every frame): samples lost", viewed.lost, "samples", target=0)
+    report.figure(
+        f"live view ({width}x{height}, every frame): samples lost", viewed.lost, "samples", target=0
+    )
     report.figure("live view: frames drawn per second", viewed.frames / viewed.wall, "frames/s")
     report.figure("live view: CPU of the process", viewed.cpu / viewed.wall * 100, "% of a core")
     extra = (viewed.cpu / viewed.wall - base.cpu / base.wall) * 100
@@ -155,12 +179,22 @@ def main() -> None:
         path = Path(tmp) / "monitor.ndjson"
         written = Run(args.devices, args.rate, args.seconds, ndjson=path)
         size = path.stat().st_size
-    report.figure("ndjson to a file: sample records written per second", written.written / written.wall,
-                  "samples/s", target=100_000, higher_is_better=True)
+    report.figure(
+        "ndjson to a file: sample records written per second",
+        written.written / written.wall,
+        "samples/s",
+        target=100_000,
+        higher_is_better=True,
+    )
     report.figure("ndjson to a file: samples lost", written.lost, "samples", target=0)
-    report.figure("ndjson to a file: CPU of the process", written.cpu / written.wall * 100, "% of a core")
-    report.figure("ndjson to a file: records per CPU second (capacity)", written.written / written.cpu,
-                  "samples/s")
+    report.figure(
+        "ndjson to a file: CPU of the process", written.cpu / written.wall * 100, "% of a core"
+    )
+    report.figure(
+        "ndjson to a file: records per CPU second (capacity)",
+        written.written / written.cpu,
+        "samples/s",
+    )
     report.figure("ndjson to a file: bytes per record", size / max(1, written.written), "bytes")
 
     changes = Run(args.devices, args.rate, args.seconds, events=True)

@@ -39,16 +39,28 @@ def wand_session(updates: int) -> list[SampleRecord]:
 def record_ours(path: Path, records: list[SampleRecord]) -> None:
     with Recorder(path, {"bench": True}, overwrite=True) as recorder:
         for i in range(0, len(records), BATCH):
-            recorder.write_samples(records[i:i + BATCH])
+            recorder.write_samples(records[i : i + BATCH])
 
 
 def record_json_dumps(path: Path, records: list[SampleRecord]) -> None:
     """The baseline: json.dumps of a dict per record, the same batching and flushing."""
     with open(path, "wb") as f:
         for i in range(0, len(records), BATCH):
-            lines = [json.dumps({"v": 1, "type": "sample", "device": r.device, "kind": r.kind,
-                                 "unit": r.unit, "timestamp": r.timestamp, "value": r.value,
-                                 "raw": r.raw}) for r in records[i:i + BATCH]]
+            lines = [
+                json.dumps(
+                    {
+                        "v": 1,
+                        "type": "sample",
+                        "device": r.device,
+                        "kind": r.kind,
+                        "unit": r.unit,
+                        "timestamp": r.timestamp,
+                        "value": r.value,
+                        "raw": r.raw,
+                    }
+                )
+                for r in records[i : i + BATCH]
+            ]
             f.write(("\n".join(lines) + "\n").encode())
             f.flush()
 
@@ -57,11 +69,13 @@ def read_all(path: Path) -> int:
     return sum(1 for _ in read_recording(path).records)
 
 
-def stats_second(devices: int = 100, rate: int = 1000, batch: int = 10, snapshots: int = 10) -> None:
+def stats_second(
+    devices: int = 100, rate: int = 1000, batch: int = 10, snapshots: int = 10
+) -> None:
     """One second of data from ``devices`` at ``rate`` Hz, fed in batches, with snapshots."""
     monitor = MonitorStats()
     stamps = np.arange(rate) / rate
-    chunks = [stamps[i:i + batch] for i in range(0, rate, batch)]
+    chunks = [stamps[i : i + batch] for i in range(0, rate, batch)]
     every = len(chunks) // snapshots
     names = [f"dev{d}" for d in range(devices)]
     for n, chunk in enumerate(chunks):
@@ -76,17 +90,28 @@ def stats_second(devices: int = 100, rate: int = 1000, batch: int = 10, snapshot
 def main() -> None:
     report = Report()
     session = wand_session(20_000)
-    by_kind = {kind: [r for r in session if r.kind == kind] for kind in ("analog", "digital", "position")}
-    print(f"recording: {len(session)} samples (1 kHz wand: 4 analog, 6 digital, 2 positions "
-          f"per update), batches of {BATCH}, flushed per batch")
+    by_kind = {
+        kind: [r for r in session if r.kind == kind] for kind in ("analog", "digital", "position")
+    }
+    print(
+        f"recording: {len(session)} samples (1 kHz wand: 4 analog, 6 digital, 2 positions "
+        f"per update), batches of {BATCH}, flushed per batch"
+    )
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "bench.ndjson"
         ours = median_time(lambda: record_ours(path, session), repeat=5)
         size = path.stat().st_size
         base = median_time(lambda: record_json_dumps(path, session), repeat=5)
-        report.figure("write mixed session", len(session) / ours, "samples/s",
-                      target=100_000, higher_is_better=True)
-        report.figure("json.dumps per record, same batching (baseline)", len(session) / base, "samples/s")
+        report.figure(
+            "write mixed session",
+            len(session) / ours,
+            "samples/s",
+            target=100_000,
+            higher_is_better=True,
+        )
+        report.figure(
+            "json.dumps per record, same batching (baseline)", len(session) / base, "samples/s"
+        )
         report.ratio("speed-up over json.dumps", base, ours)
         for kind, records in by_kind.items():
             t = median_time(lambda records=records: record_ours(path, records), repeat=5)
@@ -96,8 +121,12 @@ def main() -> None:
         report.figure("read back (decode + validate)", len(session) / read, "records/s")
         report.figure("file size per sample", size / len(session), "bytes")
     cpu = median_time(stats_second, repeat=5)
-    report.figure("stats: 100 devices x 1 kHz, batches of 10, 10 snapshots/s", cpu * 100,
-                  "% of a core", target=10)
+    report.figure(
+        "stats: 100 devices x 1 kHz, batches of 10, 10 snapshots/s",
+        cpu * 100,
+        "% of a core",
+        target=10,
+    )
     report.exit()
 
 

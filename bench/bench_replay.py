@@ -26,8 +26,13 @@ RECORDED_SPAN = 2.0
 
 
 def replay_span(path: Path, speed: float) -> float:
-    done = subprocess.run([*GADGETCTL, "replay", str(path), "--speed", str(speed), "--format", "ndjson"],
-                          capture_output=True, text=True, check=True, cwd=REPO)
+    done = subprocess.run(
+        [*GADGETCTL, "replay", str(path), "--speed", str(speed), "--format", "ndjson"],
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=REPO,
+    )
     records = [json.loads(line) for line in done.stdout.splitlines() if line.startswith("{")]
     first = min(r["timestamp"] for r in records if r["type"] == "sample")
     return records[-1]["timestamp"] - first
@@ -37,15 +42,36 @@ def main() -> int:
     report = Report()
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "waveform.ndjson"
-        subprocess.run([*GADGETCTL, "monitor", str(WAVEFORM), "--duration", str(RECORDED_SPAN), "--format",
-                        "table", "--interval", "10", "--record", str(path)],
-                       capture_output=True, check=True, cwd=REPO)
+        subprocess.run(
+            [
+                *GADGETCTL,
+                "monitor",
+                str(WAVEFORM),
+                "--duration",
+                str(RECORDED_SPAN),
+                "--format",
+                "table",
+                "--interval",
+                "10",
+                "--record",
+                str(path),
+            ],
+            capture_output=True,
+            check=True,
+            cwd=REPO,
+        )
         for speed in (1.0, 10.0):
             expected = RECORDED_SPAN / speed
             span = min(replay_span(path, speed) for _ in range(3))
-            report.figure(f"replay --speed {speed:g}: first sample to end record", span, "s",
-                          target=expected + 0.12 + 0.05 * expected)
-            report.ratio(f"replay --speed {speed:g}: span against the scaled recording", span, expected)
+            report.figure(
+                f"replay --speed {speed:g}: first sample to end record",
+                span,
+                "s",
+                target=expected + 0.12 + 0.05 * expected,
+            )
+            report.ratio(
+                f"replay --speed {speed:g}: span against the scaled recording", span, expected
+            )
     report.exit()
     return 0
 

@@ -17,7 +17,10 @@ from common import CORPUS, GADGETCTL, Report, command_time, median_time, replica
 from gadgetctl.validate import ValidateOptions, validate_paths
 
 MODULES = CORPUS / "modules"
-EXTRA = [MODULES / "vrjuggler/samples/OGL/simple/ConfigApp", MODULES / "jackal/test/TestSuite/TestFiles/definitions"]
+EXTRA = [
+    MODULES / "vrjuggler/samples/OGL/simple/ConfigApp",
+    MODULES / "jackal/test/TestSuite/TestFiles/definitions",
+]
 
 report = Report()
 options = ValidateOptions(definition_dirs=EXTRA)
@@ -28,8 +31,9 @@ with tempfile.TemporaryDirectory(prefix="gadgetctl-bench-") as tmp:
     for copies in (1, 10, 50):
         root = Path(tmp) / f"x{copies}"
         files = replicate_corpus(root, copies)
-        times[copies] = median_time(lambda root=root: validate_paths([root], options),
-                                    repeat=5 if copies < 50 else 3)
+        times[copies] = median_time(
+            lambda root=root: validate_paths([root], options), repeat=5 if copies < 50 else 3
+        )
         report.figure(f"corpus x{copies} ({len(files)} files)", times[copies] * 1000, "ms")
 report.figure("ratio 10x / 1x", times[10] / times[1], "x", target=11)
 report.figure("ratio 50x / 1x", times[50] / times[1], "x", target=55)
@@ -38,5 +42,7 @@ print("one process, start-up included (median of 5 runs, wall time):")
 command = [*GADGETCTL, "validate", str(CORPUS), "-f", "json"]
 for directory in EXTRA:
     command += ["--definitions", str(directory)]
-report.figure("gadgetctl validate CORPUS (full)", command_time(command, repeat=5), "s", target=0.500)
+report.figure(
+    "gadgetctl validate CORPUS (full)", command_time(command, repeat=5), "s", target=0.500
+)
 report.exit()

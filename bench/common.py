@@ -14,7 +14,10 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 CORPUS = REPO.parent / "shared" / "corpus" / "vrjuggler"
 GADGETCTL = [sys.executable, "-m", "gadgetctl"]
-if shutil.which("gadgetctl") and Path(shutil.which("gadgetctl")).parent == Path(sys.executable).parent:
+if (
+    shutil.which("gadgetctl")
+    and Path(shutil.which("gadgetctl")).parent == Path(sys.executable).parent
+):
     GADGETCTL = [shutil.which("gadgetctl")]
 
 
@@ -47,8 +50,15 @@ class Report:
     def __init__(self) -> None:
         self.ok = True
 
-    def figure(self, label: str, value: float, unit: str, *, target: float | None = None,
-               higher_is_better: bool = False) -> None:
+    def figure(
+        self,
+        label: str,
+        value: float,
+        unit: str,
+        *,
+        target: float | None = None,
+        higher_is_better: bool = False,
+    ) -> None:
         status = ""
         if target is not None:
             met = value >= target if higher_is_better else value <= target
@@ -72,5 +82,7 @@ def command_cpu(args: list[str], ok: tuple[int, ...] = (0,)) -> tuple[float, flo
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if done.returncode not in ok or "internal error" in done.stderr:
-        sys.exit(f"{' '.join(args)} failed ({done.returncode}): {(done.stderr or done.stdout)[-500:]}")
+        sys.exit(
+            f"{' '.join(args)} failed ({done.returncode}): {(done.stderr or done.stdout)[-500:]}"
+        )
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)

@@ -32,7 +32,9 @@ def pytest_configure(config) -> None:
 @pytest.fixture(scope="session")
 def corpus() -> Path:
     """The VR Juggler corpus beside the repository. Missing corpus is a failure, not a skip."""
-    assert CORPUS.is_dir(), f"corpus not found at {CORPUS}; ../shared must sit beside the repository"
+    assert CORPUS.is_dir(), (
+        f"corpus not found at {CORPUS}; ../shared must sit beside the repository"
+    )
     return CORPUS
 
 
@@ -63,7 +65,11 @@ def _is_local(address) -> bool:
 @pytest.fixture(autouse=True)
 def no_network(monkeypatch):
     """Fail any test that tries to reach a non-loopback address."""
-    real_connect, real_connect_ex, real_sendto = socket.socket.connect, socket.socket.connect_ex, socket.socket.sendto
+    real_connect, real_connect_ex, real_sendto = (
+        socket.socket.connect,
+        socket.socket.connect_ex,
+        socket.socket.sendto,
+    )
 
     def guard(address) -> None:
         if not _is_local(address):

@@ -15,8 +15,15 @@ def jconf(elements: str = "", *, includes: str = "", extra: str = "") -> str:
     )
 
 
-def jdef(name: str, body: str, *, parents: str = "<parent/>", version: int = 1, abstract: str = "false",
-         more_versions: str = "") -> str:
+def jdef(
+    name: str,
+    body: str,
+    *,
+    parents: str = "<parent/>",
+    version: int = 1,
+    abstract: str = "false",
+    more_versions: str = "",
+) -> str:
     return (
         '<?xml version="1.0" encoding="UTF-8"?>\n'
         '<?org-vrjuggler-jccl-settings definition.version="3.1"?>\n'
@@ -34,8 +41,14 @@ def jdef(name: str, body: str, *, parents: str = "<parent/>", version: int = 1, 
     )
 
 
-def prop(name: str, valuetype: str = "string", *, variable: str = "false", values: str = "",
-         extra: str = "") -> str:
+def prop(
+    name: str,
+    valuetype: str = "string",
+    *,
+    variable: str = "false",
+    values: str = "",
+    extra: str = "",
+) -> str:
     values = values or '<value label="v" defaultvalue=""/>'
     return (
         f'      <property valuetype="{valuetype}" variable="{variable}" name="{name}">\n'

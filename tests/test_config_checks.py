@@ -20,15 +20,25 @@ TRACKER = """      <tracker name="Tracker" version="1">
 def check(tmp_path):
     definitions = write_definitions(tmp_path / "defs")
 
-    def run(elements: str = "", *, files: dict[str, str] | None = None, together: bool = False,
-            environ: dict[str, str] | None = None, only: tuple[str, ...] | None = None,
-            categories: tuple[Category, ...] = (Category.CONFIG,)):
+    def run(
+        elements: str = "",
+        *,
+        files: dict[str, str] | None = None,
+        together: bool = False,
+        environ: dict[str, str] | None = None,
+        only: tuple[str, ...] | None = None,
+        categories: tuple[Category, ...] = (Category.CONFIG,),
+    ):
         files = files if files is not None else {"test.jconf": configuration(elements)}
         paths = [write(tmp_path / name, text) for name, text in files.items()]
         if only is not None:
             paths = [tmp_path / name for name in only]
-        options = ValidateOptions(bundled=False, definition_dirs=[definitions], together=together,
-                                  environ=environ if environ is not None else {})
+        options = ValidateOptions(
+            bundled=False,
+            definition_dirs=[definitions],
+            together=together,
+            environ=environ if environ is not None else {},
+        )
         result = validate_paths(paths, options)
         return [d for d in result.diagnostics if d.category in categories]
 
@@ -45,6 +55,7 @@ def tracker(body: str) -> str:
 
 # -- element types, versions, names ------------------------------------------------------
 
+
 def test_unknown_type_is_reported_with_close_names_and_the_search_path(check):
     (found,) = check('      <trackr name="T" version="1"/>\n')
     assert found.code == "CFG010" and found.severity is Severity.ERROR
@@ -59,13 +70,18 @@ def test_abstract_type_cannot_be_instantiated(check):
 
 
 def test_older_element_is_flagged_and_judged_by_its_own_version(check):
-    found = check('      <input_manager name="IM" version="1"><driver>X_drv</driver></input_manager>\n')
+    found = check(
+        '      <input_manager name="IM" version="1"><driver>X_drv</driver></input_manager>\n'
+    )
     assert "CFG012" in codes(found)
     older = next(d for d in found if d.code == "CFG012")
     assert "version 1" in older.message and "version 2" in older.message and "upgrade" in older.hint
     # driver is a property of version 1: no unknown-property finding
     assert "CFG020" not in codes(found)
-    assert check('      <input_manager name="IM" version="2"><driver>X_drv</driver></input_manager>\n') == []
+    assert (
+        check('      <input_manager name="IM" version="2"><driver>X_drv</driver></input_manager>\n')
+        == []
+    )
 
 
 def test_newer_version_than_known(check):
@@ -85,6 +101,7 @@ def test_element_without_a_name(check):
 
 # -- properties and values ------------------------------------------------------------
 
+
 def test_unknown_property_with_close_names(check):
     (found,) = check(tracker("         <baud_rate>9600</baud_rate>\n"))
     assert found.code == "CFG020" and found.line == 6 and "baud_rate" in found.message
@@ -103,7 +120,9 @@ def test_property_only_a_newer_version_has(check):
     assert "CFG022" in codes(found)
     (newer,) = [d for d in found if d.code == "CFG022"]
     assert "version 3 added it" in newer.message and 'version="3"' in newer.hint
-    assert "CFG022" not in codes(check('      <gizmo name="G" version="3"><extent>3</extent></gizmo>\n'))
+    assert "CFG022" not in codes(
+        check('      <gizmo name="G" version="3"><extent>3</extent></gizmo>\n')
+    )
 
 
 def test_more_values_than_slots(check):
@@ -120,7 +139,9 @@ def test_fewer_values_than_slots_names_the_defaults(check):
     assert check(tracker("")) == []  # not written at all: defaults, as intended
 
 
-@pytest.mark.parametrize(("text", "reads"), [("", "0"), ("quick", "0"), ("1.5", "1"), ("12abc", "12")])
+@pytest.mark.parametrize(
+    ("text", "reads"), [("", "0"), ("quick", "0"), ("1.5", "1"), ("12abc", "12")]
+)
 def test_integer_that_does_not_parse(check, text, reads):
     found = check(tracker(f"         <mode>{text}</mode>\n"))
     assert codes(found) == ["CFG025"]
@@ -168,17 +189,24 @@ def test_value_outside_a_fixed_enumeration(check):
 def test_value_of_the_wrong_kind(check):
     found = check(tracker("         <position_filters>filter</position_filters>\n"))
     assert codes(found) == ["CFG029"]
-    found = check('      <alias name="A" version="1"><proxy><tracker name="x" version="1"/></proxy></alias>\n')
+    found = check(
+        '      <alias name="A" version="1"><proxy><tracker name="x" version="1"/></proxy></alias>\n'
+    )
     assert "CFG029" in codes(found)
 
 
 # -- embedded elements and pointers ----------------------------------------------------
 
+
 def test_embedded_element_of_a_type_not_allowed(check):
-    bad = tracker('         <position_filters><other_filter name="F" version="1"/></position_filters>\n')
+    bad = tracker(
+        '         <position_filters><other_filter name="F" version="1"/></position_filters>\n'
+    )
     (found,) = check(bad)
     assert found.code == "CFG030" and "position_transform_filter" in found.message
-    good = tracker('         <position_filters><scaled_filter name="F" version="1"/></position_filters>\n')
+    good = tracker(
+        '         <position_filters><scaled_filter name="F" version="1"/></position_filters>\n'
+    )
     assert check(good) == []  # derived from an allowed type
 
 
@@ -199,7 +227,10 @@ def test_pointer_to_no_element(check):
 
 
 def test_pointer_checks_span_files_given_together(check):
-    files = {"a.jconf": configuration(PROXY.format(target="Tracker")), "b.jconf": configuration(tracker(""))}
+    files = {
+        "a.jconf": configuration(PROXY.format(target="Tracker")),
+        "b.jconf": configuration(tracker("")),
+    }
     assert codes(check(files=files)) == ["CFG031"]
     assert check(files=files, together=True) == []
     files["b.jconf"] = configuration("")
@@ -209,8 +240,10 @@ def test_pointer_checks_span_files_given_together(check):
 
 
 def test_included_file_is_checked_within_the_file_that_includes_it(check):
-    files = {"main.jconf": configuration(tracker(""), includes=("proxies.jconf",)),
-             "proxies.jconf": configuration(PROXY.format(target="Tracker"))}
+    files = {
+        "main.jconf": configuration(tracker(""), includes=("proxies.jconf",)),
+        "proxies.jconf": configuration(PROXY.format(target="Tracker")),
+    }
     assert check(files=files) == []  # both given: proxies.jconf is judged as part of main.jconf
     assert codes(check(files=files, only=("proxies.jconf",))) == ["CFG031"]
 
@@ -233,9 +266,13 @@ def test_required_pointer_empty_or_missing(check):
 def test_duplicate_names_same_file_and_across_files(check):
     found = check(tracker("") + tracker(""))
     # a warning since issue 17 (only duplicates within one file or unrelated files warn)
-    assert codes(found) == ["CFG040"] and found[0].severity is Severity.WARNING and found[0].line == 7
-    files = {"main.jconf": configuration(tracker(""), includes=("base.jconf",)),
-             "base.jconf": configuration(tracker(""))}
+    assert (
+        codes(found) == ["CFG040"] and found[0].severity is Severity.WARNING and found[0].line == 7
+    )
+    files = {
+        "main.jconf": configuration(tracker(""), includes=("base.jconf",)),
+        "base.jconf": configuration(tracker("")),
+    }
     # an including file overriding its include: info (issue 17), see test_config_checks_round2
     (found,) = check(files=files, only=("main.jconf",), categories=(Category.CONFIG,))
     assert found.code == "CFG042" and found.severity is Severity.INFO
@@ -245,52 +282,69 @@ def test_duplicate_names_same_file_and_across_files(check):
 
 # -- pending -------------------------------------------------------------------------
 
+
 def test_command_proxy_waits_for_its_device_and_the_alias_for_the_proxy(check):
-    elements = ('      <alias name="Cmd" version="1"><proxy>CmdProxy</proxy></alias>\n'
-                '      <command_proxy name="CmdProxy" version="1"><device>Box</device></command_proxy>\n')
+    elements = (
+        '      <alias name="Cmd" version="1"><proxy>CmdProxy</proxy></alias>\n'
+        '      <command_proxy name="CmdProxy" version="1"><device>Box</device></command_proxy>\n'
+    )
     found = check(elements)
     assert codes(found) == ["CFG041", "CFG031"]  # in line order: the alias comes first
     pending, missing = found
     assert "pending forever" in missing.message
     assert "alias 'Cmd' would stay pending" in pending.message and "CmdProxy" in pending.message
     assert pending.severity is Severity.WARNING  # the root cause may come from another file
-    (pending,) = [d for d in check(elements, files={"t.jconf": configuration(elements)}, together=True)
-                  if d.code == "CFG041"]
+    (pending,) = [
+        d
+        for d in check(elements, files={"t.jconf": configuration(elements)}, together=True)
+        if d.code == "CFG041"
+    ]
     assert pending.severity is Severity.ERROR
     assert check(elements + '      <cmd_box name="Box" version="1"/>\n') == []
 
 
 def test_stupefied_proxy_does_not_wait(check):
-    found = check('      <alias name="Head" version="1"><proxy>HeadProxy</proxy></alias>\n'
-                  + PROXY.format(target="Nothing").replace('"Head"', '"HeadProxy"'))
+    found = check(
+        '      <alias name="Head" version="1"><proxy>HeadProxy</proxy></alias>\n'
+        + PROXY.format(target="Nothing").replace('"Head"', '"HeadProxy"')
+    )
     assert codes(found) == ["CFG031"]
     assert "returns default data" in found[0].message
 
 
 def test_refused_old_version_stays_pending(check):
-    found = check('      <input_manager name="IM" version="1"><driver>X_drv</driver></input_manager>\n')
+    found = check(
+        '      <input_manager name="IM" version="1"><driver>X_drv</driver></input_manager>\n'
+    )
     (pending,) = [d for d in found if d.code == "CFG041"]
     assert "older than version 2" in pending.message and pending.severity is Severity.ERROR
 
 
 def test_gesture_proxy_is_never_handled(check):
-    found = check('      <gesture_proxy name="G" version="1"><device>Box</device></gesture_proxy>\n'
-                  '      <cmd_box name="Box" version="1"/>\n')
+    found = check(
+        '      <gesture_proxy name="G" version="1"><device>Box</device></gesture_proxy>\n'
+        '      <cmd_box name="Box" version="1"/>\n'
+    )
     assert codes(found) == ["CFG041"] and found[0].severity is Severity.WARNING
 
 
 def test_pointer_to_an_embedded_element_never_satisfies_a_dependency(check):
-    elements = ('      <holder name="H" version="1"><parts><cmd_box name="Inner" version="1"/></parts></holder>\n'
-                '      <holder name="User" version="1"><target>H/parts/Inner</target></holder>\n')
+    elements = (
+        '      <holder name="H" version="1"><parts><cmd_box name="Inner" version="1"/></parts></holder>\n'
+        '      <holder name="User" version="1"><target>H/parts/Inner</target></holder>\n'
+    )
     (found,) = check(elements)
     assert found.code == "CFG041" and "embedded" in found.message
 
 
 # -- environment variables and definition paths --------------------------------------
 
+
 def test_undefined_variable_in_driver_path(check):
-    elements = ('      <input_manager name="IM" version="2"><driver_path>${DRIVERS}/lib</driver_path>'
-                "</input_manager>\n")
+    elements = (
+        '      <input_manager name="IM" version="2"><driver_path>${DRIVERS}/lib</driver_path>'
+        "</input_manager>\n"
+    )
     (found,) = check(elements)
     assert found.code == "CFG003" and "DRIVERS" in found.message
     assert check(elements, environ={"DRIVERS": "/opt"}) == []
@@ -304,25 +358,36 @@ def test_undefined_variable_in_an_include(check):
 def test_definition_path_is_resolved_against_the_configuration_directory(tmp_path, check):
     from config_samples import definition, prop, version
 
-    write(tmp_path / "conf" / "mydefs" / "widget.jdef", definition("widget", version(1, prop("size", "integer"))))
-    text = configuration('      <widget name="W" version="1"><size>3</size></widget>\n', definition_path=("mydefs",))
+    write(
+        tmp_path / "conf" / "mydefs" / "widget.jdef",
+        definition("widget", version(1, prop("size", "integer"))),
+    )
+    text = configuration(
+        '      <widget name="W" version="1"><size>3</size></widget>\n', definition_path=("mydefs",)
+    )
     assert check(files={"conf/w.jconf": text}) == []
-    text = configuration('      <widget name="W" version="1"/>\n', definition_path=("nowhere", "${NODEFS}"))
+    text = configuration(
+        '      <widget name="W" version="1"/>\n', definition_path=("nowhere", "${NODEFS}")
+    )
     found = check(files={"conf/w.jconf": text}, categories=(Category.CONFIG, Category.DEFINITION))
     # the unset variable expands to nothing, i.e. the configuration's own directory
     assert sorted(codes(found)) == ["CFG003", "CFG010", "DEF023"]
 
 
 def test_findings_are_not_repeated_for_a_file_included_twice(check):
-    files = {"a.jconf": configuration("", includes=("shared.jconf",)),
-             "b.jconf": configuration("", includes=("shared.jconf",)),
-             "shared.jconf": configuration(tracker("         <rate>x</rate>\n"))}
+    files = {
+        "a.jconf": configuration("", includes=("shared.jconf",)),
+        "b.jconf": configuration("", includes=("shared.jconf",)),
+        "shared.jconf": configuration(tracker("         <rate>x</rate>\n")),
+    }
     assert codes(check(files=files)) == ["CFG025"]
 
 
 def test_include_cycle_and_missing_include(check):
-    files = {"a.jconf": configuration(tracker(""), includes=("b.jconf",)),
-             "b.jconf": configuration("", includes=("a.jconf", "nowhere.jconf"))}
+    files = {
+        "a.jconf": configuration(tracker(""), includes=("b.jconf",)),
+        "b.jconf": configuration("", includes=("a.jconf", "nowhere.jconf")),
+    }
     found = check(files=files, only=("a.jconf",))
     assert sorted(codes(found)) == ["CFG001", "CFG002"]
 
@@ -339,4 +404,7 @@ def test_pre_commit_hook_definition():
 def test_values_on_one_line_get_their_own_columns(check):
     line = "         " + "<offset>0.0</offset>" * 4 + "\n"
     (found,) = check(tracker(line))
-    assert found.code == "CFG023" and (found.line, found.column) == (6, 10 + 3 * len("<offset>0.0</offset>"))
+    assert found.code == "CFG023" and (found.line, found.column) == (
+        6,
+        10 + 3 * len("<offset>0.0</offset>"),
+    )

@@ -27,20 +27,29 @@ from conftest import CORPUS, CORPUS_DEFINITIONS  # noqa: E402
 
 PINNED = HERE / "data" / "corpus_config_findings.txt"
 MODULES = CORPUS / "modules"
-EXTRA = [MODULES / "vrjuggler/samples/OGL/simple/ConfigApp", MODULES / "jackal/test/TestSuite/TestFiles/definitions"]
+EXTRA = [
+    MODULES / "vrjuggler/samples/OGL/simple/ConfigApp",
+    MODULES / "jackal/test/TestSuite/TestFiles/definitions",
+]
 ENVIRONMENT = {"HOME": "/home/user"}  # DATA_DIR, VJ_BASE_DIR and the rest unset
 
 
 def findings(root: Path, *, bundled: bool = True, together: bool = False, paths=None) -> list:
-    options = ValidateOptions(bundled=bundled, definition_dirs=EXTRA if bundled else [],
-                              together=together, environ=ENVIRONMENT)
+    options = ValidateOptions(
+        bundled=bundled,
+        definition_dirs=EXTRA if bundled else [],
+        together=together,
+        environ=ENVIRONMENT,
+    )
     result = validate_paths(paths or [root], options)
     return [d for d in result.diagnostics if d.category is Category.CONFIG]
 
 
 def keys(found, root: Path = CORPUS) -> collections.Counter:
-    return collections.Counter((d.code, Path(d.path).resolve().relative_to(root.resolve()).as_posix(), d.line)
-                               for d in found)
+    return collections.Counter(
+        (d.code, Path(d.path).resolve().relative_to(root.resolve()).as_posix(), d.line)
+        for d in found
+    )
 
 
 def pinned() -> collections.Counter:
@@ -93,16 +102,23 @@ def test_c4_closed_with_its_includes(corpus):
     assert "AppDigitalSim" in missing.message and Path(missing.path).name == "C4.base.jconf"
     # C4.mstar.jconf repeats C4.base.jconf's VJHead alias byte for byte: info, not a warning
     (twice,) = [d for d in found if d.code == "CFG042"]
-    assert "VJHead" in twice.message and (Path(twice.path).name, twice.line) == ("C4.mstar.jconf", 36)
+    assert "VJHead" in twice.message and (Path(twice.path).name, twice.line) == (
+        "C4.mstar.jconf",
+        36,
+    )
     assert "C4.base.jconf:5" in twice.message and "identical copy" in twice.message
     assert not [d for d in found if d.code == "CFG040"]
 
 
 def test_clean_files_have_no_findings(corpus):
-    clean = ["vrjuggler/data/configFiles/example.flock.jconf", "vrjuggler/data/configFiles/example.wanda.jconf",
-             "vrjuggler/data/configFiles/example.mstar.2pack.jconf", "vrjuggler/data/configFiles/sim.trackd.jconf",
-             "vrjuggler/data/configFiles/sim.wand.mixin.jconf",
-             "jackal/test/TestSuite/TestFiles/cfg/enumerations_test.jconf"]
+    clean = [
+        "vrjuggler/data/configFiles/example.flock.jconf",
+        "vrjuggler/data/configFiles/example.wanda.jconf",
+        "vrjuggler/data/configFiles/example.mstar.2pack.jconf",
+        "vrjuggler/data/configFiles/sim.trackd.jconf",
+        "vrjuggler/data/configFiles/sim.wand.mixin.jconf",
+        "jackal/test/TestSuite/TestFiles/cfg/enumerations_test.jconf",
+    ]
     for name in clean:
         assert findings(corpus, paths=[MODULES / name]) == [], name
 
@@ -113,8 +129,11 @@ def test_upgrade_check_lists_every_older_element_and_upgrading_removes_them(corp
     assert result.exit_code == 1
     import json
 
-    listed = {(Path(entry["path"]).resolve().relative_to(corpus.resolve()).as_posix(), element["line"])
-              for entry in json.loads(result.stdout) for element in entry["elements"]}
+    listed = {
+        (Path(entry["path"]).resolve().relative_to(corpus.resolve()).as_posix(), element["line"])
+        for entry in json.loads(result.stdout)
+        for element in entry["elements"]
+    }
     assert listed == older
 
     copy = tmp_path / "corpus"
@@ -151,15 +170,26 @@ def test_drop_removed_leaves_no_dropped_property_in_the_config_files(corpus, tmp
 
 def test_upgrade_diff_of_a_file_with_one_outdated_element_changes_only_its_lines(corpus, cli):
     result = cli("upgrade", "--diff", MODULES / "vrjuggler/data/configFiles/example.vrpn.jconf")
-    changed = [line for line in result.stdout.splitlines() if line[:1] in "+-" and line[:3] not in ("+++", "---")]
-    assert changed == ['-      <vrpn name="Vrpn" version="2">', '+      <vrpn name="Vrpn" version="3">']
+    changed = [
+        line
+        for line in result.stdout.splitlines()
+        if line[:1] in "+-" and line[:3] not in ("+++", "---")
+    ]
+    assert changed == [
+        '-      <vrpn name="Vrpn" version="2">',
+        '+      <vrpn name="Vrpn" version="3">',
+    ]
 
 
 def regenerate() -> None:
     found = keys(findings(CORPUS))
-    lines = ["# code\tfile (relative to the corpus)\tline: configuration-level findings on the corpus,",
-             "# each reviewed as a real problem of its file. Regenerate: python tests/test_config_corpus.py"]
-    for (code, path, line), count in sorted(found.items(), key=lambda item: (item[0][1], item[0][2], item[0][0])):
+    lines = [
+        "# code\tfile (relative to the corpus)\tline: configuration-level findings on the corpus,",
+        "# each reviewed as a real problem of its file. Regenerate: python tests/test_config_corpus.py",
+    ]
+    for (code, path, line), count in sorted(
+        found.items(), key=lambda item: (item[0][1], item[0][2], item[0][0])
+    ):
         lines += [f"{code}\t{path}\t{line}"] * count
     PINNED.parent.mkdir(parents=True, exist_ok=True)
     PINNED.write_text("\n".join(lines) + "\n", encoding="utf-8")

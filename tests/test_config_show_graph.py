@@ -43,13 +43,18 @@ def test_show_json_has_every_effective_property_with_its_source(cli, setup):
     assert result.exit_code == 0
     (tracker,) = json.loads(result.stdout)
     props = {p["name"]: p for p in tracker["properties"]}
-    assert props["baud"]["values"] == [{"source": "written", "value": "9600", "written": "Fast", "label": "Fast"}]
+    assert props["baud"]["values"] == [
+        {"source": "written", "value": "9600", "written": "Fast", "label": "Fast"}
+    ]
     assert [v["source"] for v in props["offset"]["values"]] == ["written", "default", "default"]
     assert [v["value"] for v in props["offset"]["values"]] == ["0.5", "0.0", "1.5"]
     assert props["units"]["values"][0] == {"source": "written", "value": "0.3048", "label": "Feet"}
     assert props["port"]["values"] == [{"source": "default", "value": "/dev/ttyS0"}]
     assert props["position_filters"]["inherited_from"] == "positional_device"
-    assert props["position_filters"]["values"][0]["element"]["full_name"] == "Tracker/position_filters/Scale"
+    assert (
+        props["position_filters"]["values"][0]["element"]["full_name"]
+        == "Tracker/position_filters/Scale"
+    )
     assert props["colour"]["known"] is False
 
 
@@ -78,7 +83,10 @@ def test_graph_text_tree(cli, setup):
     lines = result.stdout.splitlines()
     assert lines[0] == "alias 'VJHead'"
     assert lines[1] == "└── proxy → position_proxy 'Head'"
-    assert lines[2] == "    └── device → tracker 'Tracker'  [no known driver plug-in handles this type]"
+    assert (
+        lines[2]
+        == "    └── device → tracker 'Tracker'  [no known driver plug-in handles this type]"
+    )
     assert "missing 'Nowhere'" in result.stdout
     assert "driver → plug-in DTrack_drv" in result.stdout
 
@@ -89,33 +97,52 @@ def test_graph_json_and_mermaid(cli, setup):
     kinds = {n["name"]: n["kind"] for n in graph["nodes"]}
     assert kinds["VJHead"] == "alias" and kinds["Head"] == "proxy" and kinds["Tracker"] == "device"
     assert kinds["Tracker/position_filters/Scale"] == "element"
-    assert {(e["kind"], e["label"]) for e in graph["edges"]} >= {("pointer", "proxy"), ("pointer", "device"),
-                                                                ("contains", "position_filters"), ("driver", "driver")}
+    assert {(e["kind"], e["label"]) for e in graph["edges"]} >= {
+        ("pointer", "proxy"),
+        ("pointer", "device"),
+        ("contains", "position_filters"),
+        ("driver", "driver"),
+    }
     mermaid = cli("config", "graph", path, "--format", "mermaid", *options).stdout
     assert mermaid.startswith("flowchart LR") and "-->|proxy|" in mermaid
 
 
 def test_dtrack_device_is_handled_by_the_bundled_plugin(cli):
-    result = cli("config", "graph", CORPUS_CONFIGS / "example.dtrack.jconf", "--no-bundled", "-d", CORPUS_DEFINITIONS)
+    result = cli(
+        "config",
+        "graph",
+        CORPUS_CONFIGS / "example.dtrack.jconf",
+        "--no-bundled",
+        "-d",
+        CORPUS_DEFINITIONS,
+    )
     assert "device → dtrack 'DTrack Device'" in result.stdout
     assert "handled by → plug-in DTrack_drv" in result.stdout
 
 
-@pytest.mark.parametrize("name", ["sim.base.jconf", "example.sim.cluster.jconf", "C4.closed.jconf", "example.dtrack.jconf"])
+@pytest.mark.parametrize(
+    "name",
+    ["sim.base.jconf", "example.sim.cluster.jconf", "C4.closed.jconf", "example.dtrack.jconf"],
+)
 def test_dot_output_is_accepted_by_graphviz(cli, name):
     require_tool("dot", "graphviz")
     result = cli("config", "graph", CORPUS_CONFIGS / name, "--format", "dot")
     assert result.exit_code == 0
-    done = subprocess.run(["dot", "-Tsvg"], input=result.stdout, capture_output=True, text=True, timeout=30)
+    done = subprocess.run(
+        ["dot", "-Tsvg"], input=result.stdout, capture_output=True, text=True, timeout=30
+    )
     assert done.returncode == 0, done.stderr
     assert not done.stderr and "<svg" in done.stdout
 
 
 def test_plugin_metadata_is_read_without_importing(tmp_path):
-    init = write(tmp_path / "Fake_drv" / "__init__.py",
-                 'raise SystemExit("imported!")\nPLUGIN_NAME = "Fake_drv"\nELEMENT_TYPES = {"fake": ("digital",)}\n')
-    assert {t: tuple(k.value for k in kinds) for t, kinds in read_metadata(init).element_types.items()} == {
-        "fake": ("digital",)}
+    init = write(
+        tmp_path / "Fake_drv" / "__init__.py",
+        'raise SystemExit("imported!")\nPLUGIN_NAME = "Fake_drv"\nELEMENT_TYPES = {"fake": ("digital",)}\n',
+    )
+    assert {
+        t: tuple(k.value for k in kinds) for t, kinds in read_metadata(init).element_types.items()
+    } == {"fake": ("digital",)}
     assert bundled_plugins(tmp_path) == {"Fake_drv": ("fake",)}
     assert plugin_for_type(tmp_path)["fake"] == "Fake_drv"
     assert plugin_for_type(drivers_dir())["dtrack"] == "DTrack_drv"

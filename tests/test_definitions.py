@@ -52,11 +52,24 @@ def test_dtrack_inherits_position_filters(cli):
 
 
 def test_child_property_wins_and_origins_are_known(tmp_path):
-    write(tmp_path / "base.jdef", jdef("base", prop("shared", "integer", values='<value label="x" defaultvalue="1"/>') + prop("only_base")))
+    write(
+        tmp_path / "base.jdef",
+        jdef(
+            "base",
+            prop("shared", "integer", values='<value label="x" defaultvalue="1"/>')
+            + prop("only_base"),
+        ),
+    )
     write(tmp_path / "mid.jdef", jdef("mid", prop("mid_prop"), parents="<parent>base</parent>"))
     write(tmp_path / "other.jdef", jdef("other", prop("other_prop")))
-    write(tmp_path / "leaf.jdef", jdef("leaf", prop("shared", "integer", values='<value label="x" defaultvalue="7"/>'),
-                                       parents="<parent>mid</parent><parent>other</parent>"))
+    write(
+        tmp_path / "leaf.jdef",
+        jdef(
+            "leaf",
+            prop("shared", "integer", values='<value label="x" defaultvalue="7"/>'),
+            parents="<parent>mid</parent><parent>other</parent>",
+        ),
+    )
     repo = repo_of(tmp_path)
     props = {p.name: p for p in repo.effective_properties("leaf")}
     assert props["shared"].defined_by == "leaf" and props["shared"].definition.default(0) == "7"
@@ -88,7 +101,9 @@ def test_thousand_level_chain_is_bounded(tmp_path):
     # Each report shows the first steps of the cycle and its size, not all 1000 names, so
     # reporting a cycle of N definitions is linear in N (it was quadratic in time and text).
     assert all(len(d.message) < 200 for d in cycles), cycles[0].message
-    assert "t0 inherits from itself: t0 -> t1 -> " in next(d.message for d in cycles if d.message.startswith("t0 "))
+    assert "t0 inherits from itself: t0 -> t1 -> " in next(
+        d.message for d in cycles if d.message.startswith("t0 ")
+    )
     assert all("(a cycle of 1000 definitions)" in d.message for d in cycles)
     repo = repo_of(tmp_path)
     assert len(repo.effective_properties("t0")) == 1000
@@ -96,48 +111,82 @@ def test_thousand_level_chain_is_bounded(tmp_path):
 
 
 def test_definition_checks_fire_and_stay_quiet(tmp_path):
-    bad = jdef("bad",
-               prop("num", "integer", values='<value label="n" defaultvalue="fast"/>')
-               + prop("flag", "boolean", values='<value label="f" defaultvalue="yes"/>')
-               + prop("mode", "integer", extra='         <enumeration><enum label="A" value="one"/></enumeration>\n')
-               + prop("list", "float", variable="true", values='<value label="a"/><value label="b"/>')
-               + prop("ptr", "configelementpointer", extra="         <allowed_type>no_such_type</allowed_type>\n")
-               + prop("num", "integer"))
+    bad = jdef(
+        "bad",
+        prop("num", "integer", values='<value label="n" defaultvalue="fast"/>')
+        + prop("flag", "boolean", values='<value label="f" defaultvalue="yes"/>')
+        + prop(
+            "mode",
+            "integer",
+            extra='         <enumeration><enum label="A" value="one"/></enumeration>\n',
+        )
+        + prop("list", "float", variable="true", values='<value label="a"/><value label="b"/>')
+        + prop(
+            "ptr",
+            "configelementpointer",
+            extra="         <allowed_type>no_such_type</allowed_type>\n",
+        )
+        + prop("num", "integer"),
+    )
     write(tmp_path / "bad.jdef", bad)
     codes = sorted(d.code for d in validate_paths([tmp_path / "bad.jdef"]).diagnostics)
     assert codes == ["DEF001", "DEF001", "DEF002", "DEF003", "DEF004", "DEF007"]
-    good = jdef("good", prop("num", "integer", values='<value label="n" defaultvalue="3"/>')
-                + prop("flag", "boolean", values='<value label="f" defaultvalue="true"/>'))
+    good = jdef(
+        "good",
+        prop("num", "integer", values='<value label="n" defaultvalue="3"/>')
+        + prop("flag", "boolean", values='<value label="f" defaultvalue="true"/>'),
+    )
     assert validate_paths([write(tmp_path / "good.jdef", good)]).diagnostics == []
 
 
 def test_redefined_inherited_property_with_other_type(tmp_path):
     write(tmp_path / "base.jdef", jdef("base", prop("shared", "integer")))
-    write(tmp_path / "kid.jdef", jdef("kid", prop("shared", "string"), parents="<parent>base</parent>"))
+    write(
+        tmp_path / "kid.jdef",
+        jdef("kid", prop("shared", "string"), parents="<parent>base</parent>"),
+    )
     assert [d.code for d in validate_paths([tmp_path]).diagnostics] == ["DEF008"]
 
 
 def test_version_order_duplicates_and_missing_transform(tmp_path):
     v2 = jdef("multi", prop("p"), version=2)
-    older = ('   <definition_version version="1" label="old"><help>h</help><parent/>'
-             "<upgrade_transform/></definition_version>\n")
-    text = v2.replace('   <definition_version version="2"', older + '   <definition_version version="2"')
+    older = (
+        '   <definition_version version="1" label="old"><help>h</help><parent/>'
+        "<upgrade_transform/></definition_version>\n"
+    )
+    text = v2.replace(
+        '   <definition_version version="2"', older + '   <definition_version version="2"'
+    )
     found = [d.code for d in validate_paths([write(tmp_path / "m.jdef", text)]).diagnostics]
     assert found == ["DEF011"]  # 1 then 2, no transform for the step
     swapped = v2.replace("</definition>", older + "</definition>")
-    assert "DEF009" in [d.code for d in validate_paths([write(tmp_path / "s.jdef", swapped)]).diagnostics]
+    assert "DEF009" in [
+        d.code for d in validate_paths([write(tmp_path / "s.jdef", swapped)]).diagnostics
+    ]
     dup = v2.replace("</definition>", older.replace('version="1"', 'version="2"') + "</definition>")
-    assert "DEF010" in [d.code for d in validate_paths([write(tmp_path / "d.jdef", dup)]).diagnostics]
+    assert "DEF010" in [
+        d.code for d in validate_paths([write(tmp_path / "d.jdef", dup)]).diagnostics
+    ]
 
 
 def test_corpus_definition_findings(corpus):
-    dirs = [corpus / "modules/vrjuggler/data/definitions", corpus / "modules/vrjuggler/samples",
-            corpus / "modules/jackal/test/TestSuite/TestFiles/definitions"]
+    dirs = [
+        corpus / "modules/vrjuggler/data/definitions",
+        corpus / "modules/vrjuggler/samples",
+        corpus / "modules/jackal/test/TestSuite/TestFiles/definitions",
+    ]
     result = validate_paths(dirs)
-    found = {(Path(d.path).name, d.code, d.severity.value) for d in result.diagnostics
-             if d.category.value == "definition"}
+    found = {
+        (Path(d.path).name, d.code, d.severity.value)
+        for d in result.diagnostics
+        if d.category.value == "definition"
+    }
     assert ("gadget_logger.jdef", "DEF004", "warning") in found  # DigProxy, proxyAlias
-    assert ("simulated_analog_device.jdef", "DEF004", "info") in found  # stale type in an old version
+    assert (
+        "simulated_analog_device.jdef",
+        "DEF004",
+        "info",
+    ) in found  # stale type in an old version
     xml = {(Path(d.path).name, d.code) for d in result.diagnostics if d.category.value == "xml"}
     assert ("flock.jdef", "XML002") in xml and ("config_app.jdef", "XML013") in xml
     noisy = {name for name, _, severity in found if severity != "info"}
@@ -160,7 +209,9 @@ def test_search_path_order_and_origins(tmp_path, monkeypatch, cli):
     monkeypatch.delenv("VJ_BASE_DIR", raising=False)
     data = json.loads(cli("defs", "path", "--format", "json").stdout)
     assert [(e["origin"], e["path"]) for e in data["entries"]][1:] == [
-        ("JCCL_DEFINITION_PATH", str(one)), ("JCCL_DEFINITION_PATH", str(two))]
+        ("JCCL_DEFINITION_PATH", str(one)),
+        ("JCCL_DEFINITION_PATH", str(two)),
+    ]
     assert data["entries"][0]["origin"] == "bundled"
     rows = {r["name"]: r for r in json.loads(cli("defs", "list", "--format", "json").stdout)}
     assert rows["dtrack"]["version"] == 99 and rows["dtrack"]["source"] == str(one / "dtrack.jdef")
@@ -170,10 +221,23 @@ def test_search_path_order_and_origins(tmp_path, monkeypatch, cli):
 
 def test_search_path_sources_and_expansion(tmp_path):
     vj = tmp_path / "vj"
-    entries = build_search_path(SearchPathOptions(extra_dirs=[tmp_path / "cli"], environ={
-        "VJ_BASE_DIR": str(vj), "JCCL_DEFINITION_PATH": "${MISSING}/defs" + os.pathsep + "$(HOMEDIR)/x",
-        "HOMEDIR": str(tmp_path)}))
-    assert [e.origin for e in entries] == ["bundled", "VJ_BASE_DIR", "JCCL_DEFINITION_PATH", "JCCL_DEFINITION_PATH", "--definitions"]
+    entries = build_search_path(
+        SearchPathOptions(
+            extra_dirs=[tmp_path / "cli"],
+            environ={
+                "VJ_BASE_DIR": str(vj),
+                "JCCL_DEFINITION_PATH": "${MISSING}/defs" + os.pathsep + "$(HOMEDIR)/x",
+                "HOMEDIR": str(tmp_path),
+            },
+        )
+    )
+    assert [e.origin for e in entries] == [
+        "bundled",
+        "VJ_BASE_DIR",
+        "JCCL_DEFINITION_PATH",
+        "JCCL_DEFINITION_PATH",
+        "--definitions",
+    ]
     assert entries[1].path == vj / "share/vrjuggler/data/definitions"
     assert entries[2].undefined == ("MISSING",)
     assert entries[3].path == tmp_path / "x"
@@ -186,7 +250,9 @@ def test_shadowing_is_reported_with_both_locations(tmp_path):
     write(tmp_path / "b" / "thing.jdef", jdef("thing", prop("q")))
     repo = repo_of(tmp_path / "a", tmp_path / "b")
     (shadow,) = repo.shadowed
-    assert shadow.winner.path.endswith("a/thing.jdef") and shadow.loser.path.endswith("b/thing.jdef")
+    assert shadow.winner.path.endswith("a/thing.jdef") and shadow.loser.path.endswith(
+        "b/thing.jdef"
+    )
     assert repo.get("thing").own_property("p") is not None
 
 

@@ -24,12 +24,24 @@ from conftest import write
 pytestmark = pytest.mark.timeout(60)
 
 NOBODY = Identity(65534, frozenset({65534}))
-HEAD = ('<?xml version="1.0" encoding="UTF-8"?>\n'
-        '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="doctor test">\n'
-        '<elements>\n')
+HEAD = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="doctor test">\n'
+    "<elements>\n"
+)
 TAIL = "</elements>\n</configuration>\n"
-DRIVER_CODES = {"DRV001", "DRV002", "DRV003", "DRV004", "DRV005", "DRV006", "DRV007", "DRV030", "DRV031"}
+DRIVER_CODES = {
+    "DRV001",
+    "DRV002",
+    "DRV003",
+    "DRV004",
+    "DRV005",
+    "DRV006",
+    "DRV007",
+    "DRV030",
+    "DRV031",
+}
 
 
 def config(tmp_path: Path, *elements: str, drivers: tuple[str, ...] = ()) -> Path:
@@ -59,8 +71,10 @@ def dtrack(port: int) -> str:
 
 
 def motion_star(port: int) -> str:
-    return (f'<motion_star name="Chassis" version="2"><address>127.0.0.1</address>'
-            f'<server_port>{port}</server_port></motion_star>')
+    return (
+        f'<motion_star name="Chassis" version="2"><address>127.0.0.1</address>'
+        f"<server_port>{port}</server_port></motion_star>"
+    )
 
 
 def doctor_json(cli, *args) -> tuple[int, dict]:
@@ -141,20 +155,27 @@ def fifo_device(path: Path | str) -> str:
 
 # -- device files ---------------------------------------------------------------------------
 
+
 def test_missing_joystick_path_is_a_blocking_finding(cli, tmp_path):
     missing = tmp_path / "js0"
     code, report = doctor_json(cli, config(tmp_path, joydev(missing), drivers=("LinuxJoydev_drv",)))
     assert code == 1
     [check] = checks_of(report, "Joystick")
-    assert check["status"] == "problem" and check["code"] == "DRV100" and check["target"] == str(missing)
+    assert (
+        check["status"] == "problem"
+        and check["code"] == "DRV100"
+        and check["target"] == str(missing)
+    )
     assert check["property"] == "port_name"
     finding = next(d for d in report["diagnostics"] if d["code"] == "DRV100")
     assert finding["line"] == 6 and "gadgetctl emulate LinuxJoydev_drv" in finding["hint"]
 
 
 def test_missing_dev_input_path_lists_the_joysticks(tmp_path):
-    report = diagnose([config(tmp_path, joydev("/dev/input/js7"))],
-                      DoctorOptions(joystick_glob=str(tmp_path / "none*")))
+    report = diagnose(
+        [config(tmp_path, joydev("/dev/input/js7"))],
+        DoctorOptions(joystick_glob=str(tmp_path / "none*")),
+    )
     finding = next(d for d in report.diagnostics if d.code == "DRV100")
     assert "no joystick devices found" in finding.hint
 
@@ -181,8 +202,12 @@ def test_nothing_blocking_exits_0(cli, tmp_path, fifo_plugin):
     fifo = tmp_path / "pad"
     writer = fed_fifo(fifo)
     try:
-        result = cli("doctor", "--driver-path", fifo_plugin,
-                     config(tmp_path, fifo_device(fifo), drivers=("Fifo_drv",)))
+        result = cli(
+            "doctor",
+            "--driver-path",
+            fifo_plugin,
+            config(tmp_path, fifo_device(fifo), drivers=("Fifo_drv",)),
+        )
     finally:
         os.close(writer)
     assert result.exit_code == 0, result.stdout
@@ -193,8 +218,10 @@ def test_nothing_blocking_exits_0(cli, tmp_path, fifo_plugin):
 
 def test_a_regular_file_is_only_a_warning(tmp_path, fifo_plugin):
     plain = write(tmp_path / "recorded", "")
-    report = diagnose([config(tmp_path, fifo_device(plain), drivers=("Fifo_drv",))],
-                      DoctorOptions(driver_dirs=[fifo_plugin]))
+    report = diagnose(
+        [config(tmp_path, fifo_device(plain), drivers=("Fifo_drv",))],
+        DoctorOptions(driver_dirs=[fifo_plugin]),
+    )
     [check] = report.devices[0].checks
     assert check.status is Status.WARNING and check.code == "DRV102"
     assert report.exit_code == 0
@@ -207,13 +234,16 @@ def test_a_directory_is_not_a_device(tmp_path):
 
 # -- permissions ----------------------------------------------------------------------------
 
+
 def fake_stat(mode: int, uid: int, gid: int) -> os.stat_result:
     return os.stat_result((mode, 0, 0, 1, uid, gid, 0, 0, 0, 0))
 
 
 def other_group() -> grp.struct_group:
     """A real group that NOBODY is not in, to name in hints."""
-    return next(g for g in sorted(grp.getgrall(), key=lambda g: g.gr_gid) if g.gr_gid not in NOBODY.gids)
+    return next(
+        g for g in sorted(grp.getgrall(), key=lambda g: g.gr_gid) if g.gr_gid not in NOBODY.gids
+    )
 
 
 def test_permission_logic_from_mode_bits():
@@ -223,13 +253,17 @@ def test_permission_logic_from_mode_bits():
     assert allowed(joystick, Identity(0, frozenset()), os.R_OK)  # root
     assert allowed(fake_stat(stat.S_IFCHR | 0o604, 0, 0), NOBODY, os.R_OK)  # others may read
     assert not allowed(fake_stat(stat.S_IFCHR | 0o604, 0, 0), NOBODY, os.R_OK | os.W_OK)
-    assert not allowed(fake_stat(stat.S_IFCHR | 0o066, 65534, 0), NOBODY, os.R_OK)  # the owner bits count
+    assert not allowed(
+        fake_stat(stat.S_IFCHR | 0o066, 65534, 0), NOBODY, os.R_OK
+    )  # the owner bits count
 
 
 def test_group_hint_names_the_group_of_the_file():
     group = other_group()
     hint = access_hint(fake_stat(stat.S_IFCHR | 0o660, 0, group.gr_gid), NOBODY, os.R_OK)
-    assert hint.startswith(f"add yourself to group {group.gr_name}: sudo usermod -aG {group.gr_name} $USER")
+    assert hint.startswith(
+        f"add yourself to group {group.gr_name}: sudo usermod -aG {group.gr_name} $USER"
+    )
     closed = access_hint(fake_stat(stat.S_IFCHR | 0o600, 0, group.gr_gid), NOBODY, os.R_OK)
     assert "udev rule" in closed and "crw-------" in closed
 
@@ -244,7 +278,9 @@ def test_unreadable_device_for_another_user(tmp_path):
     assert checked.hint.startswith(f"add yourself to group {group}")
     fifo = tmp_path / "fifo"
     os.mkfifo(fifo, 0o600)
-    report = diagnose([config(tmp_path, joydev(fifo))], DoctorOptions(identity=Identity(4242, frozenset())))
+    report = diagnose(
+        [config(tmp_path, joydev(fifo))], DoctorOptions(identity=Identity(4242, frozenset()))
+    )
     [check] = report.devices[0].checks
     assert check.code == "DRV101" and "may not read" in check.detail
     assert report.exit_code == 1
@@ -255,7 +291,9 @@ def test_permission_of_the_current_user(cli, tmp_path):
     fifo = tmp_path / "js0"
     writer = fed_fifo(fifo, 0o000)
     try:
-        code, report = doctor_json(cli, config(tmp_path, joydev(fifo), drivers=("LinuxJoydev_drv",)))
+        code, report = doctor_json(
+            cli, config(tmp_path, joydev(fifo), drivers=("LinuxJoydev_drv",))
+        )
     finally:
         os.close(writer)
     [check] = checks_of(report, "Joystick")
@@ -267,6 +305,7 @@ def test_permission_of_the_current_user(cli, tmp_path):
 
 
 # -- serial ports ---------------------------------------------------------------------------
+
 
 def test_pty_behind_a_symlink_is_a_usable_serial_port(tmp_path):
     from gadgetctl.emulation import PseudoTerminal
@@ -294,6 +333,7 @@ def test_missing_serial_port_of_an_upstream_driver_lists_the_ports(tmp_path):
 
 # -- UDP and TCP ----------------------------------------------------------------------------
 
+
 def test_udp_port_taken_by_another_socket(cli, tmp_path):
     holder = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     try:
@@ -304,7 +344,11 @@ def test_udp_port_taken_by_another_socket(cli, tmp_path):
         holder.close()
     assert code == 1
     [check] = checks_of(report, "Tracker")
-    assert check["code"] == "DRV103" and check["property"] == "receive_port" and "taken" in check["detail"]
+    assert (
+        check["code"] == "DRV103"
+        and check["property"] == "receive_port"
+        and "taken" in check["detail"]
+    )
 
 
 def test_free_udp_port(cli, tmp_path):
@@ -352,8 +396,13 @@ def test_tcp_server_not_listening(cli, tmp_path):
     closed.bind(("127.0.0.1", 0))
     port = closed.getsockname()[1]
     closed.close()
-    code, report = doctor_json(cli, "--probe", "--timeout", "2",
-                               config(tmp_path, motion_star(port), drivers=("MotionStar_drv",)))
+    code, report = doctor_json(
+        cli,
+        "--probe",
+        "--timeout",
+        "2",
+        config(tmp_path, motion_star(port), drivers=("MotionStar_drv",)),
+    )
     assert code == 1
     [check] = checks_of(report, "Chassis")
     assert check["code"] == "DRV104" and "refused" in check["detail"]
@@ -367,6 +416,7 @@ def test_tcp_check_without_probe_touches_nothing():
 
 
 # -- drivers --------------------------------------------------------------------------------
+
 
 def test_device_whose_driver_is_missing(cli, tmp_path):
     path = config(tmp_path, joydev("/dev/null"), drivers=("NoSuchJoystick_drv",))
@@ -392,9 +442,11 @@ def test_device_type_no_plugin_provides(cli, tmp_path):
 
 
 def test_plugin_that_fails_to_import(tmp_path, fifo_plugin):
-    write(fifo_plugin / "Broken_drv" / "__init__.py",
-          "GADGETCTL_API_VERSION = 1\nELEMENT_TYPES = {'broken_device': ('digital',)}\n"
-          "raise ImportError('needs libfoo')\n\ndef register(registry):\n    pass\n")
+    write(
+        fifo_plugin / "Broken_drv" / "__init__.py",
+        "GADGETCTL_API_VERSION = 1\nELEMENT_TYPES = {'broken_device': ('digital',)}\n"
+        "raise ImportError('needs libfoo')\n\ndef register(registry):\n    pass\n",
+    )
     overview = diagnose([], DoctorOptions(driver_dirs=[fifo_plugin]))
     plugins = {p.name: p for p in overview.plugins}
     assert plugins["Fifo_drv"].ok and not plugins["Broken_drv"].ok
@@ -405,8 +457,10 @@ def test_plugin_that_fails_to_import(tmp_path, fifo_plugin):
     writer = fed_fifo(fifo)
     # a configuration that does not use the broken plug-in is not blocked by it
     try:
-        used = diagnose([config(tmp_path, fifo_device(fifo), drivers=("Fifo_drv",))],
-                        DoctorOptions(driver_dirs=[fifo_plugin]))
+        used = diagnose(
+            [config(tmp_path, fifo_device(fifo), drivers=("Fifo_drv",))],
+            DoctorOptions(driver_dirs=[fifo_plugin]),
+        )
     finally:
         os.close(writer)
     assert next(d for d in used.diagnostics if d.code == "DRV003").severity.value == "warning"
@@ -418,14 +472,17 @@ def test_transports_naming_an_unknown_property(tmp_path, fifo_plugin):
     init.write_text(init.read_text().replace('"path": "port_name"', '"path": "device_file"'))
     fifo = tmp_path / "pad"
     os.mkfifo(fifo)
-    report = diagnose([config(tmp_path, fifo_device(fifo), drivers=("Fifo_drv",))],
-                      DoctorOptions(driver_dirs=[fifo_plugin]))
+    report = diagnose(
+        [config(tmp_path, fifo_device(fifo), drivers=("Fifo_drv",))],
+        DoctorOptions(driver_dirs=[fifo_plugin]),
+    )
     [check] = report.devices[0].checks
     assert check.code == "DRV107" and "device_file" in check.detail
     assert report.exit_code == 0
 
 
 # -- overview, JSON, errors -----------------------------------------------------------------
+
 
 def test_overview_without_configuration(cli, fifo_plugin):
     code, report = doctor_json(cli, "--driver-path", fifo_plugin)
@@ -437,28 +494,80 @@ def test_overview_without_configuration(cli, fifo_plugin):
     assert isinstance(report["serial_ports"], list) and isinstance(report["joysticks"], list)
     assert code == report["exit_code"]
     text = cli("doctor", "--driver-path", fifo_plugin).stdout
-    for heading in ("Definition search path:", "Driver plug-ins", "Serial ports:", "Joystick devices:"):
+    for heading in (
+        "Definition search path:",
+        "Driver plug-ins",
+        "Serial ports:",
+        "Joystick devices:",
+    ):
         assert heading in text
 
 
 def test_json_shape(cli, tmp_path):
     _, report = doctor_json(cli, config(tmp_path, joydev(tmp_path / "js0"), dtrack(5999)))
-    assert set(report) == {"configurations", "definition_path", "driver_places", "plugins", "devices",
-                           "serial_ports", "joysticks", "diagnostics", "blocking", "exit_code"}
+    assert set(report) == {
+        "configurations",
+        "definition_path",
+        "driver_places",
+        "plugins",
+        "devices",
+        "serial_ports",
+        "joysticks",
+        "diagnostics",
+        "blocking",
+        "exit_code",
+    }
     device = report["devices"][0]
-    assert set(device) == {"name", "type", "path", "line", "driver", "driver_ok", "pending",
-                           "transports_from", "checks"}
-    assert set(device["checks"][0]) == {"kind", "property", "target", "status", "detail", "code", "hint"}
-    assert set(report["plugins"][0]) == {"name", "source", "path", "loads", "error", "element_types", "used",
-                                         "shadowed_by"}
-    assert set(report["diagnostics"][0]) == {"code", "severity", "category", "path", "line", "column",
-                                             "message", "hint"}
+    assert set(device) == {
+        "name",
+        "type",
+        "path",
+        "line",
+        "driver",
+        "driver_ok",
+        "pending",
+        "transports_from",
+        "checks",
+    }
+    assert set(device["checks"][0]) == {
+        "kind",
+        "property",
+        "target",
+        "status",
+        "detail",
+        "code",
+        "hint",
+    }
+    assert set(report["plugins"][0]) == {
+        "name",
+        "source",
+        "path",
+        "loads",
+        "error",
+        "element_types",
+        "used",
+        "shadowed_by",
+    }
+    assert set(report["diagnostics"][0]) == {
+        "code",
+        "severity",
+        "category",
+        "path",
+        "line",
+        "column",
+        "message",
+        "hint",
+    }
     assert report["blocking"] == sum(d["severity"] == "error" for d in report["diagnostics"])
 
 
 def test_usage_errors_exit_2(cli, tmp_path):
     missing = cli("doctor", tmp_path / "nope.jconf")
-    assert missing.exit_code == 2 and missing.stderr.strip() == f"gadgetctl: error: {tmp_path / 'nope.jconf'}: no such configuration file"
+    assert (
+        missing.exit_code == 2
+        and missing.stderr.strip()
+        == f"gadgetctl: error: {tmp_path / 'nope.jconf'}: no such configuration file"
+    )
     bad = cli("doctor", "--timeout", "0")
     assert bad.exit_code == 2 and "Traceback" not in bad.stderr
     broken = write(tmp_path / "broken.jconf", "<configuration")

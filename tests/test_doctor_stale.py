@@ -59,8 +59,12 @@ def test_a_fifo_a_program_writes_or_an_emulator_holds_is_fine(tmp_path) -> None:
 def test_a_pty_link_now_pointing_at_somebodys_terminal_is_stale(cli, tmp_path) -> None:
     """The issue's case: the emulator was killed, its pts number went to a terminal."""
     master, slave = os.openpty()
-    terminal = subprocess.Popen([sys.executable, "-c", HOLD_AS_TERMINAL, os.ttyname(slave)],
-                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    terminal = subprocess.Popen(
+        [sys.executable, "-c", HOLD_AS_TERMINAL, os.ttyname(slave)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert terminal.stdout.readline() == "ready\n"
         link = tmp_path / "gadgetctl-pinch"
@@ -68,7 +72,9 @@ def test_a_pty_link_now_pointing_at_somebodys_terminal_is_stale(cli, tmp_path) -
         code, report = doctor_json(cli, config(tmp_path, pinch(link), drivers=("PinchGlove_drv",)))
         [check] = [c for d in report["devices"] for c in d["checks"]]
         assert check["code"] == "DRV108" and check["status"] == "problem", check
-        assert "the terminal of python" in check["detail"] and f"pid {terminal.pid}" in check["detail"]
+        assert (
+            "the terminal of python" in check["detail"] and f"pid {terminal.pid}" in check["detail"]
+        )
         assert "would write into that terminal" in check["detail"]
         assert code == 1
     finally:

@@ -11,7 +11,11 @@ EXAMPLES = sorted((REPO / "drivers").glob("*/example.jconf"))
 
 def test_every_bundled_driver_has_an_example():
     assert {p.parent.name for p in EXAMPLES} >= {
-        "LinuxJoydev_drv", "DTrack_drv", "PinchGlove_drv", "MotionStar_drv"}
+        "LinuxJoydev_drv",
+        "DTrack_drv",
+        "PinchGlove_drv",
+        "MotionStar_drv",
+    }
 
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=[p.parent.name for p in EXAMPLES])

@@ -77,8 +77,15 @@ def wait_for_output(proc: subprocess.Popen, pattern: str, timeout: float = 30.0)
 
 def gadgetctl(*args: str, **kwargs) -> subprocess.Popen:
     env = {**os.environ, "PYTHONUNBUFFERED": "1", "NO_COLOR": "1"}
-    return subprocess.Popen([sys.executable, "-m", "gadgetctl", *args], cwd=REPO, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kwargs)
+    return subprocess.Popen(
+        [sys.executable, "-m", "gadgetctl", *args],
+        cwd=REPO,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        **kwargs,
+    )
 
 
 @pytest.mark.timeout(120)
@@ -89,9 +96,22 @@ def test_emulate_then_monitor_the_example(driver, kinds, ready):
         try:
             said = wait_for_output(emulator, ready)
             monitor = subprocess.run(
-                [sys.executable, "-m", "gadgetctl", "monitor", f"drivers/{driver}/example.jconf",
-                 "--duration", "3", "--format", "ndjson"],
-                cwd=REPO, capture_output=True, text=True, timeout=40)
+                [
+                    sys.executable,
+                    "-m",
+                    "gadgetctl",
+                    "monitor",
+                    f"drivers/{driver}/example.jconf",
+                    "--duration",
+                    "3",
+                    "--format",
+                    "ndjson",
+                ],
+                cwd=REPO,
+                capture_output=True,
+                text=True,
+                timeout=40,
+            )
         finally:
             emulator.send_signal(signal.SIGINT)
             out, err = emulator.communicate(timeout=15)

@@ -22,15 +22,24 @@ from conftest import REPO
 
 ALL_DEVICES = REPO / "examples" / "all_devices.jconf"
 WAVEFORM = REPO / "examples" / "waveform.jconf"
-FRAMES_LINE = re.compile(r"^frames: (\d+) in ([\d.]+) s, ([\d.]+) Hz achieved of ([\d.]+) Hz requested$", re.M)
+FRAMES_LINE = re.compile(
+    r"^frames: (\d+) in ([\d.]+) s, ([\d.]+) Hz achieved of ([\d.]+) Hz requested$", re.M
+)
 
 pytestmark = pytest.mark.timeout(120)
 
 
 def gadgetctl(*args: str | Path, timeout: float = 90) -> subprocess.CompletedProcess:
     env = {**os.environ, "NO_COLOR": "1"}
-    return subprocess.run([sys.executable, "-m", "gadgetctl", *map(str, args)], cwd=REPO, capture_output=True,
-                          text=True, timeout=timeout, env=env, stdin=subprocess.DEVNULL)
+    return subprocess.run(
+        [sys.executable, "-m", "gadgetctl", *map(str, args)],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
+        stdin=subprocess.DEVNULL,
+    )
 
 
 def frames_of(result: subprocess.CompletedProcess) -> tuple[int, float, float, float]:
@@ -41,8 +50,9 @@ def frames_of(result: subprocess.CompletedProcess) -> tuple[int, float, float, f
 
 
 def test_monitor_duration_is_seconds_when_the_frame_rate_is_not_reached() -> None:
-    result = gadgetctl("monitor", ALL_DEVICES, "--rate", "10000", "--duration", "1", "--format", "table",
-                       "--stats")
+    result = gadgetctl(
+        "monitor", ALL_DEVICES, "--rate", "10000", "--duration", "1", "--format", "table", "--stats"
+    )
     assert result.returncode == 0, result.stderr
     frames, seconds, achieved, requested = frames_of(result)
     assert requested == 10000 and frames < 10000  # the run ended on time, not on a frame count
@@ -57,14 +67,18 @@ def test_monitor_duration_is_seconds_when_the_frame_rate_is_not_reached() -> Non
 
 
 def test_ndjson_monitor_says_so_once_too() -> None:
-    result = gadgetctl("monitor", ALL_DEVICES, "--rate", "10000", "--duration", "1", "--format", "ndjson")
+    result = gadgetctl(
+        "monitor", ALL_DEVICES, "--rate", "10000", "--duration", "1", "--format", "ndjson"
+    )
     assert result.returncode == 0, result.stderr
     assert result.stderr.count("not reached") == 1, result.stderr
     assert result.stdout.rstrip().splitlines()[-1].startswith('{"v":1,"type":"end"')
 
 
 def test_a_reached_frame_rate_says_nothing() -> None:
-    result = gadgetctl("monitor", WAVEFORM, "--rate", "5", "--duration", "1", "--format", "table", "--stats")
+    result = gadgetctl(
+        "monitor", WAVEFORM, "--rate", "5", "--duration", "1", "--format", "table", "--stats"
+    )
     assert result.returncode == 0, result.stderr
     frames, seconds, _achieved, requested = frames_of(result)
     assert requested == 5 and seconds >= 1.0 and 4 <= frames <= 6
@@ -73,11 +87,31 @@ def test_a_reached_frame_rate_says_nothing() -> None:
 
 def test_replay_duration_is_seconds(tmp_path) -> None:
     path = tmp_path / "rec.ndjson"
-    recorded = gadgetctl("monitor", WAVEFORM, "--duration", "0.5", "--format", "table", "--interval", "10",
-                         "--record", path)
+    recorded = gadgetctl(
+        "monitor",
+        WAVEFORM,
+        "--duration",
+        "0.5",
+        "--format",
+        "table",
+        "--interval",
+        "10",
+        "--record",
+        path,
+    )
     assert recorded.returncode == 0, recorded.stderr
-    result = gadgetctl("replay", path, "--loop", "--rate", "10000", "--duration", "1", "--format", "table",
-                       "--stats")
+    result = gadgetctl(
+        "replay",
+        path,
+        "--loop",
+        "--rate",
+        "10000",
+        "--duration",
+        "1",
+        "--format",
+        "table",
+        "--stats",
+    )
     assert result.returncode == 0, result.stderr
     _frames, seconds, achieved, requested = frames_of(result)
     assert 1.0 <= seconds < 3.0  # wall-clock, not 10,000 frames
@@ -92,13 +126,17 @@ def test_replay_duration_is_seconds(tmp_path) -> None:
 def test_input_manager_run_duration_is_seconds() -> None:
     from gadgetctl.input import InputManager, ManagerOptions
 
-    manager, configuration = InputManager.from_files([WAVEFORM], options=ManagerOptions(entry_points=False))
+    manager, configuration = InputManager.from_files(
+        [WAVEFORM], options=ManagerOptions(entry_points=False)
+    )
     with manager:
         manager.configure(configuration)
         started = time.monotonic()
         count = manager.run(rate=1_000_000, duration=0.5)
         elapsed = time.monotonic() - started
     assert 0.5 <= elapsed < 2.5 and count < 500_000
+
+
 @pytest.fixture
 def udp_port():
     """A loopback UDP port that takes (and ignores) what the DTrack emulator sends."""
@@ -116,10 +154,16 @@ def test_emulate_refuses_a_negative_duration(udp_port, driver: str, value: str) 
     assert "--duration" in result.stderr and "Traceback" not in result.stderr
 
 
-@pytest.mark.parametrize("driver", ["DTrack_drv", "LinuxJoydev_drv", "PinchGlove_drv", "MotionStar_drv"])
+@pytest.mark.parametrize(
+    "driver", ["DTrack_drv", "LinuxJoydev_drv", "PinchGlove_drv", "MotionStar_drv"]
+)
 def test_emulate_duration_is_seconds(tmp_path, udp_port, driver: str) -> None:
-    where = {"DTrack_drv": ["--port", udp_port], "LinuxJoydev_drv": ["--path", str(tmp_path / "js0")],
-             "PinchGlove_drv": ["--port", str(tmp_path / "pinch")], "MotionStar_drv": ["--port", "0"]}[driver]
+    where = {
+        "DTrack_drv": ["--port", udp_port],
+        "LinuxJoydev_drv": ["--path", str(tmp_path / "js0")],
+        "PinchGlove_drv": ["--port", str(tmp_path / "pinch")],
+        "MotionStar_drv": ["--port", "0"],
+    }[driver]
     started = time.monotonic()
     result = gadgetctl("emulate", driver, *where, "--duration", "0.5", timeout=30)
     elapsed = time.monotonic() - started

@@ -36,8 +36,10 @@ class Emulation:
         """``args`` start with the command: ``Emulation("emulate", "DTrack_drv", ...)``."""
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "gadgetctl", *map(str, args)],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-            env={**os.environ, "PYTHONUNBUFFERED": "1"})
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            env={**os.environ, "PYTHONUNBUFFERED": "1"},
+        )
         self.output = ""
 
     def wait_for(self, pattern: str, timeout: float = 15.0) -> re.Match[str]:
@@ -48,10 +50,14 @@ class Emulation:
             selector.register(self.proc.stdout, selectors.EVENT_READ)
             while (match := regex.search(self.output)) is None:
                 left = deadline - time.monotonic()
-                assert left > 0, f"no {pattern!r} within {timeout} s; output so far: {self.output!r}"
+                assert left > 0, (
+                    f"no {pattern!r} within {timeout} s; output so far: {self.output!r}"
+                )
                 if selector.select(left):
                     chunk = os.read(self.proc.stdout.fileno(), 4096)
-                    assert chunk, f"emulator ended: {self.output!r} {self.proc.stderr.read().decode()!r}"
+                    assert chunk, (
+                        f"emulator ended: {self.output!r} {self.proc.stderr.read().decode()!r}"
+                    )
                     self.output += chunk.decode()
         return match
 
@@ -91,9 +97,12 @@ def emulate():
 
 # -- each bundled emulator, read for real ---------------------------------------------------
 
+
 def test_joystick_fifo_delivers_js_events(emulate, tmp_path):
     fifo = tmp_path / "js0"
-    emulation = emulate("LinuxJoydev_drv", "--path", fifo, "--duration", "3", "--buttons", "4", "--axes", "2")
+    emulation = emulate(
+        "LinuxJoydev_drv", "--path", fifo, "--duration", "3", "--buttons", "4", "--axes", "2"
+    )
     address = emulation.wait_for(r"<port_name>(.+)</port_name>").group(1)
     assert address == str(fifo)
     fd = os.open(address, os.O_RDONLY | os.O_NONBLOCK)
@@ -115,7 +124,8 @@ def test_joystick_fifo_delivers_js_events(emulate, tmp_path):
     # the kernel's order: one INIT event per button, then per axis, then live events
     assert [(e[2], e[3]) for e in events[:6]] == [
         *((JS_EVENT_INIT | JS_EVENT_BUTTON, n) for n in range(4)),
-        *((JS_EVENT_INIT | JS_EVENT_AXIS, n) for n in range(2))]
+        *((JS_EVENT_INIT | JS_EVENT_AXIS, n) for n in range(2)),
+    ]
     assert all(not e[2] & JS_EVENT_INIT for e in events[6:])
     assert emulation.finish() == (0, "")
 
@@ -169,15 +179,19 @@ def test_motion_star_accepts_a_client_on_the_printed_port(emulate):
 
 # -- Ctrl-C, names, pass-through ------------------------------------------------------------
 
-@pytest.mark.parametrize(("driver", "args", "ready"), [
-    ("LinuxJoydev_drv", ("--path", "{tmp}/js0"), "Press Ctrl-C"),
-    ("DTrack_drv", ("--port", "{udp}"), "Press Ctrl-C"),
-    ("OptiTrack_drv", ("--port", "{udp}"), "Press Ctrl-C"),
-    ("TUIO_drv", ("--port", "{udp}"), "Press Ctrl-C"),
-    ("ElexolEther24_drv", ("--port", "0"), "Press Ctrl-C"),
-    ("PinchGlove_drv", ("--port", "{tmp}/pinch"), "<port>"),
-    ("MotionStar_drv", ("--port", "0"), "<server_port>"),
-])
+
+@pytest.mark.parametrize(
+    ("driver", "args", "ready"),
+    [
+        ("LinuxJoydev_drv", ("--path", "{tmp}/js0"), "Press Ctrl-C"),
+        ("DTrack_drv", ("--port", "{udp}"), "Press Ctrl-C"),
+        ("OptiTrack_drv", ("--port", "{udp}"), "Press Ctrl-C"),
+        ("TUIO_drv", ("--port", "{udp}"), "Press Ctrl-C"),
+        ("ElexolEther24_drv", ("--port", "0"), "Press Ctrl-C"),
+        ("PinchGlove_drv", ("--port", "{tmp}/pinch"), "<port>"),
+        ("MotionStar_drv", ("--port", "0"), "<server_port>"),
+    ],
+)
 def test_ctrl_c_ends_cleanly(emulate, tmp_path, driver, args, ready):
     sink = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     try:
@@ -196,11 +210,16 @@ def test_unknown_driver_exits_2_with_a_suggestion(cli):
     result = cli("emulate", "DTrak_drv")
     assert result.exit_code == 2
     assert result.stderr.startswith("gadgetctl: error: no driver plug-in named 'DTrak_drv'")
-    assert "did you mean DTrack_drv" in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    assert (
+        "did you mean DTrack_drv" in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    )
 
 
 def test_plugin_without_emulator_exits_2(cli, tmp_path):
-    write(tmp_path / "Quiet_drv" / "__init__.py", "GADGETCTL_API_VERSION = 1\n\ndef register(registry):\n    pass\n")
+    write(
+        tmp_path / "Quiet_drv" / "__init__.py",
+        "GADGETCTL_API_VERSION = 1\n\ndef register(registry):\n    pass\n",
+    )
     result = cli("emulate", "--driver-path", tmp_path, "quiet_drv")
     assert result.exit_code == 2
     assert "Quiet_drv" in result.stderr and "ships no emulator" in result.stderr
@@ -210,11 +229,21 @@ def test_plugin_without_emulator_exits_2(cli, tmp_path):
 def test_list_shows_the_bundled_emulators(cli):
     result = cli("emulate", "--list")
     assert result.exit_code == 0
-    for name in ("LinuxJoydev_drv", "DTrack_drv", "PinchGlove_drv", "MotionStar_drv", "OptiTrack_drv", "TUIO_drv", "ElexolEther24_drv"):
+    for name in (
+        "LinuxJoydev_drv",
+        "DTrack_drv",
+        "PinchGlove_drv",
+        "MotionStar_drv",
+        "OptiTrack_drv",
+        "TUIO_drv",
+        "ElexolEther24_drv",
+    ):
         assert name in result.stdout
     listed = json.loads(cli("emulate", "--list", "--format", "json").stdout)["emulators"]
     dtrack = next(e for e in listed if e["plugin"] == "DTrack_drv")
-    assert dtrack["element_types"] == ["dtrack"] and dtrack["path"].endswith("DTrack_drv/emulator.py")
+    assert dtrack["element_types"] == ["dtrack"] and dtrack["path"].endswith(
+        "DTrack_drv/emulator.py"
+    )
 
 
 def test_options_after_driver_go_to_the_emulator(cli):
@@ -232,11 +261,17 @@ def test_missing_driver_name(cli):
 
 def test_emulator_is_loaded_by_path_without_register(cli, tmp_path):
     plugin = tmp_path / "Odd_drv"
-    write(plugin / "__init__.py", "GADGETCTL_API_VERSION = 1\nraise RuntimeError('__init__ must not run')\n\n"
-          "def register(registry):\n    raise RuntimeError('register must not run')\n")
+    write(
+        plugin / "__init__.py",
+        "GADGETCTL_API_VERSION = 1\nraise RuntimeError('__init__ must not run')\n\n"
+        "def register(registry):\n    raise RuntimeError('register must not run')\n",
+    )
     write(plugin / "protocol.py", "GREETING = 'odd device ready'\n")
-    write(plugin / "emulator.py", '"""An odd emulator."""\nfrom .protocol import GREETING\n\n\n'
-          "def main(argv):\n    print(GREETING, *argv)\n    return 0\n")
+    write(
+        plugin / "emulator.py",
+        '"""An odd emulator."""\nfrom .protocol import GREETING\n\n\n'
+        "def main(argv):\n    print(GREETING, *argv)\n    return 0\n",
+    )
     result = cli("emulate", "--driver-path", tmp_path, "Odd_drv", "--x", "1")
     assert result.exit_code == 0, result.stderr
     assert result.stdout == "odd device ready --x 1\n"

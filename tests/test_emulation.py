@@ -92,8 +92,12 @@ SOCKET_EMULATOR = textwrap.dedent("""
 @pytest.mark.parametrize("signum", STOPS, ids=lambda s: signal.Signals(s).name)
 def test_a_unix_socket_made_through_run_is_removed_on_a_stop_signal(tmp_path, signum) -> None:
     path = tmp_path / "emu.sock"
-    proc = subprocess.Popen([sys.executable, "-c", SOCKET_EMULATOR, str(path)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-c", SOCKET_EMULATOR, str(path)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert proc.stdout.readline() == "ready\n"
         assert stat.S_ISSOCK(os.lstat(path).st_mode) and is_held(path)
@@ -192,8 +196,16 @@ def test_emulation_imports_nothing_else_from_gadgetctl() -> None:
     package = Path(__file__).resolve().parents[1] / "src" / "gadgetctl" / "emulation"
     for path in package.glob("*.py"):
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            names = [a.name for a in node.names] if isinstance(node, ast.Import) else (
-                [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level else [])
+            names = (
+                [a.name for a in node.names]
+                if isinstance(node, ast.Import)
+                else (
+                    [node.module or ""]
+                    if isinstance(node, ast.ImportFrom) and not node.level
+                    else []
+                )
+            )
             for name in names:
-                assert not name.startswith("gadgetctl.") or name.startswith("gadgetctl.emulation"), \
-                    f"{path.name} imports {name}"
+                assert not name.startswith("gadgetctl.") or name.startswith(
+                    "gadgetctl.emulation"
+                ), f"{path.name} imports {name}"

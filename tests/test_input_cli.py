@@ -55,9 +55,14 @@ def test_pending_elements_and_stupefied_proxies_with_reasons(tmp_path):
     assert set(pending) == {"TrackdSensorDev", "TrackdControllerDev"}
     assert pending["TrackdSensorDev"]["code"] == "DRV030" and pending["TrackdSensorDev"]["line"]
     assert {s["name"] for s in report["stupefied"]} >= {"Wand Proxy", "Head Proxy"}
-    assert any(d["code"] == "DRV001" and "TrackdShm_drv" in d["message"] for d in report["diagnostics"])
+    assert any(
+        d["code"] == "DRV001" and "TrackdShm_drv" in d["message"] for d in report["diagnostics"]
+    )
     text = run(str(config)).output
-    assert "error DRV030 TrackdSensorDev (trackd_sensor) stays pending: no loaded driver handles trackd_sensor" in text
+    assert (
+        "error DRV030 TrackdSensorDev (trackd_sensor) stays pending: no loaded driver handles trackd_sensor"
+        in text
+    )
     assert "TrackdShm_drv" in text
 
 

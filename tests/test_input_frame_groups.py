@@ -91,13 +91,17 @@ def _expected(device, first: int, stop: int):
 
 
 @pytest.mark.timeout(60)
-@pytest.mark.parametrize("ahead", [False, True], ids=["blocks-at-the-frame", "blocks-computed-ahead"])
+@pytest.mark.parametrize(
+    "ahead", [False, True], ids=["blocks-at-the-frame", "blocks-computed-ahead"]
+)
 def test_a_group_frame_gives_each_device_exactly_its_own_samples(make, ahead):
     """With or without the next blocks computed between frames (InputManager.prepare), and
     with frames that bring nothing new (two at once), every device's frames hold exactly
     its samples, in order, once each."""
     m = make(_config())
-    devices = [m.device(f"Poses {i}") for i in range(4)] + [m.device(f"Mixed {i}") for i in range(2)]
+    devices = [m.device(f"Poses {i}") for i in range(4)] + [
+        m.device(f"Mixed {i}") for i in range(2)
+    ]
     seen = {d.name: 0 for d in devices}  # the next sample number each device must deliver
     shared_frames = switches = empties = 0
     generations = {}
@@ -113,7 +117,9 @@ def test_a_group_frame_gives_each_device_exactly_its_own_samples(make, ahead):
             shared_frames += bool(windows.fresh[slot])
             empties += bool(windows.emptied[slot])
             generation = int(windows.generation[slot])
-            switches += bool(windows.fresh[slot]) and generations.get(device.name, generation) != generation
+            switches += (
+                bool(windows.fresh[slot]) and generations.get(device.name, generation) != generation
+            )
             generations[device.name] = generation
             frames = store.current
             if not frames:
@@ -192,7 +198,14 @@ def test_a_grouped_device_that_raises_is_faulted_alone(make):
     frames_until(m, lambda: broken.state.value == "faulted", timeout=10)
     assert "broken on purpose" in broken.error
     totals = [d.store.total() for d in devices]
-    frames_until(m, lambda: all(d.store.total() > t + 20 for d, t in zip(devices, totals, strict=True) if d is not broken))
+    frames_until(
+        m,
+        lambda: all(
+            d.store.total() > t + 20
+            for d, t in zip(devices, totals, strict=True)
+            if d is not broken
+        ),
+    )
     assert all(d.state.value == "running" for d in devices if d is not broken)
 
 
@@ -231,7 +244,9 @@ def test_gathering_without_statistics_reads_shared_windows_and_proxies_see_filte
     assert head is m.proxy("Head Proxy") and not head.stupefied
     newest = m.device("Poses 0").store.latest(DeviceKind.POSITION)
     assert head.timestamp == newest.timestamp
-    np.testing.assert_allclose(head.data[:3, 3], newest.values[1][:3, 3] + [0.0, 1.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(
+        head.data[:3, 3], newest.values[1][:3, 3] + [0.0, 1.0, 0.0], atol=1e-12
+    )
     knob = m.proxy("Knob")
     raw = m.device("Mixed 0").store.latest(DeviceKind.ANALOG)
     assert knob.timestamp == raw.timestamp

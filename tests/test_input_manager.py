@@ -19,11 +19,17 @@ CORPUS = Path("/work/shared/corpus/vrjuggler/modules/vrjuggler/data")
 CORPUS_DEFINITIONS = CORPUS / "definitions"
 CONFIGS = CORPUS / "configFiles"
 PLUGINS = Path(__file__).parent / "data" / "plugins"
-HEAD = ('<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n<elements>\n')
-KEYBOARD = ('<keyboard_mouse_device name="KB" version="2"/>'
-            '<keyboard_mouse_proxy name="KBP" version="1"><device>KB</device></keyboard_mouse_proxy>')
-BUTTONS = KEYBOARD + """
+HEAD = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n<elements>\n'
+)
+KEYBOARD = (
+    '<keyboard_mouse_device name="KB" version="2"/>'
+    '<keyboard_mouse_proxy name="KBP" version="1"><device>KB</device></keyboard_mouse_proxy>'
+)
+BUTTONS = (
+    KEYBOARD
+    + """
 <simulated_digital_device name="Buttons" version="2">
   <keyboard_mouse_proxy>KBP</keyboard_mouse_proxy>
   <key_pair><key_modifier_pair name="a" version="1"><key>KEY_A</key></key_modifier_pair></key_pair>
@@ -31,6 +37,7 @@ BUTTONS = KEYBOARD + """
 <digital_proxy name="A Proxy" version="1"><device>Buttons</device><unit>0</unit></digital_proxy>
 <alias name="VJButton0" version="1"><proxy>A Proxy</proxy></alias>
 """
+)
 needs_corpus = pytest.mark.usefixtures("corpus")  # a missing corpus fails, never skips
 
 
@@ -82,8 +89,11 @@ def reasons(manager):
 
 # -- pending reasons ----------------------------------------------------------------------
 
+
 def test_every_pending_element_has_its_reason(make):
-    body = BUTTONS + """
+    body = (
+        BUTTONS
+        + """
     <linux_joydev name="Stick" version="1"><port_name>/dev/input/js0</port_name></linux_joydev>
     <digital_device name="Abstract" version="1"/>
     <alias name="Double" version="1"><proxy>VJButton0</proxy></alias>
@@ -98,9 +108,13 @@ def test_every_pending_element_has_its_reason(make):
     </simulated_relative_position>
     <user name="User" version="1"><head_position>VJButton0</head_position></user>
     """
+    )
     m = make(body)
     found = reasons(m)
-    assert found["Stick"][0] == "DRV030" and "no loaded driver handles linux_joydev" in found["Stick"][1]
+    assert (
+        found["Stick"][0] == "DRV030"
+        and "no loaded driver handles linux_joydev" in found["Stick"][1]
+    )
     assert "LinuxJoydev_drv (bundled) provides linux_joydev" in found["Stick"][2]
     assert found["Abstract"][0] == "DRV030" and "abstract" in found["Abstract"][1]
     assert found["Double"][0] == "DRV039" and "alias 'VJButton0'" in found["Double"][1]
@@ -117,9 +131,12 @@ def test_every_pending_element_has_its_reason(make):
 
 
 def test_elements_waiting_for_pending_elements_quote_their_reason(make):
-    body = KEYBOARD + """
+    body = (
+        KEYBOARD
+        + """
     <linux_joydev name="Stick" version="1"/>
     <input_window name="Window" version="2"><keyboard_mouse_device_name>Stick</keyboard_mouse_device_name></input_window>"""
+    )
     m = make(body)
     code, message, _ = reasons(m)["Window"]
     assert code == "DRV035" and "which is pending: no loaded driver handles linux_joydev" in message
@@ -139,7 +156,9 @@ def test_driver_named_by_input_manager_and_failures_reported(make, tmp_path):
     codes = {d.code for d in m.diagnostics}
     assert {"DRV001", "DRV003"} <= codes
     missing = next(d for d in m.diagnostics if d.code == "DRV001")
-    assert "Missing_drv" in missing.message and missing.line is not None  # points at the <driver> value
+    assert (
+        "Missing_drv" in missing.message and missing.line is not None
+    )  # points at the <driver> value
     assert "Missing_drv" in reasons(m)["Stick"][2]
 
 
@@ -166,8 +185,11 @@ def test_start_failure_is_pending_with_the_error_and_retried(make):
     registry = DeviceRegistry.with_builtins()
     registry.register_device(Flaky)
     Flaky.can_start = False
-    m = make('<button_device name="B" version="1"/>'
-             '<digital_proxy name="P" version="1"><device>B</device></digital_proxy>', registry)
+    m = make(
+        '<button_device name="B" version="1"/>'
+        '<digital_proxy name="P" version="1"><device>B</device></digital_proxy>',
+        registry,
+    )
     code, message, _ = reasons(m)["B"]
     assert code == "DRV033" and "OSError: no such device: /dev/button" in message
     assert m.proxy("P").stupefied and "failed to start" in m.proxy("P").reason
@@ -198,6 +220,7 @@ def load_alias_named(name):
 
 
 # -- reconfiguration ----------------------------------------------------------------------
+
 
 def test_removing_a_device_stupefies_its_proxies_and_adding_it_back_revives_them(make):
     m = make(BUTTONS)
@@ -288,7 +311,9 @@ def test_vr_juggler_simulator_configurations_configure_completely(repo, managers
 @needs_corpus
 def test_configurations_with_drivers_gadgetctl_lacks_give_the_reason(repo, managers):
     # Trackd_drv is bundled now: without the bundled drivers it is one gadgetctl lacks
-    m = InputManager(repo, ManagerOptions(retry_interval=None, entry_points=False, bundled_drivers=False))
+    m = InputManager(
+        repo, ManagerOptions(retry_interval=None, entry_points=False, bundled_drivers=False)
+    )
     managers.append(m)
     m.configure(load_configuration([CONFIGS / "sim.trackd.jconf"]))
     found = reasons(m)
@@ -329,14 +354,27 @@ def test_examples_are_valid_configurations(path):
 def test_examples_configure_with_nothing_pending_and_every_kind_reachable(managers):
     paths = [examples_dir() / "all_devices.jconf", examples_dir() / "waveform.jconf"]
     configuration = load_configuration(paths)
-    m = InputManager(repository_for(configuration), ManagerOptions(retry_interval=None, entry_points=False))
+    m = InputManager(
+        repository_for(configuration), ManagerOptions(retry_interval=None, entry_points=False)
+    )
     managers.append(m)
     m.configure(configuration)
     assert not m.pending(), reasons(m)
     kinds = {type(p).__name__ for p in m.proxies.values()}
-    assert kinds >= {"AnalogProxy", "DigitalProxy", "PositionProxy", "GloveProxy", "GestureProxy",
-                     "CommandProxy", "StringProxy", "HatProxy", "KeyboardMouseProxy"}
+    assert kinds >= {
+        "AnalogProxy",
+        "DigitalProxy",
+        "PositionProxy",
+        "GloveProxy",
+        "GestureProxy",
+        "CommandProxy",
+        "StringProxy",
+        "HatProxy",
+        "KeyboardMouseProxy",
+    }
     m.update()
-    assert not [p.name for p in m.proxies.values() if p.stupefied and p.reason and "unit" in p.reason]
+    assert not [
+        p.name for p in m.proxies.values() if p.stupefied and p.reason and "unit" in p.reason
+    ]
     for alias in m.aliases:
         assert m.proxy(alias) is not None

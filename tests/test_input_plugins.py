@@ -35,14 +35,19 @@ def repo():
 
 
 def search_in(*directories):
-    return DriverSearch([DriverDirectory(Path(d), PluginSource.OPTION) for d in directories], entry_points=False)
+    return DriverSearch(
+        [DriverDirectory(Path(d), PluginSource.OPTION) for d in directories], entry_points=False
+    )
 
 
 def imported_from(directory: Path, before: set[str]) -> list[str]:
     """Modules from ``directory`` imported since ``before`` was taken (a copy of sys.modules' keys)."""
     root = str(directory.resolve())
-    return [name for name, module in list(sys.modules.items())
-            if name not in before and (getattr(module, "__file__", None) or "").startswith(root)]
+    return [
+        name
+        for name, module in list(sys.modules.items())
+        if name not in before and (getattr(module, "__file__", None) or "").startswith(root)
+    ]
 
 
 def test_listing_finds_every_plugin_without_importing_any():
@@ -69,7 +74,10 @@ def test_loading_reports_each_failure_precisely_and_loads_the_rest(repo):
     broken = results["BrokenImport_drv"]
     assert not broken.ok and broken.diagnostics[0].code == "DRV003"
     assert broken.reason == "import failed: RuntimeError: BrokenImport_drv was imported"
-    assert broken.diagnostics[0].path.endswith("BrokenImport_drv.py") and broken.diagnostics[0].line == 7
+    assert (
+        broken.diagnostics[0].path.endswith("BrokenImport_drv.py")
+        and broken.diagnostics[0].line == 7
+    )
 
     wrong = results["WrongApi_drv"]
     assert not wrong.ok and wrong.diagnostics[0].code == "DRV002"
@@ -82,35 +90,47 @@ def test_loading_reports_each_failure_precisely_and_loads_the_rest(repo):
     assert "derives from digital_device but the class provides no digital data" in messages
     assert registry.get("mismatch_device") is None  # nothing of a failed plug-in is registered
 
-    assert not any(m.startswith(("Button_drv", "wrapper")) for m in sys.modules)  # private names only
+    assert not any(
+        m.startswith(("Button_drv", "wrapper")) for m in sys.modules
+    )  # private names only
 
 
 def test_plugins_with_the_same_module_names_do_not_meet(repo, tmp_path):
     for name, token in (("Alpha_drv", "alpha_device"), ("Beta_drv", "beta_device")):
         package = tmp_path / name
         package.mkdir()
-        (package / "__init__.py").write_text(textwrap.dedent(f"""
+        (package / "__init__.py").write_text(
+            textwrap.dedent(f"""
             GADGETCTL_API_VERSION = 1
             ELEMENT_TYPES = {{"{token}": ("digital",)}}
 
             def register(registry):
                 from .wrapper import Device
                 registry.register_device(Device)
-            """))
-        (package / "wrapper.py").write_text(textwrap.dedent(f"""
+            """)
+        )
+        (package / "wrapper.py").write_text(
+            textwrap.dedent(f"""
             from gadgetctl.input import Digital
 
             class Device(Digital):
                 ELEMENT_TYPE = "{token}"
-            """))
-        (package / f"{token}.jdef").write_text((PLUGINS / "Button_drv" / "button_device.jdef").read_text()
-                                                .replace("button_device", token))
+            """)
+        )
+        (package / f"{token}.jdef").write_text(
+            (PLUGINS / "Button_drv" / "button_device.jdef")
+            .read_text()
+            .replace("button_device", token)
+        )
     registry = DeviceRegistry()
     loader = PluginLoader(registry, repo)
     search = search_in(tmp_path)
     assert loader.load_name("Alpha_drv", search).ok
     assert loader.load_name("Beta_drv", search).ok
-    alpha, beta = registry.get("alpha_device").device_class, registry.get("beta_device").device_class
+    alpha, beta = (
+        registry.get("alpha_device").device_class,
+        registry.get("beta_device").device_class,
+    )
     assert alpha is not beta and alpha.__module__ != beta.__module__
     assert "wrapper" not in sys.modules
 
@@ -135,7 +155,9 @@ def test_a_second_plugin_for_the_same_type_is_ignored_with_a_warning(repo, tmp_p
 
 
 def test_metadata_problems_are_listed():
-    meta = parse_metadata("VERSION = 1\nGADGETCTL_API_VERSION = compute()\nELEMENT_TYPES = {'x': ('digital', 'sound')}\n")
+    meta = parse_metadata(
+        "VERSION = 1\nGADGETCTL_API_VERSION = compute()\nELEMENT_TYPES = {'x': ('digital', 'sound')}\n"
+    )
     problems = " ".join(meta.problems)
     assert "GADGETCTL_API_VERSION is not a literal" in problems
     assert "unknown device type 'sound'" in problems
@@ -146,8 +168,12 @@ def test_metadata_problems_are_listed():
 def test_search_places_in_order(tmp_path):
     env = {"GADGETCTL_DRIVER_PATH": f"{tmp_path / 'a'}{__import__('os').pathsep}{tmp_path / 'b'}"}
     directories = standard_directories([tmp_path / "c"], environ=env)
-    assert [d.source for d in directories] == [PluginSource.BUNDLED, PluginSource.ENVIRONMENT,
-                                               PluginSource.ENVIRONMENT, PluginSource.OPTION]
+    assert [d.source for d in directories] == [
+        PluginSource.BUNDLED,
+        PluginSource.ENVIRONMENT,
+        PluginSource.ENVIRONMENT,
+        PluginSource.OPTION,
+    ]
     assert [d.path.name for d in directories[1:]] == ["a", "b", "c"]
 
 
@@ -172,7 +198,9 @@ def test_installed_plugins_come_from_entry_points(tmp_path, monkeypatch, repo):
     dist = site / "gadget_extra-1.0.dist-info"
     dist.mkdir()
     (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: gadget-extra\nVersion: 1.0\n")
-    (dist / "entry_points.txt").write_text("[gadgetctl.drivers]\nExtraButton_drv = gadget_extra.buttons\n")
+    (dist / "entry_points.txt").write_text(
+        "[gadgetctl.drivers]\nExtraButton_drv = gadget_extra.buttons\n"
+    )
     monkeypatch.syspath_prepend(str(site))
     search = DriverSearch([], entry_points=True)
     info = search.find("ExtraButton_drv")
@@ -187,6 +215,7 @@ def test_installed_plugins_come_from_entry_points(tmp_path, monkeypatch, repo):
 
 # -- commands -----------------------------------------------------------------------------
 
+
 def run(*args):
     return CliRunner().invoke(build_app(), list(args))
 
@@ -200,22 +229,39 @@ def test_drivers_list_shows_every_plugin_and_its_problems():
     assert "written for plug-in API 99; gadgetctl provides 1" in result.output
     assert "button_device: digital" in result.output
     assert imported_from(PLUGINS, before) == []
-    data = json.loads(run("drivers", "list", "--driver-path", str(PLUGINS), "--format", "json").output)
+    data = json.loads(
+        run("drivers", "list", "--driver-path", str(PLUGINS), "--format", "json").output
+    )
     by_name = {p["name"]: p for p in data["plugins"]}
     assert set(by_name) >= TEST_PLUGINS and by_name["WrongApi_drv"]["api_version"] == 99
     assert by_name["Button_drv"]["provides"] == {"button_device": ["digital"]}
 
 
 def test_drivers_load_reports_failures_loads_the_rest_and_exits_1():
-    result = run("drivers", "load", "Button_drv", "BrokenImport_drv", "WrongApi_drv",
-                 "--driver-path", str(PLUGINS))
+    result = run(
+        "drivers",
+        "load",
+        "Button_drv",
+        "BrokenImport_drv",
+        "WrongApi_drv",
+        "--driver-path",
+        str(PLUGINS),
+    )
     assert result.exit_code == 1
     assert "Button_drv: ok: button_device -> ButtonDevice (digital)" in result.output
-    assert "BrokenImport_drv: failed: import failed: RuntimeError: BrokenImport_drv was imported" in result.output
+    assert (
+        "BrokenImport_drv: failed: import failed: RuntimeError: BrokenImport_drv was imported"
+        in result.output
+    )
     assert "WrongApi_drv: failed: written for plug-in API version 99" in result.output
     assert "1 loaded, 2 failed" in result.output
-    data = json.loads(run("drivers", "load", "Button_drv", "--driver-path", str(PLUGINS), "-f", "json").output)
-    assert data["failed"] == 0 and data["plugins"][0]["registered"][0]["element_type"] == "button_device"
+    data = json.loads(
+        run("drivers", "load", "Button_drv", "--driver-path", str(PLUGINS), "-f", "json").output
+    )
+    assert (
+        data["failed"] == 0
+        and data["plugins"][0]["registered"][0]["element_type"] == "button_device"
+    )
 
 
 def test_drivers_load_accepts_a_path():

@@ -16,16 +16,27 @@ from gadgetctl.jccl.searchpath import SearchPathEntry
 
 CORPUS_DEFINITIONS = Path("/work/shared/corpus/vrjuggler/modules/vrjuggler/data/definitions")
 PLUGINS = Path(__file__).parent / "data" / "plugins"
-HEAD = ('<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n<elements>\n')
-KEYBOARD = ('<keyboard_mouse_device name="KB" version="2"/>'
-            '<keyboard_mouse_proxy name="KBP" version="1"><device>KB</device></keyboard_mouse_proxy>')
-ON, OFF, TOGGLE_ON, TOGGLE_OFF = DigitalState.ON, DigitalState.OFF, DigitalState.TOGGLE_ON, DigitalState.TOGGLE_OFF
+HEAD = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n<elements>\n'
+)
+KEYBOARD = (
+    '<keyboard_mouse_device name="KB" version="2"/>'
+    '<keyboard_mouse_proxy name="KBP" version="1"><device>KB</device></keyboard_mouse_proxy>'
+)
+ON, OFF, TOGGLE_ON, TOGGLE_OFF = (
+    DigitalState.ON,
+    DigitalState.OFF,
+    DigitalState.TOGGLE_ON,
+    DigitalState.TOGGLE_OFF,
+)
 
 
 def key(code, modifier="ANY", name="k"):
-    return (f'<key_modifier_pair name="{name}" version="1"><modifier_key>{modifier}</modifier_key>'
-            f'<key>{code}</key></key_modifier_pair>')
+    return (
+        f'<key_modifier_pair name="{name}" version="1"><modifier_key>{modifier}</modifier_key>'
+        f"<key>{code}</key></key_modifier_pair>"
+    )
 
 
 @pytest.fixture(scope="module")
@@ -43,7 +54,9 @@ def make(repo, tmp_path):
     def build(body, registry=None):
         path = tmp_path / f"test{len(managers)}.jconf"
         path.write_text(HEAD + body + "\n</elements>\n</configuration>\n")
-        manager = InputManager(repo, ManagerOptions(retry_interval=None, entry_points=False), registry=registry)
+        manager = InputManager(
+            repo, ManagerOptions(retry_interval=None, entry_points=False), registry=registry
+        )
         managers.append(manager)
         manager.configure(load_configuration([path]))
         return manager
@@ -55,7 +68,9 @@ def make(repo, tmp_path):
 
 # -- digital ------------------------------------------------------------------------------
 
-BUTTONS = KEYBOARD + f"""
+BUTTONS = (
+    KEYBOARD
+    + f"""
 <simulated_digital_device name="Buttons" version="2">
   <keyboard_mouse_proxy>KBP</keyboard_mouse_proxy>
   <key_pair>{key("KEY_A")}</key_pair>
@@ -65,6 +80,7 @@ BUTTONS = KEYBOARD + f"""
 <digital_proxy name="B Proxy" version="1"><device>Buttons</device><unit>1</unit></digital_proxy>
 <alias name="VJButtonA" version="1"><proxy>A Proxy</proxy></alias>
 """
+)
 
 
 def frames(manager, name, count):
@@ -111,8 +127,11 @@ class PushButtons(Digital):
 def test_press_and_release_reported_by_a_device_within_one_frame(make):
     registry = DeviceRegistry.with_builtins()
     registry.register_device(PushButtons)
-    m = make('<button_device name="Pad" version="1"/>'
-             '<digital_proxy name="P" version="1"><device>Pad</device><unit>0</unit></digital_proxy>', registry)
+    m = make(
+        '<button_device name="Pad" version="1"/>'
+        '<digital_proxy name="P" version="1"><device>Pad</device><unit>0</unit></digital_proxy>',
+        registry,
+    )
     pad = m.device("Pad")
     m.update()
     pad.add_digital_sample([1])
@@ -127,7 +146,9 @@ def test_press_and_release_reported_by_a_device_within_one_frame(make):
 
 # -- analog -------------------------------------------------------------------------------
 
-ANALOG = KEYBOARD + f"""
+ANALOG = (
+    KEYBOARD
+    + f"""
 <simulated_analog_device name="Throttle" version="3">
   <keyboard_mouse_proxy>KBP</keyboard_mouse_proxy>
   <increment_keypress>{key("KEY_W")}</increment_keypress>
@@ -136,6 +157,7 @@ ANALOG = KEYBOARD + f"""
 </simulated_analog_device>
 <analog_proxy name="T" version="1"><device>Throttle</device><unit>0</unit></analog_proxy>
 """
+)
 
 
 def test_analog_normalises_and_clamps(make):
@@ -212,10 +234,14 @@ def test_position_filters_at_device_and_proxy_level(make):
     m.update()
     # device filter: Pre · S(M · Post) with Post = T(10 in, 0, 0), S = inches -> meters,
     # Pre = T(1, 2, 3) · Ry(90°); Ry(90°) turns +x into -z: 110 in = 2.794 m -> (0, 0, -2.794)
-    expected = np.array([[0.0, 0.0, 1.0, 1.0],
-                         [0.0, 1.0, 0.0, 2.0],
-                         [-1.0, 0.0, 0.0, 3.0 - 2.794],
-                         [0.0, 0.0, 0.0, 1.0]])
+    expected = np.array(
+        [
+            [0.0, 0.0, 1.0, 1.0],
+            [0.0, 1.0, 0.0, 2.0],
+            [-1.0, 0.0, 0.0, 3.0 - 2.794],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
     np.testing.assert_allclose(m.proxy("Raw").matrix, expected, atol=1e-12)
     # proxy filter: Pre · M · Post with Pre = T(0, 0, -1) (row-major values), Post = identity
     lowered = expected.copy()
@@ -232,11 +258,15 @@ def test_proxies_give_meters_and_convert_on_request(make):
     feet = proxy.matrix_in(LengthUnit.FEET)
     np.testing.assert_allclose(feet[:3, 3], proxy.translation / 0.3048)
     np.testing.assert_allclose(feet[:3, :3], proxy.matrix[:3, :3])  # rotation kept
-    np.testing.assert_allclose(proxy.matrix_in(LengthUnit.CENTIMETERS)[:3, 3], proxy.translation * 100)
+    np.testing.assert_allclose(
+        proxy.matrix_in(LengthUnit.CENTIMETERS)[:3, 3], proxy.translation * 100
+    )
 
 
 def test_device_filters_apply_once_on_simulated_positions(make):
-    body = KEYBOARD + """
+    body = (
+        KEYBOARD
+        + """
     <simulated_positional_device name="Head" version="3">
       <keyboard_mouse_proxy>KBP</keyboard_mouse_proxy>
       <initial_position>0.0</initial_position><initial_position>1.0</initial_position><initial_position>0.0</initial_position>
@@ -247,6 +277,7 @@ def test_device_filters_apply_once_on_simulated_positions(make):
       </position_filters>
     </simulated_positional_device>
     <position_proxy name="HP" version="1"><device>Head</device><unit>0</unit></position_proxy>"""
+    )
     m = make(body)
     m.update()
     np.testing.assert_allclose(m.proxy("HP").translation, [0.0, 1.5, 0.0])  # once, not twice
@@ -254,12 +285,16 @@ def test_device_filters_apply_once_on_simulated_positions(make):
 
 # -- stupefied proxies --------------------------------------------------------------------
 
+
 def test_stupefied_proxies_return_neutral_values_and_say_why(make):
-    body = BUTTONS + """
+    body = (
+        BUTTONS
+        + """
     <digital_proxy name="Ghost" version="1"><device>Nobody</device><unit>0</unit></digital_proxy>
     <position_proxy name="Wrong Type" version="1"><device>Buttons</device><unit>0</unit></position_proxy>
     <digital_proxy name="Far Unit" version="1"><device>Buttons</device><unit>7</unit></digital_proxy>
     <analog_proxy name="Empty" version="1"><device></device></analog_proxy>"""
+    )
     m = make(body)
     m.events.press(Key.KEY_A)
     m.update()
@@ -288,7 +323,9 @@ def test_aliases_resolve_to_proxies_and_any_name_can_be_looked_up(make):
 
 # -- glove, gesture, command, string, hat -------------------------------------------------
 
-GLOVES = KEYBOARD + f"""
+GLOVES = (
+    KEYBOARD
+    + f"""
 <simulated_positional_device name="Hand" version="3"><keyboard_mouse_proxy>KBP</keyboard_mouse_proxy></simulated_positional_device>
 <position_proxy name="Hand Proxy" version="1"><device>Hand</device><unit>0</unit></position_proxy>
 <simulated_digital_glove name="Glove" version="3">
@@ -308,13 +345,14 @@ GLOVES = KEYBOARD + f"""
 </simulated_glove_gesture>
 <gesture_proxy name="Gesture" version="1"><device>Gestures</device></gesture_proxy>
 """
+)
 
 
 def test_glove_fingers_and_gestures(make):
     m = make(GLOVES)
     assert not m.pending(), [p.message for p in m.pending()]
-    m.events.press(Key.KEY_2)   # left index
-    m.events.press(Key.KEY_7)   # right index
+    m.events.press(Key.KEY_2)  # left index
+    m.events.press(Key.KEY_7)  # right index
     m.events.tap(Key.KEY_F2)
     m.update()
     left, right = m.proxy("Left").data, m.proxy("Right").data

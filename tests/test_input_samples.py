@@ -27,8 +27,10 @@ def test_samples_since_the_previous_frame_and_the_latched_newest():
 def test_batches_and_single_samples_mix_in_order():
     store = SampleStore([A, D])
     store.add(A, 0.5, (9.0,))
-    store.add_batches(np.array([1.0, 2.0, 3.0]), {A: np.array([[1.0], [2.0], [3.0]]),
-                                                  D: np.array([[0], [1], [0]], dtype=np.int8)})
+    store.add_batches(
+        np.array([1.0, 2.0, 3.0]),
+        {A: np.array([[1.0], [2.0], [3.0]]), D: np.array([[0], [1], [0]], dtype=np.int8)},
+    )
     store.swap()
     frame = store.frame(A)
     assert len(frame) == 4

@@ -18,8 +18,10 @@ from gadgetctl.jccl.searchpath import SearchPathEntry
 
 CORPUS_DEFINITIONS = Path("/work/shared/corpus/vrjuggler/modules/vrjuggler/data/definitions")
 PLUGINS = Path(__file__).parent / "data" / "plugins"
-HEAD = ('<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n<elements>\n')
+HEAD = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n<elements>\n'
+)
 FAST_RESTART = RestartPolicy(initial_delay=0.005, factor=1.0, max_delay=0.005)
 
 
@@ -107,14 +109,18 @@ class ScheduledEveryThirdFails(EveryThirdFails):
 
 
 @pytest.mark.timeout(20)
-@pytest.mark.parametrize("faulty", [EveryThirdFails, ScheduledEveryThirdFails], ids=["thread", "scheduler"])
+@pytest.mark.parametrize(
+    "faulty", [EveryThirdFails, ScheduledEveryThirdFails], ids=["thread", "scheduler"]
+)
 def test_a_faulting_device_is_restarted_and_the_others_lose_no_samples(make, faulty):
     body = """
     <command_device name="Counter" version="1"/>
     <button_device name="Faulty" version="1"/>
     <waveform_device name="Wave" version="1"><rate>500.0</rate><button_period>0.1</button_period><event_period>0.0</event_period></waveform_device>
     <digital_proxy name="Faulty Proxy" version="1"><device>Faulty</device><unit>0</unit></digital_proxy>"""
-    m = make(body, devices=[("command_device", Counter), ("button_device", faulty)], restart=FAST_RESTART)
+    m = make(
+        body, devices=[("command_device", Counter), ("button_device", faulty)], restart=FAST_RESTART
+    )
     faulty_device, counter, wave = m.device("Faulty"), m.device("Counter"), m.device("Wave")
     sequence, stamps = [], []
     deadline = time.monotonic() + 10
@@ -128,7 +134,10 @@ def test_a_faulting_device_is_restarted_and_the_others_lose_no_samples(make, fau
     assert faulty_device.restarts >= 5
     assert faulty_device.faults >= faulty_device.restarts
     assert faulty_device.error == "OSError: device unplugged"
-    assert faulty_device.stops >= faulty_device.restarts and faulty_device.starts == faulty_device.restarts + 1
+    assert (
+        faulty_device.stops >= faulty_device.restarts
+        and faulty_device.starts == faulty_device.restarts + 1
+    )
     assert sequence == list(range(1, len(sequence) + 1))  # the threaded neighbour lost nothing
     assert np.allclose(np.diff(stamps), 1 / 500.0)  # nor did the scheduled one
     assert counter.store.dropped() == 0 and wave.store.dropped() == 0
@@ -144,14 +153,21 @@ class GivesUp(Digital):
 
 @pytest.mark.timeout(10)
 def test_restarts_stop_at_the_policys_limit_and_the_status_keeps_the_error(make):
-    m = make('<button_device name="Dead" version="1"/>', devices=[("button_device", GivesUp)],
-             restart=RestartPolicy(initial_delay=0.001, factor=2.0, max_delay=0.01, max_restarts=3))
+    m = make(
+        '<button_device name="Dead" version="1"/>',
+        devices=[("button_device", GivesUp)],
+        restart=RestartPolicy(initial_delay=0.001, factor=2.0, max_delay=0.01, max_restarts=3),
+    )
     device = m.device("Dead")
     assert wait_for(lambda: device.restarts == 3 and device.faults == 4)
     time.sleep(0.05)
     assert device.restarts == 3 and device.state is DeviceState.FAULTED
     status = {s.name: s for s in m.statuses()}["Dead"]
-    assert status.state == "faulted" and status.reason == "OSError: gone for good" and status.code == "DRV042"
+    assert (
+        status.state == "faulted"
+        and status.reason == "OSError: gone for good"
+        and status.code == "DRV042"
+    )
 
 
 class Blocking(Digital):
@@ -180,8 +196,11 @@ class Stubborn(Digital):
 
 @pytest.mark.timeout(20)
 def test_a_blocking_device_never_delays_a_frame_and_stops_within_the_timeout(make):
-    m = make('<button_device name="Slow" version="1"/><command_device name="Counter" version="1"/>',
-             devices=[("button_device", Blocking), ("command_device", Counter)], stop_timeout=0.2)
+    m = make(
+        '<button_device name="Slow" version="1"/><command_device name="Counter" version="1"/>',
+        devices=[("button_device", Blocking), ("command_device", Counter)],
+        stop_timeout=0.2,
+    )
     worst = 0.0
     for _ in range(20):
         start = time.perf_counter()
@@ -199,23 +218,30 @@ def test_a_blocking_device_never_delays_a_frame_and_stops_within_the_timeout(mak
 @pytest.mark.timeout(20)
 def test_a_thread_that_does_not_stop_is_reported_and_abandoned(make):
     Stubborn.released.clear()
-    m = make('<button_device name="Stubborn" version="1"/>', devices=[("button_device", Stubborn)],
-             stop_timeout=0.1)
+    m = make(
+        '<button_device name="Stubborn" version="1"/>',
+        devices=[("button_device", Stubborn)],
+        stop_timeout=0.1,
+    )
     time.sleep(0.05)
     start = time.perf_counter()
     m.shutdown()
     try:
         assert time.perf_counter() - start < 5.0  # not the 10 s the stubborn read lasts
-        assert any(d.code == "DRV041" and "did not stop within 0.1 s" in d.message for d in m.diagnostics)
+        assert any(
+            d.code == "DRV041" and "did not stop within 0.1 s" in d.message for d in m.diagnostics
+        )
     finally:
         Stubborn.released.set()  # the abandoned thread ends now, not during later tests
 
 
 @pytest.mark.timeout(20)
 def test_ctrl_c_in_the_frame_loop_stops_everything(make):
-    m = make('<button_device name="Slow" version="1"/><command_device name="Counter" version="1"/>'
-             '<waveform_device name="Wave" version="1"/>',
-             devices=[("button_device", Blocking), ("command_device", Counter)])
+    m = make(
+        '<button_device name="Slow" version="1"/><command_device name="Counter" version="1"/>'
+        '<waveform_device name="Wave" version="1"/>',
+        devices=[("button_device", Blocking), ("command_device", Counter)],
+    )
     threads_before = {t for t in threading.enumerate() if t.name.startswith("gadgetctl-")}
     assert threads_before
 
@@ -256,11 +282,14 @@ def test_run_paces_frames_at_the_rate_and_stops_on_request(make):
 @pytest.mark.timeout(20)
 def test_threaded_plugin_device_samples_between_frames(repo, tmp_path):
     path = tmp_path / "button.jconf"
-    path.write_text(HEAD + f"""
+    path.write_text(
+        HEAD
+        + f"""
     <input_manager name="IM" version="2"><driver_path>{PLUGINS}</driver_path><driver>Button_drv</driver></input_manager>
     <button_device name="Button" version="1"/>
     <digital_proxy name="P" version="1"><device>Button</device><unit>0</unit></digital_proxy>
-    </elements></configuration>""")
+    </elements></configuration>"""
+    )
     with InputManager(repo, ManagerOptions(retry_interval=None, entry_points=False)) as m:
         m.configure(load_configuration([path]))
         device = m.device("Button")

@@ -14,18 +14,36 @@ from gadgetctl.jccl.configload import load_configuration
 from gadgetctl.jccl.repository import default_repository
 
 CORPUS_DEFINITIONS = Path("/work/shared/corpus/vrjuggler/modules/vrjuggler/data/definitions")
-HEAD = ('<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n<elements>\n')
-KEYBOARD = ('<keyboard_mouse_device name="KB" version="2"><mouse_sensitivity>0.5</mouse_sensitivity>'
-            '<scroll_as_buttons>true</scroll_as_buttons></keyboard_mouse_device>'
-            '<keyboard_mouse_proxy name="KBP" version="1"><device>KB</device></keyboard_mouse_proxy>')
-MOVE_KEYS = ["KEY_W", "KEY_S", "KEY_A", "KEY_D", "KEY_R", "KEY_F",
-             "KEY_L", "KEY_J", "KEY_I", "KEY_K", "KEY_U", "KEY_O"]
+HEAD = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n<elements>\n'
+)
+KEYBOARD = (
+    '<keyboard_mouse_device name="KB" version="2"><mouse_sensitivity>0.5</mouse_sensitivity>'
+    "<scroll_as_buttons>true</scroll_as_buttons></keyboard_mouse_device>"
+    '<keyboard_mouse_proxy name="KBP" version="1"><device>KB</device></keyboard_mouse_proxy>'
+)
+MOVE_KEYS = [
+    "KEY_W",
+    "KEY_S",
+    "KEY_A",
+    "KEY_D",
+    "KEY_R",
+    "KEY_F",
+    "KEY_L",
+    "KEY_J",
+    "KEY_I",
+    "KEY_K",
+    "KEY_U",
+    "KEY_O",
+]
 
 
 def key(code, modifier="ANY", name="k"):
-    return (f'<key_modifier_pair name="{name}" version="1"><modifier_key>{modifier}</modifier_key>'
-            f'<key>{code}</key></key_modifier_pair>')
+    return (
+        f'<key_modifier_pair name="{name}" version="1"><modifier_key>{modifier}</modifier_key>'
+        f"<key>{code}</key></key_modifier_pair>"
+    )
 
 
 @pytest.fixture(scope="module")
@@ -86,10 +104,13 @@ def test_mouse_motion_is_scaled_and_scroll_can_be_buttons(make):
 
 
 def test_input_window_routes_targeted_events(make):
-    body = KEYBOARD + """
+    body = (
+        KEYBOARD
+        + """
     <keyboard_mouse_device name="Other" version="2"/>
     <keyboard_mouse_proxy name="Other Proxy" version="1"><device>Other</device></keyboard_mouse_proxy>
     <input_window name="Window" version="2"><keyboard_mouse_device_name>KB</keyboard_mouse_device_name></input_window>"""
+    )
     m = make(body)
     assert not m.pending()
     m.events.press(Key.KEY_Q, target="Window")
@@ -99,7 +120,9 @@ def test_input_window_routes_targeted_events(make):
 
 
 def test_simulated_analog_auto_return(make):
-    body = KEYBOARD + f"""
+    body = (
+        KEYBOARD
+        + f"""
     <simulated_analog_device name="Spring" version="3">
       <keyboard_mouse_proxy>KBP</keyboard_mouse_proxy>
       <increment_keypress>{key("KEY_W")}</increment_keypress>
@@ -108,6 +131,7 @@ def test_simulated_analog_auto_return(make):
       <auto_return>true</auto_return>
     </simulated_analog_device>
     <analog_proxy name="P" version="1"><device>Spring</device><unit>0</unit></analog_proxy>"""
+    )
     m = make(body)
     proxy = m.proxy("P")
     for _ in range(3):
@@ -122,20 +146,27 @@ def test_simulated_analog_auto_return(make):
 
 
 def test_simulated_analog_with_fewer_decrement_keys_warns(make):
-    body = KEYBOARD + f"""
+    body = (
+        KEYBOARD
+        + f"""
     <simulated_analog_device name="Two" version="3">
       <keyboard_mouse_proxy>KBP</keyboard_mouse_proxy>
       <increment_keypress>{key("KEY_W")}</increment_keypress>
       <increment_keypress>{key("KEY_E")}</increment_keypress>
       <decrement_keypress>{key("KEY_S")}</decrement_keypress>
     </simulated_analog_device>"""
+    )
     m = make(body)
     assert any(d.code == "DRV023" for d in m.diagnostics)
 
 
 def position_body(translation_system="Local", rotation_system="Local"):
-    pairs = "".join(f"<key_pair>{key(k, 'NONE', f'm{i}')}</key_pair>" for i, k in enumerate(MOVE_KEYS))
-    return KEYBOARD + f"""
+    pairs = "".join(
+        f"<key_pair>{key(k, 'NONE', f'm{i}')}</key_pair>" for i, k in enumerate(MOVE_KEYS)
+    )
+    return (
+        KEYBOARD
+        + f"""
     <simulated_positional_device name="Head" version="3">
       <keyboard_mouse_proxy>KBP</keyboard_mouse_proxy>{pairs}
       <initial_position>0.0</initial_position><initial_position>1.0</initial_position><initial_position>0.0</initial_position>
@@ -145,6 +176,7 @@ def position_body(translation_system="Local", rotation_system="Local"):
       <rotation_coordinate_system>{rotation_system}</rotation_coordinate_system>
     </simulated_positional_device>
     <position_proxy name="P" version="1"><device>Head</device><unit>0</unit></position_proxy>"""
+    )
 
 
 def start_matrix():
@@ -187,36 +219,47 @@ def test_simulated_position_roll_keys_turn_about_minus_z(make):
 
 
 def test_simulated_position_with_missing_key_pairs_warns(make):
-    body = KEYBOARD + f"""
+    body = (
+        KEYBOARD
+        + f"""
     <simulated_positional_device name="Half" version="3">
       <keyboard_mouse_proxy>KBP</keyboard_mouse_proxy><key_pair>{key("KEY_W")}</key_pair>
     </simulated_positional_device>"""
+    )
     m = make(body)
     assert not m.pending()
     assert any(d.code == "DRV023" and "only 1 of 12" in d.message for d in m.diagnostics)
 
 
 def test_relative_position_is_base_times_relative(make):
-    body = position_body() + """
+    body = (
+        position_body()
+        + """
     <simulated_setable_position name="Offset" version="1"/>
     <position_proxy name="Offset Proxy" version="1"><device>Offset</device><unit>0</unit></position_proxy>
     <simulated_relative_position name="Wand" version="1">
       <base_frame_proxy>P</base_frame_proxy><relative_proxy>Offset Proxy</relative_proxy>
     </simulated_relative_position>
     <position_proxy name="Wand Proxy" version="1"><device>Wand</device><unit>0</unit></position_proxy>"""
+    )
     m = make(body)
     assert not m.pending()
     m.device("Offset").set_data([translation(0, 0, -0.4)])
     m.update()
-    np.testing.assert_allclose(m.proxy("Wand Proxy").matrix, start_matrix() @ translation(0, 0, -0.4), atol=1e-12)
+    np.testing.assert_allclose(
+        m.proxy("Wand Proxy").matrix, start_matrix() @ translation(0, 0, -0.4), atol=1e-12
+    )
 
 
 def test_simulated_devices_without_a_keyboard_proxy_stay_pending_with_a_reason(make):
-    body = KEYBOARD + """
+    body = (
+        KEYBOARD
+        + """
     <simulated_digital_device name="Deaf" version="2"><keyboard_mouse_proxy></keyboard_mouse_proxy></simulated_digital_device>
     <simulated_digital_device name="Old" version="1"><event_window_proxy>Window Proxy</event_window_proxy></simulated_digital_device>
     <simulated_digital_device name="Lost" version="2"><keyboard_mouse_proxy>No Such Proxy</keyboard_mouse_proxy></simulated_digital_device>
     <keyboard_mouse_device name="Ancient" version="1"/>"""
+    )
     m = make(body)
     reasons = {p.name: (p.code, p.message) for p in m.pending()}
     assert reasons["Deaf"][0] == "DRV032" and "keyboard_mouse_proxy is empty" in reasons["Deaf"][1]

@@ -21,8 +21,10 @@ from gadgetctl.jccl.configload import load_configuration
 from gadgetctl.jccl.repository import default_repository
 from gadgetctl.monitor.session import MonitorSession
 
-HEAD = ('<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="scale">\n<elements>\n')
+HEAD = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="scale">\n<elements>\n'
+)
 GROUP = """<alias name="Alias {i}" version="1"><proxy>Wave {i} Position</proxy></alias>
 <position_proxy name="Wave {i} Position" version="1"><device>Wave {i}</device><unit>0</unit></position_proxy>
 <digital_proxy name="Wave {i} Button" version="1"><device>Wave {i}</device><unit>0</unit></digital_proxy>
@@ -32,7 +34,9 @@ GROUP = """<alias name="Alias {i}" version="1"><proxy>Wave {i} Position</proxy><
 
 def write_groups(path: Path, groups: int) -> Path:
     """``groups`` x (alias, two proxies, device), each written before what it points at."""
-    path.write_text(HEAD + "".join(GROUP.format(i=i) for i in range(groups)) + "</elements>\n</configuration>\n")
+    path.write_text(
+        HEAD + "".join(GROUP.format(i=i) for i in range(groups)) + "</elements>\n</configuration>\n"
+    )
     return path
 
 
@@ -60,7 +64,9 @@ def test_configuring_works_on_each_element_a_bounded_number_of_times(repo, tmp_p
 
     monkeypatch.setattr(Proxy, "refresh", counted_refresh)
     monkeypatch.setattr(InputManager, "_try", counted_try)
-    manager = InputManager(repo, ManagerOptions(start_devices=False, retry_interval=None, entry_points=False))
+    manager = InputManager(
+        repo, ManagerOptions(start_devices=False, retry_interval=None, entry_points=False)
+    )
     try:
         manager.configure(configuration)
         assert not manager.pending(), [p.message for p in manager.pending()[:3]]
@@ -82,11 +88,15 @@ def test_configuring_works_on_each_element_a_bounded_number_of_times(repo, tmp_p
 @pytest.mark.timeout(120)
 def test_status_of_one_element_is_looked_up_not_searched(repo, tmp_path, monkeypatch):
     configuration = load_configuration([write_groups(tmp_path / "groups.jconf", 50)])
-    manager = InputManager(repo, ManagerOptions(start_devices=False, retry_interval=None, entry_points=False))
+    manager = InputManager(
+        repo, ManagerOptions(start_devices=False, retry_interval=None, entry_points=False)
+    )
     try:
         manager.configure(configuration)
         expected = {s.name: s for s in manager.statuses()}
-        monkeypatch.setattr(InputManager, "statuses", lambda self: pytest.fail("status() built every status"))
+        monkeypatch.setattr(
+            InputManager, "statuses", lambda self: pytest.fail("status() built every status")
+        )
         for name, status in expected.items():
             assert manager.status(name) == status
         assert manager.status("Nobody") is None
@@ -100,7 +110,9 @@ class Held(Digital):
     SAMPLING = SamplingMode.SCHEDULED
     sample_interval = 0.001
 
-    def __init__(self, entered: threading.Event | None = None, release: threading.Event | None = None) -> None:
+    def __init__(
+        self, entered: threading.Event | None = None, release: threading.Event | None = None
+    ) -> None:
         super().__init__()
         self.entered = entered
         self.release = release
@@ -129,7 +141,9 @@ def test_starting_a_device_never_waits_for_the_scheduler_to_sample_the_others():
         threading.Thread(target=lambda: (fresh.start(), added.set()), daemon=True).start()
         assert added.wait(20), "adding a device waited for another device's sample()"
         # Removing the held device waits for its sample() to return, never longer.
-        threading.Thread(target=lambda: (scheduler.remove(held), removed.set()), daemon=True).start()
+        threading.Thread(
+            target=lambda: (scheduler.remove(held), removed.set()), daemon=True
+        ).start()
         assert not removed.wait(0.2)
         release.set()
         assert removed.wait(20)
@@ -147,8 +161,9 @@ def test_a_large_configuration_starts_and_runs_its_first_frame(tmp_path):
     about half a minute before; every proxy and alias is bound by the first frame."""
     groups = 1500
     path = write_groups(tmp_path / "large.jconf", groups)
-    manager, configuration = InputManager.from_files([path], options=ManagerOptions(retry_interval=None,
-                                                                                   entry_points=False))
+    manager, configuration = InputManager.from_files(
+        [path], options=ManagerOptions(retry_interval=None, entry_points=False)
+    )
     session = MonitorSession(manager, configuration)
     try:
         assert len(session.start()) == 4 * groups

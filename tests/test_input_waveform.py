@@ -18,8 +18,10 @@ from gadgetctl.jccl.repository import default_repository
 from gadgetctl.resources import definitions_dir
 
 CORPUS_DEFINITIONS = Path("/work/shared/corpus/vrjuggler/modules/vrjuggler/data/definitions")
-HEAD = ('<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n<elements>\n')
+HEAD = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="test">\n<elements>\n'
+)
 WAVE = """<waveform_device name="{name}" version="1">
   <rate>{rate}</rate><seed>{seed}</seed>
   <analog_waveform>sine</analog_waveform><analog_waveform>triangle</analog_waveform>
@@ -46,7 +48,9 @@ def make(repo, tmp_path):
     def build(body, **options):
         path = tmp_path / f"test{len(managers)}.jconf"
         path.write_text(HEAD + body + "\n</elements>\n</configuration>\n")
-        manager = InputManager(repo, ManagerOptions(retry_interval=None, entry_points=False, **options))
+        manager = InputManager(
+            repo, ManagerOptions(retry_interval=None, entry_points=False, **options)
+        )
         managers.append(manager)
         manager.configure(load_configuration([path]))
         return manager
@@ -70,15 +74,21 @@ def test_every_builtin_device_agrees_with_its_definition(repo):
 
 
 def test_signals_are_deterministic_for_a_seed_and_independent_of_batching(make):
-    m = make(WAVE.format(name="A", rate=1000.0, seed=7) + WAVE.format(name="B", rate=1000.0, seed=7)
-             + WAVE.format(name="C", rate=1000.0, seed=8), start_devices=False)
+    m = make(
+        WAVE.format(name="A", rate=1000.0, seed=7)
+        + WAVE.format(name="B", rate=1000.0, seed=7)
+        + WAVE.format(name="C", rate=1000.0, seed=8),
+        start_devices=False,
+    )
     a, b, c = m.device("A"), m.device("B"), m.device("C")
     whole = a.compute(0, 300).data
     parts = [b.compute(0, 120).data, b.compute(120, 180).data]
     for kind in (DeviceKind.ANALOG, DeviceKind.DIGITAL, DeviceKind.POSITION, DeviceKind.HAT):
         np.testing.assert_array_equal(whole[kind], np.concatenate([p[kind] for p in parts]))
     other = c.compute(0, 300).data[DeviceKind.ANALOG]
-    np.testing.assert_array_equal(other[:, :3], whole[DeviceKind.ANALOG][:, :3])  # only noise depends on the seed
+    np.testing.assert_array_equal(
+        other[:, :3], whole[DeviceKind.ANALOG][:, :3]
+    )  # only noise depends on the seed
     assert not np.array_equal(other[:, 3], whole[DeviceKind.ANALOG][:, 3])
 
 
@@ -89,9 +99,13 @@ def test_wave_shapes_buttons_and_paths(make):
     analog = block.data[DeviceKind.ANALOG]
     t = np.arange(1000) / 1000.0
     np.testing.assert_allclose(analog[:, 0], 5.0 + 5.0 * np.sin(2 * np.pi * 2.0 * t), atol=1e-9)
-    assert analog[250, 1] == pytest.approx(10.0) and analog[0, 1] == pytest.approx(5.0)  # triangle, 1 Hz
+    assert analog[250, 1] == pytest.approx(10.0) and analog[0, 1] == pytest.approx(
+        5.0
+    )  # triangle, 1 Hz
     assert set(np.round(analog[:, 2], 9)) == {0.0, 10.0}  # square
-    assert analog[:, 3].min() >= 0.0 and analog[:, 3].max() <= 10.0 and analog[:, 3].std() > 1.0  # noise
+    assert (
+        analog[:, 3].min() >= 0.0 and analog[:, 3].max() <= 10.0 and analog[:, 3].std() > 1.0
+    )  # noise
     buttons = block.data[DeviceKind.DIGITAL][:, 0]
     assert list(buttons[:100]) == [1] * 50 + [0] * 50  # on for the first half of each 0.1 s period
     positions = block.data[DeviceKind.POSITION]
@@ -103,7 +117,9 @@ def test_wave_shapes_buttons_and_paths(make):
     np.testing.assert_allclose(spin[250, :3, :3] @ spin[250, :3, :3].T, np.eye(3), atol=1e-12)
     assert spin[250, 0, 2] == pytest.approx(1.0)  # a quarter turn about +Y
     eight = positions[:, 2, :3, 3]
-    assert eight[0] == pytest.approx([0.0, 1.5, 0.0]) and eight[500] == pytest.approx([0.0, 1.5, 0.0], abs=1e-12)
+    assert eight[0] == pytest.approx([0.0, 1.5, 0.0]) and eight[500] == pytest.approx(
+        [0.0, 1.5, 0.0], abs=1e-12
+    )
     assert list(block.data[DeviceKind.HAT][::250, 0]) == [0, 1, 2, 4]
     assert block.events == [(250, 1), (500, 2), (750, 3)]
 
@@ -123,7 +139,9 @@ def test_samples_follow_the_devices_own_schedule_exactly(make):
         stamps.extend(frame.timestamps())
     elapsed = time.perf_counter() - device.t0
     assert batches > 0 and len(stamps) > 300
-    np.testing.assert_allclose(np.diff(stamps), 1e-3, rtol=0, atol=1e-9)  # exact spacing, nothing lost
+    np.testing.assert_allclose(
+        np.diff(stamps), 1e-3, rtol=0, atol=1e-9
+    )  # exact spacing, nothing lost
     np.testing.assert_allclose(stamps[0], device.t0, atol=1e-9)
     assert stamps[-1] <= time.perf_counter()  # never a sample from the future
     assert abs(len(stamps) - elapsed * 1000) < 50
@@ -143,11 +161,20 @@ def test_rates_up_to_and_beyond_one_kilohertz(make):
     np.testing.assert_allclose(np.diff(frame.timestamps()), 1 / 5000.0, atol=1e-9)
 
 
-@pytest.mark.parametrize("body, message", [
-    ('<analog_waveform>sawtooth</analog_waveform>', "analog_waveform 'sawtooth' is not one of sine, triangle, square, noise"),
-    ('<rate>0</rate>', "rate must be greater than 0"),
-    ('<position_path>circle</position_path><position_period>-1</position_period>', "position_period must be greater than 0"),
-])
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        (
+            "<analog_waveform>sawtooth</analog_waveform>",
+            "analog_waveform 'sawtooth' is not one of sine, triangle, square, noise",
+        ),
+        ("<rate>0</rate>", "rate must be greater than 0"),
+        (
+            "<position_path>circle</position_path><position_period>-1</position_period>",
+            "position_period must be greater than 0",
+        ),
+    ],
+)
 def test_configuration_errors_leave_the_device_pending_with_the_reason(make, body, message):
     m = make(f'<waveform_device name="Bad" version="1">{body}</waveform_device>')
     pending = {p.name: p for p in m.pending()}
@@ -155,9 +182,11 @@ def test_configuration_errors_leave_the_device_pending_with_the_reason(make, bod
 
 
 def test_defaults_give_one_unit_per_listed_channel(make):
-    m = make('<waveform_device name="D" version="1"><analog_waveform>sine</analog_waveform>'
-             '<analog_waveform>sine</analog_waveform><analog_frequency>3.0</analog_frequency></waveform_device>',
-             start_devices=False)
+    m = make(
+        '<waveform_device name="D" version="1"><analog_waveform>sine</analog_waveform>'
+        "<analog_waveform>sine</analog_waveform><analog_frequency>3.0</analog_frequency></waveform_device>",
+        start_devices=False,
+    )
     device = m.device("D")
     assert [c.frequency for c in device.analog] == [3.0, 1.0]  # the second takes the default
     assert device.rate == 100.0 and device.event_period == 1.0 and device.positions == []

@@ -26,8 +26,16 @@ pytestmark = pytest.mark.timeout(90)
 def gadgetctl(*args: str | Path, timeout: float = 60, **kwargs) -> subprocess.CompletedProcess:
     env = {**os.environ, "NO_COLOR": "1"}
     env.pop("GADGETCTL_DEBUG", None)
-    return subprocess.run([sys.executable, "-m", "gadgetctl", *map(str, args)], cwd=REPO, capture_output=True,
-                          text=True, timeout=timeout, env=env, stdin=subprocess.DEVNULL, **kwargs)
+    return subprocess.run(
+        [sys.executable, "-m", "gadgetctl", *map(str, args)],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        **kwargs,
+    )
 
 
 def records(text: str) -> list[dict]:
@@ -55,8 +63,18 @@ def by_device(recs: list[dict]) -> dict[str, list[float]]:
 def recorded(tmp_path_factory) -> Path:
     """Two seconds of the waveform example, recorded."""
     path = tmp_path_factory.mktemp("rec") / "waveform.ndjson"
-    result = gadgetctl("monitor", WAVEFORM, "--duration", "2", "--format", "table", "--interval", "10",
-                       "--record", path)
+    result = gadgetctl(
+        "monitor",
+        WAVEFORM,
+        "--duration",
+        "2",
+        "--format",
+        "table",
+        "--interval",
+        "10",
+        "--record",
+        path,
+    )
     assert result.returncode == 0, result.stderr
     return path
 
@@ -74,7 +92,9 @@ def test_ndjson_stream_has_every_device_at_its_rate_in_order_without_drops():
     units = samples_by_unit(recs)
     for key, rows in units.items():
         stamps = [r["timestamp"] for r in rows]
-        assert all(b > a for a, b in itertools.pairwise(stamps)), f"{key}: timestamps not increasing"
+        assert all(b > a for a, b in itertools.pairwise(stamps)), (
+            f"{key}: timestamps not increasing"
+        )
     instants = by_device(recs)
     assert set(instants) == set(RATES)
     for name, stamps in instants.items():
@@ -102,14 +122,23 @@ def test_ndjson_sample_records_carry_values_and_raw_values():
     sticks = header["elements"]["Waveform Sticks"]
     assert sticks["element"] == "device" and sticks["type"] == "waveform_device"
     assert sticks["min"] == -1.0 and sticks["max"] == 1.0 and sticks["units"]["analog"] == 2
-    assert header["elements"]["VJWand"] == {"element": "alias", "type": "alias", "proxy": "Wand Proxy"}
+    assert header["elements"]["VJWand"] == {
+        "element": "alias",
+        "type": "alias",
+        "proxy": "Wand Proxy",
+    }
     assert header["elements"]["Wand Proxy"]["device"] == "Waveform Tracker"
-    analog = next(r for r in recs if r["type"] == "sample" and r["kind"] == "analog"
-                  and r["device"] == "Waveform Sticks")
+    analog = next(
+        r
+        for r in recs
+        if r["type"] == "sample" and r["kind"] == "analog" and r["device"] == "Waveform Sticks"
+    )
     assert analog["value"] == pytest.approx((analog["raw"] + 1.0) / 2.0)
     position = next(r for r in recs if r["type"] == "sample" and r["kind"] == "position")
     assert len(position["value"]) == 4 and position["value"][3] == [0.0, 0.0, 0.0, 1.0]
-    assert position["value"][1][3] == pytest.approx(1.6)  # centered at 1.5 m, raised 10 cm by the filter
+    assert position["value"][1][3] == pytest.approx(
+        1.6
+    )  # centered at 1.5 m, raised 10 cm by the filter
     statuses = [r for r in recs if r["type"] == "status"]
     assert {r["name"] for r in statuses} >= {"Waveform Sticks", "VJWand", "Wand Proxy"}
     assert all(r["state"] in ("running", "active") for r in statuses)
@@ -117,8 +146,19 @@ def test_ndjson_sample_records_carry_values_and_raw_values():
 
 def test_ndjson_per_frame_and_selected_proxies():
     # 10 frames a second for a second of wall clock (a loaded machine may run fewer)
-    result = gadgetctl("monitor", WAVEFORM, "VJ*", "Waveform Noise", "--rate", "10", "--duration", "1",
-                       "--format", "ndjson", "--per-frame")
+    result = gadgetctl(
+        "monitor",
+        WAVEFORM,
+        "VJ*",
+        "Waveform Noise",
+        "--rate",
+        "10",
+        "--duration",
+        "1",
+        "--format",
+        "ndjson",
+        "--per-frame",
+    )
     assert result.returncode == 0, result.stderr
     recs = records(result.stdout)
     frames = [r for r in recs if r["type"] == "frame"]
@@ -127,8 +167,16 @@ def test_ndjson_per_frame_and_selected_proxies():
     numbers = [f["frame"] for f in frames]
     assert numbers == sorted(numbers)
     last = frames[-1]["devices"]
-    assert set(last) == {"Waveform Noise", "VJAnalog0", "VJAnalog1", "VJButton0", "VJButton1", "VJWand",
-                         "VJHead", "VJNoise"}
+    assert set(last) == {
+        "Waveform Noise",
+        "VJAnalog0",
+        "VJAnalog1",
+        "VJButton0",
+        "VJButton1",
+        "VJWand",
+        "VJHead",
+        "VJNoise",
+    }
     # each frame counts the samples since the previous one (1 kHz: about 100 at 10 frames/s,
     # more in a frame after a stall); together they are the device's samples of the run
     counts = [f["devices"]["Waveform Noise"]["count"] for f in frames]
@@ -142,7 +190,9 @@ def test_selected_aliases_stream_one_sample_per_frame_with_new_data():
     # 10 frames in the second (--duration is wall-clock: a loaded machine may run fewer), each
     # with new data from the 120 Hz tracker: one alias sample per frame, never the tracker's
     # 120 samples a second
-    result = gadgetctl("monitor", WAVEFORM, "VJWand", "--rate", "10", "--duration", "1", "--format", "ndjson")
+    result = gadgetctl(
+        "monitor", WAVEFORM, "VJWand", "--rate", "10", "--duration", "1", "--format", "ndjson"
+    )
     recs = records(result.stdout)
     samples = [r for r in recs if r["type"] == "sample"]
     assert samples and {r["device"] for r in samples} == {"VJWand"}
@@ -157,15 +207,27 @@ def test_selected_aliases_stream_one_sample_per_frame_with_new_data():
 
 def test_table_is_the_default_without_a_terminal_and_stats_are_printed():
     started = time.monotonic()
-    result = gadgetctl("monitor", WAVEFORM, "Waveform*", "--duration", "1.2", "--interval", "0.5", "--stats",
-                       "--units", "centimeters")
+    result = gadgetctl(
+        "monitor",
+        WAVEFORM,
+        "Waveform*",
+        "--duration",
+        "1.2",
+        "--interval",
+        "0.5",
+        "--stats",
+        "--units",
+        "centimeters",
+    )
     assert result.returncode == 0, result.stderr
     assert time.monotonic() - started < 15
     out = result.stdout
     assert out.count("NAME ") >= 2 and "\x1b" not in out
     assert "Waveform Noise" in out and "running" in out and " cm" in out
     assert "statistics:" in out and "MEAN Hz" in out
-    line = next(line for line in out.splitlines() if line.startswith("Waveform Noise") and "1000.0" in line)
+    line = next(
+        line for line in out.splitlines() if line.startswith("Waveform Noise") and "1000.0" in line
+    )
     assert line.split()[-2] == "0"  # no faults
 
 
@@ -181,16 +243,19 @@ def test_demo_prints_a_readable_table_and_exits_0_without_a_terminal():
 # --------------------------------------------------------------------------- usage errors
 
 
-@pytest.mark.parametrize(("args", "message"), [
-    (["monitor", "missing.jconf"], "no such configuration file"),
-    (["monitor", "Waveform*"], "no configuration given"),
-    (["monitor", WAVEFORM, "Nobody"], "matches 'Nobody'"),
-    (["monitor", WAVEFORM, "--format", "live"], "needs a terminal"),
-    (["monitor", WAVEFORM, "--rate", "0"], "--rate"),
-    (["replay", REPO / "README.md"], "not a gadgetctl recording"),
-    (["replay", "missing.ndjson"], "cannot read"),
-    (["replay", REPO / "README.md", "--summary"], "not a gadgetctl recording"),
-])
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["monitor", "missing.jconf"], "no such configuration file"),
+        (["monitor", "Waveform*"], "no configuration given"),
+        (["monitor", WAVEFORM, "Nobody"], "matches 'Nobody'"),
+        (["monitor", WAVEFORM, "--format", "live"], "needs a terminal"),
+        (["monitor", WAVEFORM, "--rate", "0"], "--rate"),
+        (["replay", REPO / "README.md"], "not a gadgetctl recording"),
+        (["replay", "missing.ndjson"], "cannot read"),
+        (["replay", REPO / "README.md", "--summary"], "not a gadgetctl recording"),
+    ],
+)
 def test_usage_errors_exit_2_with_one_line(args, message):
     result = gadgetctl(*args)
     assert result.returncode == 2, result.stderr
@@ -218,13 +283,32 @@ def test_existing_record_file_needs_overwrite(tmp_path):
 # --------------------------------------------------------------------------- recording and signals
 
 
-@pytest.mark.parametrize(("signum", "reason"), [(signal.SIGINT, "interrupted"), (signal.SIGTERM, "terminated")])
+@pytest.mark.parametrize(
+    ("signum", "reason"), [(signal.SIGINT, "interrupted"), (signal.SIGTERM, "terminated")]
+)
 def test_interrupted_recording_is_complete_and_summarised(tmp_path, signum, reason):
     path = tmp_path / "interrupted.ndjson"
     env = {**os.environ, "NO_COLOR": "1"}
-    process = subprocess.Popen([sys.executable, "-m", "gadgetctl", "monitor", str(WAVEFORM), "--format", "table",
-                                "--interval", "100", "--record", str(path)], cwd=REPO, env=env,
-                               stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    process = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "gadgetctl",
+            "monitor",
+            str(WAVEFORM),
+            "--format",
+            "table",
+            "--interval",
+            "100",
+            "--record",
+            str(path),
+        ],
+        cwd=REPO,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
     try:
         deadline = time.monotonic() + 30
         while time.monotonic() < deadline:
@@ -266,38 +350,77 @@ def test_replay_reproduces_every_sample_sequence(recorded, speed):
     assert set(replayed) == set(original)
     for key, rows in original.items():
         again = replayed[key]
-        assert [(r["value"], r.get("raw")) for r in again] == [(r["value"], r.get("raw")) for r in rows], key
-        assert [t * speed for t in _relative(again)] == pytest.approx(_relative(rows), abs=1e-6), key
+        assert [(r["value"], r.get("raw")) for r in again] == [
+            (r["value"], r.get("raw")) for r in rows
+        ], key
+        assert [t * speed for t in _relative(again)] == pytest.approx(_relative(rows), abs=1e-6), (
+            key
+        )
     # the samples span the recording's time scaled by the speed (the wall-clock side, how
     # closely the replay keeps to that schedule on a given machine, is bench/bench_replay.py)
     stamps = sorted(r["timestamp"] for r in replayed_recs if r["type"] == "sample")
-    recorded_stamps = sorted(r["timestamp"] for r in records(recorded.read_text()) if r["type"] == "sample")
-    assert (stamps[-1] - stamps[0]) * speed == pytest.approx(recorded_stamps[-1] - recorded_stamps[0], abs=1e-6)
+    recorded_stamps = sorted(
+        r["timestamp"] for r in records(recorded.read_text()) if r["type"] == "sample"
+    )
+    assert (stamps[-1] - stamps[0]) * speed == pytest.approx(
+        recorded_stamps[-1] - recorded_stamps[0], abs=1e-6
+    )
     assert [r["type"] for r in replayed_recs[-2:]] == ["stats", "end"]
     assert replayed_recs[-1]["timestamp"] >= stamps[-1] and replayed_recs[-1]["reason"] == "closed"
 
 
 def test_replay_against_another_configuration_with_a_name_mapping(tmp_path, recorded):
-    text = WAVEFORM.read_text().replace('"Waveform Sticks"', '"Lab Joystick"').replace(
-        "<device>Waveform Sticks</device>", "<device>Lab Joystick</device>")
+    text = (
+        WAVEFORM.read_text()
+        .replace('"Waveform Sticks"', '"Lab Joystick"')
+        .replace("<device>Waveform Sticks</device>", "<device>Lab Joystick</device>")
+    )
     other = write(tmp_path / "other.jconf", text)
-    result = gadgetctl("replay", recorded, "--config", other, "--map", "Waveform Sticks=Lab Joystick",
-                       "--format", "ndjson", "Stick X Proxy", "Lab Joystick")
+    result = gadgetctl(
+        "replay",
+        recorded,
+        "--config",
+        other,
+        "--map",
+        "Waveform Sticks=Lab Joystick",
+        "--format",
+        "ndjson",
+        "Stick X Proxy",
+        "Lab Joystick",
+    )
     assert result.returncode == 0, result.stderr
     recs = records(result.stdout)
     proxy = [r for r in recs if r["type"] == "sample" and r["device"] == "Stick X Proxy"]
-    device = [r for r in recs if r["type"] == "sample" and r["device"] == "Lab Joystick" and r["kind"] == "analog"
-              and r["unit"] == 0]
+    device = [
+        r
+        for r in recs
+        if r["type"] == "sample"
+        and r["device"] == "Lab Joystick"
+        and r["kind"] == "analog"
+        and r["unit"] == 0
+    ]
     original = samples_by_unit(records(recorded.read_text()))[("Waveform Sticks", "analog", 0)]
     assert [r["value"] for r in device] == [r["value"] for r in original]
     recorded_values = {r["value"] for r in original}
-    assert len(proxy) > 50 and {r["value"] for r in proxy} <= recorded_values  # normalised by the proxy
+    assert (
+        len(proxy) > 50 and {r["value"] for r in proxy} <= recorded_values
+    )  # normalised by the proxy
     assert recs[0]["info"]["elements"]["Lab Joystick"]["type"] == "waveform_device"
 
 
 def test_replay_refuses_mapping_names_that_are_not_recorded(recorded):
-    result = gadgetctl("replay", recorded, "--map", "Ghost=Other", "--speed", "20", "--format", "table",
-                       "--interval", "10")
+    result = gadgetctl(
+        "replay",
+        recorded,
+        "--map",
+        "Ghost=Other",
+        "--speed",
+        "20",
+        "--format",
+        "table",
+        "--interval",
+        "10",
+    )
     assert result.returncode == 2 and result.stdout == ""
     assert "'Ghost' is not a device of the recording" in result.stderr
 
@@ -310,8 +433,18 @@ def test_replay_usage_errors(recorded):
 
 
 def test_replay_loop_runs_until_the_duration(recorded):
-    result = gadgetctl("replay", recorded, "--speed", "10", "--loop", "--duration", "1", "--format", "ndjson",
-                       "Waveform Sticks")
+    result = gadgetctl(
+        "replay",
+        recorded,
+        "--speed",
+        "10",
+        "--loop",
+        "--duration",
+        "1",
+        "--format",
+        "ndjson",
+        "Waveform Sticks",
+    )
     assert result.returncode == 0, result.stderr
     stamps = by_device(records(result.stdout))["Waveform Sticks"]
     assert len(stamps) > 600  # 400 samples per pass, about five passes in a second at x10
@@ -321,7 +454,7 @@ def test_replay_loop_runs_until_the_duration(recorded):
 # --------------------------------------------------------------------------- faults
 
 
-FAULTY_INIT = '''\
+FAULTY_INIT = """\
 GADGETCTL_API_VERSION = 1
 PLUGIN_NAME = "Faulty_drv"
 ELEMENT_TYPES = {"faulty_device": ("analog",)}
@@ -331,7 +464,7 @@ def register(registry):
     from .wrapper import FaultyDevice
 
     registry.register_device(FaultyDevice)
-'''
+"""
 FAULTY_WRAPPER = '''\
 from gadgetctl.input import Analog, SamplingMode
 
@@ -359,7 +492,7 @@ class FaultyDevice(Analog):
             raise RuntimeError("sensor exploded")
         self.add_analog_sample([0.5])
 '''
-FAULTY_JDEF = '''\
+FAULTY_JDEF = """\
 <?xml version="1.0" encoding="UTF-8"?>
 <?org-vrjuggler-jccl-settings definition.version="3.1"?>
 <definition xmlns="http://www.vrjuggler.org/jccl/xsd/3.1/definition" name="faulty_device">
@@ -379,8 +512,8 @@ FAULTY_JDEF = '''\
       <upgrade_transform/>
    </definition_version>
 </definition>
-'''
-FAULTY_CONFIG = '''\
+"""
+FAULTY_CONFIG = """\
 <?xml version="1.0" encoding="UTF-8"?>
 <?org-vrjuggler-jccl-settings configuration.version="3.0"?>
 <configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="faulty">
@@ -401,7 +534,7 @@ FAULTY_CONFIG = '''\
       </analog_proxy>
    </elements>
 </configuration>
-'''
+"""
 
 
 def faulty_configuration(directory: Path) -> Path:
@@ -417,7 +550,11 @@ def test_a_device_that_raises_is_faulted_in_json_and_the_others_keep_their_rate(
     assert result.returncode == 1, result.stderr
     assert "Bad Sensor: faulted" in result.stderr
     recs = records(result.stdout)
-    states = [(r["state"], r["reason"]) for r in recs if r["type"] == "status" and r["name"] == "Bad Sensor"]
+    states = [
+        (r["state"], r["reason"])
+        for r in recs
+        if r["type"] == "status" and r["name"] == "Bad Sensor"
+    ]
     assert states[0] == ("running", None)
     assert ("faulted", "RuntimeError: sensor exploded") in states
     assert states[-1] == ("faulted", "OSError: device unplugged")

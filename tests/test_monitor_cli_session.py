@@ -42,18 +42,28 @@ pytestmark = pytest.mark.timeout(60)
 
 
 def test_encode_rows_writes_what_encode_samples_writes():
-    matrix = [[1.0, 0.0, 0.0, 0.5], [0.0, 1.0, 0.0, 1.5], [0.0, 0.0, 1.0, -0.25], [0.0, 0.0, 0.0, 1.0]]
+    matrix = [
+        [1.0, 0.0, 0.0, 0.5],
+        [0.0, 1.0, 0.0, 1.5],
+        [0.0, 0.0, 1.0, -0.25],
+        [0.0, 0.0, 0.0, 1.0],
+    ]
     cases = [
         ("Stick", "analog", [1.5, 2.5], [[0.25, 1.0], [math.nan, 0.0]], [[-0.5, 1.0], [7, 0.0]]),
         ("Buttons", "digital", [3.0], [[0, 1, 1]], None),
         ("Head", "position", [4.0, 4.01], [[matrix], [matrix]], None),
-        ("Voice", "string", [5.0], [["next \"slide\""]], None),
+        ("Voice", "string", [5.0], [['next "slide"']], None),
     ]
     for device, kind, stamps, rows, raws in cases:
-        records = [SampleRecord(device, kind, unit, t, value, raws[i][unit] if raws else value)
-                   for i, (t, row) in enumerate(zip(stamps, rows, strict=True)) for unit, value in enumerate(row)]
+        records = [
+            SampleRecord(device, kind, unit, t, value, raws[i][unit] if raws else value)
+            for i, (t, row) in enumerate(zip(stamps, rows, strict=True))
+            for unit, value in enumerate(row)
+        ]
         assert encode_rows(device, kind, stamps, rows, raws) == encode_samples(records)
-        back = [decode_line(line) for line in encode_rows(device, kind, stamps, rows, raws).splitlines()]
+        back = [
+            decode_line(line) for line in encode_rows(device, kind, stamps, rows, raws).splitlines()
+        ]
         assert [(r.unit, r.timestamp) for r in back] == [(r.unit, r.timestamp) for r in records]
 
 
@@ -72,11 +82,15 @@ def test_status_records_round_trip():
 def test_frame_timestamps_merges_kinds_sampled_at_different_instants():
     from gadgetctl.input.samples import FrameSamples, Sample, SampleBatch
 
-    together = {DeviceKind.ANALOG: FrameSamples([SampleBatch(np.array([1.0, 2.0]), np.zeros((2, 1)))]),
-                DeviceKind.DIGITAL: FrameSamples([SampleBatch(np.array([1.0, 2.0]), np.zeros((2, 1)))])}
+    together = {
+        DeviceKind.ANALOG: FrameSamples([SampleBatch(np.array([1.0, 2.0]), np.zeros((2, 1)))]),
+        DeviceKind.DIGITAL: FrameSamples([SampleBatch(np.array([1.0, 2.0]), np.zeros((2, 1)))]),
+    }
     assert frame_timestamps(together).tolist() == [1.0, 2.0]
-    apart = {DeviceKind.ANALOG: FrameSamples([Sample(1.0, (0.0,)), Sample(3.0, (0.0,))]),
-             DeviceKind.DIGITAL: FrameSamples([Sample(2.0, (1,))])}
+    apart = {
+        DeviceKind.ANALOG: FrameSamples([Sample(1.0, (0.0,)), Sample(3.0, (0.0,))]),
+        DeviceKind.DIGITAL: FrameSamples([Sample(2.0, (1,))]),
+    }
     assert frame_timestamps(apart).tolist() == [1.0, 2.0, 3.0]
 
 
@@ -92,17 +106,30 @@ def waveform():
 
 def test_selection_by_name_and_glob_in_configuration_order(waveform):
     manager, configuration = waveform
-    session = MonitorSession(manager, configuration, selectors=["VJ*", "waveform noise", "Wand Proxy"])
+    session = MonitorSession(
+        manager, configuration, selectors=["VJ*", "waveform noise", "Wand Proxy"]
+    )
     names = session.start()
-    assert names == ["Waveform Noise", "Wand Proxy", "VJAnalog0", "VJAnalog1", "VJButton0", "VJButton1",
-                     "VJWand", "VJHead", "VJNoise"]
+    assert names == [
+        "Waveform Noise",
+        "Wand Proxy",
+        "VJAnalog0",
+        "VJAnalog1",
+        "VJButton0",
+        "VJButton1",
+        "VJWand",
+        "VJHead",
+        "VJNoise",
+    ]
     with pytest.raises(SelectionError, match="'Ghost\\*'"):
         MonitorSession(manager, None, selectors=["Ghost*"]).start()
 
 
 def test_every_frame_gathers_every_sample_and_the_view_reads_the_newest(waveform):
     manager, configuration = waveform
-    session = MonitorSession(manager, configuration, selectors=["Waveform Noise", "VJNoise", "Trigger Proxy"])
+    session = MonitorSession(
+        manager, configuration, selectors=["Waveform Noise", "VJNoise", "Trigger Proxy"]
+    )
     session.start()
     frames = list(session.frames(frames=30))  # a count, not a duration: load cannot change it
     assert len(frames) == 30
@@ -128,9 +155,11 @@ def _controlled(kinds=("digital",), name="Test Device") -> tuple[InputManager, M
     manager = InputManager(default_repository(), ManagerOptions(retry_interval=None))
     replaydevice.install(manager)
     device = replaydevice.RecordedDevice(name, name, "test_device", list(kinds))
-    elements = [replaydevice.replay_element(device, HERE),
-                replaydevice._element("digital_proxy", "Button", HERE, {"device": [name], "unit": [1]}),
-                replaydevice._element("digital_proxy", "Nowhere", HERE, {"device": ["Ghost"], "unit": [0]})]
+    elements = [
+        replaydevice.replay_element(device, HERE),
+        replaydevice._element("digital_proxy", "Button", HERE, {"device": [name], "unit": [1]}),
+        replaydevice._element("digital_proxy", "Nowhere", HERE, {"device": ["Ghost"], "unit": [0]}),
+    ]
     session = MonitorSession(manager, Configuration(loaded=elements))
     session.start()
     return manager, session
@@ -147,7 +176,10 @@ def test_presses_between_frames_are_counted_and_toggles_marked():
             device.feed(DeviceKind.DIGITAL, t + i * 0.001, state)
         session.step()
         view = session.element_view("Test Device")
-        assert [(u.value, u.presses, u.changed) for u in view.values] == [(1, 1, True), (1, 2, True)]
+        assert [(u.value, u.presses, u.changed) for u in view.values] == [
+            (1, 1, True),
+            (1, 2, True),
+        ]
         button = session.element_view("Button")
         assert button.values[0].presses == 2 and button.values[0].value == 2  # toggle on
         session.step()
@@ -171,6 +203,7 @@ def test_status_changes_and_samples_go_to_the_sinks():
         session.step()
         device.feed(DeviceKind.ANALOG, now(), (0.25,))
         session.step()
+
         def broken() -> None:
             raise OSError("cable")
 
@@ -185,8 +218,13 @@ def test_status_changes_and_samples_go_to_the_sinks():
     assert recs[0]["info"]["elements"]["Test Device"]["kinds"] == ["digital", "analog"]
     samples = [r for r in recs if r["type"] == "sample"]
     assert [(r["device"], r["kind"], r["value"], r.get("raw")) for r in samples] == [
-        ("Test Device", "analog", 0.25, None)]
-    faults = [(r["state"], r["reason"]) for r in recs if r["type"] == "status" and r["name"] == "Test Device"]
+        ("Test Device", "analog", 0.25, None)
+    ]
+    faults = [
+        (r["state"], r["reason"])
+        for r in recs
+        if r["type"] == "status" and r["name"] == "Test Device"
+    ]
     assert faults == [("running", None), ("faulted", "OSError: cable")]
     assert [r["name"] for r in recs if r["type"] == "marker"] == ["after the fault"]
     assert [r["type"] for r in recs[-2:]] == ["stats", "end"]
@@ -215,30 +253,58 @@ def test_a_device_that_disappears_and_comes_back_resumes(waveform):
 
 def test_replay_plan_synthesises_devices_proxies_and_aliases(tmp_path):
     path = tmp_path / "r.ndjson"
-    info = {"elements": {
-        "Stick": {"element": "device", "type": "linux_joydev", "kinds": ["analog", "digital"],
-                  "units": {"analog": 2}, "min": 0.0, "max": 255.0},
-        "Stick X": {"element": "proxy", "type": "analog_proxy", "device": "Stick", "unit": 1},
-        "VJX": {"element": "alias", "type": "alias", "proxy": "Stick X"}}}
+    info = {
+        "elements": {
+            "Stick": {
+                "element": "device",
+                "type": "linux_joydev",
+                "kinds": ["analog", "digital"],
+                "units": {"analog": 2},
+                "min": 0.0,
+                "max": 255.0,
+            },
+            "Stick X": {"element": "proxy", "type": "analog_proxy", "device": "Stick", "unit": 1},
+            "VJX": {"element": "alias", "type": "alias", "proxy": "Stick X"},
+        }
+    }
     with Recorder(path, info) as recorder:
-        recorder.write_samples([SampleRecord("Stick", "analog", u, 10.0 + i * 0.01, v / 255, v)
-                                for i, v in enumerate((0, 51, 255)) for u in range(2)]
-                               + [SampleRecord("Stick X", "analog", 1, 10.0, 0.0, 0)])
+        recorder.write_samples(
+            [
+                SampleRecord("Stick", "analog", u, 10.0 + i * 0.01, v / 255, v)
+                for i, v in enumerate((0, 51, 255))
+                for u in range(2)
+            ]
+            + [SampleRecord("Stick X", "analog", 1, 10.0, 0.0, 0)]
+        )
     recording = read_recording(path)
-    schedule = replaydevice.make_schedule(recording.records, speed=50.0, loop=False, mapping={"Stick": "Pad"})
+    schedule = replaydevice.make_schedule(
+        recording.records, speed=50.0, loop=False, mapping={"Stick": "Pad"}
+    )
     plan = replaydevice.plan_replay(recording.header, schedule, path, None, {"Stick": "Pad"})
     assert list(plan.devices) == ["Pad"]  # the proxy's own samples are not replayed
     assert plan.devices["Pad"].units == {"analog": 2}
-    types = {e.name: (e.type, {k: [v.text for v in vs] for k, vs in e.properties.items()}) for e in plan.elements}
-    assert types["Pad"] == ("replay_device", {"kind": ["analog", "digital"], "recorded_type": ["linux_joydev"],
-                                              "min": ["0.0"], "max": ["255.0"]})
+    types = {
+        e.name: (e.type, {k: [v.text for v in vs] for k, vs in e.properties.items()})
+        for e in plan.elements
+    }
+    assert types["Pad"] == (
+        "replay_device",
+        {
+            "kind": ["analog", "digital"],
+            "recorded_type": ["linux_joydev"],
+            "min": ["0.0"],
+            "max": ["255.0"],
+        },
+    )
     assert types["Stick X"] == ("analog_proxy", {"device": ["Pad"], "unit": ["1"]})
     assert types["VJX"] == ("alias", {"proxy": ["Stick X"]})
 
     manager = InputManager(default_repository(), ManagerOptions(retry_interval=None))
     try:
         replaydevice.install(manager)
-        feeder = replaydevice.ReplayFeeder(schedule, manager.device, {"Pad": plan.devices["Pad"].units})
+        feeder = replaydevice.ReplayFeeder(
+            schedule, manager.device, {"Pad": plan.devices["Pad"].units}
+        )
         session = MonitorSession(manager, plan.configuration, source=feeder)
         session.start()
         assert not manager.pending()
@@ -276,7 +342,9 @@ def test_keyboard_events_and_keyboard_proxies_are_recorded_as_json():
     from gadgetctl.input.keys import Key
 
     manager, configuration = InputManager.from_files([REPO / "examples" / "all_devices.jconf"])
-    session = MonitorSession(manager, configuration, selectors=["Sim Keyboard", "Sim Buttons", "Sim Keyboard Proxy"])
+    session = MonitorSession(
+        manager, configuration, selectors=["Sim Keyboard", "Sim Buttons", "Sim Keyboard Proxy"]
+    )
     session.start()
     stream = io.BytesIO()
     session.add_sink(lambda info: Recorder.to_stream(stream, info, clock=now))
@@ -290,10 +358,18 @@ def test_keyboard_events_and_keyboard_proxies_are_recorded_as_json():
         manager.shutdown()
     recs = [json.loads(line) for line in stream.getvalue().decode().splitlines()]
     keyboard = [r["value"] for r in recs if r["type"] == "sample" and r["device"] == "Sim Keyboard"]
-    assert keyboard == [{"event": "key", "key": "KEY_SPACE", "pressed": True},
-                        {"event": "key", "key": "KEY_SPACE", "pressed": False},
-                        {"event": "move", "dx": 10.0, "dy": -5.0}]
-    proxy = [r["value"] for r in recs if r["type"] == "sample" and r["device"] == "Sim Keyboard Proxy"]
+    assert keyboard == [
+        {"event": "key", "key": "KEY_SPACE", "pressed": True},
+        {"event": "key", "key": "KEY_SPACE", "pressed": False},
+        {"event": "move", "dx": 10.0, "dy": -5.0},
+    ]
+    proxy = [
+        r["value"] for r in recs if r["type"] == "sample" and r["device"] == "Sim Keyboard Proxy"
+    ]
     assert proxy == [[]]  # the keys held at the end of the frame
-    buttons = [r["value"] for r in recs if r["type"] == "sample" and r["device"] == "Sim Buttons" and r["unit"] == 0]
+    buttons = [
+        r["value"]
+        for r in recs
+        if r["type"] == "sample" and r["device"] == "Sim Buttons" and r["unit"] == 0
+    ]
     assert buttons[-1] == 1

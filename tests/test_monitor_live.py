@@ -34,16 +34,25 @@ def shell(command: str, *, rows: int = 45, cols: int = 200) -> pexpect.spawn:
     env = {**os.environ, "NO_COLOR": "1", "TERM": "xterm-256color"}
     env.pop("GADGETCTL_DEBUG", None)
     script = f'echo "STTY=$(stty -g)"; {command}; echo "EXIT=$?"; echo "STTY=$(stty -g)"'
-    return pexpect.spawn("bash", ["--norc", "--noprofile", "-c", script], cwd=str(REPO), env=env,
-                         dimensions=(rows, cols), encoding="utf-8", timeout=20,
-                         # a signal can end a frame's write inside a multi-byte character (the
-                         # terminal shows one odd glyph); what these tests judge is the text
-                         # around it, so a cut character must not raise UnicodeDecodeError
-                         codec_errors="replace")
+    return pexpect.spawn(
+        "bash",
+        ["--norc", "--noprofile", "-c", script],
+        cwd=str(REPO),
+        env=env,
+        dimensions=(rows, cols),
+        encoding="utf-8",
+        timeout=20,
+        # a signal can end a frame's write inside a multi-byte character (the
+        # terminal shows one odd glyph); what these tests judge is the text
+        # around it, so a cut character must not raise UnicodeDecodeError
+        codec_errors="replace",
+    )
 
 
 def monitor_command(*args: str | Path) -> str:
-    return " ".join(shlex.quote(str(a)) for a in (sys.executable, "-m", "gadgetctl", "monitor", *args))
+    return " ".join(
+        shlex.quote(str(a)) for a in (sys.executable, "-m", "gadgetctl", "monitor", *args)
+    )
 
 
 def stty_before(child: pexpect.spawn) -> str:
@@ -94,14 +103,18 @@ def test_live_view_draws_pauses_quits_and_restores_the_terminal():
 
 
 def test_keys_are_forwarded_to_the_keyboard_mouse_device_and_drive_simulated_devices():
-    child = shell(monitor_command(ALL_DEVICES, "Sim Buttons", "Sim Head", "Button 0 Proxy", "--no-mouse"))
+    child = shell(
+        monitor_command(ALL_DEVICES, "Sim Buttons", "Sim Head", "Button 0 Proxy", "--no-mouse")
+    )
     try:
         before = stty_before(child)
         child.expect(r"other keys and the mouse → Sim Keyboard")
         child.expect(r"digital\s+0:○\s+1:○")
         child.send(" ")  # KEY_SPACE: button 0 of Sim Buttons
         child.expect(r"digital\s+0:[●○][ ↕]\u00d71")
-        child.expect(r"Button 0 Proxy\s+digital_proxy → Sim Buttons\[0\]\s+active\s+[●○][ ↑↓]\u00d71")
+        child.expect(
+            r"Button 0 Proxy\s+digital_proxy → Sim Buttons\[0\]\s+active\s+[●○][ ↑↓]\u00d71"
+        )
         child.send("\x1b[A")  # Up arrow: KEY_UP, forward 5 cm
         child.expect(r"position 0\s+x \+0\.000 y \+1\.800 z -0\.050 m")
         child.send("\r")  # KEY_RETURN: button 1
@@ -131,7 +144,11 @@ def test_marker_prompt_writes_a_named_marker(tmp_path):
     assert (code, after) == (0, before)
     lines = path.read_text().splitlines()
     assert any('"type":"marker","name":"button test"' in line for line in lines)
-    assert '"type":"end"' in lines[-1] and '"reason":"closed"' in lines[-1] and '"markers":1' in lines[-1]
+    assert (
+        '"type":"end"' in lines[-1]
+        and '"reason":"closed"' in lines[-1]
+        and '"markers":1' in lines[-1]
+    )
 
 
 def test_a_faulted_device_shows_in_the_live_view_while_the_others_keep_their_rate(tmp_path):
@@ -179,8 +196,12 @@ def test_a_signal_ends_the_live_view_and_restores_the_terminal(tmp_path, signum)
 
 
 def test_the_demo_uses_the_live_view_on_a_terminal():
-    child = shell(" ".join(shlex.quote(str(a)) for a in (sys.executable, "-m", "gadgetctl", "demo",
-                                                          "--duration", "1.5")))
+    child = shell(
+        " ".join(
+            shlex.quote(str(a))
+            for a in (sys.executable, "-m", "gadgetctl", "demo", "--duration", "1.5")
+        )
+    )
     try:
         before = stty_before(child)
         child.expect(r"gadgetctl demo .*waveform\.jconf")
@@ -195,10 +216,29 @@ def test_a_replay_in_the_live_view_stays_on_screen_when_it_ends(tmp_path):
     import subprocess
 
     path = tmp_path / "short.ndjson"
-    subprocess.run([sys.executable, "-m", "gadgetctl", "monitor", str(WAVEFORM), "--duration", "1", "--format",
-                    "ndjson", "--record", str(path)], cwd=REPO, check=True, capture_output=True, timeout=60)
-    command = " ".join(shlex.quote(str(a)) for a in (sys.executable, "-m", "gadgetctl", "replay", path,
-                                                      "--speed", "4"))
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "gadgetctl",
+            "monitor",
+            str(WAVEFORM),
+            "--duration",
+            "1",
+            "--format",
+            "ndjson",
+            "--record",
+            str(path),
+        ],
+        cwd=REPO,
+        check=True,
+        capture_output=True,
+        timeout=60,
+    )
+    command = " ".join(
+        shlex.quote(str(a))
+        for a in (sys.executable, "-m", "gadgetctl", "replay", path, "--speed", "4")
+    )
     child = shell(command)
     try:
         before = stty_before(child)

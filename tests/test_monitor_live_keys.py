@@ -21,28 +21,39 @@ def keys(data: bytes, moment: float = 0.0) -> list[tuple[Key, tuple[Modifier, ..
     return [(e.key, e.modifiers) for e in events if e.kind == "key"]
 
 
-@pytest.mark.parametrize(("typed", "expected"), [
-    (b"a", [(Key.KEY_A, ())]),
-    (b"Z", [(Key.KEY_Z, (SHIFT,))]),
-    (b"7", [(Key.KEY_7, ())]),
-    (b" ", [(Key.KEY_SPACE, ())]),
-    (b"\r", [(Key.KEY_RETURN, ())]),
-    (b"\t", [(Key.KEY_TAB, ())]),
-    (b"\x7f", [(Key.KEY_BACKSPACE, ())]),
-    (b",.", [(Key.KEY_COMMA, ()), (Key.KEY_PERIOD, ())]),
-    (b"<>", [(Key.KEY_COMMA, (SHIFT,)), (Key.KEY_PERIOD, (SHIFT,))]),  # as an X11 input window: unshifted key + SHIFT
-    (b"!", [(Key.KEY_1, (SHIFT,))]),
-    (b"\x01", [(Key.KEY_A, (CTRL,))]),
-    (b"\x1bx", [(Key.KEY_X, (ALT,))]),
-    (b"\x1b", [(Key.KEY_ESC, ())]),
-    (b"\x1b[A\x1b[B\x1b[C\x1b[D", [(Key.KEY_UP, ()), (Key.KEY_DOWN, ()), (Key.KEY_RIGHT, ()), (Key.KEY_LEFT, ())]),
-    (b"\x1bOA", [(Key.KEY_UP, ())]),
-    (b"\x1b[1;2C", [(Key.KEY_RIGHT, (SHIFT,))]),
-    (b"\x1b[1;5A", [(Key.KEY_UP, (CTRL,))]),
-    (b"\x1bOP\x1b[15~\x1b[24~", [(Key.KEY_F1, ()), (Key.KEY_F5, ()), (Key.KEY_F12, ())]),
-    (b"\x1b[5~\x1b[6~\x1b[H\x1b[3~", [(Key.KEY_PRIOR, ()), (Key.KEY_NEXT, ()), (Key.KEY_HOME, ()),
-                                      (Key.KEY_DELETE, ())]),
-])
+@pytest.mark.parametrize(
+    ("typed", "expected"),
+    [
+        (b"a", [(Key.KEY_A, ())]),
+        (b"Z", [(Key.KEY_Z, (SHIFT,))]),
+        (b"7", [(Key.KEY_7, ())]),
+        (b" ", [(Key.KEY_SPACE, ())]),
+        (b"\r", [(Key.KEY_RETURN, ())]),
+        (b"\t", [(Key.KEY_TAB, ())]),
+        (b"\x7f", [(Key.KEY_BACKSPACE, ())]),
+        (b",.", [(Key.KEY_COMMA, ()), (Key.KEY_PERIOD, ())]),
+        (
+            b"<>",
+            [(Key.KEY_COMMA, (SHIFT,)), (Key.KEY_PERIOD, (SHIFT,))],
+        ),  # as an X11 input window: unshifted key + SHIFT
+        (b"!", [(Key.KEY_1, (SHIFT,))]),
+        (b"\x01", [(Key.KEY_A, (CTRL,))]),
+        (b"\x1bx", [(Key.KEY_X, (ALT,))]),
+        (b"\x1b", [(Key.KEY_ESC, ())]),
+        (
+            b"\x1b[A\x1b[B\x1b[C\x1b[D",
+            [(Key.KEY_UP, ()), (Key.KEY_DOWN, ()), (Key.KEY_RIGHT, ()), (Key.KEY_LEFT, ())],
+        ),
+        (b"\x1bOA", [(Key.KEY_UP, ())]),
+        (b"\x1b[1;2C", [(Key.KEY_RIGHT, (SHIFT,))]),
+        (b"\x1b[1;5A", [(Key.KEY_UP, (CTRL,))]),
+        (b"\x1bOP\x1b[15~\x1b[24~", [(Key.KEY_F1, ()), (Key.KEY_F5, ()), (Key.KEY_F12, ())]),
+        (
+            b"\x1b[5~\x1b[6~\x1b[H\x1b[3~",
+            [(Key.KEY_PRIOR, ()), (Key.KEY_NEXT, ()), (Key.KEY_HOME, ()), (Key.KEY_DELETE, ())],
+        ),
+    ],
+)
 def test_terminal_sequences_become_key_codes(typed, expected):
     assert keys(typed) == expected
 
@@ -66,7 +77,9 @@ def test_utf8_split_across_reads_and_unknown_characters():
 
 def test_mouse_reports_become_buttons_motion_and_wheel():
     decoder = KeyDecoder()
-    events = decoder.feed(b"\x1b[<0;10;5M\x1b[<32;12;4M\x1b[<0;12;4m\x1b[<65;12;4M\x1b[<18;12;4M", 0.0)
+    events = decoder.feed(
+        b"\x1b[<0;10;5M\x1b[<32;12;4M\x1b[<0;12;4m\x1b[<65;12;4M\x1b[<18;12;4M", 0.0
+    )
     summary = [(e.kind, e.key, e.pressed, e.dx, e.dy, e.direction, e.modifiers) for e in events]
     assert summary == [
         ("button", Key.MOUSE_BUT1, True, 0.0, 0.0, None, ()),
@@ -81,10 +94,18 @@ def test_raw_terminal_restores_the_mode_even_after_an_error():
     master, slave = pty.openpty()
     try:
         before = termios.tcgetattr(slave)
-        with (open(slave, closefd=False) as stdin, open(os.devnull, "w") as stdout,
-              pytest.raises(RuntimeError), RawTerminal(stdin, stdout) as terminal):
+        with (
+            open(slave, closefd=False) as stdin,
+            open(os.devnull, "w") as stdout,
+            pytest.raises(RuntimeError),
+            RawTerminal(stdin, stdout) as terminal,
+        ):
             raw = termios.tcgetattr(slave)
-            assert not raw[3] & termios.ECHO and not raw[3] & termios.ICANON and not raw[3] & termios.ISIG
+            assert (
+                not raw[3] & termios.ECHO
+                and not raw[3] & termios.ICANON
+                and not raw[3] & termios.ISIG
+            )
             os.write(master, b"q\x1b[A")
             assert terminal.read() == b"q\x1b[A"
             assert terminal.read() == b""  # never waits

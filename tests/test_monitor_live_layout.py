@@ -103,8 +103,19 @@ def test_v_switches_between_the_compact_and_the_detailed_layout():
 
 def test_quitting_the_live_view_prints_a_summary_with_the_recording(tmp_path):
     path = tmp_path / "run.ndjson"
-    shown = " ".join(shlex.quote(str(a)) for a in (sys.executable, "-m", "gadgetctl", "monitor", WAVEFORM,
-                                                    "Waveform Noise", "--record", path))
+    shown = " ".join(
+        shlex.quote(str(a))
+        for a in (
+            sys.executable,
+            "-m",
+            "gadgetctl",
+            "monitor",
+            WAVEFORM,
+            "Waveform Noise",
+            "--record",
+            path,
+        )
+    )
     with Pane(shown, cols=160, rows=40) as pane:
         pane.wait_for(r"^Waveform Noise\s+waveform_device\s+running")
         pane.keys("m", literal=True)

@@ -66,8 +66,7 @@ def test_many_findings_end_in_a_summary_line(tmp_path):
     assert done.returncode == 0, done.stderr
     assert done.stderr.count("error CFG020") == 10
     assert (
-        "… and 4 more: 14 errors, 0 warnings in all (gadgetctl validate --together"
-        in done.stderr
+        "… and 4 more: 14 errors, 0 warnings in all (gadgetctl validate --together" in done.stderr
     )
 
 

@@ -32,8 +32,10 @@ pytestmark = pytest.mark.timeout(60)
 
 
 def samples(n, start=10.0, device="Wand"):
-    return [SampleRecord(device, "analog", i % 2, start + i * 0.01, (i % 100) / 100, i % 100)
-            for i in range(n)]
+    return [
+        SampleRecord(device, "analog", i % 2, start + i * 0.01, (i % 100) / 100, i % 100)
+        for i in range(n)
+    ]
 
 
 class FakeClock:
@@ -61,7 +63,11 @@ def test_round_trip_of_a_session(tmp_path):
     recording, records = read_all(path)
     assert recording.header.info == {"config": "wand.jconf", "devices": ["Wand"]}
     assert records[:60] == samples(50) + samples(10, start=11.0)
-    assert records[60:63] == [MarkerRecord("tap", 10.5), frame, StatsRecord(11.2, {"Wand": {"count": 60}})]
+    assert records[60:63] == [
+        MarkerRecord("tap", 10.5),
+        frame,
+        StatsRecord(11.2, {"Wand": {"count": 60}}),
+    ]
     end = records[-1]
     assert isinstance(end, EndRecord) and end.reason == "closed"
     assert (end.samples, end.markers, end.frames) == (60, 1, 1)
@@ -95,7 +101,11 @@ def test_single_samples_are_flushed_within_the_interval(tmp_path):
         assert list(read_recording(path).records) == batch
         recorder.write_sample(batch[0])
         recorder.write_marker("m")  # other records flush pending samples first
-        assert list(read_recording(path).records) == [*batch, batch[0], MarkerRecord("m", clock.now)]
+        assert list(read_recording(path).records) == [
+            *batch,
+            batch[0],
+            MarkerRecord("m", clock.now),
+        ]
 
 
 def test_existing_files_are_kept_unless_overwrite(tmp_path):
@@ -115,8 +125,10 @@ def test_unwritable_path_is_a_recording_error(tmp_path):
         Recorder(tmp_path / "missing-dir" / "x.ndjson")
 
 
-@pytest.mark.parametrize(("exc", "reason"), [
-    (KeyboardInterrupt, "interrupted"), (Terminated, "terminated"), (RuntimeError, "error")])
+@pytest.mark.parametrize(
+    ("exc", "reason"),
+    [(KeyboardInterrupt, "interrupted"), (Terminated, "terminated"), (RuntimeError, "error")],
+)
 def test_end_reason_follows_the_exception(tmp_path, exc, reason):
     path = tmp_path / "x.ndjson"
     with pytest.raises(exc), Recorder(path) as recorder:
@@ -192,19 +204,22 @@ def test_interrupted_line_in_the_middle_is_a_warning(tmp_path):
     assert [(p.line, p.severity) for p in recording.problems] == [(3, "warning")]
 
 
-@pytest.mark.parametrize(("content", "message"), [
-    (b"", "empty"),
-    (b"\x89PNG\r\n\x1a\n\x00\x00binary", "not a gadgetctl recording"),
-    (b'<?xml version="1.0"?>\n<configuration/>\n', "not a gadgetctl recording"),
-    (b'{"v":1,"type":"sample","device":"A"}\n', "header"),
-    (b'{"v":1,"type":"header","format":"something-else"}\n', "header"),
-    (b'{"v":0,"type":"header","format":"gadgetctl-recording"}\n', "version"),
-    (b'{"v":"1","type":"header","format":"gadgetctl-recording"}\n', "version"),
-    (b'{"v":7,"type":"header","format":"gadgetctl-recording"}\n', "newer"),
-    (b'{"v":1,"type":"header","format":"gadgetctl-recording","info":[]}\n', "info"),
-    (b'{"v":1,"type":"header","format":"gadgetctl-rec', "ends inside its header"),
-    (b"x" * 3_000_000, "not a gadgetctl recording"),
-])
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"", "empty"),
+        (b"\x89PNG\r\n\x1a\n\x00\x00binary", "not a gadgetctl recording"),
+        (b'<?xml version="1.0"?>\n<configuration/>\n', "not a gadgetctl recording"),
+        (b'{"v":1,"type":"sample","device":"A"}\n', "header"),
+        (b'{"v":1,"type":"header","format":"something-else"}\n', "header"),
+        (b'{"v":0,"type":"header","format":"gadgetctl-recording"}\n', "version"),
+        (b'{"v":"1","type":"header","format":"gadgetctl-recording"}\n', "version"),
+        (b'{"v":7,"type":"header","format":"gadgetctl-recording"}\n', "newer"),
+        (b'{"v":1,"type":"header","format":"gadgetctl-recording","info":[]}\n', "info"),
+        (b'{"v":1,"type":"header","format":"gadgetctl-rec', "ends inside its header"),
+        (b"x" * 3_000_000, "not a gadgetctl recording"),
+    ],
+)
 def test_files_that_are_not_recordings_raise(tmp_path, content, message):
     path = tmp_path / "bad.ndjson"
     path.write_bytes(content)
@@ -265,15 +280,22 @@ CHILD = textwrap.dedent("""
 
 @pytest.mark.timeout(30)
 @pytest.mark.parametrize("delay", [0.05, 0.3])
-@pytest.mark.parametrize(("signum", "returncode", "reason"), [
-    (signal.SIGINT, 130, "interrupted"),
-    (signal.SIGTERM, 143, "terminated"),
-    (signal.SIGKILL, -signal.SIGKILL, None),
-])
+@pytest.mark.parametrize(
+    ("signum", "returncode", "reason"),
+    [
+        (signal.SIGINT, 130, "interrupted"),
+        (signal.SIGTERM, 143, "terminated"),
+        (signal.SIGKILL, -signal.SIGKILL, None),
+    ],
+)
 def test_killed_writer_leaves_a_readable_recording(tmp_path, signum, returncode, reason, delay):
     path = tmp_path / "killed.ndjson"
-    child = subprocess.Popen([sys.executable, "-c", CHILD, str(path), "2000"],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    child = subprocess.Popen(
+        [sys.executable, "-c", CHILD, str(path), "2000"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert child.stdout.readline() == "ready\n", child.stderr.read()
         time.sleep(delay)

@@ -28,7 +28,12 @@ from gadgetctl.monitor.records import (
     encode_value,
 )
 
-POSITION = [[1.0, 0.0, 0.0, 0.125], [0.0, 0.0, -1.0, 1.6], [0.0, 1.0, 0.0, -0.3], [0.0, 0.0, 0.0, 1.0]]
+POSITION = [
+    [1.0, 0.0, 0.0, 0.125],
+    [0.0, 0.0, -1.0, 1.6],
+    [0.0, 1.0, 0.0, -0.3],
+    [0.0, 0.0, 0.0, 1.0],
+]
 GLOVE = [[0.1 * f + 0.01 * j for j in range(4)] for f in range(6)]
 
 ONE_OF_EACH = [
@@ -71,9 +76,19 @@ def test_raw_is_written_only_when_it_differs():
 def test_floats_round_trip_exactly():
     rng = random.Random(7)
     values = [rng.uniform(-1e3, 1e3) for _ in range(2000)] + [
-        5e-324, 1.7976931348623157e308, -0.0, 1e16, 1e-7, 0.1 + 0.2, 2.0 ** 0.5, 123456789.0]
-    records = [SampleRecord("A", "analog", 0, 1000.0 + i * 1e-3 + rng.random() * 1e-6, v, v)
-               for i, v in enumerate(values)]
+        5e-324,
+        1.7976931348623157e308,
+        -0.0,
+        1e16,
+        1e-7,
+        0.1 + 0.2,
+        2.0**0.5,
+        123456789.0,
+    ]
+    records = [
+        SampleRecord("A", "analog", 0, 1000.0 + i * 1e-3 + rng.random() * 1e-6, v, v)
+        for i, v in enumerate(values)
+    ]
     back = roundtrip(records)
     for ours, theirs in zip(records, back, strict=True):
         assert theirs.value == ours.value and theirs.timestamp == ours.timestamp
@@ -138,14 +153,22 @@ def test_device_names_are_escaped():
 
 
 def test_rare_records_round_trip():
-    frame = FrameRecord(42, 99.5, {
-        "Wand": FrameDevice(3, {"analog": {0: 0.5, 1: 0.25}, "digital": {0: 1}}),
-        "Head": FrameDevice(1, {"position": {0: POSITION}}),
-        "Idle": FrameDevice(0, {}),
-    })
+    frame = FrameRecord(
+        42,
+        99.5,
+        {
+            "Wand": FrameDevice(3, {"analog": {0: 0.5, 1: 0.25}, "digital": {0: 1}}),
+            "Head": FrameDevice(1, {"position": {0: POSITION}}),
+            "Idle": FrameDevice(0, {}),
+        },
+    )
     stats = StatsRecord(100.0, {"Wand": {"count": 10, "window_rate": 99.9, "p50_interval": None}})
-    records = [MarkerRecord("start ☃", 12.0), frame, stats,
-               EndRecord(101.0, "interrupted", 1000, 2, 60)]
+    records = [
+        MarkerRecord("start ☃", 12.0),
+        frame,
+        stats,
+        EndRecord(101.0, "interrupted", 1000, 2, 60),
+    ]
     for record in records:
         line = encode_record(record)
         assert line.endswith("\n") and line.count("\n") == 1
@@ -155,8 +178,9 @@ def test_rare_records_round_trip():
 
 
 def test_header_records_carry_format_and_clock_times():
-    header = HeaderRecord.now({"config": "x.jconf", "devices": ["Wand"], "n": np.int64(3)},
-                              clock=lambda: 55.5)
+    header = HeaderRecord.now(
+        {"config": "x.jconf", "devices": ["Wand"], "n": np.int64(3)}, clock=lambda: 55.5
+    )
     obj = json.loads(encode_record(header))
     assert obj["type"] == "header" and obj["format"] == FORMAT_NAME and obj["v"] == 1
     assert obj["monotonic"] == 55.5 and obj["clock"] == "monotonic"
@@ -166,22 +190,33 @@ def test_header_records_carry_format_and_clock_times():
 
 
 def test_unknown_fields_are_ignored():
-    line = ('{"v":1,"type":"sample","device":"A","kind":"analog","unit":0,"timestamp":1.0,'
-            '"value":0.5,"raw":7,"quality":"good","extra":{"x":[1]}}')
+    line = (
+        '{"v":1,"type":"sample","device":"A","kind":"analog","unit":0,"timestamp":1.0,'
+        '"value":0.5,"raw":7,"quality":"good","extra":{"x":[1]}}'
+    )
     assert decode_line(line) == SampleRecord("A", "analog", 0, 1.0, 0.5, 7)
 
 
-@pytest.mark.parametrize(("line", "message"), [
-    ('{"v":1,"type":"sample","device":"A","kind":"analog","unit":0,"timestamp":1.0}', "value"),
-    ('{"v":1,"type":"sample","device":"A","kind":"analog","unit":true,"timestamp":1,"value":0}', "unit"),
-    ('{"v":1,"type":"marker","name":"m","timestamp":"soon"}', "timestamp"),
-    ('{"v":1,"type":"marker","name":"m","timestamp":NaN}', "finite"),
-    ('{"v":2,"type":"marker","name":"m","timestamp":1}', "newer"),
-    ('{"type":"marker","name":"m","timestamp":1}', "'v'"),
-    ('{"v":1,"type":"frame","frame":1,"timestamp":1,"devices":{"A":{"count":1,"values":{"analog":{"x":1}}}}}', "unit"),
-    ('[1, 2]', "object"),
-    ('{"v":1,"type":"sample","device":"A"', "JSON"),
-])
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        ('{"v":1,"type":"sample","device":"A","kind":"analog","unit":0,"timestamp":1.0}', "value"),
+        (
+            '{"v":1,"type":"sample","device":"A","kind":"analog","unit":true,"timestamp":1,"value":0}',
+            "unit",
+        ),
+        ('{"v":1,"type":"marker","name":"m","timestamp":"soon"}', "timestamp"),
+        ('{"v":1,"type":"marker","name":"m","timestamp":NaN}', "finite"),
+        ('{"v":2,"type":"marker","name":"m","timestamp":1}', "newer"),
+        ('{"type":"marker","name":"m","timestamp":1}', "'v'"),
+        (
+            '{"v":1,"type":"frame","frame":1,"timestamp":1,"devices":{"A":{"count":1,"values":{"analog":{"x":1}}}}}',
+            "unit",
+        ),
+        ("[1, 2]", "object"),
+        ('{"v":1,"type":"sample","device":"A"', "JSON"),
+    ],
+)
 def test_malformed_records_raise_format_errors(line, message):
     with pytest.raises(RecordFormatError, match=message):
         decode_line(line)

@@ -104,8 +104,12 @@ def test_mapping_renames_devices_and_reports_unknown_names():
 
 
 def test_markers_are_replayed_and_other_records_are_not():
-    records = [*recording(), MarkerRecord("poke", 100.75), FrameRecord(1, 100.2),
-               EndRecord(104.0, "closed", 4, 1, 1)]
+    records = [
+        *recording(),
+        MarkerRecord("poke", 100.75),
+        FrameRecord(1, 100.2),
+        EndRecord(104.0, "closed", 4, 1, 1),
+    ]
     clock = FakeClock()
     _, out = replay(records, clock)
     kinds = [type(r).__name__ for _, r in out]
@@ -120,8 +124,9 @@ def test_records_out_of_order_are_sorted():
 
 
 def test_tolerance_releases_close_records_together():
-    records = [SampleRecord(f"d{i % 3}", "digital", 0, 10.0 + i * 0.0001, i % 2, i % 2)
-               for i in range(300)]
+    records = [
+        SampleRecord(f"d{i % 3}", "digital", 0, 10.0 + i * 0.0001, i % 2, i % 2) for i in range(300)
+    ]
     clock = FakeClock()
     schedule = ReplaySchedule(records, clock=clock, sleep=clock.sleep, tolerance=0.001)
     released = [(clock.now, batch) for batch in schedule.batches()]

@@ -24,7 +24,7 @@ def regular(rate, seconds, start=100.0):
 
 def fed(stats, timestamps, batch):
     for i in range(0, len(timestamps), batch):
-        stats.add_timestamps(timestamps[i:i + batch])
+        stats.add_timestamps(timestamps[i : i + batch])
     return stats
 
 
@@ -56,7 +56,7 @@ def test_feeding_style_does_not_change_the_figures(feed):
         for t in stamps.tolist():
             stats.add_timestamp(t)
     intervals = np.diff(stamps)
-    recent = intervals[-(stats.history - 1):]
+    recent = intervals[-(stats.history - 1) :]
     p50, p99, jitter = stats.interval_stats()
     assert stats.count == 9000
     assert stats.max_gap == intervals.max()
@@ -144,7 +144,12 @@ def test_counters_frames_and_reset():
     stats.reset()
     snap = stats.snapshot()
     assert (snap.count, snap.dropped, snap.faults, snap.frames, snap.max_gap) == (0, 0, 0, 0, None)
-    assert (snap.mean_rate, snap.window_rate, snap.p50_interval, snap.jitter) == (0.0, 0.0, None, None)
+    assert (snap.mean_rate, snap.window_rate, snap.p50_interval, snap.jitter) == (
+        0.0,
+        0.0,
+        None,
+        None,
+    )
 
 
 def test_empty_and_single_sample_devices():
@@ -195,7 +200,9 @@ def write_session(path, close=True):
         records.append(SampleRecord("Wand", "analog", 1, t, 0.25, 64))
         records.append(SampleRecord("Wand", "digital", 0, t, 1, 1))
     for i in range(50):
-        records.append(SampleRecord("Head", "position", 0, 1000.0 + i * 0.02, position(i / 49), None))
+        records.append(
+            SampleRecord("Head", "position", 0, 1000.0 + i * 0.02, position(i / 49), None)
+        )
     glove = [[0.1 * f + 0.2 * j for j in range(4)] for f in range(6)]
     records.append(SampleRecord("Glove", "glove", 0, 1000.5, glove, glove))
     records.append(SampleRecord("Voice", "string", 0, 1000.7, "hello", "hello"))
@@ -231,7 +238,11 @@ def test_summarize_recording(tmp_path):
     units = {(u.kind, u.unit): u for u in wand.units}
     ramp, flat, button = units["analog", 0], units["analog", 1], units["digital", 0]
     assert (ramp.minimum, ramp.maximum, ramp.samples) == (0.0, 1.0, 200)
-    assert ramp.sparkline[0] == BARS[0] and ramp.sparkline[-1] == BARS[-1] and len(ramp.sparkline) == 20
+    assert (
+        ramp.sparkline[0] == BARS[0]
+        and ramp.sparkline[-1] == BARS[-1]
+        and len(ramp.sparkline) == 20
+    )
     assert (flat.minimum, flat.maximum) == (0.25, 0.25) and flat.sparkline == MID * 20
     assert (button.minimum, button.maximum) == (1.0, 1.0)
 
@@ -239,7 +250,9 @@ def test_summarize_recording(tmp_path):
     assert head.translation_min == pytest.approx((0.0, 1.5, -0.5))
     assert head.translation_max == pytest.approx((1.0, 1.5, 0.0))
     assert head.minimum is None and head.sparkline is None
-    assert set(head.sparklines) == {"x", "y", "z"} and all(len(line) == 20 for line in head.sparklines.values())
+    assert set(head.sparklines) == {"x", "y", "z"} and all(
+        len(line) == 20 for line in head.sparklines.values()
+    )
     assert devices["Head"].gaps.count == 0 and devices["Head"].mean_rate == pytest.approx(50)
 
     glove = devices["Glove"].units[0]
@@ -264,13 +277,15 @@ def test_summary_of_an_interrupted_recording(tmp_path):
 def test_summary_of_odd_values(tmp_path):
     path = tmp_path / "odd.ndjson"
     with Recorder(path) as recorder:
-        recorder.write_samples([
-            SampleRecord("A", "analog", 0, 1.0, math.nan, 0),
-            SampleRecord("A", "analog", 0, 2.0, "oops", 0),
-            SampleRecord("P", "position", 0, 1.0, "not a matrix", None),
-            SampleRecord("P", "position", 0, 2.0, list(range(16)), None),
-            SampleRecord("H", "hat", 0, 1.0, 4, 4),
-        ])
+        recorder.write_samples(
+            [
+                SampleRecord("A", "analog", 0, 1.0, math.nan, 0),
+                SampleRecord("A", "analog", 0, 2.0, "oops", 0),
+                SampleRecord("P", "position", 0, 1.0, "not a matrix", None),
+                SampleRecord("P", "position", 0, 2.0, list(range(16)), None),
+                SampleRecord("H", "hat", 0, 1.0, 4, 4),
+            ]
+        )
     summary = summarize_recording(path)
     devices = {d.name: d for d in summary.devices}
     analog = devices["A"].units[0]

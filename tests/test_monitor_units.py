@@ -24,9 +24,19 @@ from gadgetctl.monitor.units import (
 S = math.sqrt(0.5)
 
 
-@pytest.mark.parametrize(("unit", "factor"), [
-    ("meters", 1.0), ("feet", 3.28084), ("inches", 39.3701), ("centimeters", 100.0),
-    ("m", 1.0), ("FT", 3.28084), ("in", 39.3701), ("cm", 100.0)])
+@pytest.mark.parametrize(
+    ("unit", "factor"),
+    [
+        ("meters", 1.0),
+        ("feet", 3.28084),
+        ("inches", 39.3701),
+        ("centimeters", 100.0),
+        ("m", 1.0),
+        ("FT", 3.28084),
+        ("in", 39.3701),
+        ("cm", 100.0),
+    ],
+)
 def test_length_factors(unit, factor):
     assert length_factor(unit) == factor
     assert from_meters(2.0, unit) == pytest.approx(2.0 * factor)
@@ -46,13 +56,16 @@ def test_the_convention_is_rx_ry_rz_as_in_position_transform_filter():
         assert ours == pytest.approx(filter_rotation(*angles)[:3, :3])
 
 
-@pytest.mark.parametrize(("matrix", "angles"), [
-    (np.eye(3), (0, 0, 0)),
-    ([[1, 0, 0], [0, 0, -1], [0, 1, 0]], (90, 0, 0)),      # 90 about x
-    ([[0, 0, 1], [0, 1, 0], [-1, 0, 0]], (0, 90, 0)),      # 90 about y (gimbal lock)
-    ([[S, S, 0], [-S, S, 0], [0, 0, 1]], (0, 0, -45)),     # -45 about z
-    ([[-1, 0, 0], [0, -1, 0], [0, 0, 1]], (0, 0, 180)),
-])
+@pytest.mark.parametrize(
+    ("matrix", "angles"),
+    [
+        (np.eye(3), (0, 0, 0)),
+        ([[1, 0, 0], [0, 0, -1], [0, 1, 0]], (90, 0, 0)),  # 90 about x
+        ([[0, 0, 1], [0, 1, 0], [-1, 0, 0]], (0, 90, 0)),  # 90 about y (gimbal lock)
+        ([[S, S, 0], [-S, S, 0], [0, 0, 1]], (0, 0, -45)),  # -45 about z
+        ([[-1, 0, 0], [0, -1, 0], [0, 0, 1]], (0, 0, 180)),
+    ],
+)
 def test_known_rotations_to_euler(matrix, angles):
     assert euler_xyz_degrees(matrix) == pytest.approx(angles, abs=1e-9)
 
@@ -83,14 +96,17 @@ def test_scale_and_translation_do_not_disturb_angles():
     assert translation(m.tolist()) == (1.0, 2.0, 3.0)
 
 
-@pytest.mark.parametrize(("matrix", "quat"), [
-    (np.eye(4), (1, 0, 0, 0)),
-    ([[S, -S, 0], [S, S, 0], [0, 0, 1]], (math.cos(math.pi / 8), 0, 0, math.sin(math.pi / 8))),
-    ([[1, 0, 0], [0, -1, 0], [0, 0, -1]], (0, 1, 0, 0)),   # 180 about x
-    ([[-1, 0, 0], [0, 1, 0], [0, 0, -1]], (0, 0, 1, 0)),   # 180 about y
-    ([[-1, 0, 0], [0, -1, 0], [0, 0, 1]], (0, 0, 0, 1)),   # 180 about z
-    ([[0, 0, 1], [0, 1, 0], [-1, 0, 0]], (S, 0, S, 0)),    # 90 about y
-])
+@pytest.mark.parametrize(
+    ("matrix", "quat"),
+    [
+        (np.eye(4), (1, 0, 0, 0)),
+        ([[S, -S, 0], [S, S, 0], [0, 0, 1]], (math.cos(math.pi / 8), 0, 0, math.sin(math.pi / 8))),
+        ([[1, 0, 0], [0, -1, 0], [0, 0, -1]], (0, 1, 0, 0)),  # 180 about x
+        ([[-1, 0, 0], [0, 1, 0], [0, 0, -1]], (0, 0, 1, 0)),  # 180 about y
+        ([[-1, 0, 0], [0, -1, 0], [0, 0, 1]], (0, 0, 0, 1)),  # 180 about z
+        ([[0, 0, 1], [0, 1, 0], [-1, 0, 0]], (S, 0, S, 0)),  # 90 about y
+    ],
+)
 def test_known_rotations_to_quaternions(matrix, quat):
     assert quaternion_wxyz(matrix) == pytest.approx(quat, abs=1e-12)
 

@@ -37,14 +37,27 @@ def test_clean_exit_zero_and_warnings_with_strict(cli, tmp_path):
 def test_json_fields(cli, tmp_path):
     path = write(tmp_path / "b.jconf", BROKEN)
     (item,) = json.loads(cli("validate", path, "-f", "json").stdout)
-    assert item == {"code": "XML001", "severity": "error", "category": "xml", "path": str(path),
-                    "line": 6, "column": item["column"], "message": item["message"], "hint": None}
+    assert item == {
+        "code": "XML001",
+        "severity": "error",
+        "category": "xml",
+        "path": str(path),
+        "line": 6,
+        "column": item["column"],
+        "message": item["message"],
+        "hint": None,
+    }
 
 
 def test_github_annotations(cli, tmp_path):
     path = write(tmp_path / "b,c.jconf", BROKEN)
     out = cli("validate", path, "-f", "github").stdout.strip()
-    assert out.startswith("::error file=") and "%2C" in out and ",line=6," in out and "title=XML001::" in out
+    assert (
+        out.startswith("::error file=")
+        and "%2C" in out
+        and ",line=6," in out
+        and "title=XML001::" in out
+    )
 
 
 def test_sarif_required_structure(cli, tmp_path):
@@ -64,7 +77,10 @@ def test_sarif_required_structure(cli, tmp_path):
 def test_missing_path_is_a_usage_error(cli, tmp_path):
     result = cli("validate", tmp_path / "nope.jconf")
     assert result.exit_code == 2
-    assert result.stderr.strip() == f"gadgetctl: error: {tmp_path / 'nope.jconf'}: no such file or directory"
+    assert (
+        result.stderr.strip()
+        == f"gadgetctl: error: {tmp_path / 'nope.jconf'}: no such file or directory"
+    )
 
 
 def test_bad_option_is_a_usage_error(cli, tmp_path):

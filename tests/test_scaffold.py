@@ -16,54 +16,66 @@ from gadgetctl.scaffold.render import TemplateError, evaluate, render, select_li
 # -- names ---------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize(("name", "camel", "plugin", "element_type"), [
-    ("AcmeWand", "AcmeWand", "AcmeWand_drv", "acme_wand"),
-    ("acme_wand", "AcmeWand", "AcmeWand_drv", "acme_wand"),
-    ("AcmeWand_drv", "AcmeWand", "AcmeWand_drv", "acme_wand"),
-    ("MyHTTPGlove", "MyHTTPGlove", "MyHTTPGlove_drv", "my_http_glove"),
-    ("wand2_x", "Wand2X", "Wand2X_drv", "wand2_x"),
-    ("Wand", "Wand", "Wand_drv", "wand"),
-    ("  spaced  ", "Spaced", "Spaced_drv", "spaced"),
-])
+@pytest.mark.parametrize(
+    ("name", "camel", "plugin", "element_type"),
+    [
+        ("AcmeWand", "AcmeWand", "AcmeWand_drv", "acme_wand"),
+        ("acme_wand", "AcmeWand", "AcmeWand_drv", "acme_wand"),
+        ("AcmeWand_drv", "AcmeWand", "AcmeWand_drv", "acme_wand"),
+        ("MyHTTPGlove", "MyHTTPGlove", "MyHTTPGlove_drv", "my_http_glove"),
+        ("wand2_x", "Wand2X", "Wand2X_drv", "wand2_x"),
+        ("Wand", "Wand", "Wand_drv", "wand"),
+        ("  spaced  ", "Spaced", "Spaced_drv", "spaced"),
+    ],
+)
 def test_names_are_derived_from_camel_or_snake_case(name, camel, plugin, element_type):
     names = DriverNames.parse(name)
     assert (names.camel, names.plugin, names.element_type) == (camel, plugin, element_type)
 
 
-@pytest.mark.parametrize(("name", "reason"), [
-    ("", "empty"),
-    ("_drv", "empty"),
-    ("3dMouse", "not a valid name"),
-    ("acme-wand", "not a valid name"),
-    ("Acme Wand", "not a valid name"),
-    ("Akmé", "not a valid name"),
-    ("_acme", "may not start or end"),
-    ("acme__wand", "may not start or end"),
-    ("acme_Wand", "mixes cases"),
-    ("acmeWand", "starts with a capital letter"),
-    ("XmlReader", "XML reserves"),
-    ("match", "Python keyword"),
-    ("Analog", "already uses"),
-    ("A" + "b" * 32, "too long"),
-])
+@pytest.mark.parametrize(
+    ("name", "reason"),
+    [
+        ("", "empty"),
+        ("_drv", "empty"),
+        ("3dMouse", "not a valid name"),
+        ("acme-wand", "not a valid name"),
+        ("Acme Wand", "not a valid name"),
+        ("Akmé", "not a valid name"),
+        ("_acme", "may not start or end"),
+        ("acme__wand", "may not start or end"),
+        ("acme_Wand", "mixes cases"),
+        ("acmeWand", "starts with a capital letter"),
+        ("XmlReader", "XML reserves"),
+        ("match", "Python keyword"),
+        ("Analog", "already uses"),
+        ("A" + "b" * 32, "too long"),
+    ],
+)
 def test_invalid_names_are_refused_with_the_reason(name, reason):
     with pytest.raises(ScaffoldError, match=reason):
         DriverNames.parse(name)
 
 
-@pytest.mark.parametrize(("name", "clash"), [
-    ("PinchGlove", "standard definition pinch_glove"),
-    ("pinch_glove", "standard definition pinch_glove"),
-    ("DTrack", "bundled driver plug-in DTrack_drv"),
-    ("Dtrack", "standard definition dtrack"),
-    ("LinuxJoydev", "standard definition linux_joydev"),
-    ("WaveformDevice", "standard definition waveform_device"),
-    ("SimulatedAnalogDevice", "standard definition simulated_analog_device"),
-    ("digital_proxy", "standard definition digital_proxy"),
-    ("InputManager", "standard definition input_manager"),
-    ("IS900", "bundled driver plug-in IS900_drv"),
-    ("DirectXJoystick", "upstream Gadgeteer driver plug-in DirectXJoystick_drv"),  # Windows only
-])
+@pytest.mark.parametrize(
+    ("name", "clash"),
+    [
+        ("PinchGlove", "standard definition pinch_glove"),
+        ("pinch_glove", "standard definition pinch_glove"),
+        ("DTrack", "bundled driver plug-in DTrack_drv"),
+        ("Dtrack", "standard definition dtrack"),
+        ("LinuxJoydev", "standard definition linux_joydev"),
+        ("WaveformDevice", "standard definition waveform_device"),
+        ("SimulatedAnalogDevice", "standard definition simulated_analog_device"),
+        ("digital_proxy", "standard definition digital_proxy"),
+        ("InputManager", "standard definition input_manager"),
+        ("IS900", "bundled driver plug-in IS900_drv"),
+        (
+            "DirectXJoystick",
+            "upstream Gadgeteer driver plug-in DirectXJoystick_drv",
+        ),  # Windows only
+    ],
+)
 def test_names_of_standard_definitions_and_plugins_are_refused(name, clash):
     with pytest.raises(ScaffoldError, match=f"clashes with the {clash}"):
         DriverNames.parse(name)
@@ -110,8 +122,13 @@ def test_directives_choose_lines(monkeypatch):
     }
     monkeypatch.setattr("gadgetctl.scaffold.render.template_text", texts.__getitem__)
     assert render("main", {"a": True, "b": True}, {"value": 1}) == "start\n  A\n1\n"
-    assert render("main", {"a": False, "b": True}, {"value": 2}) == "start\n  B\npart for not a\n2\n"
-    assert render("main", {"a": False, "b": False}, {"value": 3}) == "start\n  neither\npart for not a\n3\n"
+    assert (
+        render("main", {"a": False, "b": True}, {"value": 2}) == "start\n  B\npart for not a\n2\n"
+    )
+    assert (
+        render("main", {"a": False, "b": False}, {"value": 3})
+        == "start\n  neither\npart for not a\n3\n"
+    )
     with pytest.raises(TemplateError, match="without %end"):
         select_lines("broken", {"a": True})
     with pytest.raises(TemplateError, match="KeyError"):
@@ -132,24 +149,42 @@ def test_every_template_renders_for_every_transport():
 def test_python_layout_follows_ruff():
     assert py_literal("X = ", {"a": ("b",)}) == ['X = {"a": ("b",)}']
     long = py_literal("ELEMENT_TYPES = ", {"x" * 30: ("digital", "analog", "position", "glove")})
-    assert long == ["ELEMENT_TYPES = {", '    "' + "x" * 30 + '": ("digital", "analog", "position", "glove"),', "}"]
+    assert long == [
+        "ELEMENT_TYPES = {",
+        '    "' + "x" * 30 + '": ("digital", "analog", "position", "glove"),',
+        "}",
+    ]
     longer = py_literal("ELEMENT_TYPES = ", {"x" * 40: ("digital", "analog", "position", "glove")})
     assert longer[1:3] == ['    "' + "x" * 40 + '": (', '        "digital",']
     assert py_import("m", ["decode", "KINDS", "Wand"]) == "from m import KINDS, Wand, decode"
     assert py_import("m", ["n" * 30, "o" * 30, "p" * 30]).splitlines()[1:] == [
-        "    " + "n" * 30 + ",", "    " + "o" * 30 + ",", "    " + "p" * 30 + ",", ")"]
+        "    " + "n" * 30 + ",",
+        "    " + "o" * 30 + ",",
+        "    " + "p" * 30 + ",",
+        ")",
+    ]
 
 
 # -- what is generated ---------------------------------------------------------------------------
 
 
 def test_a_folder_plugin_has_the_layout_of_the_bundled_drivers(tmp_path):
-    spec = DriverSpec.create("AcmeWand", ["digital", "analog"], "serial", vendor="Acme", directory=tmp_path)
+    spec = DriverSpec.create(
+        "AcmeWand", ["digital", "analog"], "serial", vendor="Acme", directory=tmp_path
+    )
     result = scaffold(spec)
     folder = tmp_path / "AcmeWand_drv"
     assert sorted(str(p.relative_to(folder)) for p in result.paths) == [
-        "README.md", "__init__.py", "acme_wand.jdef", "emulator.py", "example.jconf", "standalone.py",
-        "tests/conftest.py", "tests/test_acme_wand.py", "wrapper.py"]
+        "README.md",
+        "__init__.py",
+        "acme_wand.jdef",
+        "emulator.py",
+        "example.jconf",
+        "standalone.py",
+        "tests/conftest.py",
+        "tests/test_acme_wand.py",
+        "wrapper.py",
+    ]
     init = (folder / "__init__.py").read_text()
     assert 'PLUGIN_NAME = "AcmeWand_drv"' in init
     assert 'ELEMENT_TYPES = {"acme_wand": ("digital", "analog")}' in init
@@ -183,27 +218,46 @@ def test_gesture_devices_get_no_gesture_proxy_and_say_why(tmp_path):
     scaffold(DriverSpec.create("Gestures", ["gesture"], "none", directory=tmp_path))
     jconf = (tmp_path / "Gestures_drv" / "example.jconf").read_text()
     assert "gesture_proxy" in jconf and "<gesture_proxy " not in jconf
-    assert "<parent>input_device</parent>" in (tmp_path / "Gestures_drv" / "gestures.jdef").read_text()
+    assert (
+        "<parent>input_device</parent>" in (tmp_path / "Gestures_drv" / "gestures.jdef").read_text()
+    )
 
 
 # -- the command line ------------------------------------------------------------------------------
 
 
 def test_scaffold_driver_writes_and_shows_the_next_steps(cli, tmp_path):
-    result = cli("scaffold", "driver", "AcmeWand", "--type", "digital", "-t", "analog", "--transport", "udp",
-                 "--dir", tmp_path)
+    result = cli(
+        "scaffold",
+        "driver",
+        "AcmeWand",
+        "--type",
+        "digital",
+        "-t",
+        "analog",
+        "--transport",
+        "udp",
+        "--dir",
+        tmp_path,
+    )
     assert result.exit_code == 0, result.stderr
-    assert result.stdout.startswith("AcmeWand: plug-in AcmeWand_drv, element type acme_wand, digital and analog")
+    assert result.stdout.startswith(
+        "AcmeWand: plug-in AcmeWand_drv, element type acme_wand, digital and analog"
+    )
     assert "created" in result.stdout and "gadgetctl monitor" in result.stdout
     assert (tmp_path / "AcmeWand_drv" / "emulator.py").is_file()
 
 
 def test_dry_run_writes_nothing(cli, tmp_path):
-    result = cli("scaffold", "driver", "AcmeWand", "--dir", tmp_path / "new", "--dry-run", "--package")
+    result = cli(
+        "scaffold", "driver", "AcmeWand", "--dir", tmp_path / "new", "--dry-run", "--package"
+    )
     assert result.exit_code == 0, result.stderr
     assert "would create" in result.stdout and "pyproject.toml" in result.stdout
     assert not (tmp_path / "new").exists()
-    data = json.loads(cli("scaffold", "driver", "AcmeWand", "--dir", tmp_path, "--dry-run", "-f", "json").stdout)
+    data = json.loads(
+        cli("scaffold", "driver", "AcmeWand", "--dir", tmp_path, "--dry-run", "-f", "json").stdout
+    )
     assert data["written"] is False and data["plugin"] == "AcmeWand_drv"
     assert data["files"][0] == str(tmp_path / "AcmeWand_drv" / "__init__.py")
     assert not list(tmp_path.iterdir())
@@ -224,14 +278,17 @@ def test_an_existing_directory_needs_force(cli, tmp_path):
     assert (folder / "notes.txt").read_text() == "mine\n"
 
 
-@pytest.mark.parametrize(("args", "message"), [
-    (["3dMouse"], "is not a valid name"),
-    (["PinchGlove"], "clashes with the standard definition pinch_glove"),
-    (["DTrack"], "clashes with the bundled driver plug-in DTrack_drv"),
-    (["Wand", "--type", "keyboard"], "Invalid value for '--type'"),
-    (["Wand", "--transport", "usb"], "Invalid value for '--transport'"),
-    (["Wand", "--vendor", "<b>"], "--vendor"),
-])
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["3dMouse"], "is not a valid name"),
+        (["PinchGlove"], "clashes with the standard definition pinch_glove"),
+        (["DTrack"], "clashes with the bundled driver plug-in DTrack_drv"),
+        (["Wand", "--type", "keyboard"], "Invalid value for '--type'"),
+        (["Wand", "--transport", "usb"], "Invalid value for '--transport'"),
+        (["Wand", "--vendor", "<b>"], "--vendor"),
+    ],
+)
 def test_refusals_exit_2_with_a_clear_message(cli, tmp_path, args, message):
     result = cli("scaffold", "driver", *args, "--dir", tmp_path)
     assert result.exit_code == 2

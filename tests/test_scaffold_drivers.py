@@ -47,10 +47,16 @@ CASES = [
     Case("DataMitt", "file", ("glove", "digital")),
     Case("SelfMade", "none", ("analog", "digital")),
     # every type at once, with the longest name accepted (generated lines stay within 88)
-    Case("Abcdefghijklmnopqrstuvwxyz" + "abcdef", "serial", ("analog", "digital", "position", "glove",
-                                                              "gesture", "command", "string", "hat")),
-    Case("EverythingAtOnce", "udp", ("hat", "string", "command", "gesture", "glove", "position",
-                                     "analog", "digital")),
+    Case(
+        "Abcdefghijklmnopqrstuvwxyz" + "abcdef",
+        "serial",
+        ("analog", "digital", "position", "glove", "gesture", "command", "string", "hat"),
+    ),
+    Case(
+        "EverythingAtOnce",
+        "udp",
+        ("hat", "string", "command", "gesture", "glove", "position", "analog", "digital"),
+    ),
 ]
 
 
@@ -78,7 +84,9 @@ def generated(tmp_path_factory) -> dict[str, Generated]:
     found = {}
     for case in CASES:
         directory = tmp_path_factory.mktemp(case.id)
-        spec = DriverSpec.create(case.name, case.types, case.transport, vendor="Acme", directory=directory)
+        spec = DriverSpec.create(
+            case.name, case.types, case.transport, vendor="Acme", directory=directory
+        )
         scaffold(spec)
         found[case.id] = Generated(case, spec)
     return found
@@ -110,7 +118,9 @@ def test_drivers_list_finds_the_plugin(cli, driver, monkeypatch):
 
 
 def test_drivers_load_succeeds(cli, driver):
-    result = cli("drivers", "load", "--driver-path", driver.parent, driver.plugin, "--format", "json")
+    result = cli(
+        "drivers", "load", "--driver-path", driver.parent, driver.plugin, "--format", "json"
+    )
     assert result.exit_code == 0, result.stdout
     (loaded,) = json.loads(result.stdout)["plugins"]
     assert loaded["ok"] is True
@@ -122,9 +132,15 @@ def test_emulate_runs_the_emulator(cli, driver, tmp_path):
         result = cli("emulate", "--driver-path", driver.parent, driver.plugin)
         assert result.exit_code == 2 and "ships no emulator" in result.stderr
         return
-    where = {"serial": ["--port", tmp_path / "tty"], "file": ["--path", tmp_path / "fifo"],
-             "udp": ["--port", str(free_udp_port())], "tcp": ["--port", "0"]}[driver.case.transport]
-    result = cli("emulate", "--driver-path", driver.parent, driver.plugin, *where, "--duration", "0.2")
+    where = {
+        "serial": ["--port", tmp_path / "tty"],
+        "file": ["--path", tmp_path / "fifo"],
+        "udp": ["--port", str(free_udp_port())],
+        "tcp": ["--port", "0"],
+    }[driver.case.transport]
+    result = cli(
+        "emulate", "--driver-path", driver.parent, driver.plugin, *where, "--duration", "0.2"
+    )
     assert result.exit_code == 0, result.stderr
     assert f"Point the {driver.spec.names.element_type} element at it" in result.stdout
 
@@ -146,10 +162,12 @@ def test_generated_code_passes_ruff(generated):
     ruff = [sys.executable, "-m", "ruff"]
     folders = [str(g.folder) for g in generated.values()]
     config = ["--config", str(REPO / "pyproject.toml")]
-    for command in ([*ruff, "check", *config, *folders],
-                    [*ruff, "format", "--check", *config, *folders],
-                    # ruff's default line length too, for authors without a configuration
-                    [*ruff, "format", "--check", "--isolated", "--line-length", "88", *folders]):
+    for command in (
+        [*ruff, "check", *config, *folders],
+        [*ruff, "format", "--check", *config, *folders],
+        # ruff's default line length too, for authors without a configuration
+        [*ruff, "format", "--check", "--isolated", "--line-length", "88", *folders],
+    ):
         proc = subprocess.run(command, capture_output=True, text=True, timeout=60)
         assert proc.returncode == 0, proc.stdout + proc.stderr
 
@@ -158,38 +176,77 @@ def test_generated_tests_pass(generated, tmp_path):
     """All generated test suites in one pytest run, in a subprocess."""
     tests = [str(g.folder / "tests") for g in generated.values()]
     env = {k: v for k, v in os.environ.items() if k not in ("GADGETCTL_DRIVER_PATH", "PYTHONPATH")}
-    proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *tests],
-                          capture_output=True, text=True, timeout=240, cwd=tmp_path, env=env)
+    proc = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *tests],
+        capture_output=True,
+        text=True,
+        timeout=240,
+        cwd=tmp_path,
+        env=env,
+    )
     assert proc.returncode == 0, proc.stdout[-6000:] + proc.stderr[-2000:]
     summary = proc.stdout.strip().splitlines()[-1]
     emulated = sum(g.case.transport != "none" for g in generated.values())
-    expected = 7 * emulated + 4 * (len(generated) - emulated) + sum(
-        "position" in g.case.types for g in generated.values())
+    expected = (
+        7 * emulated
+        + 4 * (len(generated) - emulated)
+        + sum("position" in g.case.types for g in generated.values())
+    )
     assert summary.startswith(f"{expected} passed"), summary
 
 
 def test_package_installs_and_is_found_by_its_entry_point(tmp_path):
-    spec = DriverSpec.create("AcmeMitt", ["glove", "digital"], "udp", package=True, directory=tmp_path)
+    spec = DriverSpec.create(
+        "AcmeMitt", ["glove", "digital"], "udp", package=True, directory=tmp_path
+    )
     scaffold(spec)
     python = fresh_venv(tmp_path / "venv")
-    install = subprocess.run([python, "-m", "pip", "install", "--no-deps", "--no-build-isolation",
-                              "--no-index", "--quiet", str(spec.target)],
-                             capture_output=True, text=True, timeout=180)
+    install = subprocess.run(
+        [
+            python,
+            "-m",
+            "pip",
+            "install",
+            "--no-deps",
+            "--no-build-isolation",
+            "--no-index",
+            "--quiet",
+            str(spec.target),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=180,
+    )
     assert install.returncode == 0, install.stdout + install.stderr
-    listed = subprocess.run([python, "-m", "gadgetctl", "drivers", "list", "--format", "json"],
-                            capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    listed = subprocess.run(
+        [python, "-m", "gadgetctl", "drivers", "list", "--format", "json"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=tmp_path,
+    )
     assert listed.returncode == 0, listed.stderr
     (entry,) = [p for p in json.loads(listed.stdout)["plugins"] if p["name"] == "AcmeMitt_drv"]
     assert entry["source"] == "entry point"
     assert entry["module"] == "AcmeMitt_drv"
     assert Path(entry["path"]).is_relative_to(tmp_path / "venv")
     assert entry["provides"] == {"acme_mitt": ["glove", "digital"]}
-    loaded = subprocess.run([python, "-m", "gadgetctl", "drivers", "load", "AcmeMitt_drv"],
-                            capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    loaded = subprocess.run(
+        [python, "-m", "gadgetctl", "drivers", "load", "AcmeMitt_drv"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=tmp_path,
+    )
     assert loaded.returncode == 0, loaded.stdout + loaded.stderr
     # the project's own tests, run the way its README says: `python -m pytest` in the project
-    tested = subprocess.run([python, "-m", "pytest", "-q", "-p", "no:cacheprovider"],
-                            capture_output=True, text=True, timeout=120, cwd=spec.target)
+    tested = subprocess.run(
+        [python, "-m", "pytest", "-q", "-p", "no:cacheprovider"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=spec.target,
+    )
     assert tested.returncode == 0, tested.stdout[-4000:] + tested.stderr[-2000:]
     assert tested.stdout.strip().splitlines()[-1].startswith("7 passed"), tested.stdout
 
@@ -217,7 +274,12 @@ def emulator_for(driver: Generated, tmp_path: Path) -> Iterator[dict[str, str]]:
     search = DriverSearch.standard([driver.parent], bundled=False, entry_points=False, environ={})
     module = load_emulator(find_emulator(driver.plugin, search))
     cls = getattr(module, f"{driver.spec.names.camel}Emulator")
-    where = {"serial": tmp_path / "tty", "file": tmp_path / "fifo", "udp": free_udp_port(), "tcp": 0}
+    where = {
+        "serial": tmp_path / "tty",
+        "file": tmp_path / "fifo",
+        "udp": free_udp_port(),
+        "tcp": 0,
+    }
     with cls(where[transport], rate=200.0) as emulator:
         if transport in ("serial", "file"):
             yield {"port" if transport == "serial" else "path": emulator.address}
@@ -244,13 +306,22 @@ def example_configuration(driver: Generated, tmp_path: Path, values: dict[str, s
 def fresh_venv(path: Path) -> str:
     """A new virtual environment that also sees this interpreter's packages (gadgetctl,
     hatchling, pip...), so nothing is downloaded."""
-    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", "--without-pip", str(path)],
-                   check=True, timeout=120, capture_output=True)
+    subprocess.run(
+        [sys.executable, "-m", "venv", "--system-site-packages", "--without-pip", str(path)],
+        check=True,
+        timeout=120,
+        capture_output=True,
+    )
     python = path / "bin" / "python"
     if not python.exists():
         python = path / "Scripts" / "python.exe"
-    purelib = subprocess.run([str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
-                             check=True, capture_output=True, text=True, timeout=60).stdout.strip()
+    purelib = subprocess.run(
+        [str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+        check=True,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    ).stdout.strip()
     ours = dict.fromkeys(sysconfig.get_paths()[k] for k in ("purelib", "platlib"))
     lines = "".join(f"import site; site.addsitedir({d!r})\n" for d in ours)
     Path(purelib, "_gadgetctl_test_parent.pth").write_text(lines, encoding="utf-8")

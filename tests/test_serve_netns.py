@@ -173,9 +173,13 @@ def test_serve_in_one_namespace_monitor_in_another(tmp_path):
 
             serve = ServeProcess(*serve_args, prefix=prefix)
             listening = time.perf_counter()  # (read as serve printed it)
-            _, first = monitor.wait_for(lambda r: is_sample(r) and r["timestamp"] > killed, timeout=40)
+            _, first = monitor.wait_for(
+                lambda r: is_sample(r) and r["timestamp"] > killed, timeout=40
+            )
             # the figure (within 2 s); here only a hang guard, whatever the load
-            print(f"samples again {first['timestamp'] - listening:.2f} s after the server listened again")
+            print(
+                f"samples again {first['timestamp'] - listening:.2f} s after the server listened again"
+            )
             assert serve.wait_event("connected", timeout=20)["client"].startswith(CLIENT_IP + ":")
         finally:
             monitor.stop()

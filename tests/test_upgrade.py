@@ -53,7 +53,9 @@ UPGRADED_WINDOW = """      <display_window name="Main Window" version="6">
       </display_window>"""
 
 
-@pytest.mark.parametrize("bundled", [False, True], ids=["corpus definitions", "bundled definitions"])
+@pytest.mark.parametrize(
+    "bundled", [False, True], ids=["corpus definitions", "bundled definitions"]
+)
 def test_display_window_version_2_upgrades_in_four_steps(tmp_path, bundled):
     repo = default_repository([] if bundled else [CORPUS_DEFINITIONS], bundled=bundled)
     result = upgrade_bytes(tmp_path / "w.jconf", OLD_WINDOW.encode(), repo)
@@ -62,8 +64,13 @@ def test_display_window_version_2_upgrades_in_four_steps(tmp_path, bundled):
     end = OLD_WINDOW.index("</display_window>") + len("</display_window>")
     assert result.upgraded.decode() == OLD_WINDOW[:start] + UPGRADED_WINDOW + OLD_WINDOW[end:]
     (step,) = result.elements
-    assert (step.type, step.name, step.from_version, step.to_version, step.line) == \
-        ("display_window", "Main Window", 2, 6, 6)
+    assert (step.type, step.name, step.from_version, step.to_version, step.line) == (
+        "display_window",
+        "Main Window",
+        2,
+        6,
+        6,
+    )
 
 
 @pytest.fixture
@@ -72,74 +79,99 @@ def repo(tmp_path):
 
 
 def test_new_elements_from_a_transform_follow_the_upgraded_one(tmp_path, repo):
-    text = configuration('      <gizmo name="G" version="1">\n         <size>4</size>\n      </gizmo>\n'
-                         '      <tracker name="T" version="1"/>\n')
+    text = configuration(
+        '      <gizmo name="G" version="1">\n         <size>4</size>\n      </gizmo>\n'
+        '      <tracker name="T" version="1"/>\n'
+    )
     result = upgrade_bytes(tmp_path / "g.jconf", text.encode(), repo)
     assert not result.problems
     assert result.upgraded.decode() == text.replace(
         '      <gizmo name="G" version="1">\n         <size>4</size>\n      </gizmo>\n',
         '      <gizmo name="G" version="3">\n         <extent>4</extent>\n         <color>red</color>\n'
-        '      </gizmo>\n      <gizmo_label name="G label" version="1"/>\n')
+        '      </gizmo>\n      <gizmo_label name="G label" version="1"/>\n',
+    )
     (step,) = result.elements
     assert (step.from_version, step.to_version, step.created) == (1, 3, 1)
 
 
 def test_embedded_elements_are_upgraded_in_place(tmp_path, repo):
-    text = configuration('      <holder name="H" version="1">\n         <parts>\n'
-                         '            <input_manager name="IM" version="1"><driver>A_drv</driver></input_manager>\n'
-                         "         </parts>\n      </holder>\n")
+    text = configuration(
+        '      <holder name="H" version="1">\n         <parts>\n'
+        '            <input_manager name="IM" version="1"><driver>A_drv</driver></input_manager>\n'
+        "         </parts>\n      </holder>\n"
+    )
     result = upgrade_bytes(tmp_path / "h.jconf", text.encode(), repo)
     assert '<input_manager name="IM" version="2">' in result.upgraded.decode()
-    assert result.upgraded.decode().startswith(text[:text.index('<input_manager')])
+    assert result.upgraded.decode().startswith(text[: text.index("<input_manager")])
 
 
 def test_a_failing_element_leaves_the_file_unchanged(tmp_path, repo):
     broken = definition("gizmo", version(1, prop("size")), version(2, prop("size")))  # no transform
     write(tmp_path / "defs" / "gizmo.jdef", broken)
     repo = default_repository([tmp_path / "defs"], bundled=False)
-    text = configuration('      <gizmo name="G" version="1"/>\n      <input_manager name="IM" version="1"/>\n')
+    text = configuration(
+        '      <gizmo name="G" version="1"/>\n      <input_manager name="IM" version="1"/>\n'
+    )
     result = upgrade_bytes(tmp_path / "g.jconf", text.encode(), repo)
     assert result.upgraded is None and not result.changed
     (problem,) = result.problems
-    assert problem.code == "CFG050" and "no upgrade transform" in problem.message and problem.line == 5
+    assert (
+        problem.code == "CFG050" and "no upgrade transform" in problem.message and problem.line == 5
+    )
 
 
 def test_stylesheets_cannot_read_files(tmp_path):
     secret = write(tmp_path / "secret.xml", "<secret>42</secret>")
-    sheet = ('<xsl:stylesheet xmlns:xsl="http://www.w3.org/1999/XSL/Transform" version="1.0">'
-             '<xsl:template match="/"><xsl:element name="gizmo" namespace="' + CONFIG_NS + '">'
-             f'<xsl:attribute name="version">2</xsl:attribute><xsl:value-of select="document(\'{secret.as_uri()}\')"/>'
-             "</xsl:element></xsl:template></xsl:stylesheet>")
-    write(tmp_path / "defs" / "gizmo.jdef", definition("gizmo", version(1), version(2, transform=sheet)))
+    sheet = (
+        '<xsl:stylesheet xmlns:xsl="http://www.w3.org/1999/XSL/Transform" version="1.0">'
+        '<xsl:template match="/"><xsl:element name="gizmo" namespace="' + CONFIG_NS + '">'
+        f'<xsl:attribute name="version">2</xsl:attribute><xsl:value-of select="document(\'{secret.as_uri()}\')"/>'
+        "</xsl:element></xsl:template></xsl:stylesheet>"
+    )
+    write(
+        tmp_path / "defs" / "gizmo.jdef",
+        definition("gizmo", version(1), version(2, transform=sheet)),
+    )
     repo = default_repository([tmp_path / "defs"], bundled=False)
-    result = upgrade_bytes(tmp_path / "g.jconf", configuration('      <gizmo name="G" version="1"/>\n').encode(), repo)
+    result = upgrade_bytes(
+        tmp_path / "g.jconf", configuration('      <gizmo name="G" version="1"/>\n').encode(), repo
+    )
     assert result.upgraded is None
     assert result.problems and result.problems[0].code == "CFG050"
 
 
 def test_configuration_namespace_and_processing_instruction(tmp_path, repo):
-    text = ('<?xml version="1.0" encoding="UTF-8"?>\n'
-            '<?org-vrjuggler-jccl-settings configuration.version="3.1"?>\n'
-            '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.1/configuration" name="x">\n'
-            "   <elements/>\n</configuration>\n")
+    text = (
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<?org-vrjuggler-jccl-settings configuration.version="3.1"?>\n'
+        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.1/configuration" name="x">\n'
+        "   <elements/>\n</configuration>\n"
+    )
     result = upgrade_bytes(tmp_path / "x.jconf", text.encode(), repo)
     assert result.upgraded.decode() == text.replace("3.1", "3.0")
     bare = '<?xml version="1.0"?>\n<configuration name="x">\n   <elements>\n     <tracker xmlns="" name="T" version="1"/>\n   </elements>\n</configuration>\n'
     upgraded = upgrade_bytes(tmp_path / "y.jconf", bare.encode(), repo).upgraded.decode()
-    assert upgraded == ('<?xml version="1.0"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-                        f'<configuration xmlns="{CONFIG_NS}" name="x">\n   <elements>\n'
-                        '     <tracker name="T" version="1"/>\n   </elements>\n</configuration>\n')
+    assert upgraded == (
+        '<?xml version="1.0"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+        f'<configuration xmlns="{CONFIG_NS}" name="x">\n   <elements>\n'
+        '     <tracker name="T" version="1"/>\n   </elements>\n</configuration>\n'
+    )
 
 
 def test_definition_format_3_0(tmp_path, repo):
-    text = ('<?xml version="1.0" encoding="UTF-8"?>\n'
-            '<?org-vrjuggler-jccl-settings definition.version="3.0"?>\n'
-            '<definition xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/definition" name="d">\n'
-            '   <definition_version version="1" label="D">\n      <help>h</help>\n      <parent/>\n'
-            "      <upgrade_transform/>\n   </definition_version>\n</definition>\n")
+    text = (
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<?org-vrjuggler-jccl-settings definition.version="3.0"?>\n'
+        '<definition xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/definition" name="d">\n'
+        '   <definition_version version="1" label="D">\n      <help>h</help>\n      <parent/>\n'
+        "      <upgrade_transform/>\n   </definition_version>\n</definition>\n"
+    )
     result = upgrade_bytes(tmp_path / "d.jdef", text.encode(), repo)
     assert result.upgraded.decode() == (
-        text.replace("3.0", "3.1").replace('label="D">\n', 'label="D">\n      <abstract>false</abstract>\n'))
+        text.replace("3.0", "3.1").replace(
+            'label="D">\n', 'label="D">\n      <abstract>false</abstract>\n'
+        )
+    )
 
 
 def test_up_to_date_file_is_unchanged(tmp_path, repo):
@@ -149,6 +181,7 @@ def test_up_to_date_file_is_unchanged(tmp_path, repo):
 
 
 # -- the command ---------------------------------------------------------------------
+
 
 @pytest.fixture
 def old_file(tmp_path):

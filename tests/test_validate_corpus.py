@@ -26,13 +26,16 @@ EXPECTED = {
 def _xml_and_schema(result, corpus):
     return {
         (str(Path(d.path).relative_to(corpus)), d.code, d.line)
-        for d in result.diagnostics if d.category.value in ("xml", "schema")
+        for d in result.diagnostics
+        if d.category.value in ("xml", "schema")
     }
 
 
 def test_exactly_the_six_broken_files_have_xml_or_schema_findings(corpus):
     result = validate_paths([corpus])
-    assert len(result.files) == 236  # every .jdef and .jconf; the two .xsd files are not JCCL documents
+    assert (
+        len(result.files) == 236
+    )  # every .jdef and .jconf; the two .xsd files are not JCCL documents
     assert _xml_and_schema(result, corpus) == EXPECTED
     assert len({f for f, _, _ in EXPECTED}) == 6
 
@@ -60,6 +63,9 @@ def test_cli_json_on_corpus(cli, corpus):
     result = cli("validate", corpus, "--format", "json")
     assert result.exit_code == 1
     data = json.loads(result.stdout)
-    assert {"code", "severity", "category", "path", "line", "column", "message", "hint"} == set(data[0])
+    assert {"code", "severity", "category", "path", "line", "column", "message", "hint"} == set(
+        data[0]
+    )
     assert {d["path"] for d in data if d["category"] in ("xml", "schema")} == {
-        str(corpus / f) for f, _, _ in EXPECTED}
+        str(corpus / f) for f, _, _ in EXPECTED
+    }

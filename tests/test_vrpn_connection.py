@@ -256,12 +256,22 @@ def test_garbage_on_the_clients_udp_channel_is_counted():
             assert wait_until(lambda: open_clients(server) == 1 and server.clients[0].udp)
             port = client._udp_in.getsockname()[1]  # the channel the client announced
             junk = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-            for data in (b"\x01" * 7, struct.pack(">IiiiiI", 90000, 0, 0, 0, 0, 0), frame(3, 0, b"x" * 16)[:30]):
+            for data in (
+                b"\x01" * 7,
+                struct.pack(">IiiiiI", 90000, 0, 0, 0, 0, 0),
+                frame(3, 0, b"x" * 16)[:30],
+            ):
                 junk.sendto(data, ("127.0.0.1", port))
             junk.close()
-            assert wait_until(lambda: client.counts()["bad_datagrams"] == 3, 5,
-                              step=lambda: client.poll(0.01), pause=0)
+            assert wait_until(
+                lambda: client.counts()["bad_datagrams"] == 3,
+                5,
+                step=lambda: client.poll(0.01),
+                pause=0,
+            )
             server.send(t, p, codecs.encode_pose(0, (3.0, 2.0, 1.0)), reliable=False)
             got = collect(client, lambda g: any(m.type == codecs.TRACKER_POS_QUAT for m in g))
-            assert [m.report.position for m in got if m.type == codecs.TRACKER_POS_QUAT] == [(3.0, 2.0, 1.0)]
+            assert [m.report.position for m in got if m.type == codecs.TRACKER_POS_QUAT] == [
+                (3.0, 2.0, 1.0)
+            ]
             assert client.connected and client.drops == 0

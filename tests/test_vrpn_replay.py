@@ -29,11 +29,22 @@ def make_log(path: Path, ticks: int = 100) -> Path:
         for i in range(ticks):
             t = T0 + 0.01 * i
             for sensor in range(2):
-                log.write("Tracker0", codecs.TRACKER_POS_QUAT,
-                          codecs.encode_pose(sensor, (0.01 * i, float(sensor), -0.5), quat(i)), t)
+                log.write(
+                    "Tracker0",
+                    codecs.TRACKER_POS_QUAT,
+                    codecs.encode_pose(sensor, (0.01 * i, float(sensor), -0.5), quat(i)),
+                    t,
+                )
             if i % 10 == 0:
-                log.write("Button0", codecs.BUTTON_CHANGE, codecs.encode_button_change(1, (i // 10) % 2), t)
-            log.write("Analog0", codecs.ANALOG_CHANNEL, codecs.encode_analog([math.sin(0.1 * i), 0.5]), t)
+                log.write(
+                    "Button0",
+                    codecs.BUTTON_CHANGE,
+                    codecs.encode_button_change(1, (i // 10) % 2),
+                    t,
+                )
+            log.write(
+                "Analog0", codecs.ANALOG_CHANNEL, codecs.encode_analog([math.sin(0.1 * i), 0.5]), t
+            )
     return path
 
 
@@ -75,10 +86,23 @@ def test_replay_delivers_the_logged_values(cli, tmp_path: Path) -> None:
     assert analog[-1]["value"] == pytest.approx((math.sin(4.9) + 1) / 2, abs=1e-12)
 
 
-@pytest.mark.parametrize("maps", [[], ["--map", "Tracker0=Vrpn", "--map", "Button0=Vrpn", "--map", "Analog0=Vrpn"]])
+@pytest.mark.parametrize(
+    "maps", [[], ["--map", "Tracker0=Vrpn", "--map", "Button0=Vrpn", "--map", "Analog0=Vrpn"]]
+)
 def test_replay_against_a_configuration(cli, tmp_path: Path, maps: list[str]) -> None:
     log = make_log(tmp_path / "session.vrpn", ticks=40)
-    result = cli("replay", log, "--config", EXAMPLE, *maps, "--speed", "5", "--format", "ndjson", "--per-frame")
+    result = cli(
+        "replay",
+        log,
+        "--config",
+        EXAMPLE,
+        *maps,
+        "--speed",
+        "5",
+        "--format",
+        "ndjson",
+        "--per-frame",
+    )
     assert result.exit_code == 0, result.stderr
     recs = records(result.stdout)
     statuses = {r["name"]: r["state"] for r in recs if r["type"] == "status"}
@@ -88,8 +112,11 @@ def test_replay_against_a_configuration(cli, tmp_path: Path, maps: list[str]) ->
     (wand,) = frames[-1]["devices"]["VJWand"]["values"]["position"].values()  # keyed by unit 1
     wand = np.array(wand)
     assert wand[:3, 3] == pytest.approx([0.39, 1.0, -0.5], abs=1e-9)  # the proxy and alias deliver
-    presses = [f["devices"]["Button1Proxy"]["values"]["digital"]["1"] for f in frames
-               if "Button1Proxy" in f["devices"]]
+    presses = [
+        f["devices"]["Button1Proxy"]["values"]["digital"]["1"]
+        for f in frames
+        if "Button1Proxy" in f["devices"]
+    ]
     assert presses and set(presses) & {1, 2}  # ON or TOGGLE_ON: the logged press arrives
 
 

@@ -32,10 +32,16 @@ def test_not_well_formed_reports_line_and_column(tmp_path):
 def test_external_entity_is_not_expanded(tmp_path):
     secret = write(tmp_path / "secret.txt", "TOP-SECRET")
     text = jconf('      <alias name="&x;" version="1"/>\n').replace(
-        "<configuration", f'<!DOCTYPE configuration [<!ENTITY x SYSTEM "file://{secret}">]>\n<configuration')
+        "<configuration",
+        f'<!DOCTYPE configuration [<!ENTITY x SYSTEM "file://{secret}">]>\n<configuration',
+    )
     path = write(tmp_path / "xxe.jconf", text)
     doc = load_file(path)
-    assert b"TOP-SECRET" not in __import__("lxml.etree").etree.tostring(doc.root) if doc.root is not None else True
+    assert (
+        b"TOP-SECRET" not in __import__("lxml.etree").etree.tostring(doc.root)
+        if doc.root is not None
+        else True
+    )
     found = validate_paths([path]).diagnostics
     assert any(d.code == "XML003" for d in found)
     assert all("TOP-SECRET" not in d.message for d in found)
@@ -43,8 +49,11 @@ def test_external_entity_is_not_expanded(tmp_path):
 
 def test_billion_laughs_is_bounded(tmp_path):
     entities = '<!ENTITY a0 "lol">' + "".join(
-        f'<!ENTITY a{i} "{f"&a{i - 1};" * 10}">' for i in range(1, 10))
-    text = jconf("      <x>&a9;</x>\n").replace("<configuration", f"<!DOCTYPE configuration [{entities}]>\n<configuration")
+        f'<!ENTITY a{i} "{f"&a{i - 1};" * 10}">' for i in range(1, 10)
+    )
+    text = jconf("      <x>&a9;</x>\n").replace(
+        "<configuration", f"<!DOCTYPE configuration [{entities}]>\n<configuration"
+    )
     path = write(tmp_path / "lol.jconf", text)
     start = time.perf_counter()
     found = validate_paths([path]).diagnostics
@@ -75,8 +84,13 @@ def test_huge_file_is_not_read(tmp_path):
 def test_hostile_file_through_the_cli_has_no_traceback(tmp_path):
     path = tmp_path / "x.jconf"
     path.write_bytes(b"<configuration>" + b"<a>" * 5000)
-    proc = subprocess.run([sys.executable, "-m", "gadgetctl", "validate", str(path)],
-                          capture_output=True, text=True, timeout=20, env={**os.environ, "NO_COLOR": "1"})
+    proc = subprocess.run(
+        [sys.executable, "-m", "gadgetctl", "validate", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=20,
+        env={**os.environ, "NO_COLOR": "1"},
+    )
     assert proc.returncode == 1
     assert "Traceback" not in proc.stderr + proc.stdout
     assert f"{path}:1:" in proc.stdout
@@ -84,8 +98,11 @@ def test_hostile_file_through_the_cli_has_no_traceback(tmp_path):
 
 def test_declared_latin1_is_fine(tmp_path):
     path = tmp_path / "latin.jconf"
-    path.write_bytes(jconf('      <alias name="caf\xe9" version="1"/>\n').replace(
-        'encoding="UTF-8"', 'encoding="ISO-8859-1"').encode("latin-1"))
+    path.write_bytes(
+        jconf('      <alias name="caf\xe9" version="1"/>\n')
+        .replace('encoding="UTF-8"', 'encoding="ISO-8859-1"')
+        .encode("latin-1")
+    )
     assert not [c for c, _ in codes(path) if c.startswith("XML")]
 
 

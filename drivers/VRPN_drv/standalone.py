@@ -215,7 +215,11 @@ class VrpnInput:
         for dev in self.devices:
             if dev.location == location and (location, dev.device) not in self._heard:
                 names = ", ".join(sorted(announced - SYSTEM_SENDERS - {dev.device})) or "none"
-                listed = " (it lists the name but nothing answers for it)" if dev.device in announced else ""
+                listed = (
+                    " (it lists the name but nothing answers for it)"
+                    if dev.device in announced
+                    else ""
+                )
                 raise VrpnDeviceMissing(
                     f"the VRPN server at {location} has no device {dev.device!r}{listed}; "
                     f"it announces: {names}"

@@ -27,12 +27,15 @@ def expand_paths(paths: Iterable[Path]) -> list[Path]:
             if not os.access(path, os.R_OK | os.X_OK):
                 raise GadgetctlError(f"{path}: directory is not readable")
             candidates = sorted(
-                p for p in path.rglob("*")
+                p
+                for p in path.rglob("*")
                 if p.suffix in JCCL_SUFFIXES and p.is_file() and not _hidden(p.relative_to(path))
             )
             if not candidates:
-                raise GadgetctlError(f"{path}: no .jconf or .jdef files in this directory or below "
-                                     "(hidden ones are skipped): nothing to check")
+                raise GadgetctlError(
+                    f"{path}: no .jconf or .jdef files in this directory or below "
+                    "(hidden ones are skipped): nothing to check"
+                )
         else:
             if not os.access(path, os.R_OK):
                 raise GadgetctlError(f"{path}: file is not readable")
@@ -66,7 +69,9 @@ def is_dir(path: Path) -> bool:
         return False
 
 
-def require_file(path: Path, what: str = "configuration file", suffixes: tuple[str, ...] = (".jconf",)) -> None:
+def require_file(
+    path: Path, what: str = "configuration file", suffixes: tuple[str, ...] = (".jconf",)
+) -> None:
     """Raise :class:`GadgetctlError` unless ``path`` is a readable file, saying what it is
     instead (a directory, nothing: with the closest ``suffixes`` files beside it)."""
     from gadgetctl.boundedread import check_readable_file
@@ -88,11 +93,18 @@ def _nearby(path: Path, suffixes: tuple[str, ...]) -> str:
 
     parent = path.parent
     try:
-        names = [p.name for p in parent.iterdir() if p.suffix in suffixes and p.is_file()] if parent.is_dir() else []
+        names = (
+            [p.name for p in parent.iterdir() if p.suffix in suffixes and p.is_file()]
+            if parent.is_dir()
+            else []
+        )
     except OSError:
         return ""
     close = close_names(path.name, names)
     if not close:
         return ""
-    shown = [str(parent / name) if str(parent) != "." or str(path).startswith("./") else name for name in close]
+    shown = [
+        str(parent / name) if str(parent) != "." or str(path).startswith("./") else name
+        for name in close
+    ]
     return f" (did you mean {' or '.join(shown)}?)"

@@ -71,17 +71,33 @@ def search_path_diagnostics(repo, given: Iterable[str] = ()) -> list[Diagnostic]
         if entry.origin == "bundled":
             continue
         for name in entry.undefined:
-            found.append(Diagnostic.make("DEF022", f"{entry.origin} entry {entry.raw!r} uses ${{{name}}}, which is not set",
-                                         *(_where(entry.location))))
+            found.append(
+                Diagnostic.make(
+                    "DEF022",
+                    f"{entry.origin} entry {entry.raw!r} uses ${{{name}}}, which is not set",
+                    *(_where(entry.location)),
+                )
+            )
         if not entry.exists:
-            found.append(Diagnostic.make("DEF023", f"{entry.origin} directory {entry.path} does not exist",
-                                         *(_where(entry.location))))
+            found.append(
+                Diagnostic.make(
+                    "DEF023",
+                    f"{entry.origin} directory {entry.path} does not exist",
+                    *(_where(entry.location)),
+                )
+            )
     for shadow in repo.shadowed:
         if shadow.loser is not None:
-            found.append(Diagnostic.make(
-                "DEF021", f"{shadow.name} version {shadow.version} is ignored here: "
-                f"{shadow.winner} comes first on the search path",
-                shadow.loser.path, shadow.loser.line, shadow.loser.column))
+            found.append(
+                Diagnostic.make(
+                    "DEF021",
+                    f"{shadow.name} version {shadow.version} is ignored here: "
+                    f"{shadow.winner} comes first on the search path",
+                    shadow.loser.path,
+                    shadow.loser.line,
+                    shadow.loser.column,
+                )
+            )
     return found
 
 
@@ -96,14 +112,18 @@ def _where(location) -> tuple:
     return (location.path, location.line, location.column) if location else ()
 
 
-def validate_paths(paths: Sequence[Path], options: ValidateOptions | None = None) -> ValidationResult:
+def validate_paths(
+    paths: Sequence[Path], options: ValidateOptions | None = None
+) -> ValidationResult:
     from gadgetctl.perf import collector_paused
 
     with collector_paused():
         return _validate_paths(paths, options)
 
 
-def _validate_paths(paths: Sequence[Path], options: ValidateOptions | None = None) -> ValidationResult:
+def _validate_paths(
+    paths: Sequence[Path], options: ValidateOptions | None = None
+) -> ValidationResult:
     from gadgetctl.jccl.defchecks import check_cycles, check_definition
     from gadgetctl.jccl.defparser import read_definition
     from gadgetctl.jccl.repository import default_repository
@@ -122,8 +142,15 @@ def _validate_paths(paths: Sequence[Path], options: ValidateOptions | None = Non
         result.diagnostics.sort(key=sort_key)
         return result
 
-    definitions = [d for d in (read_definition(doc) for doc in result.documents
-                               if doc.root is not None and doc.kind is FileKind.DEFINITION) if d and d.name]
+    definitions = [
+        d
+        for d in (
+            read_definition(doc)
+            for doc in result.documents
+            if doc.root is not None and doc.kind is FileKind.DEFINITION
+        )
+        if d and d.name
+    ]
     base = default_repository(options.definition_dirs, bundled=options.bundled)
     repo = base.overlay(definitions)
     result.diagnostics.extend(search_path_diagnostics(base, result.files))
@@ -136,14 +163,21 @@ def _validate_paths(paths: Sequence[Path], options: ValidateOptions | None = Non
     return result
 
 
-def check_configurations(result: ValidationResult, repo, options: ValidateOptions) -> list[Diagnostic]:
+def check_configurations(
+    result: ValidationResult, repo, options: ValidateOptions
+) -> list[Diagnostic]:
     """Configuration-level checks of the configurations among the files (see
     :mod:`gadgetctl.jccl.configcheck`): each file with its includes, or all of them as one
     configuration with ``options.together``."""
     from gadgetctl.jccl.configcheck import check_documents
 
-    return check_documents(result.documents, repo, together=options.together, environ=options.environ,
-                           plugin_definitions=plugin_definition_finder(options.environ))
+    return check_documents(
+        result.documents,
+        repo,
+        together=options.together,
+        environ=options.environ,
+        plugin_definitions=plugin_definition_finder(options.environ),
+    )
 
 
 def plugin_definition_finder(environ=None):

@@ -20,8 +20,12 @@ def register(app: typer.Typer) -> None:
 
 
 def completion(
-    shell: Shell = typer.Argument(..., metavar="SHELL", show_default=False,
-                                  help="The shell to complete for: bash, zsh or fish."),
+    shell: Shell = typer.Argument(
+        ...,
+        metavar="SHELL",
+        show_default=False,
+        help="The shell to complete for: bash, zsh or fish.",
+    ),
 ) -> None:
     """Print the completion script for bash, zsh or fish.
 

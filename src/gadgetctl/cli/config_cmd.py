@@ -18,8 +18,12 @@ from gadgetctl.cli.options import (
     use_color,
 )
 
-FILES_ARGUMENT = typer.Argument(..., metavar="FILES...", help="Configuration files, loaded together as one configuration "
-                                "(their includes too).", show_default=False)
+FILES_ARGUMENT = typer.Argument(
+    ...,
+    metavar="FILES...",
+    help="Configuration files, loaded together as one configuration (their includes too).",
+    show_default=False,
+)
 
 
 class GraphFormat(StrEnum):
@@ -30,8 +34,11 @@ class GraphFormat(StrEnum):
 
 
 def register(app: typer.Typer) -> None:
-    group = typer.Typer(name="config", help="Inspect configurations (.jconf): resolved values and wiring.",
-                        no_args_is_help=True)
+    group = typer.Typer(
+        name="config",
+        help="Inspect configurations (.jconf): resolved values and wiring.",
+        no_args_is_help=True,
+    )
     group.command(name="show")(show)
     group.command(name="graph")(graph)
     try:  # `config pending` lives with the input manager's command-line code
@@ -46,8 +53,13 @@ def register(app: typer.Typer) -> None:
 
 def show(
     files: list[Path] = FILES_ARGUMENT,
-    element: list[str] = typer.Option([], "--element", "-e", metavar="NAME",
-                                      help="Show only this element (name or full name). Repeatable."),
+    element: list[str] = typer.Option(
+        [],
+        "--element",
+        "-e",
+        metavar="NAME",
+        help="Show only this element (name or full name). Repeatable.",
+    ),
     fmt: DataFormat = typer.Option(DataFormat.text, "--format", "-f", help="Output format."),
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
@@ -61,15 +73,23 @@ def show(
     from gadgetctl.suggest import with_suggestion
     from gadgetctl.validate import plugin_definition_finder
 
-    opened = open_configuration(files, definition_dirs=definitions, bundled=bundled,
-                                plugin_definitions=plugin_definition_finder())
+    opened = open_configuration(
+        files,
+        definition_dirs=definitions,
+        bundled=bundled,
+        plugin_definitions=plugin_definition_finder(),
+    )
     if element:
         everything = opened.configuration.all_elements()
         known = {e.name for e in everything} | {e.full_name for e in everything}
         missing = [name for name in element if name not in known]
         if missing:
-            raise GadgetctlError("; ".join(with_suggestion(f"no element named {name!r} in the configuration",
-                                                           name, known) for name in missing))
+            raise GadgetctlError(
+                "; ".join(
+                    with_suggestion(f"no element named {name!r} in the configuration", name, known)
+                    for name in missing
+                )
+            )
     elements = resolve_configuration(opened.configuration, opened.index, element or None)
     if fmt is DataFormat.json:
         emit(json.dumps([e.to_dict() for e in elements], indent=2))
@@ -81,8 +101,9 @@ def show(
 
 def graph(
     files: list[Path] = FILES_ARGUMENT,
-    fmt: GraphFormat = typer.Option(GraphFormat.text, "--format", "-f",
-                                    help="text (a tree), dot (Graphviz), mermaid, or json."),
+    fmt: GraphFormat = typer.Option(
+        GraphFormat.text, "--format", "-f", help="text (a tree), dot (Graphviz), mermaid, or json."
+    ),
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
 ) -> None:
@@ -96,10 +117,15 @@ def graph(
     from gadgetctl.jccl.graph import RENDERERS, build_graph
     from gadgetctl.validate import plugin_definition_finder
 
-    opened = open_configuration(files, definition_dirs=definitions, bundled=bundled,
-                                plugin_definitions=plugin_definition_finder())
-    wiring = build_graph(opened.configuration, opened.index, built_in=built_in_types(),
-                         plugins=plugin_for_type())
+    opened = open_configuration(
+        files,
+        definition_dirs=definitions,
+        bundled=bundled,
+        plugin_definitions=plugin_definition_finder(),
+    )
+    wiring = build_graph(
+        opened.configuration, opened.index, built_in=built_in_types(), plugins=plugin_for_type()
+    )
     if fmt is GraphFormat.json:
         emit(json.dumps(wiring.to_dict(), indent=2))
     else:

@@ -38,8 +38,10 @@ def _property_lines(prop: ResolvedProperty, indent: str, width: int, style: _Sty
     lines = []
     if texts:
         all_default = all(v.source == DEFAULT for v in texts)
-        parts = [_value(v) + ("" if all_default or v.source != DEFAULT else style(_DIM, " (default)"))
-                 for v in texts]
+        parts = [
+            _value(v) + ("" if all_default or v.source != DEFAULT else style(_DIM, " (default)"))
+            for v in texts
+        ]
         joined = ", ".join(parts)
         if all_default:
             joined = style(_DIM, joined + "  (default)")
@@ -63,8 +65,10 @@ def _element_lines(element: ResolvedElement, indent: str, style: _Style) -> list
         judged = ""
     where = printable(f"{element.file}:{element.line}" if element.line else element.file)
     version = printable(version)
-    lines = [f"{indent}{style(_BOLD, printable(element.type))} {printable(repr(element.name))} "
-             f"({version}{judged})  {style(_DIM, where)}"]
+    lines = [
+        f"{indent}{style(_BOLD, printable(element.type))} {printable(repr(element.name))} "
+        f"({version}{judged})  {style(_DIM, where)}"
+    ]
     width = max((len(p.name) for p in element.properties), default=0)
     for prop in element.properties:
         lines += _property_lines(prop, indent + "  ", width, style)

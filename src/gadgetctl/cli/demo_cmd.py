@@ -12,7 +12,9 @@ def register(app: typer.Typer) -> None:
 
 
 def demo(
-    duration: float = typer.Option(DEMO_SECONDS, "--duration", metavar="SECONDS", help="How long to monitor."),
+    duration: float = typer.Option(
+        DEMO_SECONDS, "--duration", metavar="SECONDS", help="How long to monitor."
+    ),
 ) -> None:
     """Monitor the bundled waveform example (examples/waveform.jconf) for a few seconds: the
     live view on a terminal (q ends it early), a plain-text table otherwise."""
@@ -23,7 +25,11 @@ def demo(
 
     config = examples_dir() / "waveform.jconf"
     if not interactive():
-        emit(f"gadgetctl demo: monitoring the simulated devices of {config.name} for {duration:g} s "
-             f"(run `gadgetctl monitor {config}` on a terminal for the live view)")
-    code = run_monitor([config], [], duration=duration, interval=1.0, stats=True, heading="gadgetctl demo")
+        emit(
+            f"gadgetctl demo: monitoring the simulated devices of {config.name} for {duration:g} s "
+            f"(run `gadgetctl monitor {config}` on a terminal for the live view)"
+        )
+    code = run_monitor(
+        [config], [], duration=duration, interval=1.0, stats=True, heading="gadgetctl demo"
+    )
     raise typer.Exit(code)

@@ -10,8 +10,13 @@ import typer
 from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION, DataFormat, emit
 
 DRIVER_PATH_OPTION = typer.Option(
-    [], "--driver-path", metavar="DIR",
-    help="Also look for driver plug-ins in DIR (after the bundled drivers and GADGETCTL_DRIVER_PATH). Repeatable.")
+    [],
+    "--driver-path",
+    metavar="DIR",
+    help="Also look for driver plug-ins in DIR (after the bundled drivers and GADGETCTL_DRIVER_PATH). Repeatable.",
+)
+
+
 def _trust(value: bool) -> bool:
     if value:
         from gadgetctl.input.plugins.trust import accept_writable_places
@@ -21,12 +26,16 @@ def _trust(value: bool) -> bool:
 
 
 TRUST_OPTION = typer.Option(
-    False, "--trust-driver-path", callback=_trust,
-    help="Import plug-ins also from directories other users can write to (refused by default: DRV011).")
+    False,
+    "--trust-driver-path",
+    callback=_trust,
+    help="Import plug-ins also from directories other users can write to (refused by default: DRV011).",
+)
 FORMAT_OPTION = typer.Option(DataFormat.text, "--format", "-f", help="Output format.")
 
-drivers_app = typer.Typer(help="Driver plug-ins: list what can be found, load and check them.",
-                          no_args_is_help=True)
+drivers_app = typer.Typer(
+    help="Driver plug-ins: list what can be found, load and check them.", no_args_is_help=True
+)
 
 
 def register(app: typer.Typer) -> None:
@@ -37,8 +46,12 @@ def register(app: typer.Typer) -> None:
 def list_drivers(
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
     configs: list[Path] = typer.Option(
-        [], "--config", "-c", metavar="FILE",
-        help="Also look in the driver_path and driver_scan_path of this configuration's input_manager elements. Repeatable."),
+        [],
+        "--config",
+        "-c",
+        metavar="FILE",
+        help="Also look in the driver_path and driver_scan_path of this configuration's input_manager elements. Repeatable.",
+    ),
     fmt: DataFormat = FORMAT_OPTION,
 ) -> None:
     """List every discoverable driver plug-in, without importing any of them.
@@ -57,10 +70,24 @@ def list_drivers(
         entries = []
         for info in plugins:
             types, read_from = info.declared_types()
-            entries.append({**info.to_dict(), "provides": {t: [k.value for k in kinds] for t, kinds in types.items()},
-                            "provides_from": read_from or None, "problems": _problems(info, PLUGIN_API_VERSION)})
-        emit(json.dumps({"api_version": PLUGIN_API_VERSION, "places": search.describe_places(),
-                         "plugins": entries}, indent=2))
+            entries.append(
+                {
+                    **info.to_dict(),
+                    "provides": {t: [k.value for k in kinds] for t, kinds in types.items()},
+                    "provides_from": read_from or None,
+                    "problems": _problems(info, PLUGIN_API_VERSION),
+                }
+            )
+        emit(
+            json.dumps(
+                {
+                    "api_version": PLUGIN_API_VERSION,
+                    "places": search.describe_places(),
+                    "plugins": entries,
+                },
+                indent=2,
+            )
+        )
         return
     if not plugins:
         emit(f"no driver plug-ins found (looked in {search.describe_places()})")
@@ -77,13 +104,20 @@ def list_drivers(
         if not types:
             lines.append("    provides no declared element types")
         lines.extend(f"    ! {problem}" for problem in _problems(info, PLUGIN_API_VERSION))
-    lines.append(f"{len(plugins)} plug-in{'s' if len(plugins) != 1 else ''}; gadgetctl provides plug-in API {PLUGIN_API_VERSION}")
+    lines.append(
+        f"{len(plugins)} plug-in{'s' if len(plugins) != 1 else ''}; gadgetctl provides plug-in API {PLUGIN_API_VERSION}"
+    )
     emit("\n".join(lines))
 
 
 @drivers_app.command("load")
 def load_drivers(
-    names: list[str] = typer.Argument(..., metavar="NAME...", help="Plug-in names (as a driver value writes them) or paths of plug-in folders or modules.", show_default=False),
+    names: list[str] = typer.Argument(
+        ...,
+        metavar="NAME...",
+        help="Plug-in names (as a driver value writes them) or paths of plug-in folders or modules.",
+        show_default=False,
+    ),
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
     trust_driver_path: bool = TRUST_OPTION,
     definitions: list[Path] = DEFINITIONS_OPTION,
@@ -102,8 +136,12 @@ def load_drivers(
     from gadgetctl.jccl.repository import default_repository
 
     search = driver_search_for(None, driver_paths)
-    chosen = [plugin_at(Path(name)) if ("/" in name or name.endswith(".py")) and Path(name).exists()
-              else search.find(name) for name in names]
+    chosen = [
+        plugin_at(Path(name))
+        if ("/" in name or name.endswith(".py")) and Path(name).exists()
+        else search.find(name)
+        for name in names
+    ]
     unknown = [name for name, info in zip(names, chosen, strict=True) if info is None]
     if unknown:
         raise _unknown_plugins(unknown, search)
@@ -112,14 +150,25 @@ def load_drivers(
     results = [loader.load(info) for info in chosen if info is not None]
     failed = [r for r in results if not r.ok]
     if fmt is DataFormat.json:
-        emit(json.dumps({"loaded": len(results) - len(failed), "failed": len(failed),
-                         "plugins": [r.to_dict() for r in results]}, indent=2))
+        emit(
+            json.dumps(
+                {
+                    "loaded": len(results) - len(failed),
+                    "failed": len(failed),
+                    "plugins": [r.to_dict() for r in results],
+                },
+                indent=2,
+            )
+        )
     else:
         lines = []
         for result in results:
             if result.ok:
-                registered = "; ".join(f"{r.element_type} -> {r.device_class.__qualname__} "
-                                       f"({', '.join(r.kinds) or 'no device types'})" for r in result.registrations)
+                registered = "; ".join(
+                    f"{r.element_type} -> {r.device_class.__qualname__} "
+                    f"({', '.join(r.kinds) or 'no device types'})"
+                    for r in result.registrations
+                )
                 lines.append(f"{result.name}: ok: {registered or 'nothing new registered'}")
             else:
                 lines.append(f"{result.name}: failed: {result.reason or result.error}")
@@ -145,17 +194,24 @@ def _unknown_plugins(names: list[str], search):
             continue
         close = did_you_mean(name, known)
         parts.append(f"no driver plug-in named {name!r}" + (f" ({close})" if close else ""))
-    return GadgetctlError(f"{'; '.join(parts)} (looked in {search.describe_places()}; "
-                          "gadgetctl drivers list shows them)")
+    return GadgetctlError(
+        f"{'; '.join(parts)} (looked in {search.describe_places()}; "
+        "gadgetctl drivers list shows them)"
+    )
 
 
 def _problems(info, api_version: int) -> list[str]:
     problems = list(info.metadata.problems)
     declared = info.metadata.api_version
     if declared is not None and declared != api_version:
-        problems.insert(0, f"written for plug-in API {declared}; gadgetctl provides {api_version} (it will be refused)")
+        problems.insert(
+            0,
+            f"written for plug-in API {declared}; gadgetctl provides {api_version} (it will be refused)",
+        )
     if info.shadowed_by is not None:
-        problems.append(f"shadowed by {info.shadowed_by.path} ({info.shadowed_by.source}), which is found first")
+        problems.append(
+            f"shadowed by {info.shadowed_by.path} ({info.shadowed_by.source}), which is found first"
+        )
     return problems
 
 

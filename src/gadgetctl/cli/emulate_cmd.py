@@ -13,7 +13,11 @@ from gadgetctl.cli.options import DataFormat, emit
 if TYPE_CHECKING:
     from gadgetctl.input.plugins.emulators import Emulator
 
-PASS_THROUGH = {"allow_extra_args": True, "ignore_unknown_options": True, "allow_interspersed_args": False}
+PASS_THROUGH = {
+    "allow_extra_args": True,
+    "ignore_unknown_options": True,
+    "allow_interspersed_args": False,
+}
 
 
 def register(app: typer.Typer) -> None:
@@ -23,13 +27,23 @@ def register(app: typer.Typer) -> None:
 def emulate(
     ctx: typer.Context,
     driver: str | None = typer.Argument(
-        None, metavar="DRIVER", show_default=False,
-        help="Plug-in name (DTrack_drv) or element type (dtrack), case-insensitive."),
-    list_: bool = typer.Option(False, "--list", help="List the driver plug-ins that ship an emulator."),
+        None,
+        metavar="DRIVER",
+        show_default=False,
+        help="Plug-in name (DTrack_drv) or element type (dtrack), case-insensitive.",
+    ),
+    list_: bool = typer.Option(
+        False, "--list", help="List the driver plug-ins that ship an emulator."
+    ),
     driver_paths: list[Path] = typer.Option(
-        [], "--driver-path", metavar="DIR",
-        help="Also look for driver plug-ins in DIR (after the bundled drivers and GADGETCTL_DRIVER_PATH). Repeatable."),
-    fmt: DataFormat = typer.Option(DataFormat.text, "--format", "-f", help="Output format of --list."),
+        [],
+        "--driver-path",
+        metavar="DIR",
+        help="Also look for driver plug-ins in DIR (after the bundled drivers and GADGETCTL_DRIVER_PATH). Repeatable.",
+    ),
+    fmt: DataFormat = typer.Option(
+        DataFormat.text, "--format", "-f", help="Output format of --list."
+    ),
 ) -> None:
     """Run the device emulator a driver plug-in ships, and print where to point a
     configuration at it (a FIFO path, a UDP or TCP port, a pty path).
@@ -78,7 +92,10 @@ def _run(emulator: Emulator, argv: list[str]) -> int:
     except SystemExit as exit_:  # argparse: --help, usage errors
         code = exit_.code
     except Exception as err:
-        typer.echo(f"gadgetctl: error: the {emulator.plugin.name} emulator failed: {describe(err)}", err=True)
+        typer.echo(
+            f"gadgetctl: error: the {emulator.plugin.name} emulator failed: {describe(err)}",
+            err=True,
+        )
         return 1
     if code is None or isinstance(code, bool):
         return int(bool(code))
@@ -94,7 +111,9 @@ def _list(found: list[Emulator], fmt: DataFormat) -> None:
         return
     lines = []
     for emulator in found:
-        types = ", ".join(sorted(emulator.plugin.declared_types()[0])) or "no declared element types"
+        types = (
+            ", ".join(sorted(emulator.plugin.declared_types()[0])) or "no declared element types"
+        )
         lines.append(f"{emulator.plugin.name}  ({types})  {emulator.path}")
         if emulator.summary:
             lines.append(f"    {emulator.summary}")

@@ -19,24 +19,95 @@ class LengthUnits(StrEnum):
     centimeters = "centimeters"
 
 
-RATE_OPTION = typer.Option(60.0, "--rate", metavar="HZ", help="Frames per second (the view refreshes once per frame).")
-DURATION_OPTION = typer.Option(None, "--duration", metavar="SECONDS", help="Stop after this many seconds (default: until q, Ctrl-C or SIGTERM).")
-FORMAT_OPTION = typer.Option(None, "--format", "-f", help="live: the dashboard (needs a terminal); table: a plain-text table every --interval seconds; ndjson: one JSON record per sample on stdout; events: one line per change (button pressed or released, an axis beyond --dead-band, a pose beyond --pose-threshold or --angle-threshold). Default: live on a terminal, table otherwise.", show_default=False)
-PER_FRAME_OPTION = typer.Option(False, "--per-frame", help="With --format ndjson: one frame record per frame instead of one record per sample.")
-RECORD_OPTION = typer.Option(None, "--record", metavar="FILE", help="Write every sample, status change and marker to FILE (the recording format); complete even after Ctrl-C or SIGTERM.")
+RATE_OPTION = typer.Option(
+    60.0, "--rate", metavar="HZ", help="Frames per second (the view refreshes once per frame)."
+)
+DURATION_OPTION = typer.Option(
+    None,
+    "--duration",
+    metavar="SECONDS",
+    help="Stop after this many seconds (default: until q, Ctrl-C or SIGTERM).",
+)
+FORMAT_OPTION = typer.Option(
+    None,
+    "--format",
+    "-f",
+    help="live: the dashboard (needs a terminal); table: a plain-text table every --interval seconds; ndjson: one JSON record per sample on stdout; events: one line per change (button pressed or released, an axis beyond --dead-band, a pose beyond --pose-threshold or --angle-threshold). Default: live on a terminal, table otherwise.",
+    show_default=False,
+)
+PER_FRAME_OPTION = typer.Option(
+    False,
+    "--per-frame",
+    help="With --format ndjson: one frame record per frame instead of one record per sample.",
+)
+RECORD_OPTION = typer.Option(
+    None,
+    "--record",
+    metavar="FILE",
+    help="Write every sample, status change and marker to FILE (the recording format); complete even after Ctrl-C or SIGTERM.",
+)
 OVERWRITE_OPTION = typer.Option(False, "--overwrite", help="Replace an existing --record file.")
-STATS_OPTION = typer.Option(False, "--stats", help="Print end-of-run statistics per device (always written as a stats record in ndjson).")
-UNITS_OPTION = typer.Option(LengthUnits.meters, "--units", help="Length unit of displayed positions (records stay in meters).")
-QUATERNION_OPTION = typer.Option(False, "--quaternion", help="Also show orientations as quaternions (w x y z).")
-POSE_OPTION = typer.Option(None, "--pose", help="How positions are written in ndjson, the table and events: matrix (4x4; the default of ndjson), quaternion (position + w x y z) or euler (position + X-Y-Z angles in degrees, gmtl's EulerAngleXYZ as VR Juggler's position filters use; the default of events). Without it the table shows the translation and Euler angles (--quaternion adds w x y z).", show_default=False)
-DEAD_BAND_OPTION = typer.Option(0.02, "--dead-band", metavar="SHARE", help="--format events: report an analog unit when it moved more than this share of its device's range (min..max) since it was last reported.")
-POSE_THRESHOLD_OPTION = typer.Option(0.01, "--pose-threshold", metavar="METERS", help="--format events: report a position when it moved more than this distance since it was last reported.")
-ANGLE_THRESHOLD_OPTION = typer.Option(1.0, "--angle-threshold", metavar="DEGREES", help="--format events: report a position (or glove joint) when it turned more than this angle since it was last reported.")
-INTERVAL_OPTION = typer.Option(1.0, "--interval", metavar="SECONDS", help="Seconds between two tables of --format table.")
-MOUSE_OPTION = typer.Option(True, "--mouse/--no-mouse", help="Live view: report mouse buttons, motion and wheel to the keyboard_mouse_device.")
-CHECK_OPTION = typer.Option(True, "--check/--no-check", help="Check the configurations first and print their errors and warnings as validate does (--no-check skips it).")
-STRICT_OPTION = typer.Option(False, "--strict", help="Do not start when the configuration checks find errors (exit status 1).")
-KEYBOARD_OPTION = typer.Option(None, "--keyboard", metavar="NAME", help="Live view: the keyboard_mouse_device that gets the keys and the mouse first (Tab gives them to the next one). Default: the first.")
+STATS_OPTION = typer.Option(
+    False,
+    "--stats",
+    help="Print end-of-run statistics per device (always written as a stats record in ndjson).",
+)
+UNITS_OPTION = typer.Option(
+    LengthUnits.meters,
+    "--units",
+    help="Length unit of displayed positions (records stay in meters).",
+)
+QUATERNION_OPTION = typer.Option(
+    False, "--quaternion", help="Also show orientations as quaternions (w x y z)."
+)
+POSE_OPTION = typer.Option(
+    None,
+    "--pose",
+    help="How positions are written in ndjson, the table and events: matrix (4x4; the default of ndjson), quaternion (position + w x y z) or euler (position + X-Y-Z angles in degrees, gmtl's EulerAngleXYZ as VR Juggler's position filters use; the default of events). Without it the table shows the translation and Euler angles (--quaternion adds w x y z).",
+    show_default=False,
+)
+DEAD_BAND_OPTION = typer.Option(
+    0.02,
+    "--dead-band",
+    metavar="SHARE",
+    help="--format events: report an analog unit when it moved more than this share of its device's range (min..max) since it was last reported.",
+)
+POSE_THRESHOLD_OPTION = typer.Option(
+    0.01,
+    "--pose-threshold",
+    metavar="METERS",
+    help="--format events: report a position when it moved more than this distance since it was last reported.",
+)
+ANGLE_THRESHOLD_OPTION = typer.Option(
+    1.0,
+    "--angle-threshold",
+    metavar="DEGREES",
+    help="--format events: report a position (or glove joint) when it turned more than this angle since it was last reported.",
+)
+INTERVAL_OPTION = typer.Option(
+    1.0, "--interval", metavar="SECONDS", help="Seconds between two tables of --format table."
+)
+MOUSE_OPTION = typer.Option(
+    True,
+    "--mouse/--no-mouse",
+    help="Live view: report mouse buttons, motion and wheel to the keyboard_mouse_device.",
+)
+CHECK_OPTION = typer.Option(
+    True,
+    "--check/--no-check",
+    help="Check the configurations first and print their errors and warnings as validate does (--no-check skips it).",
+)
+STRICT_OPTION = typer.Option(
+    False,
+    "--strict",
+    help="Do not start when the configuration checks find errors (exit status 1).",
+)
+KEYBOARD_OPTION = typer.Option(
+    None,
+    "--keyboard",
+    metavar="NAME",
+    help="Live view: the keyboard_mouse_device that gets the keys and the mouse first (Tab gives them to the next one). Default: the first.",
+)
 
 
 def register(app: typer.Typer) -> None:
@@ -44,7 +115,12 @@ def register(app: typer.Typer) -> None:
 
 
 def monitor(
-    arguments: list[str] = typer.Argument(..., metavar="CONFIG... [NAME...]", help="Configuration files (existing files ending in .jconf) and VRPN devices to watch without one (vrpn:Device@host[:port], vrpn:Device@tcp://host:port), then names or glob patterns of the devices, proxies and aliases to show (default: all).", show_default=False),
+    arguments: list[str] = typer.Argument(
+        ...,
+        metavar="CONFIG... [NAME...]",
+        help="Configuration files (existing files ending in .jconf) and VRPN devices to watch without one (vrpn:Device@host[:port], vrpn:Device@tcp://host:port), then names or glob patterns of the devices, proxies and aliases to show (default: all).",
+        show_default=False,
+    ),
     rate: float = RATE_OPTION,
     duration: float | None = DURATION_OPTION,
     fmt: OutputFormat | None = FORMAT_OPTION,
@@ -87,8 +163,9 @@ def monitor(
     from gadgetctl.monitor.vrpnwatch import is_vrpn_argument, write_configuration
 
     watched = [a for a in arguments if is_vrpn_argument(a)]
-    configs, selectors = split_arguments([a for a in arguments if not is_vrpn_argument(a)],
-                                         require_config=not watched)
+    configs, selectors = split_arguments(
+        [a for a in arguments if not is_vrpn_argument(a)], require_config=not watched
+    )
     if check:
         from gadgetctl.cli.preflight import check_before_running
 
@@ -96,16 +173,33 @@ def monitor(
     with tempfile.TemporaryDirectory(prefix="gadgetctl-vrpn-") as scratch:
         if watched:  # vrpn:Device@host: a vrpn element per device, laid out as the server shows
             configs.append(write_configuration(watched, Path(scratch)))
-        code = run_monitor(configs, selectors, rate=rate, duration=duration, fmt=fmt, per_frame=per_frame,
-                           record=record, overwrite=overwrite, stats=stats, units=units.value,
-                           quaternion=quaternion, interval=interval, mouse=mouse, keyboard=keyboard, driver_paths=driver_paths,
-                           definitions=definitions, bundled=bundled,
-                           pose=pose.value if pose else None,
-                           thresholds=event_thresholds(dead_band, pose_threshold, angle_threshold))
+        code = run_monitor(
+            configs,
+            selectors,
+            rate=rate,
+            duration=duration,
+            fmt=fmt,
+            per_frame=per_frame,
+            record=record,
+            overwrite=overwrite,
+            stats=stats,
+            units=units.value,
+            quaternion=quaternion,
+            interval=interval,
+            mouse=mouse,
+            keyboard=keyboard,
+            driver_paths=driver_paths,
+            definitions=definitions,
+            bundled=bundled,
+            pose=pose.value if pose else None,
+            thresholds=event_thresholds(dead_band, pose_threshold, angle_threshold),
+        )
     raise typer.Exit(code)
 
 
-def split_arguments(arguments: list[str], *, require_config: bool = True) -> tuple[list[Path], list[str]]:
+def split_arguments(
+    arguments: list[str], *, require_config: bool = True
+) -> tuple[list[Path], list[str]]:
     """Existing ``*.jconf`` files are configurations, the rest NAME patterns."""
     import os
 
@@ -123,17 +217,23 @@ def split_arguments(arguments: list[str], *, require_config: bool = True) -> tup
             if os.path.exists(path) or not any(c in argument for c in "*?["):
                 require_file(path)
         elif (argument.endswith("/") or not configs) and is_dir(path):
-            raise GadgetctlError(f"{argument}: is a directory; monitor takes configuration files (*.jconf) "
-                                 "before the names to show")
+            raise GadgetctlError(
+                f"{argument}: is a directory; monitor takes configuration files (*.jconf) "
+                "before the names to show"
+            )
         selectors.append(argument)
     if not configs and require_config:
         first = Path(arguments[0])
         if is_file(first):
-            raise GadgetctlError(f"{first}: not a configuration file (configurations end in .jconf)")
+            raise GadgetctlError(
+                f"{first}: not a configuration file (configurations end in .jconf)"
+            )
         if os.path.exists(first) or "/" in arguments[0] or first.suffix:
             require_file(first)  # says what is wrong with a mistyped path
-        raise GadgetctlError("no configuration given: CONFIG arguments are existing files ending in .jconf "
-                             "(or vrpn:Device@host)")
+        raise GadgetctlError(
+            "no configuration given: CONFIG arguments are existing files ending in .jconf "
+            "(or vrpn:Device@host)"
+        )
     return configs, selectors
 
 
@@ -149,7 +249,9 @@ def check_options(rate: float, duration: float | None, interval: float) -> None:
     from gadgetctl.errors import GadgetctlError
 
     if not rate > 0 or rate > 10_000:
-        raise GadgetctlError(f"--rate must be more than 0 and at most 10000 frames per second, not {rate:g}")
+        raise GadgetctlError(
+            f"--rate must be more than 0 and at most 10000 frames per second, not {rate:g}"
+        )
     if duration is not None and not duration >= 0:
         raise GadgetctlError(f"--duration must not be negative, not {duration:g}")
     if not interval > 0:
@@ -161,7 +263,11 @@ def event_thresholds(dead_band: float, distance: float, angle: float):
     from gadgetctl.errors import GadgetctlError
     from gadgetctl.monitor.events import Thresholds
 
-    for option, value in (("--dead-band", dead_band), ("--pose-threshold", distance), ("--angle-threshold", angle)):
+    for option, value in (
+        ("--dead-band", dead_band),
+        ("--pose-threshold", distance),
+        ("--angle-threshold", angle),
+    ):
         if not (value >= 0 and value < float("inf")):
             raise GadgetctlError(f"{option} must be a finite number >= 0, not {value:g}")
     return Thresholds(dead_band, distance, angle)
@@ -177,16 +283,35 @@ def check_keyboard(name: str | None, keyboards: list[str]) -> None:
     if not keyboards:
         raise GadgetctlError(f"--keyboard {name!r}: the configuration has no keyboard_mouse_device")
     hint = did_you_mean(name, keyboards)
-    raise GadgetctlError(f"--keyboard {name!r}: no keyboard_mouse_device of that name"
-                         + (f"; {hint}" if hint else f" (there are: {', '.join(keyboards)})"))
+    raise GadgetctlError(
+        f"--keyboard {name!r}: no keyboard_mouse_device of that name"
+        + (f"; {hint}" if hint else f" (there are: {', '.join(keyboards)})")
+    )
 
 
-def run_monitor(configs: list[Path], selectors: list[str], *, rate: float = 60.0, duration: float | None = None,
-                fmt: OutputFormat | None = None, per_frame: bool = False, record: Path | None = None,
-                overwrite: bool = False, stats: bool = False, units: str = "meters", quaternion: bool = False,
-                interval: float = 1.0, mouse: bool = True, keyboard: str | None = None, driver_paths: list[Path] | None = None,
-                definitions: list[Path] | None = None, bundled: bool = True, heading: str = "gadgetctl monitor",
-                pose: str | None = None, thresholds=None) -> int:
+def run_monitor(
+    configs: list[Path],
+    selectors: list[str],
+    *,
+    rate: float = 60.0,
+    duration: float | None = None,
+    fmt: OutputFormat | None = None,
+    per_frame: bool = False,
+    record: Path | None = None,
+    overwrite: bool = False,
+    stats: bool = False,
+    units: str = "meters",
+    quaternion: bool = False,
+    interval: float = 1.0,
+    mouse: bool = True,
+    keyboard: str | None = None,
+    driver_paths: list[Path] | None = None,
+    definitions: list[Path] | None = None,
+    bundled: bool = True,
+    heading: str = "gadgetctl monitor",
+    pose: str | None = None,
+    thresholds=None,
+) -> int:
     from gadgetctl.cli.monitor_run import RunOptions, check_record_path, choose_format, run
     from gadgetctl.input.manager import InputManager, ManagerOptions
     from gadgetctl.monitor.session import MonitorSession
@@ -195,8 +320,9 @@ def run_monitor(configs: list[Path], selectors: list[str], *, rate: float = 60.0
     mode = choose_format(fmt, record)
     check_record_path(record, overwrite, mode)
     options = ManagerOptions(driver_dirs=list(driver_paths or ()))
-    manager, configuration = InputManager.from_files(configs, definitions=list(definitions or ()),
-                                                     bundled=bundled, options=options)
+    manager, configuration = InputManager.from_files(
+        configs, definitions=list(definitions or ()), bundled=bundled, options=options
+    )
     fatal_load_errors(configuration)
     info = {"config": [str(p) for p in configs]}
     session = MonitorSession(manager, configuration, selectors=selectors, rate=rate, info=info)
@@ -210,9 +336,30 @@ def run_monitor(configs: list[Path], selectors: list[str], *, rate: float = 60.0
     except BaseException:
         manager.shutdown()
         raise
-    notes = [f"{d.location}: {d.message}" for d in configuration.diagnostics if d.severity.value == "warning"]
+    notes = [
+        f"{d.location}: {d.message}"
+        for d in configuration.diagnostics
+        if d.severity.value == "warning"
+    ]
     title = " ".join(str(p) for p in configs)
-    return run(session, RunOptions(format=mode, duration=duration, per_frame=per_frame, stats=stats,
-                                   record=record, overwrite=overwrite, interval=interval, length_unit=units,
-                                   quaternion=quaternion, mouse=mouse, keyboard=keyboard, title=title, heading=heading,
-                                   notes=notes, pose=pose, thresholds=thresholds))
+    return run(
+        session,
+        RunOptions(
+            format=mode,
+            duration=duration,
+            per_frame=per_frame,
+            stats=stats,
+            record=record,
+            overwrite=overwrite,
+            interval=interval,
+            length_unit=units,
+            quaternion=quaternion,
+            mouse=mouse,
+            keyboard=keyboard,
+            title=title,
+            heading=heading,
+            notes=notes,
+            pose=pose,
+            thresholds=thresholds,
+        ),
+    )

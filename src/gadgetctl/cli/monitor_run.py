@@ -40,7 +40,9 @@ class RunOptions:
     heading: str = "gadgetctl monitor"
     notes: list[str] = field(default_factory=list)
     pose: str | None = None  # matrix, quaternion, euler (None: matrix in ndjson, euler in views)
-    thresholds: Any = None  # gadgetctl.monitor.events.Thresholds of --format events (None: defaults)
+    thresholds: Any = (
+        None  # gadgetctl.monitor.events.Thresholds of --format events (None: defaults)
+    )
 
 
 #: ``--record -``: the recording goes to standard output, the human output to stderr.
@@ -65,8 +67,10 @@ def choose_format(requested: OutputFormat | None, record: Path | None = None) ->
         return OutputFormat.live if interactive(record) else OutputFormat.table
     if requested is OutputFormat.live and not interactive(record):
         where = "stderr" if records_to_stdout(record) else "stdout"
-        raise GadgetctlError(f"the live view needs a terminal on stdin and {where}; "
-                             "use --format table or --format ndjson")
+        raise GadgetctlError(
+            f"the live view needs a terminal on stdin and {where}; "
+            "use --format table or --format ndjson"
+        )
     return requested
 
 
@@ -75,11 +79,15 @@ def check_record_path(path: Path | None, overwrite: bool, mode: OutputFormat | N
         return
     if records_to_stdout(path):
         if mode in (OutputFormat.ndjson, OutputFormat.events):
-            raise GadgetctlError(f"--record - and --format {mode.value} both write to standard output; "
-                                 "use one of them")
+            raise GadgetctlError(
+                f"--record - and --format {mode.value} both write to standard output; "
+                "use one of them"
+            )
         if sys.stdout.isatty():
-            raise GadgetctlError("--record -: standard output is a terminal; redirect it to a file or a "
-                                 "pipe (or use --format ndjson to watch the records)")
+            raise GadgetctlError(
+                "--record -: standard output is a terminal; redirect it to a file or a "
+                "pipe (or use --format ndjson to watch the records)"
+            )
         return
     if path.is_dir():
         raise GadgetctlError(f"--record {path}: is a directory; give the name of the file to write")
@@ -106,7 +114,9 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
         pose = options.pose or MATRIX
 
         def open_stream(info):
-            return Recorder.to_stream(stream, info if pose == MATRIX else {**info, "pose": pose}, clock=now)
+            return Recorder.to_stream(
+                stream, info if pose == MATRIX else {**info, "pose": pose}, clock=now
+            )
 
         session.add_sink(open_stream, per_frame=options.per_frame, pose=pose)
     elif mode is OutputFormat.events:
@@ -139,7 +149,9 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
                     raise
                 broken_pipe = True  # `--format events | head`: the reader has what it wanted
             except RecordingError as err:
-                if (mode is OutputFormat.ndjson or records_to_stdout(options.record)) and "Broken pipe" in str(err):
+                if (
+                    mode is OutputFormat.ndjson or records_to_stdout(options.record)
+                ) and "Broken pipe" in str(err):
                     broken_pipe = True  # the reader went away (`| head`): not an error
                 else:
                     reason = "error"
@@ -187,8 +199,12 @@ class EventPrinter:
         events = self.detector.frame(session, moment)
         if events:
             self.lines += len(events)
-            self.stream.write("".join(event_line(e, self.origin, pose=self.pose, length_unit=self.length_unit) + "\n"
-                                      for e in events))
+            self.stream.write(
+                "".join(
+                    event_line(e, self.origin, pose=self.pose, length_unit=self.length_unit) + "\n"
+                    for e in events
+                )
+            )
             self.stream.flush()
 
 
@@ -198,7 +214,9 @@ class RateNotice:
 
     def __init__(self, session: MonitorSession, tell=None) -> None:
         self.session = session
-        self.tell = tell or (lambda text: print(f"gadgetctl: note: {text}", file=sys.stderr, flush=True))
+        self.tell = tell or (
+            lambda text: print(f"gadgetctl: note: {text}", file=sys.stderr, flush=True)
+        )
         self.told = False
 
     def check(self) -> None:
@@ -207,8 +225,10 @@ class RateNotice:
             return
         self.told = True
         requested, achieved = shortfall
-        self.tell(f"the frame rate of {requested:g} Hz is not reached: about {achieved:.0f} frames "
-                  "per second (--duration counts seconds all the same)")
+        self.tell(
+            f"the frame rate of {requested:g} Hz is not reached: about {achieved:.0f} frames "
+            "per second (--duration counts seconds all the same)"
+        )
 
 
 def _silence_stdout() -> None:
@@ -225,13 +245,23 @@ def _evaluate(session: MonitorSession) -> tuple[dict, list[str]]:
     final = session.final_stats()
     snapshot = session.snapshot()
     problems = [f"{e.name}: {status_text(e)}" for e in problem_elements(snapshot)]
-    problems += [f"{name}: {counted(s['faults'], 'fault')}, last error: {s.get('error') or '-'}"
-                 for name, s in final.items() if s.get("faults") and s.get("state") == "running"]
+    problems += [
+        f"{name}: {counted(s['faults'], 'fault')}, last error: {s.get('error') or '-'}"
+        for name, s in final.items()
+        if s.get("faults") and s.get("state") == "running"
+    ]
     return final, problems
 
 
-def _finish(session: MonitorSession, mode: OutputFormat, options: RunOptions, final: dict,
-            problems: list[str], *, human=None) -> int:
+def _finish(
+    session: MonitorSession,
+    mode: OutputFormat,
+    options: RunOptions,
+    final: dict,
+    problems: list[str],
+    *,
+    human=None,
+) -> int:
     from gadgetctl.cli.monitor_text import frames_text, stats_text
 
     human = human or sys.stdout
@@ -239,11 +269,19 @@ def _finish(session: MonitorSession, mode: OutputFormat, options: RunOptions, fi
         # after the live view (which leaves the screen as it was) always, as demo does
         human.write(frames_text(session) + stats_text(final))
     if mode is OutputFormat.live and options.record is not None:
-        where = "standard output" if records_to_stdout(options.record) else printable(str(options.record))
+        where = (
+            "standard output"
+            if records_to_stdout(options.record)
+            else printable(str(options.record))
+        )
         markers = len(session.markers)
-        human.write(f"recording: {where}: {counted(session.samples_written, 'sample')}, "
-                    f"{counted(markers, 'marker')}\n")
-    if session.finished and mode is not OutputFormat.ndjson:  # events: stdout holds only event lines
+        human.write(
+            f"recording: {where}: {counted(session.samples_written, 'sample')}, "
+            f"{counted(markers, 'marker')}\n"
+        )
+    if (
+        session.finished and mode is not OutputFormat.ndjson
+    ):  # events: stdout holds only event lines
         (sys.stderr if mode is OutputFormat.events else human).write("replay finished\n")
     human.flush()
     for line in problems:
@@ -254,8 +292,14 @@ def _finish(session: MonitorSession, mode: OutputFormat, options: RunOptions, fi
 def _table(session: MonitorSession, options: RunOptions, human) -> None:
     from gadgetctl.cli.monitor_text import TableView
 
-    table = TableView(session, human, interval=options.interval, length_unit=options.length_unit,
-                      quaternion=options.quaternion, pose=options.pose)
+    table = TableView(
+        session,
+        human,
+        interval=options.interval,
+        length_unit=options.length_unit,
+        quaternion=options.quaternion,
+        pose=options.pose,
+    )
     notice = RateNotice(session)
     for frame in session.frames(duration=options.duration):
         notice.check()
@@ -272,15 +316,29 @@ def _live(session: MonitorSession, options: RunOptions, human) -> None:
 
     console = Console(file=human)
     decoder = KeyDecoder()
-    recording = ("standard output" if records_to_stdout(options.record) else str(options.record)) \
-        if options.record else None
-    view = LiveView(session, console, title=options.title, length_unit=options.length_unit,
-                    quaternion=options.quaternion, recording=recording, heading=options.heading)
-    controls = _Controls(session, view, has_recording=options.record is not None, keyboard=options.keyboard)
+    recording = (
+        ("standard output" if records_to_stdout(options.record) else str(options.record))
+        if options.record
+        else None
+    )
+    view = LiveView(
+        session,
+        console,
+        title=options.title,
+        length_unit=options.length_unit,
+        quaternion=options.quaternion,
+        recording=recording,
+        heading=options.heading,
+    )
+    controls = _Controls(
+        session, view, has_recording=options.record is not None, keyboard=options.keyboard
+    )
     notice = RateNotice(session, lambda text: setattr(view, "message", text))
     with RawTerminal(mouse=options.mouse) as terminal, view:
         # a finished replay stays on screen (FINISHED) until q, unless a duration was given
-        for _ in session.frames(duration=options.duration, stop_at_end=options.duration is not None):
+        for _ in session.frames(
+            duration=options.duration, stop_at_end=options.duration is not None
+        ):
             notice.check()
             moment = now()
             events = decoder.feed(terminal.read(), moment) + decoder.flush(moment)
@@ -295,7 +353,9 @@ class _Controls:
     """What the keys of the live view do: the monitor's own keys, the marker prompt, and
     everything else forwarded to the keyboard/mouse devices."""
 
-    def __init__(self, session: MonitorSession, view, *, has_recording: bool, keyboard: str | None = None) -> None:
+    def __init__(
+        self, session: MonitorSession, view, *, has_recording: bool, keyboard: str | None = None
+    ) -> None:
         self.session = session
         self.view = view
         self.has_recording = has_recording

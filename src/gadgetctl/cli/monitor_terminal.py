@@ -30,29 +30,90 @@ MOUSE_OFF = "\x1b[?1003l\x1b[?1006l"
 _LETTERS = {chr(ord("a") + i): Key[f"KEY_{chr(ord('A') + i)}"] for i in range(26)}
 _DIGITS = {str(d): Key[f"KEY_{d}"] for d in range(10)}
 _PLAIN = {
-    " ": Key.KEY_SPACE, ",": Key.KEY_COMMA, ".": Key.KEY_PERIOD, "/": Key.KEY_SLASH,
-    ";": Key.KEY_SEMICOLON, "'": Key.KEY_APOSTROPHE, "[": Key.KEY_BRACKET_LEFT,
-    "]": Key.KEY_BRACKET_RIGHT, "\\": Key.KEY_BACKSLASH, "-": Key.KEY_MINUS, "=": Key.KEY_EQUAL,
-    "`": Key.KEY_QUOTE_LEFT, "\t": Key.KEY_TAB, "\r": Key.KEY_RETURN, "\n": Key.KEY_RETURN,
-    "\x7f": Key.KEY_BACKSPACE, "\x08": Key.KEY_BACKSPACE,
+    " ": Key.KEY_SPACE,
+    ",": Key.KEY_COMMA,
+    ".": Key.KEY_PERIOD,
+    "/": Key.KEY_SLASH,
+    ";": Key.KEY_SEMICOLON,
+    "'": Key.KEY_APOSTROPHE,
+    "[": Key.KEY_BRACKET_LEFT,
+    "]": Key.KEY_BRACKET_RIGHT,
+    "\\": Key.KEY_BACKSLASH,
+    "-": Key.KEY_MINUS,
+    "=": Key.KEY_EQUAL,
+    "`": Key.KEY_QUOTE_LEFT,
+    "\t": Key.KEY_TAB,
+    "\r": Key.KEY_RETURN,
+    "\n": Key.KEY_RETURN,
+    "\x7f": Key.KEY_BACKSPACE,
+    "\x08": Key.KEY_BACKSPACE,
 }
 #: Shifted characters of a US layout: the unshifted key, typed with SHIFT.
 _SHIFTED = {
-    "!": Key.KEY_1, "@": Key.KEY_2, "#": Key.KEY_3, "$": Key.KEY_4, "%": Key.KEY_5,
-    "^": Key.KEY_6, "&": Key.KEY_7, "*": Key.KEY_8, "(": Key.KEY_9, ")": Key.KEY_0,
-    "_": Key.KEY_MINUS, "+": Key.KEY_EQUAL, "{": Key.KEY_BRACKET_LEFT, "}": Key.KEY_BRACKET_RIGHT,
-    "|": Key.KEY_BACKSLASH, ":": Key.KEY_SEMICOLON, '"': Key.KEY_APOSTROPHE,
-    "<": Key.KEY_COMMA, ">": Key.KEY_PERIOD, "?": Key.KEY_SLASH, "~": Key.KEY_QUOTE_LEFT,
+    "!": Key.KEY_1,
+    "@": Key.KEY_2,
+    "#": Key.KEY_3,
+    "$": Key.KEY_4,
+    "%": Key.KEY_5,
+    "^": Key.KEY_6,
+    "&": Key.KEY_7,
+    "*": Key.KEY_8,
+    "(": Key.KEY_9,
+    ")": Key.KEY_0,
+    "_": Key.KEY_MINUS,
+    "+": Key.KEY_EQUAL,
+    "{": Key.KEY_BRACKET_LEFT,
+    "}": Key.KEY_BRACKET_RIGHT,
+    "|": Key.KEY_BACKSLASH,
+    ":": Key.KEY_SEMICOLON,
+    '"': Key.KEY_APOSTROPHE,
+    "<": Key.KEY_COMMA,
+    ">": Key.KEY_PERIOD,
+    "?": Key.KEY_SLASH,
+    "~": Key.KEY_QUOTE_LEFT,
 }
-_CSI_LETTERS = {"A": Key.KEY_UP, "B": Key.KEY_DOWN, "C": Key.KEY_RIGHT, "D": Key.KEY_LEFT,
-                "H": Key.KEY_HOME, "F": Key.KEY_END, "P": Key.KEY_F1, "Q": Key.KEY_F2,
-                "R": Key.KEY_F3, "S": Key.KEY_F4}
-_CSI_TILDE = {1: Key.KEY_HOME, 2: Key.KEY_INSERT, 3: Key.KEY_DELETE, 4: Key.KEY_END,
-              5: Key.KEY_PRIOR, 6: Key.KEY_NEXT, 7: Key.KEY_HOME, 8: Key.KEY_END,
-              11: Key.KEY_F1, 12: Key.KEY_F2, 13: Key.KEY_F3, 14: Key.KEY_F4, 15: Key.KEY_F5,
-              17: Key.KEY_F6, 18: Key.KEY_F7, 19: Key.KEY_F8, 20: Key.KEY_F9, 21: Key.KEY_F10,
-              23: Key.KEY_F11, 24: Key.KEY_F12, 25: Key.KEY_F13, 26: Key.KEY_F14, 28: Key.KEY_F15,
-              29: Key.KEY_F16, 31: Key.KEY_F17, 32: Key.KEY_F18, 33: Key.KEY_F19, 34: Key.KEY_F20}
+_CSI_LETTERS = {
+    "A": Key.KEY_UP,
+    "B": Key.KEY_DOWN,
+    "C": Key.KEY_RIGHT,
+    "D": Key.KEY_LEFT,
+    "H": Key.KEY_HOME,
+    "F": Key.KEY_END,
+    "P": Key.KEY_F1,
+    "Q": Key.KEY_F2,
+    "R": Key.KEY_F3,
+    "S": Key.KEY_F4,
+}
+_CSI_TILDE = {
+    1: Key.KEY_HOME,
+    2: Key.KEY_INSERT,
+    3: Key.KEY_DELETE,
+    4: Key.KEY_END,
+    5: Key.KEY_PRIOR,
+    6: Key.KEY_NEXT,
+    7: Key.KEY_HOME,
+    8: Key.KEY_END,
+    11: Key.KEY_F1,
+    12: Key.KEY_F2,
+    13: Key.KEY_F3,
+    14: Key.KEY_F4,
+    15: Key.KEY_F5,
+    17: Key.KEY_F6,
+    18: Key.KEY_F7,
+    19: Key.KEY_F8,
+    20: Key.KEY_F9,
+    21: Key.KEY_F10,
+    23: Key.KEY_F11,
+    24: Key.KEY_F12,
+    25: Key.KEY_F13,
+    26: Key.KEY_F14,
+    28: Key.KEY_F15,
+    29: Key.KEY_F16,
+    31: Key.KEY_F17,
+    32: Key.KEY_F18,
+    33: Key.KEY_F19,
+    34: Key.KEY_F20,
+}
 _CSI = re.compile(r"\x1b\[([0-9;?]*)([A-Za-z~])")
 _SGR_MOUSE = re.compile(r"\x1b\[<(\d+);(\d+);(\d+)([Mm])")
 _SS3 = re.compile(r"\x1bO([A-Za-z])")
@@ -131,7 +192,11 @@ class KeyDecoder:
     def flush(self, moment: float) -> list[TermEvent]:
         """Events of a pending lone ESC whose sequence never came."""
         events: list[TermEvent] = []
-        if self._pending and self._pending_since is not None and moment - self._pending_since >= ESCAPE_TIMEOUT:
+        if (
+            self._pending
+            and self._pending_since is not None
+            and moment - self._pending_since >= ESCAPE_TIMEOUT
+        ):
             self._parse(events, moment, final=True)
         return events
 
@@ -203,14 +268,22 @@ class KeyDecoder:
 
     def _mouse_event(self, code_text: str, x_text: str, y_text: str, kind: str) -> list[TermEvent]:
         code, x, y = int(code_text), int(x_text), int(y_text)
-        modifiers = tuple(m for bit, m in ((4, Modifier.SHIFT), (8, Modifier.ALT), (16, Modifier.CTRL))
-                          if code & bit)
+        modifiers = tuple(
+            m
+            for bit, m in ((4, Modifier.SHIFT), (8, Modifier.ALT), (16, Modifier.CTRL))
+            if code & bit
+        )
         events: list[TermEvent] = []
         previous = self._mouse
         self._mouse = (x, y)
         if previous is not None and (x, y) != previous:
-            events.append(TermEvent("move", dx=float((x - previous[0]) * PIXELS_PER_CELL),
-                                    dy=float((y - previous[1]) * PIXELS_PER_CELL)))
+            events.append(
+                TermEvent(
+                    "move",
+                    dx=float((x - previous[0]) * PIXELS_PER_CELL),
+                    dy=float((y - previous[1]) * PIXELS_PER_CELL),
+                )
+            )
         base = code & ~(4 | 8 | 16 | 32)
         if code & 32:  # motion, with or without a button held
             return events
@@ -232,7 +305,9 @@ class RawTerminal:
     happened, and turns mouse reporting off.
     """
 
-    def __init__(self, stdin: TextIO | None = None, stdout: TextIO | None = None, *, mouse: bool = True) -> None:
+    def __init__(
+        self, stdin: TextIO | None = None, stdout: TextIO | None = None, *, mouse: bool = True
+    ) -> None:
         self.stdin = stdin or sys.stdin
         self.stdout = stdout or sys.stdout
         self.fd = self.stdin.fileno()

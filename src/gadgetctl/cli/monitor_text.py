@@ -56,7 +56,9 @@ def number(value: float, digits: int = 3) -> str:
     return f"{value:.{digits}f}" if math.isfinite(value) else str(value)
 
 
-def position_text(matrix: Any, length_unit: str = "meters", quaternion: bool = False, pose: str | None = None) -> str:
+def position_text(
+    matrix: Any, length_unit: str = "meters", quaternion: bool = False, pose: str | None = None
+) -> str:
     """The translation and the rotation as Euler angles (``quaternion`` adds w x y z); with
     ``pose`` (``--pose``) exactly that form (:func:`gadgetctl.monitor.events.pose_text`)."""
     if pose is not None:
@@ -78,11 +80,19 @@ def position_text(matrix: Any, length_unit: str = "meters", quaternion: bool = F
 
 def glove_text(angles: Any) -> str:
     a = np.degrees(np.asarray(angles, dtype=np.float64).reshape(6, 4))
-    return " ".join(f"{name} {'/'.join(f'{v:.0f}' for v in row)}" for name, row in zip(FINGERS, a, strict=True))
+    return " ".join(
+        f"{name} {'/'.join(f'{v:.0f}' for v in row)}" for name, row in zip(FINGERS, a, strict=True)
+    )
 
 
-def unit_value_text(view: UnitView, *, element: str = "device", length_unit: str = "meters",
-                    quaternion: bool = False, pose: str | None = None) -> str:
+def unit_value_text(
+    view: UnitView,
+    *,
+    element: str = "device",
+    length_unit: str = "meters",
+    quaternion: bool = False,
+    pose: str | None = None,
+) -> str:
     """One unit's value as text (no bar, no sparkline)."""
     kind, value = view.kind, view.value
     if kind == "analog":
@@ -107,13 +117,19 @@ def unit_value_text(view: UnitView, *, element: str = "device", length_unit: str
     return str(value)
 
 
-def values_text(element: ElementView, *, length_unit: str = "meters", quaternion: bool = False,
-                pose: str | None = None) -> str:
+def values_text(
+    element: ElementView,
+    *,
+    length_unit: str = "meters",
+    quaternion: bool = False,
+    pose: str | None = None,
+) -> str:
     """Every unit of an element on one line, grouped by kind."""
     groups: dict[str, list[str]] = {}
     for unit in element.values:
-        text = unit_value_text(unit, element=element.element, length_unit=length_unit, quaternion=quaternion,
-                               pose=pose)
+        text = unit_value_text(
+            unit, element=element.element, length_unit=length_unit, quaternion=quaternion, pose=pose
+        )
         if element.element == "device":
             text = f"{unit.unit}: {text}"
         groups.setdefault(unit.kind, []).append(text)
@@ -135,12 +151,36 @@ def difference_lines(snapshot: Snapshot) -> list[str]:
 # --------------------------------------------------------------------------- the table
 
 
-COLUMNS = ("NAME", "KIND", "TYPE", "STATUS", "RATE Hz", "/FRAME", "DROPPED", "AGE ms", "JITTER ms", "VALUES")
+COLUMNS = (
+    "NAME",
+    "KIND",
+    "TYPE",
+    "STATUS",
+    "RATE Hz",
+    "/FRAME",
+    "DROPPED",
+    "AGE ms",
+    "JITTER ms",
+    "VALUES",
+)
 
 
 #: Driver counters of traffic, not of trouble: left out of the health summary.
-THROUGHPUT = frozenset({"datagrams", "packets", "frames", "records", "polls", "other_messages",
-                        "requests", "replies", "messages", "lobs_sent", "connects"})
+THROUGHPUT = frozenset(
+    {
+        "datagrams",
+        "packets",
+        "frames",
+        "records",
+        "polls",
+        "other_messages",
+        "requests",
+        "replies",
+        "messages",
+        "lobs_sent",
+        "connects",
+    }
+)
 #: Health fields shown elsewhere (the dropped column) or formatted with another.
 _SHOWN_ELSEWHERE = frozenset({"dropped", "last_fault", "last_fault_at"})
 
@@ -150,43 +190,66 @@ def health_text(health: Mapping[str, Any]) -> str:
     device's life) and its last fault with its time; empty when all is well."""
     import time
 
-    parts = [f"{name} {value:g}" for name, value in health.items()
-             if name not in THROUGHPUT and name not in _SHOWN_ELSEWHERE and isinstance(value, int | float) and value]
+    parts = [
+        f"{name} {value:g}"
+        for name, value in health.items()
+        if name not in THROUGHPUT
+        and name not in _SHOWN_ELSEWHERE
+        and isinstance(value, int | float)
+        and value
+    ]
     reason = health.get("last_fault")
     if reason:
         at = health.get("last_fault_at")
-        when = time.strftime("%H:%M:%S", time.localtime(at)) + " " if isinstance(at, int | float) else ""
+        when = (
+            time.strftime("%H:%M:%S", time.localtime(at)) + " "
+            if isinstance(at, int | float)
+            else ""
+        )
         parts.append(f"last fault {when}{reason}")
     return ", ".join(parts)
 
 
-def table_rows(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: bool = False,
-               pose: str | None = None) -> list[list[str]]:
+def table_rows(
+    snapshot: Snapshot,
+    *,
+    length_unit: str = "meters",
+    quaternion: bool = False,
+    pose: str | None = None,
+) -> list[list[str]]:
     rows = []
     for element in snapshot.elements:
         stats = element.stats
         own = element.element == "device"
         target = ""
         if element.target:
-            target = f" -> {element.target}" + (f"[{element.unit}]" if element.unit is not None and element.element == "proxy" else "")
-        rows.append([
-            element.name,
-            element.element,
-            element.type + target,
-            element.state,
-            rate_text(stats.window_rate) if stats else "-",
-            per_frame_text(stats) if own else "",
-            str(stats.dropped) if stats and own else ("-" if own else ""),
-            ms_text(element.age) if element.age is not None else "-",
-            ms_text(stats.jitter) if stats and own else ("-" if own else ""),
-            values_text(element, length_unit=length_unit, quaternion=quaternion, pose=pose)
-            + (f"  [{element.reason}]" if element.reason else "")
-            + (f"  health: {health}" if (health := health_text(element.health)) else ""),
-        ])
+            target = f" -> {element.target}" + (
+                f"[{element.unit}]"
+                if element.unit is not None and element.element == "proxy"
+                else ""
+            )
+        rows.append(
+            [
+                element.name,
+                element.element,
+                element.type + target,
+                element.state,
+                rate_text(stats.window_rate) if stats else "-",
+                per_frame_text(stats) if own else "",
+                str(stats.dropped) if stats and own else ("-" if own else ""),
+                ms_text(element.age) if element.age is not None else "-",
+                ms_text(stats.jitter) if stats and own else ("-" if own else ""),
+                values_text(element, length_unit=length_unit, quaternion=quaternion, pose=pose)
+                + (f"  [{element.reason}]" if element.reason else "")
+                + (f"  health: {health}" if (health := health_text(element.health)) else ""),
+            ]
+        )
     return rows
 
 
-def format_table(header: Sequence[str], rows: Sequence[Sequence[str]], *, last_free: bool = True) -> str:
+def format_table(
+    header: Sequence[str], rows: Sequence[Sequence[str]], *, last_free: bool = True
+) -> str:
     rows = [[printable(cell) for cell in row] for row in rows]  # names and values from devices
     widths = [len(h) for h in header]
     for row in rows:
@@ -194,16 +257,32 @@ def format_table(header: Sequence[str], rows: Sequence[Sequence[str]], *, last_f
             widths[i] = max(widths[i], len(cell))
     lines = []
     for row in [list(header), *rows]:
-        cells = [cell.ljust(widths[i]) if i < len(row) - 1 or not last_free else cell for i, cell in enumerate(row)]
+        cells = [
+            cell.ljust(widths[i]) if i < len(row) - 1 or not last_free else cell
+            for i, cell in enumerate(row)
+        ]
         lines.append("  ".join(cells).rstrip())
     return "\n".join(lines)
 
 
-def snapshot_table(snapshot: Snapshot, *, length_unit: str = "meters", quaternion: bool = False,
-                   pose: str | None = None) -> str:
-    head = (f"[{snapshot.elapsed:7.2f} s] frame {snapshot.frame}, {snapshot.frame_rate:.1f} frames/s"
-            + (f", {counted(snapshot.samples_written, 'sample')} written" if snapshot.samples_written else ""))
-    body = format_table(COLUMNS, table_rows(snapshot, length_unit=length_unit, quaternion=quaternion, pose=pose))
+def snapshot_table(
+    snapshot: Snapshot,
+    *,
+    length_unit: str = "meters",
+    quaternion: bool = False,
+    pose: str | None = None,
+) -> str:
+    head = (
+        f"[{snapshot.elapsed:7.2f} s] frame {snapshot.frame}, {snapshot.frame_rate:.1f} frames/s"
+        + (
+            f", {counted(snapshot.samples_written, 'sample')} written"
+            if snapshot.samples_written
+            else ""
+        )
+    )
+    body = format_table(
+        COLUMNS, table_rows(snapshot, length_unit=length_unit, quaternion=quaternion, pose=pose)
+    )
     notes = "".join(f"{line}\n" for line in difference_lines(snapshot))
     return head + "\n" + body + "\n" + notes
 
@@ -211,8 +290,16 @@ def snapshot_table(snapshot: Snapshot, *, length_unit: str = "meters", quaternio
 class TableView:
     """Prints a plain-text table of every selected element every ``interval`` seconds."""
 
-    def __init__(self, session: MonitorSession, stream: TextIO, *, interval: float = 1.0,
-                 length_unit: str = "meters", quaternion: bool = False, pose: str | None = None) -> None:
+    def __init__(
+        self,
+        session: MonitorSession,
+        stream: TextIO,
+        *,
+        interval: float = 1.0,
+        length_unit: str = "meters",
+        quaternion: bool = False,
+        pose: str | None = None,
+    ) -> None:
         self.session = session
         self.pose = pose
         self.stream = stream
@@ -225,27 +312,45 @@ class TableView:
         if self._next is None:
             self._next = self.interval
         if elapsed >= self._next:
-            self._next += self.interval * max(1, math.floor((elapsed - self._next) / self.interval) + 1)
+            self._next += self.interval * max(
+                1, math.floor((elapsed - self._next) / self.interval) + 1
+            )
             self.print()
 
     def print(self) -> None:
         snapshot = self.session.snapshot()
-        self.stream.write(snapshot_table(snapshot, length_unit=self.length_unit, quaternion=self.quaternion,
-                                         pose=self.pose) + "\n")
+        self.stream.write(
+            snapshot_table(
+                snapshot, length_unit=self.length_unit, quaternion=self.quaternion, pose=self.pose
+            )
+            + "\n"
+        )
         self.stream.flush()
 
 
 # --------------------------------------------------------------------------- statistics
 
 
-STATS_COLUMNS = ("DEVICE", "STATE", "SAMPLES", "MEAN Hz", "P50 ms", "P99 ms", "MAX GAP ms", "JITTER ms",
-                 "DROPPED", "FAULTS")
+STATS_COLUMNS = (
+    "DEVICE",
+    "STATE",
+    "SAMPLES",
+    "MEAN Hz",
+    "P50 ms",
+    "P99 ms",
+    "MAX GAP ms",
+    "JITTER ms",
+    "DROPPED",
+    "FAULTS",
+)
 
 
 def frames_text(session: Any) -> str:
     """The frames a session ran: how many, over how long, at what rate against the requested."""
-    return (f"frames: {session.frames_run} in {session.run_seconds:.3f} s, "
-            f"{session.achieved_rate:.1f} Hz achieved of {session.rate:g} Hz requested\n")
+    return (
+        f"frames: {session.frames_run} in {session.run_seconds:.3f} s, "
+        f"{session.achieved_rate:.1f} Hz achieved of {session.rate:g} Hz requested\n"
+    )
 
 
 def stats_text(stats: Mapping[str, Mapping[str, Any]]) -> str:
@@ -254,28 +359,43 @@ def stats_text(stats: Mapping[str, Mapping[str, Any]]) -> str:
         return "statistics: no device was monitored\n"
     rows = []
     for name, s in stats.items():
-        rows.append([name, str(s.get("state", "-")), str(s.get("samples", s.get("count", 0))),
-                     rate_text(s.get("mean_rate")), ms_text(s.get("p50_interval")),
-                     ms_text(s.get("p99_interval")), ms_text(s.get("max_gap")), ms_text(s.get("jitter")),
-                     str(s.get("dropped", 0)), str(s.get("faults", 0))])
+        rows.append(
+            [
+                name,
+                str(s.get("state", "-")),
+                str(s.get("samples", s.get("count", 0))),
+                rate_text(s.get("mean_rate")),
+                ms_text(s.get("p50_interval")),
+                ms_text(s.get("p99_interval")),
+                ms_text(s.get("max_gap")),
+                ms_text(s.get("jitter")),
+                str(s.get("dropped", 0)),
+                str(s.get("faults", 0)),
+            ]
+        )
     lines = []
     for name, s in stats.items():
         clock = s.get("source_clock")
         if isinstance(clock, Mapping) and clock.get("offset") is not None:
-            lines.append(f"{name}: arrival minus the source's timestamp: least {clock['offset'] * 1000:+.3f} ms "
-                         f"(clock offset plus the least transport latency), on average "
-                         f"{ms_text(clock.get('latency'))} ms more (transport and queueing), "
-                         f"over {counted(clock.get('samples') or 0, 'timestamp')}")
+            lines.append(
+                f"{name}: arrival minus the source's timestamp: least {clock['offset'] * 1000:+.3f} ms "
+                f"(clock offset plus the least transport latency), on average "
+                f"{ms_text(clock.get('latency'))} ms more (transport and queueing), "
+                f"over {counted(clock.get('samples') or 0, 'timestamp')}"
+            )
     extra = "".join(line + "\n" for line in lines)
     return "statistics:\n" + format_table(STATS_COLUMNS, rows, last_free=False) + "\n" + extra
 
 
 def summary_text(summary: Any) -> str:
     """A recording summary (``gadgetctl replay --summary``)."""
-    lines = [f"{printable(str(summary.path))}: {counted(summary.samples, 'sample')} from "
-             f"{counted(len(summary.devices), 'device')} over "
-             f"{summary.duration:.3f} s" + (f", {counted(summary.frames, 'frame')}" if summary.frames else "")
-             + f"; ended: {summary.end_reason or 'cut off (no end record)'}"]
+    lines = [
+        f"{printable(str(summary.path))}: {counted(summary.samples, 'sample')} from "
+        f"{counted(len(summary.devices), 'device')} over "
+        f"{summary.duration:.3f} s"
+        + (f", {counted(summary.frames, 'frame')}" if summary.frames else "")
+        + f"; ended: {summary.end_reason or 'cut off (no end record)'}"
+    ]
     if summary.created:
         lines.append(f"created {printable(str(summary.created))}")
     start = summary.first_timestamp
@@ -286,11 +406,16 @@ def summary_text(summary: Any) -> str:
         median = ms_text(device.median_interval)
         largest = ms_text(device.max_interval)
         gaps = device.gaps
-        gap_text = (f"{counted(gaps.count, 'gap')} > {ms_text(gaps.threshold)} ms, largest {ms_text(gaps.largest)} ms"
-                    if gaps.count else "no gaps")
-        lines.append(f"{printable(device.name)}: {counted(device.updates, 'update')}, {counted(device.samples, 'sample')}, "
-                     f"{device.mean_rate:.1f} Hz over {device.duration:.3f} s, interval median {median} ms, "
-                     f"max {largest} ms, {gap_text}")
+        gap_text = (
+            f"{counted(gaps.count, 'gap')} > {ms_text(gaps.threshold)} ms, largest {ms_text(gaps.largest)} ms"
+            if gaps.count
+            else "no gaps"
+        )
+        lines.append(
+            f"{printable(device.name)}: {counted(device.updates, 'update')}, {counted(device.samples, 'sample')}, "
+            f"{device.mean_rate:.1f} Hz over {device.duration:.3f} s, interval median {median} ms, "
+            f"max {largest} ms, {gap_text}"
+        )
         for unit in device.units:
             lines.extend(_unit_summary_lines(unit))
     for problem in summary.problems:
@@ -307,13 +432,17 @@ def _unit_summary_lines(unit: Any) -> list[str]:
             return [head + ", range -"]
         lines = [head]
         sparks = unit.sparklines or {}
-        for axis, (lo, hi) in enumerate(zip(unit.translation_min, unit.translation_max, strict=True)):
+        for axis, (lo, hi) in enumerate(
+            zip(unit.translation_min, unit.translation_max, strict=True)
+        ):
             name = "xyz"[axis]
             spark = f"  {sparks[name]}" if sparks.get(name) else ""
             lines.append(f"      {name} {lo:+.3f}..{hi:+.3f} m{spark}")
         if unit.rotation_min is not None and unit.rotation_max is not None:
-            turns = " ".join(f"{'xyz'[i]} {lo:+.1f}..{hi:+.1f}"
-                             for i, (lo, hi) in enumerate(zip(unit.rotation_min, unit.rotation_max, strict=True)))
+            turns = " ".join(
+                f"{'xyz'[i]} {lo:+.1f}..{hi:+.1f}"
+                for i, (lo, hi) in enumerate(zip(unit.rotation_min, unit.rotation_max, strict=True))
+            )
             turn = f", turned up to {unit.turn:.1f} from the first" if unit.turn is not None else ""
             lines.append(f"      rotation (Euler XYZ, degrees) {turns}{turn}")
         return lines

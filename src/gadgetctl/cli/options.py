@@ -43,15 +43,23 @@ def use_color(mode: ColorMode, stream=None) -> bool:
     return hasattr(stream, "isatty") and stream.isatty()
 
 
-COLOR_OPTION = typer.Option(ColorMode.auto, "--color", help="Colour the output: auto (only on a terminal), always or never.")
+COLOR_OPTION = typer.Option(
+    ColorMode.auto, "--color", help="Colour the output: auto (only on a terminal), always or never."
+)
 
 
 def emit(text: str) -> None:
     if text:
         sys.stdout.write(text if text.endswith("\n") else text + "\n")
 
+
 DEFINITIONS_OPTION = typer.Option(
-    [], "--definitions", "-d", metavar="DIR",
-    help="Add a directory to the definition search path (after the bundled set, VJ_BASE_DIR and JCCL_DEFINITION_PATH). Repeatable.")
+    [],
+    "--definitions",
+    "-d",
+    metavar="DIR",
+    help="Add a directory to the definition search path (after the bundled set, VJ_BASE_DIR and JCCL_DEFINITION_PATH). Repeatable.",
+)
 BUNDLED_OPTION = typer.Option(
-    True, "--bundled/--no-bundled", help="Use gadgetctl's bundled standard definitions.")
+    True, "--bundled/--no-bundled", help="Use gadgetctl's bundled standard definitions."
+)

@@ -15,13 +15,22 @@ from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION, DataFormat
 
 
 def pending(
-    files: list[Path] = typer.Argument(..., metavar="FILES...", help="Configuration files, loaded together as one configuration.", show_default=False),
+    files: list[Path] = typer.Argument(
+        ...,
+        metavar="FILES...",
+        help="Configuration files, loaded together as one configuration.",
+        show_default=False,
+    ),
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
     fmt: DataFormat = typer.Option(DataFormat.text, "--format", "-f", help="Output format."),
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
     trust_driver_path: bool = TRUST_OPTION,
-    start: bool = typer.Option(False, "--start/--no-start", help="Also start the devices (opening their ports and connections) to find those that fail to start; everything is stopped again before the report."),
+    start: bool = typer.Option(
+        False,
+        "--start/--no-start",
+        help="Also start the devices (opening their ports and connections) to find those that fail to start; everything is stopped again before the report.",
+    ),
 ) -> None:
     """Configure the input manager from FILES and report the elements that stay pending,
     each with its reason, and the proxies that end up stupefied.
@@ -38,8 +47,12 @@ def pending(
 
     for path in files:
         require_file(path)
-    options = ManagerOptions(start_devices=start, driver_dirs=list(driver_paths), retry_interval=None)
-    manager, configuration = InputManager.from_files(files, definitions=definitions, bundled=bundled, options=options)
+    options = ManagerOptions(
+        start_devices=start, driver_dirs=list(driver_paths), retry_interval=None
+    )
+    manager, configuration = InputManager.from_files(
+        files, definitions=definitions, bundled=bundled, options=options
+    )
     require_loadable(configuration)
     with manager:
         manager.configure(configuration)

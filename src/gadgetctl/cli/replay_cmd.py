@@ -37,18 +37,49 @@ def register(app: typer.Typer) -> None:
 
 
 def replay(
-    recording: Path = typer.Argument(..., metavar="FILE", help="A recording made with `gadgetctl monitor --record`, or a VRPN log file (.vrpn).", show_default=False),
-    names: list[str] = typer.Argument(None, metavar="[NAME...]", help="Names or glob patterns of the devices, proxies and aliases to show (default: all).", show_default=False),
-    speed: float = typer.Option(1.0, "--speed", metavar="X", help="Replay X times as fast as recorded (0.5: half speed)."),
-    loop: bool = typer.Option(False, "--loop", help="Start again at the end, until stopped (timestamps keep increasing)."),
-    configs: list[Path] = typer.Option([], "--config", "-c", metavar="FILE", help="Replay against this configuration: its elements named like recorded devices become replay devices; proxies, filters and aliases stay. Repeatable. Default: a configuration synthesised from the recording's header."),
-    mapping: list[str] = typer.Option([], "--map", metavar="OLD=NEW", help="Feed the recorded device OLD to the device NEW of the configuration. Repeatable."),
-    summary: bool = typer.Option(False, "--summary", help="Print per-device counts, rates, gaps and value ranges with sparklines instead of replaying (--format ndjson: as one JSON object)."),
+    recording: Path = typer.Argument(
+        ...,
+        metavar="FILE",
+        help="A recording made with `gadgetctl monitor --record`, or a VRPN log file (.vrpn).",
+        show_default=False,
+    ),
+    names: list[str] = typer.Argument(
+        None,
+        metavar="[NAME...]",
+        help="Names or glob patterns of the devices, proxies and aliases to show (default: all).",
+        show_default=False,
+    ),
+    speed: float = typer.Option(
+        1.0, "--speed", metavar="X", help="Replay X times as fast as recorded (0.5: half speed)."
+    ),
+    loop: bool = typer.Option(
+        False, "--loop", help="Start again at the end, until stopped (timestamps keep increasing)."
+    ),
+    configs: list[Path] = typer.Option(
+        [],
+        "--config",
+        "-c",
+        metavar="FILE",
+        help="Replay against this configuration: its elements named like recorded devices become replay devices; proxies, filters and aliases stay. Repeatable. Default: a configuration synthesised from the recording's header.",
+    ),
+    mapping: list[str] = typer.Option(
+        [],
+        "--map",
+        metavar="OLD=NEW",
+        help="Feed the recorded device OLD to the device NEW of the configuration. Repeatable.",
+    ),
+    summary: bool = typer.Option(
+        False,
+        "--summary",
+        help="Print per-device counts, rates, gaps and value ranges with sparklines instead of replaying (--format ndjson: as one JSON object).",
+    ),
     rate: float = RATE_OPTION,
     duration: float | None = DURATION_OPTION,
     fmt: OutputFormat | None = FORMAT_OPTION,
     per_frame: bool = PER_FRAME_OPTION,
-    record: Path | None = typer.Option(None, "--record", metavar="FILE", help="Record the replayed session to FILE."),
+    record: Path | None = typer.Option(
+        None, "--record", metavar="FILE", help="Record the replayed session to FILE."
+    ),
     overwrite: bool = OVERWRITE_OPTION,
     stats: bool = STATS_OPTION,
     units: LengthUnits = UNITS_OPTION,
@@ -81,12 +112,30 @@ def replay(
         from gadgetctl.cli.preflight import check_before_running
 
         check_before_running(list(configs), definitions=definitions, bundled=bundled, strict=strict)
-    code = run_replay(recording, list(names or ()), speed=speed, loop=loop, configs=configs, mapping=mapping,
-                      rate=rate, duration=duration, fmt=fmt, per_frame=per_frame, record=record,
-                      overwrite=overwrite, stats=stats, units=units.value, quaternion=quaternion,
-                      interval=interval, mouse=mouse, driver_paths=driver_paths, definitions=definitions,
-                      bundled=bundled, pose=pose.value if pose else None,
-                      thresholds=event_thresholds(dead_band, pose_threshold, angle_threshold))
+    code = run_replay(
+        recording,
+        list(names or ()),
+        speed=speed,
+        loop=loop,
+        configs=configs,
+        mapping=mapping,
+        rate=rate,
+        duration=duration,
+        fmt=fmt,
+        per_frame=per_frame,
+        record=record,
+        overwrite=overwrite,
+        stats=stats,
+        units=units.value,
+        quaternion=quaternion,
+        interval=interval,
+        mouse=mouse,
+        driver_paths=driver_paths,
+        definitions=definitions,
+        bundled=bundled,
+        pose=pose.value if pose else None,
+        thresholds=event_thresholds(dead_band, pose_threshold, angle_threshold),
+    )
     raise typer.Exit(code)
 
 
@@ -97,7 +146,9 @@ def parse_mapping(items: list[str]) -> dict[str, str]:
     for item in items:
         old, sep, new = item.partition("=")
         if not sep or not old or not new:
-            raise GadgetctlError(f"--map {item!r}: expected OLD=NEW (recorded name=name in the configuration)")
+            raise GadgetctlError(
+                f"--map {item!r}: expected OLD=NEW (recorded name=name in the configuration)"
+            )
         if old in result:
             raise GadgetctlError(f"--map: {old!r} is mapped twice")
         result[old] = new
@@ -146,13 +197,31 @@ def _summary(recording: Path, fmt: OutputFormat | None) -> None:
         emit(summary_text(result))
 
 
-def run_replay(recording: Path, names: list[str], *, speed: float = 1.0, loop: bool = False,
-               configs: list[Path] | None = None, mapping: list[str] | None = None, rate: float = 60.0,
-               duration: float | None = None, fmt: OutputFormat | None = None, per_frame: bool = False,
-               record: Path | None = None, overwrite: bool = False, stats: bool = False,
-               units: str = "meters", quaternion: bool = False, interval: float = 1.0, mouse: bool = True,
-               driver_paths: list[Path] | None = None, definitions: list[Path] | None = None,
-               bundled: bool = True, pose: str | None = None, thresholds=None) -> int:
+def run_replay(
+    recording: Path,
+    names: list[str],
+    *,
+    speed: float = 1.0,
+    loop: bool = False,
+    configs: list[Path] | None = None,
+    mapping: list[str] | None = None,
+    rate: float = 60.0,
+    duration: float | None = None,
+    fmt: OutputFormat | None = None,
+    per_frame: bool = False,
+    record: Path | None = None,
+    overwrite: bool = False,
+    stats: bool = False,
+    units: str = "meters",
+    quaternion: bool = False,
+    interval: float = 1.0,
+    mouse: bool = True,
+    driver_paths: list[Path] | None = None,
+    definitions: list[Path] | None = None,
+    bundled: bool = True,
+    pose: str | None = None,
+    thresholds=None,
+) -> int:
     import math
 
     from gadgetctl.cli.monitor_cmd import check_options, fatal_load_errors
@@ -169,7 +238,12 @@ def run_replay(recording: Path, names: list[str], *, speed: float = 1.0, loop: b
     renames = parse_mapping(list(mapping or ()))
     mode = choose_format(fmt, record)
     check_record_path(record, overwrite, mode)
-    if record is not None and str(record) != "-" and record.exists() and record.resolve() == recording.resolve():
+    if (
+        record is not None
+        and str(record) != "-"
+        and record.exists()
+        and record.resolve() == recording.resolve()
+    ):
         raise GadgetctlError(f"{record}: cannot record over the recording being replayed")
     configs = list(configs or ())
     from gadgetctl.files import require_file
@@ -184,18 +258,25 @@ def run_replay(recording: Path, names: list[str], *, speed: float = 1.0, loop: b
             source, renames = _open_vrpn_log(recording, configs, renames)
         else:
             source = open_recording(recording)
-        schedule = replaydevice.make_schedule(source.records, speed=speed, loop=loop, mapping=renames)
+        schedule = replaydevice.make_schedule(
+            source.records, speed=speed, loop=loop, mapping=renames
+        )
     except RecordingError as err:
         raise GadgetctlError(str(err)) from None
     except ValueError as err:
         raise GadgetctlError(f"{recording}: {err}") from None
     notes = [f"{recording}: {problem}" for problem in source.problems if problem.severity != "info"]
-    notes += [f"--map: {warning}" for warning in schedule.mapping_warnings if "does not occur" not in warning]
+    notes += [
+        f"--map: {warning}"
+        for warning in schedule.mapping_warnings
+        if "does not occur" not in warning
+    ]
     recorded = replaydevice.recorded_devices(source.header, schedule, {})
     options = ManagerOptions(driver_dirs=list(driver_paths or ()))
     if configs:
-        manager, configuration = InputManager.from_files(configs, definitions=list(definitions or ()),
-                                                         bundled=bundled, options=options)
+        manager, configuration = InputManager.from_files(
+            configs, definitions=list(definitions or ()), bundled=bundled, options=options
+        )
         try:
             fatal_load_errors(configuration)
             replaydevice.check_mapping(renames, recorded, configuration, recording)
@@ -206,24 +287,50 @@ def run_replay(recording: Path, names: list[str], *, speed: float = 1.0, loop: b
         replaydevice.check_mapping(renames, recorded, None, recording)
         from gadgetctl.input.definitions import repository_for
 
-        manager = InputManager(repository_for(None, definitions=list(definitions or ()), bundled=bundled,
-                                              driver_dirs=options.driver_dirs), options)
+        manager = InputManager(
+            repository_for(
+                None,
+                definitions=list(definitions or ()),
+                bundled=bundled,
+                driver_dirs=options.driver_dirs,
+            ),
+            options,
+        )
         configuration = None
     try:
         replaydevice.install(manager)
         plan = replaydevice.plan_replay(source.header, schedule, recording, configuration, renames)
         notes += plan.notes
-        feeder = replaydevice.ReplayFeeder(schedule, manager.device,
-                                           {name: device.units for name, device in plan.devices.items()})
+        feeder = replaydevice.ReplayFeeder(
+            schedule, manager.device, {name: device.units for name, device in plan.devices.items()}
+        )
         info = {"replay_of": str(recording), "speed": speed, "config": [str(p) for p in configs]}
-        session = MonitorSession(manager, plan.configuration, selectors=names, rate=rate, source=feeder,
-                                 info=info)
+        session = MonitorSession(
+            manager, plan.configuration, selectors=names, rate=rate, source=feeder, info=info
+        )
         session.start()
     except BaseException:
         manager.shutdown()
         raise
     title = f"{recording} at x{speed:g}" + (" (loop)" if loop else "")
-    return run(session, RunOptions(format=mode, duration=duration, per_frame=per_frame, stats=stats,
-                                   record=record, overwrite=overwrite, interval=interval, length_unit=units,
-                                   quaternion=quaternion, mouse=mouse, title=title, heading="gadgetctl replay",
-                                   notes=notes, pose=pose, thresholds=thresholds), feeder=feeder)
+    return run(
+        session,
+        RunOptions(
+            format=mode,
+            duration=duration,
+            per_frame=per_frame,
+            stats=stats,
+            record=record,
+            overwrite=overwrite,
+            interval=interval,
+            length_unit=units,
+            quaternion=quaternion,
+            mouse=mouse,
+            title=title,
+            heading="gadgetctl replay",
+            notes=notes,
+            pose=pose,
+            thresholds=thresholds,
+        ),
+        feeder=feeder,
+    )

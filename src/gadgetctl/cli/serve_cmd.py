@@ -141,8 +141,9 @@ def serve(
 
         if records_to_stdout(record):
             manager.shutdown()
-            raise GadgetctlError("--record -: serve reports its clients on standard output; "
-                                 "give a file name")
+            raise GadgetctlError(
+                "--record -: serve reports its clients on standard output; give a file name"
+            )
         check_record_path(record, overwrite)
     service = ServeService(
         manager, configuration, options, info={"config": [str(p) for p in configs]}
@@ -168,7 +169,9 @@ def _check_rate(rate: float) -> float:
     from gadgetctl.errors import GadgetctlError
 
     if not 0 < rate <= 10_000:
-        raise GadgetctlError(f"--rate must be more than 0 and at most 10000 frames per second, not {rate:g}")
+        raise GadgetctlError(
+            f"--rate must be more than 0 and at most 10000 frames per second, not {rate:g}"
+        )
     return rate
 
 
@@ -310,13 +313,20 @@ def _run(service, duration: float | None, fmt: DataFormat) -> int:
         pass
     totals = service.totals()
     counters = totals["counters"]
-    noted = {k: v for k, v in counters.items() if k not in ("accepted", "connections", "disconnects", "lobs",
-                                                           "messages")}
+    noted = {
+        k: v
+        for k, v in counters.items()
+        if k not in ("accepted", "connections", "disconnects", "lobs", "messages")
+    }
     _say(
         fmt,
         {"event": "stopped", "reason": reason, **totals},
         f"gadgetctl serve: stopped ({reason}): {counted(totals['messages'], 'message')} to "
         f"{counted(totals['clients'], 'client')}, {totals['dropped']} dropped"
-        + ("; " + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in noted.items()) if noted else ""),
+        + (
+            "; " + ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in noted.items())
+            if noted
+            else ""
+        ),
     )
     return 0

@@ -17,18 +17,43 @@ def register(app: typer.Typer) -> None:
 
 
 def upgrade(
-    paths: list[Path] = typer.Argument(..., metavar="PATHS...", help="Files or directories (searched for *.jconf and *.jdef).",
-                                       show_default=False),
-    check: bool = typer.Option(False, "--check", help="Change nothing; list what would change and exit 1 "
-                               "if anything would (for CI)."),
-    diff: bool = typer.Option(False, "--diff", help="Print a unified diff of the changes instead of the files."),
-    in_place: bool = typer.Option(False, "--in-place", "-i", help="Rewrite the files (atomically)."),
-    backup: bool = typer.Option(True, "--backup/--no-backup", help="With --in-place, keep the old file as FILE.bak."),
-    output: Path = typer.Option(None, "--output", "-o", metavar="FILE", help="Write the upgraded file here (one input file only).",
-                                show_default=False),
-    drop_removed: bool = typer.Option(False, "--drop-removed", help="Also remove properties the element's "
-                                      "newest definition no longer has (validate's CFG021, e.g. device_host)."),
-    fmt: DataFormat = typer.Option(DataFormat.text, "--format", "-f", help="Output format of the --check listing."),
+    paths: list[Path] = typer.Argument(
+        ...,
+        metavar="PATHS...",
+        help="Files or directories (searched for *.jconf and *.jdef).",
+        show_default=False,
+    ),
+    check: bool = typer.Option(
+        False,
+        "--check",
+        help="Change nothing; list what would change and exit 1 if anything would (for CI).",
+    ),
+    diff: bool = typer.Option(
+        False, "--diff", help="Print a unified diff of the changes instead of the files."
+    ),
+    in_place: bool = typer.Option(
+        False, "--in-place", "-i", help="Rewrite the files (atomically)."
+    ),
+    backup: bool = typer.Option(
+        True, "--backup/--no-backup", help="With --in-place, keep the old file as FILE.bak."
+    ),
+    output: Path = typer.Option(
+        None,
+        "--output",
+        "-o",
+        metavar="FILE",
+        help="Write the upgraded file here (one input file only).",
+        show_default=False,
+    ),
+    drop_removed: bool = typer.Option(
+        False,
+        "--drop-removed",
+        help="Also remove properties the element's "
+        "newest definition no longer has (validate's CFG021, e.g. device_host).",
+    ),
+    fmt: DataFormat = typer.Option(
+        DataFormat.text, "--format", "-f", help="Output format of the --check listing."
+    ),
     definitions: list[Path] = DEFINITIONS_OPTION,
     bundled: bool = BUNDLED_OPTION,
 ) -> None:
@@ -51,8 +76,10 @@ def upgrade(
     if output is not None and len(files) != 1:
         raise GadgetctlError("--output takes exactly one input file")
     if output is not None and output.is_dir():
-        raise GadgetctlError(f"--output {output}: is a directory; give the name of the file to write "
-                             f"(e.g. -o {output / files[0].name})")
+        raise GadgetctlError(
+            f"--output {output}: is a directory; give the name of the file to write "
+            f"(e.g. -o {output / files[0].name})"
+        )
     if output is not None and not output.parent.is_dir():
         raise GadgetctlError(f"--output {output}: no such directory {output.parent}")
     if not (check or diff or in_place or output is not None) and len(files) != 1:
@@ -99,29 +126,57 @@ def _report_problems(results) -> None:
 
 def _listing(results, fmt: DataFormat) -> None:
     if fmt is DataFormat.json:
-        emit(json.dumps([{
-            "path": r.display, "changed": r.changed, "failed": r.failed,
-            "format": r.format_notes,
-            "elements": [{"type": e.type, "name": e.name, "line": e.line, "from": e.from_version,
-                          "to": e.to_version, "created": e.created, "dropped": list(e.dropped)}
-                         for e in r.elements],
-        } for r in results if r.changed or r.failed], indent=2))
+        emit(
+            json.dumps(
+                [
+                    {
+                        "path": r.display,
+                        "changed": r.changed,
+                        "failed": r.failed,
+                        "format": r.format_notes,
+                        "elements": [
+                            {
+                                "type": e.type,
+                                "name": e.name,
+                                "line": e.line,
+                                "from": e.from_version,
+                                "to": e.to_version,
+                                "created": e.created,
+                                "dropped": list(e.dropped),
+                            }
+                            for e in r.elements
+                        ],
+                    }
+                    for r in results
+                    if r.changed or r.failed
+                ],
+                indent=2,
+            )
+        )
         return
     lines = []
     for r in results:
         if not r.changed:
             continue
         lines += [f"{r.display}: {note}" for note in r.format_notes]
-        lines += [f"{r.display}:{e.line}: {e.describe()}" if e.line else f"{r.display}: {e.describe()}"
-                  for e in r.elements]
+        lines += [
+            f"{r.display}:{e.line}: {e.describe()}" if e.line else f"{r.display}: {e.describe()}"
+            for e in r.elements
+        ]
     count = sum(r.changed for r in results)
     elements = sum(len(r.elements) for r in results if r.changed)
     failed = sum(r.failed for r in results)
     if failed:
-        lines.append(f"{failed} of {counted(len(results), 'file')} could not be upgraded (see above)")
-    lines.append(f"{count} of {counted(len(results), 'file')} would change ({counted(elements, 'element')} upgraded)"
-                 if count else f"{counted(len(results), 'file')} checked: all up to date" if not failed
-                 else f"{counted(len(results) - failed, 'other file')} up to date")
+        lines.append(
+            f"{failed} of {counted(len(results), 'file')} could not be upgraded (see above)"
+        )
+    lines.append(
+        f"{count} of {counted(len(results), 'file')} would change ({counted(elements, 'element')} upgraded)"
+        if count
+        else f"{counted(len(results), 'file')} checked: all up to date"
+        if not failed
+        else f"{counted(len(results) - failed, 'other file')} up to date"
+    )
     emit("\n".join(lines))
 
 
@@ -152,8 +207,12 @@ def _write_in_place(results, backup: bool) -> None:
             sys.stderr.write(f"gadgetctl: {err}\n")
             refused = err
             continue
-        what = f"{done.target} (through the symbolic link {r.display})" if done.via_link else r.display
-        emit(f"upgraded {what} ({counted(len(r.elements), 'element')}"
-             + (f"; {'; '.join(r.format_notes)})" if r.format_notes else ")"))
+        what = (
+            f"{done.target} (through the symbolic link {r.display})" if done.via_link else r.display
+        )
+        emit(
+            f"upgraded {what} ({counted(len(r.elements), 'element')}"
+            + (f"; {'; '.join(r.format_notes)})" if r.format_notes else ")")
+        )
     if refused is not None:
         raise typer.Exit(refused.exit_code)

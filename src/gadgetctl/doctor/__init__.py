@@ -10,5 +10,13 @@ from gadgetctl.doctor.model import DeviceReport, DoctorReport, PluginReport, Por
 from gadgetctl.doctor.render import render_text
 from gadgetctl.doctor.run import DoctorOptions, diagnose
 
-__all__ = ["DeviceReport", "DoctorOptions", "DoctorReport", "PluginReport", "PortCheck", "Status",
-           "diagnose", "render_text"]
+__all__ = [
+    "DeviceReport",
+    "DoctorOptions",
+    "DoctorReport",
+    "PluginReport",
+    "PortCheck",
+    "Status",
+    "diagnose",
+    "render_text",
+]

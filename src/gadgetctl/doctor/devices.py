@@ -33,7 +33,9 @@ class _Unknown(Exception):
         self.prop = prop
 
 
-def _read(access: ElementAccess, transport: Transport, key: str, number: bool = False) -> str | int | None:
+def _read(
+    access: ElementAccess, transport: Transport, key: str, number: bool = False
+) -> str | int | None:
     prop = transport.prop(key)
     if prop is None:
         return None
@@ -43,14 +45,23 @@ def _read(access: ElementAccess, transport: Transport, key: str, number: bool = 
         raise _Unknown(prop) from None
 
 
-def check_transport(access: ElementAccess, transport: Transport, settings: CheckSettings) -> list[PortCheck]:
+def check_transport(
+    access: ElementAccess, transport: Transport, settings: CheckSettings
+) -> list[PortCheck]:
     """Every check of one transport of the element ``access`` reads."""
     try:
         return _check(access, transport, settings)
     except _Unknown as unknown:
-        return [PortCheck(transport.kind, "", Status.WARNING,
-                          f"{access.element.type} has no property {unknown.prop!r} to read the port from",
-                          "DRV107", prop=unknown.prop)]
+        return [
+            PortCheck(
+                transport.kind,
+                "",
+                Status.WARNING,
+                f"{access.element.type} has no property {unknown.prop!r} to read the port from",
+                "DRV107",
+                prop=unknown.prop,
+            )
+        ]
 
 
 def _check(access: ElementAccess, transport: Transport, settings: CheckSettings) -> list[PortCheck]:
@@ -63,7 +74,9 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
             result = _with_hint(result, _missing_hint(kind, path, settings))
         if kind == "serial" and result.status is Status.OK and transport.prop("baud"):
             baud = _read(access, transport, "baud", number=True)
-            result = PortCheck(result.kind, result.target, result.status, f"{result.detail}, {baud} baud")
+            result = PortCheck(
+                result.kind, result.target, result.status, f"{result.detail}, {baud} baud"
+            )
         return [result.with_prop(transport.props[key])]
     if kind == "udp":
         port = int(_read(access, transport, "port", number=True) or 0)
@@ -74,29 +87,51 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
         if host:
             peer = _read(access, transport, "peer_port", number=True)
             target = f"{host}:{peer}" if peer else str(host)
-            checks.append(PortCheck("udp", target, Status.UNCHECKED,
-                                    f"commands are sent to {target} (UDP; not contacted)",
-                                    prop=transport.props["host"]))
+            checks.append(
+                PortCheck(
+                    "udp",
+                    target,
+                    Status.UNCHECKED,
+                    f"commands are sent to {target} (UDP; not contacted)",
+                    prop=transport.props["host"],
+                )
+            )
         return checks
     if kind == "udp-peer":
         # a board found by its MAC address (optional keys "mac" and "method": the element's
         # discovery method property says "find_mac") is reached through discovery, not host
         mac = str(_read(access, transport, "mac") or "")
         if mac and _read(access, transport, "method") == "find_mac":
-            return [PortCheck("udp", f"MAC {mac}", Status.UNCHECKED,
-                              f"the board with MAC {mac} is looked for by the driver's discovery "
-                              "when the device starts (not contacted)", prop=transport.props["mac"])]
+            return [
+                PortCheck(
+                    "udp",
+                    f"MAC {mac}",
+                    Status.UNCHECKED,
+                    f"the board with MAC {mac} is looked for by the driver's discovery "
+                    "when the device starts (not contacted)",
+                    prop=transport.props["mac"],
+                )
+            ]
         host = str(_read(access, transport, "host") or "")
-        return [PortCheck("udp", host or "(no address)", Status.UNCHECKED,
-                          f"commands are sent to {host or 'no address'} (UDP; not contacted)",
-                          prop=transport.props["host"])]
+        return [
+            PortCheck(
+                "udp",
+                host or "(no address)",
+                Status.UNCHECKED,
+                f"commands are sent to {host or 'no address'} (UDP; not contacted)",
+                prop=transport.props["host"],
+            )
+        ]
     if kind == "tcp":
         host = str(_read(access, transport, "host"))
         port = int(_read(access, transport, "port", number=True) or 0)
         result = check_tcp(host, port, probe=settings.probe, timeout=settings.timeout)
         if result.code == "DRV104" and settings.emulator:
-            result = _with_hint(result, f"{result.hint + '; ' if result.hint else ''}"
-                                f"to try without the hardware: gadgetctl emulate {settings.emulator}")
+            result = _with_hint(
+                result,
+                f"{result.hint + '; ' if result.hint else ''}"
+                f"to try without the hardware: gadgetctl emulate {settings.emulator}",
+            )
         return [result.with_prop(f"{transport.props['host']}, {transport.props['port']}")]
     if kind == "vrpn":
         name = str(_read(access, transport, "name") or "").strip()
@@ -105,14 +140,20 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
             return []  # this device of the element is not used
         from gadgetctl.doctor.vrpn import check_vrpn_name
 
-        return [check_vrpn_name(name, probe=settings.probe, timeout=settings.timeout)
-                .with_prop(transport.props["name"])]
+        return [
+            check_vrpn_name(name, probe=settings.probe, timeout=settings.timeout).with_prop(
+                transport.props["name"]
+            )
+        ]
     if kind == "shm":
         from gadgetctl.doctor.shm import check_shm
 
         key = int(_read(access, transport, "key", number=True) or 0)
-        return [check_shm(key, identity=settings.identity, emulator=settings.emulator)
-                .with_prop(transport.props["key"])]
+        return [
+            check_shm(key, identity=settings.identity, emulator=settings.emulator).with_prop(
+                transport.props["key"]
+            )
+        ]
     if kind == "sdl":
         from gadgetctl.doctor.sdl import check_sdl
 
@@ -122,7 +163,9 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
 
 
 def _with_hint(check: PortCheck, hint: str | None) -> PortCheck:
-    return PortCheck(check.kind, check.target, check.status, check.detail, check.code, hint, check.prop)
+    return PortCheck(
+        check.kind, check.target, check.status, check.detail, check.code, hint, check.prop
+    )
 
 
 def _missing_hint(kind: str, path: str, settings: CheckSettings) -> str:
@@ -132,11 +175,16 @@ def _missing_hint(kind: str, path: str, settings: CheckSettings) -> str:
         if ports is None:
             parts.append("pyserial cannot list the serial ports here")
         else:
-            parts.append(f"serial ports found: {', '.join(ports)}" if ports else "no serial ports found")
+            parts.append(
+                f"serial ports found: {', '.join(ports)}" if ports else "no serial ports found"
+            )
     elif path.startswith("/dev/input/") or path.startswith("/dev/js"):
         found = [c.target for c in list_joysticks(settings.joystick_glob)]
-        parts.append(f"joystick devices found: {', '.join(found)}" if found
-                     else "no joystick devices found (is the joydev kernel module loaded?)")
+        parts.append(
+            f"joystick devices found: {', '.join(found)}"
+            if found
+            else "no joystick devices found (is the joydev kernel module loaded?)"
+        )
     if settings.emulator:
         parts.append(f"to try without the hardware: gadgetctl emulate {settings.emulator} --help")
     return "; ".join(parts)

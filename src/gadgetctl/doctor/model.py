@@ -28,11 +28,20 @@ class PortCheck:
     prop: str | None = None  # the element property that names the target
 
     def with_prop(self, prop: str) -> PortCheck:
-        return PortCheck(self.kind, self.target, self.status, self.detail, self.code, self.hint, prop)
+        return PortCheck(
+            self.kind, self.target, self.status, self.detail, self.code, self.hint, prop
+        )
 
     def to_dict(self) -> dict[str, object]:
-        return {"kind": self.kind, "property": self.prop, "target": self.target, "status": self.status.value,
-                "detail": self.detail, "code": self.code, "hint": self.hint}
+        return {
+            "kind": self.kind,
+            "property": self.prop,
+            "target": self.target,
+            "status": self.status.value,
+            "detail": self.detail,
+            "code": self.code,
+            "hint": self.hint,
+        }
 
 
 @dataclass
@@ -50,9 +59,17 @@ class DeviceReport:
     checks: list[PortCheck] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, object]:
-        return {"name": self.name, "type": self.type, "path": self.path, "line": self.line,
-                "driver": self.driver, "driver_ok": self.driver_ok, "pending": self.reason,
-                "transports_from": self.transport_source, "checks": [c.to_dict() for c in self.checks]}
+        return {
+            "name": self.name,
+            "type": self.type,
+            "path": self.path,
+            "line": self.line,
+            "driver": self.driver,
+            "driver_ok": self.driver_ok,
+            "pending": self.reason,
+            "transports_from": self.transport_source,
+            "checks": [c.to_dict() for c in self.checks],
+        }
 
 
 @dataclass
@@ -69,9 +86,16 @@ class PluginReport:
     shadowed_by: str | None = None
 
     def to_dict(self) -> dict[str, object]:
-        return {"name": self.name, "source": self.source, "path": self.path, "loads": self.ok,
-                "error": self.error, "element_types": self.element_types, "used": self.used,
-                "shadowed_by": self.shadowed_by}
+        return {
+            "name": self.name,
+            "source": self.source,
+            "path": self.path,
+            "loads": self.ok,
+            "error": self.error,
+            "element_types": self.element_types,
+            "used": self.used,
+            "shadowed_by": self.shadowed_by,
+        }
 
 
 @dataclass
@@ -112,7 +136,9 @@ class DoctorReport:
         if self.sdl_joysticks is not None:
             sdl = self.sdl_joysticks
             serve["sdl_joysticks"] = (
-                {"error": sdl} if isinstance(sdl, str) else [{"index": i, "name": n} for i, n in sdl]
+                {"error": sdl}
+                if isinstance(sdl, str)
+                else [{"index": i, "name": n} for i, n in sdl]
             )
         return {
             "configurations": self.configurations,
@@ -120,7 +146,9 @@ class DoctorReport:
             "driver_places": self.driver_places,
             "plugins": [p.to_dict() for p in self.plugins],
             "devices": [d.to_dict() for d in self.devices],
-            "serial_ports": None if self.serial_ports is None else [p.to_dict() for p in self.serial_ports],
+            "serial_ports": None
+            if self.serial_ports is None
+            else [p.to_dict() for p in self.serial_ports],
             "joysticks": [j.to_dict() for j in self.joysticks],
             "diagnostics": [d.to_dict() for d in self.diagnostics],
             **serve,

@@ -84,8 +84,12 @@ def access_hint(st: os.stat_result, identity: Identity, need: int) -> str:
     group = group_name(st.st_gid)
     group_has = all(st.st_mode & _BITS[f][1] for f in _wants(need))
     if group_has and st.st_gid not in identity.gids:
-        return (f"add yourself to group {group}: sudo usermod -aG {group} $USER "
-                "(then log out and in again)")
+        return (
+            f"add yourself to group {group}: sudo usermod -aG {group} $USER "
+            "(then log out and in again)"
+        )
     mode = stat.filemode(st.st_mode)
-    return (f"{mode} {owner_name(st.st_uid)}:{group} lets neither your groups nor others {verb(need)} it; "
-            f"a udev rule with GROUP=\"{group}\" MODE=\"0660\" (and joining group {group}) grants access")
+    return (
+        f"{mode} {owner_name(st.st_uid)}:{group} lets neither your groups nor others {verb(need)} it; "
+        f'a udev rule with GROUP="{group}" MODE="0660" (and joining group {group}) grants access'
+    )

@@ -11,10 +11,16 @@ _MARK = {"ok": "ok", "warning": "warn", "problem": "PROBLEM", "unchecked": "-"}
 
 
 def _check_line(check: PortCheck) -> str:
-    what = f"{check.prop} {check.target}" if check.prop and check.kind in ("file", "serial", "vrpn") else (
-        check.prop or check.target)
-    return f"    {_MARK[check.status.value]:<8} {what}: {check.detail}" if what else (
-        f"    {_MARK[check.status.value]:<8} {check.detail}")
+    what = (
+        f"{check.prop} {check.target}"
+        if check.prop and check.kind in ("file", "serial", "vrpn")
+        else (check.prop or check.target)
+    )
+    return (
+        f"    {_MARK[check.status.value]:<8} {what}: {check.detail}"
+        if what
+        else (f"    {_MARK[check.status.value]:<8} {check.detail}")
+    )
 
 
 def _definitions(report: DoctorReport) -> list[str]:
@@ -30,11 +36,15 @@ def _plugins(report: DoctorReport) -> list[str]:
     for plugin in report.plugins:
         types = ", ".join(plugin.element_types) or "no declared element types"
         if plugin.shadowed_by:
-            lines.append(f"    {'-':<8} {plugin.name} [{plugin.source}]: shadowed by {plugin.shadowed_by}")
+            lines.append(
+                f"    {'-':<8} {plugin.name} [{plugin.source}]: shadowed by {plugin.shadowed_by}"
+            )
         elif plugin.ok:
             lines.append(f"    {'ok':<8} {plugin.name} [{plugin.source}] ({types})")
         else:
-            lines.append(f"    {'FAILED':<8} {plugin.name} [{plugin.source}] ({types}): {plugin.error}")
+            lines.append(
+                f"    {'FAILED':<8} {plugin.name} [{plugin.source}] ({types}): {plugin.error}"
+            )
     if not report.plugins:
         lines.append("    none found")
     return lines
@@ -45,7 +55,9 @@ def _devices(report: DoctorReport) -> list[str]:
     for device in report.devices:
         where = f"{device.path}:{device.line}" if device.line else device.path or "command line"
         if device.driver == "built-in" and not device.checks and not device.reason:
-            lines.append(f"  {device.name} ({device.type}), built-in device (no connection to check), {where}")
+            lines.append(
+                f"  {device.name} ({device.type}), built-in device (no connection to check), {where}"
+            )
             continue
         if device.driver is None:
             driver = "no driver"
@@ -64,7 +76,9 @@ def _system(report: DoctorReport) -> list[str]:
     if report.serial_ports is None:
         lines = ["Serial ports: pyserial cannot list them here"]
     else:
-        lines = ["Serial ports:"] + [f"    {p.device}  {p.description}" for p in report.serial_ports]
+        lines = ["Serial ports:"] + [
+            f"    {p.device}  {p.description}" for p in report.serial_ports
+        ]
         if not report.serial_ports:
             lines.append("    none found")
     lines.append("Joystick devices:")
@@ -100,6 +114,9 @@ def render_text(report: DoctorReport) -> str:
         lines += ["gadgetctl serve port:", _check_line(report.serve_port)]
     lines += _findings(report)
     blocking = len(report.blocking)
-    lines.append(f"{blocking} finding{'s' if blocking != 1 else ''} would stop data from arriving" if blocking
-                 else "nothing found that would stop data from arriving")
+    lines.append(
+        f"{blocking} finding{'s' if blocking != 1 else ''} would stop data from arriving"
+        if blocking
+        else "nothing found that would stop data from arriving"
+    )
     return "\n".join(map(printable, lines))  # names, paths, reasons: one line each

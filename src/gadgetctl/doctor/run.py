@@ -27,7 +27,11 @@ from gadgetctl.jccl.access import ElementAccess
 from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.repository import DefinitionRepository
 
-_SEVERITY = {Status.PROBLEM: Severity.ERROR, Status.WARNING: Severity.WARNING, Status.UNCHECKED: Severity.INFO}
+_SEVERITY = {
+    Status.PROBLEM: Severity.ERROR,
+    Status.WARNING: Severity.WARNING,
+    Status.UNCHECKED: Severity.INFO,
+}
 
 
 @dataclass
@@ -56,10 +60,17 @@ def diagnose(configs: Sequence[Path] = (), options: DoctorOptions | None = None)
         if not directory.is_dir():
             raise GadgetctlError(f"--definitions {directory}: no such directory")
     configuration = _load(configs, options) if configs else None
-    repo = repository_for(configuration, definitions=options.definitions, bundled=options.bundled,
-                          driver_dirs=options.driver_dirs, environ=options.environ)
+    repo = repository_for(
+        configuration,
+        definitions=options.definitions,
+        bundled=options.bundled,
+        driver_dirs=options.driver_dirs,
+        environ=options.environ,
+    )
     search = driver_search_for(configuration, options.driver_dirs, environ=options.environ)
-    report = DoctorReport([str(p) for p in configs], [e.to_dict() for e in repo.entries], search.describe_places())
+    report = DoctorReport(
+        [str(p) for p in configs], [e.to_dict() for e in repo.entries], search.describe_places()
+    )
     report.serial_ports = list_serial_ports()
     report.joysticks = list_joysticks(options.joystick_glob, options.identity)
     if configuration is None:
@@ -67,7 +78,9 @@ def diagnose(configs: Sequence[Path] = (), options: DoctorOptions | None = None)
         from gadgetctl.doctor.sdl import sdl_joysticks
 
         report.sdl_joysticks = sdl_joysticks()
-        found += [_diagnostic(c, f"joystick {c.target} {c.detail}") for c in report.joysticks if c.code]
+        found += [
+            _diagnostic(c, f"joystick {c.target} {c.detail}") for c in report.joysticks if c.code
+        ]
     else:
         found, used = _configured(configuration, repo, search, options, report)
         report.plugins, listed = _plugins(search, repo, used)
@@ -77,8 +90,12 @@ def diagnose(configs: Sequence[Path] = (), options: DoctorOptions | None = None)
     if options.serve_port is not None:
         report.serve_port = check_serve_port(*options.serve_port)
         if report.serve_port.code:
-            found.append(_diagnostic(report.serve_port, f"gadgetctl serve on {report.serve_port.target}: "
-                                                        f"{report.serve_port.detail}"))
+            found.append(
+                _diagnostic(
+                    report.serve_port,
+                    f"gadgetctl serve on {report.serve_port.target}: {report.serve_port.detail}",
+                )
+            )
     report.diagnostics = _unique(found)
     return report
 
@@ -96,8 +113,9 @@ def _load(configs: Sequence[Path], options: DoctorOptions) -> Configuration:
     return configuration
 
 
-def _plugins(search: DriverSearch, repo: DefinitionRepository,
-             used: set[str] | None) -> tuple[list[PluginReport], list[Diagnostic]]:
+def _plugins(
+    search: DriverSearch, repo: DefinitionRepository, used: set[str] | None
+) -> tuple[list[PluginReport], list[Diagnostic]]:
     """Load every discoverable plug-in into a private registry; failures of plug-ins the
     configuration does not use (``used``; None: all count) are only warnings."""
     from gadgetctl.input.plugins.loader import PluginLoader
@@ -108,30 +126,66 @@ def _plugins(search: DriverSearch, repo: DefinitionRepository,
         types = sorted(info.declared_types()[0])
         counts = used is None or info.name in used
         if info.shadowed_by is not None:
-            reports.append(PluginReport(info.name, info.source.value, str(info.path), False, "shadowed",
-                                        types, False, str(info.shadowed_by.path)))
+            reports.append(
+                PluginReport(
+                    info.name,
+                    info.source.value,
+                    str(info.path),
+                    False,
+                    "shadowed",
+                    types,
+                    False,
+                    str(info.shadowed_by.path),
+                )
+            )
             continue
         result = loader.load(info)
-        reports.append(PluginReport(info.name, info.source.value, str(info.path), result.ok,
-                                    None if result.ok else (result.reason or result.error), types,
-                                    used is not None and counts))
+        reports.append(
+            PluginReport(
+                info.name,
+                info.source.value,
+                str(info.path),
+                result.ok,
+                None if result.ok else (result.reason or result.error),
+                types,
+                used is not None and counts,
+            )
+        )
         for d in result.diagnostics:
             if not counts and d.severity is Severity.ERROR:
-                d = Diagnostic.make(d.code, f"{d.message} (not used by the configuration)", d.path, d.line,
-                                    d.column, hint=d.hint, severity=Severity.WARNING)
+                d = Diagnostic.make(
+                    d.code,
+                    f"{d.message} (not used by the configuration)",
+                    d.path,
+                    d.line,
+                    d.column,
+                    hint=d.hint,
+                    severity=Severity.WARNING,
+                )
             found.append(d)
     return reports, found
 
 
-def _configured(configuration: Configuration, repo: DefinitionRepository, search: DriverSearch,
-                options: DoctorOptions, report: DoctorReport) -> tuple[list[Diagnostic], set[str]]:
+def _configured(
+    configuration: Configuration,
+    repo: DefinitionRepository,
+    search: DriverSearch,
+    options: DoctorOptions,
+    report: DoctorReport,
+) -> tuple[list[Diagnostic], set[str]]:
     """Configure an input manager without starting devices; check each device's connections."""
     from gadgetctl.input.manager import InputManager, ManagerOptions
 
-    manager_options = ManagerOptions(start_devices=False, driver_dirs=list(options.driver_dirs),
-                                     retry_interval=None, environ=options.environ)
+    manager_options = ManagerOptions(
+        start_devices=False,
+        driver_dirs=list(options.driver_dirs),
+        retry_interval=None,
+        environ=options.environ,
+    )
     serial = None if report.serial_ports is None else tuple(p.device for p in report.serial_ports)
-    settings = CheckSettings(options.probe, options.timeout, options.identity, options.joystick_glob, serial)
+    settings = CheckSettings(
+        options.probe, options.timeout, options.identity, options.joystick_glob, serial
+    )
     with InputManager(repo, manager_options, search=search) as manager:
         manager.configure(configuration)
         found = list(manager.diagnostics)
@@ -144,19 +198,29 @@ def _configured(configuration: Configuration, repo: DefinitionRepository, search
                 continue
             if not _is_device(element, repo, manager.registry, entry):
                 continue
-            device, diagnostics, provider = _device(element, repo, manager.registry, search, entry, settings)
+            device, diagnostics, provider = _device(
+                element, repo, manager.registry, search, entry, settings
+            )
             report.devices.append(device)
             found += diagnostics
             used |= {provider.name} if provider is not None else set()
     return found, used
 
 
-def _is_device(element: ConfigElement, repo: DefinitionRepository, registry: DeviceRegistry,
-               entry: PendingEntry | None) -> bool:
+def _is_device(
+    element: ConfigElement,
+    repo: DefinitionRepository,
+    registry: DeviceRegistry,
+    entry: PendingEntry | None,
+) -> bool:
     token = element.type
     if entry is not None and entry.kind is PendingKind.NO_DEFINITION:
         return True
-    return token in registry or token in UNSUPPORTED_TYPES or (token in repo and repo.is_a(token, INPUT_DEVICE))
+    return (
+        token in registry
+        or token in UNSUPPORTED_TYPES
+        or (token in repo and repo.is_a(token, INPUT_DEVICE))
+    )
 
 
 def _provider(token: str, registry: DeviceRegistry, search: DriverSearch) -> PluginInfo | None:
@@ -169,26 +233,48 @@ def _provider(token: str, registry: DeviceRegistry, search: DriverSearch) -> Plu
     return providers[0] if providers else None
 
 
-def _device(element: ConfigElement, repo: DefinitionRepository, registry: DeviceRegistry, search: DriverSearch,
-            entry: PendingEntry | None, settings: CheckSettings
-            ) -> tuple[DeviceReport, list[Diagnostic], PluginInfo | None]:
+def _device(
+    element: ConfigElement,
+    repo: DefinitionRepository,
+    registry: DeviceRegistry,
+    search: DriverSearch,
+    entry: PendingEntry | None,
+    settings: CheckSettings,
+) -> tuple[DeviceReport, list[Diagnostic], PluginInfo | None]:
     token, name = element.type, element.full_name
     loc = element.location
     registration = registry.get(token)
     provider = _provider(token, registry, search)
-    driver = registration.plugin if registration is not None else (provider.name if provider else None)
-    device = DeviceReport(name, token, loc.path, loc.line, driver, registration is not None,
-                          entry.message if entry is not None else None)
+    driver = (
+        registration.plugin if registration is not None else (provider.name if provider else None)
+    )
+    device = DeviceReport(
+        name,
+        token,
+        loc.path,
+        loc.line,
+        driver,
+        registration is not None,
+        entry.message if entry is not None else None,
+    )
     found = [entry.diagnostic()] if entry is not None else []
     if driver == BUILTIN or token in UNSUPPORTED_TYPES or token not in repo:
         return device, found, provider
     transports, device.transport_source = transports_for(token, provider)
     if not transports:
-        check = PortCheck("", "", Status.UNCHECKED, "cannot check this device's connection", "DRV105",
-                          f"no driver plug-in declares TRANSPORTS for {token}, and gadgetctl knows no "
-                          "port property of it")
+        check = PortCheck(
+            "",
+            "",
+            Status.UNCHECKED,
+            "cannot check this device's connection",
+            "DRV105",
+            f"no driver plug-in declares TRANSPORTS for {token}, and gadgetctl knows no "
+            "port property of it",
+        )
         device.checks.append(check)
-        found.append(_diagnostic(check, f"{name} ({token}): cannot check this device's connection", element))
+        found.append(
+            _diagnostic(check, f"{name} ({token}): cannot check this device's connection", element)
+        )
         return device, found, provider
     has_emulator = provider is not None and emulator_of(provider) is not None
     settings = replace(settings, emulator=provider.name if has_emulator else None)
@@ -227,9 +313,15 @@ def _diagnostic(check: PortCheck, message: str, element: ConfigElement | None = 
         values = element.values((check.prop or "").split(",")[0])
         if values:
             loc = values[0].location
-    return Diagnostic.make(check.code or "DRV105", message, loc.path if loc else check.target or None,
-                           loc.line if loc else None, loc.column if loc else None, hint=check.hint,
-                           severity=_SEVERITY.get(check.status))
+    return Diagnostic.make(
+        check.code or "DRV105",
+        message,
+        loc.path if loc else check.target or None,
+        loc.line if loc else None,
+        loc.column if loc else None,
+        hint=check.hint,
+        severity=_SEVERITY.get(check.status),
+    )
 
 
 def _unique(found: list[Diagnostic]) -> list[Diagnostic]:

@@ -51,7 +51,9 @@ def _processes(proc: Path) -> list[Path]:
 
 def _command(pid_dir: Path) -> str:
     with contextlib.suppress(OSError):
-        words = [w.decode(errors="replace") for w in (pid_dir / "cmdline").read_bytes().split(b"\0") if w]
+        words = [
+            w.decode(errors="replace") for w in (pid_dir / "cmdline").read_bytes().split(b"\0") if w
+        ]
         if words:
             text = " ".join(" ".join([os.path.basename(words[0]), *words[1:]]).split())
             return text if len(text) <= 120 else text[:117] + "..."
@@ -107,8 +109,11 @@ def fifo_writer(path: str, proc: Path = PROC) -> Holder | None:
                 st = os.stat(fd)
                 if (st.st_dev, st.st_ino) != (target.st_dev, target.st_ino):
                     continue
-                flags = next(line for line in (pid_dir / "fdinfo" / fd.name).read_text().splitlines()
-                             if line.startswith("flags:"))
+                flags = next(
+                    line
+                    for line in (pid_dir / "fdinfo" / fd.name).read_text().splitlines()
+                    if line.startswith("flags:")
+                )
                 if int(flags.split()[1], 8) & os.O_ACCMODE in (os.O_WRONLY, os.O_RDWR):
                     return Holder(int(pid_dir.name), _command(pid_dir))
     return None
@@ -122,7 +127,9 @@ def staleness(path: str, proc: Path = PROC) -> Staleness | None:
     except OSError:
         return None
     real = os.path.realpath(path)
-    is_pts = stat.S_ISCHR(st.st_mode) and real.startswith(PTS_DIR) and real[len(PTS_DIR):].isdigit()
+    is_pts = (
+        stat.S_ISCHR(st.st_mode) and real.startswith(PTS_DIR) and real[len(PTS_DIR) :].isdigit()
+    )
     is_fifo = stat.S_ISFIFO(st.st_mode)
     if not (is_pts or is_fifo):
         return None
@@ -135,7 +142,8 @@ def staleness(path: str, proc: Path = PROC) -> Staleness | None:
         return Staleness(
             "is a FIFO that no emulator or program writes: a driver would wait for data forever",
             "a stale FIFO left by an emulator that was killed? remove it and start the emulator "
-            "again (`gadgetctl emulate DRIVER`)")
+            "again (`gadgetctl emulate DRIVER`)",
+        )
     link = f"a link to {real}" if os.path.islink(path) else "a pseudo-terminal"
     terminal = terminal_of(st.st_rdev, proc)
     if terminal is not None:
@@ -143,11 +151,17 @@ def staleness(path: str, proc: Path = PROC) -> Staleness | None:
             f"is {link} that no emulator holds: it is the terminal of {terminal}; a driver "
             "would write into that terminal",
             "a stale link left by an emulator that was killed: remove it and start the emulator "
-            "again (`gadgetctl emulate DRIVER`)")
-    holder = pty_master_holder(int(real[len(PTS_DIR):]), proc)
+            "again (`gadgetctl emulate DRIVER`)",
+        )
+    holder = pty_master_holder(int(real[len(PTS_DIR) :]), proc)
     if holder is not None:
-        return Staleness(f"is {link} held by {holder}, not by a gadgetctl emulator",
-                         "make sure that program stands in for the device", severe=False)
-    return Staleness(f"is {link} that no emulator holds",
-                     "a stale link left by an emulator that was killed: remove it and start the "
-                     "emulator again (`gadgetctl emulate DRIVER`)")
+        return Staleness(
+            f"is {link} held by {holder}, not by a gadgetctl emulator",
+            "make sure that program stands in for the device",
+            severe=False,
+        )
+    return Staleness(
+        f"is {link} that no emulator holds",
+        "a stale link left by an emulator that was killed: remove it and start the "
+        "emulator again (`gadgetctl emulate DRIVER`)",
+    )

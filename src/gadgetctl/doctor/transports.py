@@ -13,12 +13,27 @@ _SERIAL = {"kind": "serial", "port": "port", "baud": "baud"}
 
 #: Upstream element types gadgetctl does not bundle a driver for, and their port properties.
 KNOWN_TRANSPORTS: dict[str, list[dict[str, str]]] = {
-    **{token: [_SERIAL] for token in (
-        "flock", "fastrak", "intersense", "ibox", "pinch_glove", "puck_device", "data_glove",
-        "data_glove_ultra_wireless", "serial_encoder", "three_d_mouse", "cyber_glove")},
+    **{
+        token: [_SERIAL]
+        for token in (
+            "flock",
+            "fastrak",
+            "intersense",
+            "ibox",
+            "pinch_glove",
+            "puck_device",
+            "data_glove",
+            "data_glove_ultra_wireless",
+            "serial_encoder",
+            "three_d_mouse",
+            "cyber_glove",
+        )
+    },
     "wanda": [{"kind": "serial", "port": "port"}],
     "linux_joydev": [{"kind": "file", "path": "port_name"}],
-    "dtrack": [{"kind": "udp", "port": "receive_port", "host": "server_name", "peer_port": "command_port"}],
+    "dtrack": [
+        {"kind": "udp", "port": "receive_port", "host": "server_name", "peer_port": "command_port"}
+    ],
     "TUIO_drv": [{"kind": "udp", "port": "port"}],
     "optitrack": [{"kind": "udp", "port": "port", "group": "224.0.0.1"}],
     "motion_star": [{"kind": "tcp", "host": "address", "port": "server_port"}],
@@ -45,4 +60,6 @@ def transports_for(token: str, plugin: PluginInfo | None) -> tuple[list[Transpor
         specs, source = KNOWN_TRANSPORTS[token], UPSTREAM
     else:
         return [], None
-    return [Transport(s["kind"], {k: v for k, v in s.items() if k != "kind"}) for s in specs], source
+    return [
+        Transport(s["kind"], {k: v for k, v in s.items() if k != "kind"}) for s in specs
+    ], source

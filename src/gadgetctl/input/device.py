@@ -36,15 +36,15 @@ if TYPE_CHECKING:
 
 
 class SamplingMode(StrEnum):
-    THREAD = "thread"        # sample() runs in a loop in the device's own thread; it may block
+    THREAD = "thread"  # sample() runs in a loop in the device's own thread; it may block
     SCHEDULED = "scheduled"  # a shared thread calls sample() every sample_interval; must not block
-    FRAME = "frame"          # no sampling thread: update_data() produces the samples
+    FRAME = "frame"  # no sampling thread: update_data() produces the samples
 
 
 class DeviceState(StrEnum):
-    CONFIGURED = "configured"      # configured, not started (dry runs)
+    CONFIGURED = "configured"  # configured, not started (dry runs)
     RUNNING = "running"
-    FAULTED = "faulted"            # sample() raised; a restart is scheduled
+    FAULTED = "faulted"  # sample() raised; a restart is scheduled
     RECONNECTING = "reconnecting"  # start_sampling() is being retried after a fault
     STOPPED = "stopped"
 
@@ -156,7 +156,9 @@ class Input:
     def warn(self, code: str, message: str, *, hint: str | None = None) -> None:
         """Record a diagnostic about this device's configuration (shown by `config pending`)."""
         path, line, column = self._location
-        self.diagnostics.append(Diagnostic.make(code, f"{self.name}: {message}", path, line, column, hint=hint))
+        self.diagnostics.append(
+            Diagnostic.make(code, f"{self.name}: {message}", path, line, column, hint=hint)
+        )
 
     # -- used by the input manager -----------------------------------------------------
 
@@ -220,7 +222,11 @@ class Input:
         counters = getattr(self, "counters", None)
         found: dict[str, int | float | str] = {}
         if isinstance(counters, Mapping):
-            found = {str(k): v for k, v in counters.items() if isinstance(v, int | float) and not isinstance(v, bool)}
+            found = {
+                str(k): v
+                for k, v in counters.items()
+                if isinstance(v, int | float) and not isinstance(v, bool)
+            }
         found.update(faults=self.faults, reconnects=self.restarts, dropped=self.stats.dropped)
         if self.error:
             found["last_fault"] = self.error

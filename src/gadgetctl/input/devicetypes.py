@@ -81,9 +81,12 @@ class Analog(Input):
         self.analog_min = access.float("min") if access.has("min") else 0.0
         self.analog_max = access.float("max") if access.has("max") else 1.0
         if self.analog_max <= self.analog_min:
-            self.warn("DRV020", f"analog range is {'empty' if self.analog_max == self.analog_min else 'inverted'}: "
-                      f"min {self.analog_min:g}, max {self.analog_max:g}; analog proxies read 0.0",
-                      hint="set max greater than min")
+            self.warn(
+                "DRV020",
+                f"analog range is {'empty' if self.analog_max == self.analog_min else 'inverted'}: "
+                f"min {self.analog_min:g}, max {self.analog_max:g}; analog proxies read 0.0",
+                hint="set max greater than min",
+            )
 
     def normalize(self, raw: float) -> float:
         """``raw`` clamped into [min, max] and mapped onto [0, 1]; 0.0 when the range is empty."""
@@ -97,8 +100,11 @@ class Analog(Input):
         self.store.add(DeviceKind.ANALOG, _stamp(timestamp), tuple(float(v) for v in values))
 
     def add_analog_samples(self, timestamps: Any, values: Any) -> None:
-        self.store.add_batch(DeviceKind.ANALOG, np.asarray(timestamps, dtype=np.float64),
-                             np.asarray(values, dtype=np.float64))
+        self.store.add_batch(
+            DeviceKind.ANALOG,
+            np.asarray(timestamps, dtype=np.float64),
+            np.asarray(values, dtype=np.float64),
+        )
 
 
 class Digital(Input):
@@ -106,12 +112,17 @@ class Digital(Input):
 
     KIND = DeviceKind.DIGITAL
 
-    def add_digital_sample(self, values: Sequence[int | bool], timestamp: float | None = None) -> None:
+    def add_digital_sample(
+        self, values: Sequence[int | bool], timestamp: float | None = None
+    ) -> None:
         self.store.add(DeviceKind.DIGITAL, _stamp(timestamp), tuple(int(v) for v in values))
 
     def add_digital_samples(self, timestamps: Any, values: Any) -> None:
-        self.store.add_batch(DeviceKind.DIGITAL, np.asarray(timestamps, dtype=np.float64),
-                             np.asarray(values, dtype=np.int8))
+        self.store.add_batch(
+            DeviceKind.DIGITAL,
+            np.asarray(timestamps, dtype=np.float64),
+            np.asarray(values, dtype=np.int8),
+        )
 
 
 class Position(Input):
@@ -141,8 +152,11 @@ class Position(Input):
         data = as_matrices(matrices)
         if data.ndim != 4:
             raise ValueError(f"expected shape (samples, units, 4, 4), got {data.shape}")
-        self.store.add_batch(DeviceKind.POSITION, np.asarray(timestamps, dtype=np.float64),
-                             self.position_filters.apply(data))
+        self.store.add_batch(
+            DeviceKind.POSITION,
+            np.asarray(timestamps, dtype=np.float64),
+            self.position_filters.apply(data),
+        )
 
 
 class Glove(Input):
@@ -176,8 +190,11 @@ class Glove(Input):
         self.store.add(DeviceKind.GLOVE, _stamp(timestamp), data)
 
     def add_glove_samples(self, timestamps: Any, angles: Any) -> None:
-        self.store.add_batch(DeviceKind.GLOVE, np.asarray(timestamps, dtype=np.float64),
-                             np.asarray(angles, dtype=np.float64))
+        self.store.add_batch(
+            DeviceKind.GLOVE,
+            np.asarray(timestamps, dtype=np.float64),
+            np.asarray(angles, dtype=np.float64),
+        )
 
 
 class Gesture(Input):
@@ -225,8 +242,11 @@ class Hat(Input):
         self.store.add(DeviceKind.HAT, _stamp(timestamp), tuple(int(v) for v in values))
 
     def add_hat_samples(self, timestamps: Any, values: Any) -> None:
-        self.store.add_batch(DeviceKind.HAT, np.asarray(timestamps, dtype=np.float64),
-                             np.asarray(values, dtype=np.int8))
+        self.store.add_batch(
+            DeviceKind.HAT,
+            np.asarray(timestamps, dtype=np.float64),
+            np.asarray(values, dtype=np.int8),
+        )
 
 
 class Rumble(Input):
@@ -270,8 +290,11 @@ class KeyboardMouse(Input):
     def __init__(self) -> None:
         super().__init__()
         self.scroll_buttons: dict[ScrollDirection, Key] = {
-            ScrollDirection.UP: Key.MOUSE_BUT4, ScrollDirection.DOWN: Key.MOUSE_BUT5,
-            ScrollDirection.LEFT: Key.MOUSE_BUT6, ScrollDirection.RIGHT: Key.MOUSE_BUT7}
+            ScrollDirection.UP: Key.MOUSE_BUT4,
+            ScrollDirection.DOWN: Key.MOUSE_BUT5,
+            ScrollDirection.LEFT: Key.MOUSE_BUT6,
+            ScrollDirection.RIGHT: Key.MOUSE_BUT7,
+        }
         self._held: set[int] = set()
         self._carried: set[int] = set()  # keys held at the previous frame
         self._counts: dict[int, float] = {}
@@ -295,10 +318,15 @@ class KeyboardMouse(Input):
                 else:
                     self._held.discard(key)
             elif isinstance(event, MouseMoveEvent):
-                for amount, positive, negative in ((event.dx, Key.MOUSE_POSX, Key.MOUSE_NEGX),
-                                                   (event.dy, Key.MOUSE_POSY, Key.MOUSE_NEGY)):
+                for amount, positive, negative in (
+                    (event.dx, Key.MOUSE_POSX, Key.MOUSE_NEGX),
+                    (event.dy, Key.MOUSE_POSY, Key.MOUSE_NEGY),
+                ):
                     if amount:
-                        self._count(int(positive if amount > 0 else negative), abs(amount) * self.mouse_sensitivity)
+                        self._count(
+                            int(positive if amount > 0 else negative),
+                            abs(amount) * self.mouse_sensitivity,
+                        )
             elif isinstance(event, ScrollEvent):
                 keys = [SCROLL_KEYS[event.direction]]
                 if self.scroll_as_buttons:

@@ -63,8 +63,12 @@ class ScrollEvent:
 
 Event = KeyEvent | MouseMoveEvent | ScrollEvent
 
-_MODIFIER_KEY = {Modifier.SHIFT: Key.KEY_SHIFT, Modifier.CTRL: Key.KEY_CTRL,
-                 Modifier.ALT: Key.KEY_ALT, Modifier.COMMAND: Key.KEY_COMMAND}
+_MODIFIER_KEY = {
+    Modifier.SHIFT: Key.KEY_SHIFT,
+    Modifier.CTRL: Key.KEY_CTRL,
+    Modifier.ALT: Key.KEY_ALT,
+    Modifier.COMMAND: Key.KEY_COMMAND,
+}
 
 
 def modifier_key(modifier: Modifier | Key) -> Key:
@@ -151,7 +155,9 @@ class EventSource:
     def release(self, key: Key, *, target: str | None = None) -> None:
         self.push(KeyEvent(Key(key), False, now(), target))
 
-    def tap(self, key: Key, *, modifiers: Iterable[Modifier | Key] = (), target: str | None = None) -> None:
+    def tap(
+        self, key: Key, *, modifiers: Iterable[Modifier | Key] = (), target: str | None = None
+    ) -> None:
         """Press and release ``key`` while holding ``modifiers`` (what one keystroke in a
         terminal amounts to)."""
         held = [modifier_key(m) for m in modifiers]

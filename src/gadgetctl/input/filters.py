@@ -107,8 +107,11 @@ def transform_filter(access: ElementAccess) -> PositionFilter:
 
 
 def full_transform_filter(access: ElementAccess) -> PositionFilter:
-    return PositionFilter(access.name, from_row_major(access.floats("pre_xform")[:16]),
-                          from_row_major(access.floats("post_xform")[:16]))
+    return PositionFilter(
+        access.name,
+        from_row_major(access.floats("pre_xform")[:16]),
+        from_row_major(access.floats("post_xform")[:16]),
+    )
 
 
 _BUILDERS = {TRANSFORM_FILTER: transform_filter, FULL_TRANSFORM_FILTER: full_transform_filter}
@@ -139,6 +142,13 @@ def build_chain(access: ElementAccess, prop: str = FILTERS_PROPERTY) -> FilterCh
             filters.append(build_filter(element, access))
         except DeviceConfigError as err:
             loc = element.location
-            diagnostics.append(Diagnostic.make("DRV022", f"{access.name}: filter skipped: {err}",
-                                               loc.path, loc.line, loc.column))
+            diagnostics.append(
+                Diagnostic.make(
+                    "DRV022",
+                    f"{access.name}: filter skipped: {err}",
+                    loc.path,
+                    loc.line,
+                    loc.column,
+                )
+            )
     return FilterChain(tuple(filters), tuple(diagnostics))

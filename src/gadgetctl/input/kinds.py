@@ -71,6 +71,8 @@ def parse_kinds(names: object) -> tuple[DeviceKind, ...]:
     known = {k.value for k in DeviceKind}
     unknown = [n for n in names if n not in known]
     if unknown:
-        raise ValueError(f"unknown device {'type' if len(unknown) == 1 else 'types'} {', '.join(map(repr, unknown))} "
-                         f"(known: {', '.join(sorted(known))})")
+        raise ValueError(
+            f"unknown device {'type' if len(unknown) == 1 else 'types'} {', '.join(map(repr, unknown))} "
+            f"(known: {', '.join(sorted(known))})"
+        )
     return tuple(DeviceKind(n) for n in names)

@@ -119,16 +119,30 @@ class _Context:
 
 
 class InputManager:
-    def __init__(self, repo: DefinitionRepository, options: ManagerOptions | None = None, *,
-                 registry: DeviceRegistry | None = None, events: EventSource | None = None,
-                 search: DriverSearch | None = None) -> None:
+    def __init__(
+        self,
+        repo: DefinitionRepository,
+        options: ManagerOptions | None = None,
+        *,
+        registry: DeviceRegistry | None = None,
+        events: EventSource | None = None,
+        search: DriverSearch | None = None,
+    ) -> None:
         self.repo = repo
         self.options = options or ManagerOptions()
         opts = self.options
         self.registry = registry if registry is not None else DeviceRegistry.with_builtins()
         self.events = events if events is not None else EventSource()
-        self.search = search if search is not None else DriverSearch.standard(
-            opts.driver_dirs, bundled=opts.bundled_drivers, entry_points=opts.entry_points, environ=opts.environ)
+        self.search = (
+            search
+            if search is not None
+            else DriverSearch.standard(
+                opts.driver_dirs,
+                bundled=opts.bundled_drivers,
+                entry_points=opts.entry_points,
+                environ=opts.environ,
+            )
+        )
         self.loader = PluginLoader(self.registry, repo)
         self.frame = 0
         self._context = _Context(self)
@@ -143,9 +157,13 @@ class InputManager:
         self._proxies: dict[str, Proxy] = {}
         self._proxy_elements: dict[str, ConfigElement] = {}
         self._proxies_of: dict[str, set[str]] = {}  # device name -> names of proxies pointing at it
-        self._waiters: dict[str, set[str]] = {}  # name -> pending elements whose pointer waits for it
+        self._waiters: dict[
+            str, set[str]
+        ] = {}  # name -> pending elements whose pointer waits for it
         # update() order (devices, or (class, devices) updated together); None: stale
-        self._frame_order: tuple[list[Input | tuple[type[Input], list[Input]]], list[Proxy]] | None = None
+        self._frame_order: (
+            tuple[list[Input | tuple[type[Input], list[Input]]], list[Proxy]] | None
+        ) = None
         self._aliases: dict[str, str] = {}
         self._alias_elements: dict[str, ConfigElement] = {}
         self._input_managers: dict[str, ConfigElement] = {}
@@ -157,8 +175,14 @@ class InputManager:
         self._fate: tuple[int, dict[str, str | None]] = (-1, {})
 
     @classmethod
-    def from_files(cls, paths: Iterable[Path], *, definitions: Iterable[Path] = (), bundled: bool = True,
-                   options: ManagerOptions | None = None) -> tuple[InputManager, Configuration]:
+    def from_files(
+        cls,
+        paths: Iterable[Path],
+        *,
+        definitions: Iterable[Path] = (),
+        bundled: bool = True,
+        options: ManagerOptions | None = None,
+    ) -> tuple[InputManager, Configuration]:
         """Load configuration files and make a manager with the right definitions (bundled,
         ``definitions``, the files' definition_path, plug-in folders), not yet configured."""
         from gadgetctl.input.definitions import repository_for
@@ -166,8 +190,13 @@ class InputManager:
 
         options = options or ManagerOptions()
         configuration = load_configuration(list(paths), environ=options.environ)
-        repo = repository_for(configuration, definitions=definitions, bundled=bundled,
-                              driver_dirs=options.driver_dirs, environ=options.environ)
+        repo = repository_for(
+            configuration,
+            definitions=definitions,
+            bundled=bundled,
+            driver_dirs=options.driver_dirs,
+            environ=options.environ,
+        )
         return cls(repo, options), configuration
 
     # -- context manager --------------------------------------------------------------------
@@ -192,11 +221,15 @@ class InputManager:
     def remove(self, elements: Iterable[ConfigElement | str]) -> None:
         """Queue elements (or names) to remove. Thread-safe."""
         with self._incoming_lock:
-            self._incoming.extend((False, e if isinstance(e, str) else e.full_name) for e in elements)
+            self._incoming.extend(
+                (False, e if isinstance(e, str) else e.full_name) for e in elements
+            )
 
     def configure(self, configuration: Configuration | Iterable[ConfigElement]) -> int:
         """Add a whole configuration and process it now; returns elements configured."""
-        elements = configuration.elements if isinstance(configuration, Configuration) else configuration
+        elements = (
+            configuration.elements if isinstance(configuration, Configuration) else configuration
+        )
         self.add(elements)
         return self.reconfigure()
 
@@ -247,8 +280,12 @@ class InputManager:
             return ElementKind.ALIAS
         if token in PROXY_CLASSES or (token in self.repo and self.repo.is_a(token, PROXY_BASE)):
             return ElementKind.PROXY
-        if (token in self.registry or token in UNSUPPORTED_TYPES or token == INPUT_WINDOW
-                or (token in self.repo and self.repo.is_a(token, INPUT_DEVICE))):
+        if (
+            token in self.registry
+            or token in UNSUPPORTED_TYPES
+            or token == INPUT_WINDOW
+            or (token in self.repo and self.repo.is_a(token, INPUT_DEVICE))
+        ):
             return ElementKind.DEVICE
         if token not in self.repo:
             return ElementKind.DEVICE  # unknown: reported as pending, see _try
@@ -304,8 +341,12 @@ class InputManager:
         kind = self._classify(element)
         token = element.type
         if token not in self.repo:
-            return PendingEntry(element, PendingKind.NO_DEFINITION, f"no definition of element type {token} is loaded",
-                                "add the directory of its .jdef with --definitions or a definition_path")
+            return PendingEntry(
+                element,
+                PendingKind.NO_DEFINITION,
+                f"no definition of element type {token} is loaded",
+                "add the directory of its .jdef with --definitions or a definition_path",
+            )
         if token in UNSUPPORTED_TYPES:
             return PendingEntry(element, PendingKind.UNSUPPORTED, UNSUPPORTED_TYPES[token])
         # the rules validate's predictions follow too (gadgetctl.jccl.activation)
@@ -329,8 +370,12 @@ class InputManager:
         return None if entry is None else entry.message
 
     def _active(self, name: str) -> bool:
-        return (name in self._devices or name in self._proxies or name in self._aliases
-                or name in self._input_managers)
+        return (
+            name in self._devices
+            or name in self._proxies
+            or name in self._aliases
+            or name in self._input_managers
+        )
 
     def _unmet_dependency(self, element: ConfigElement) -> PendingEntry | None:
         if not waits_for_pointers(element.type, RunTime.GADGETCTL):
@@ -341,35 +386,63 @@ class InputManager:
             self._waiters.setdefault(target, set()).add(element.full_name)
             if target in self._pending:
                 waiting = self._pending[target]
-                return PendingEntry(element, PendingKind.WAITING,
-                                    f"{prop} points at {target!r}, which is pending: {waiting.message}")
+                return PendingEntry(
+                    element,
+                    PendingKind.WAITING,
+                    f"{prop} points at {target!r}, which is pending: {waiting.message}",
+                )
             if target in self._ignored:
-                return PendingEntry(element, PendingKind.WAITING,
-                                    f"{prop} points at {target!r} ({self._ignored[target].type}), "
-                                    "which the input manager does not configure")
-            return PendingEntry(element, PendingKind.MISSING_TARGET,
-                                f"{prop} points at {target!r}, which is not in the configuration",
-                                "fix the name or add the element it should point at")
+                return PendingEntry(
+                    element,
+                    PendingKind.WAITING,
+                    f"{prop} points at {target!r} ({self._ignored[target].type}), "
+                    "which the input manager does not configure",
+                )
+            return PendingEntry(
+                element,
+                PendingKind.MISSING_TARGET,
+                f"{prop} points at {target!r}, which is not in the configuration",
+                "fix the name or add the element it should point at",
+            )
         return None
 
-    def _configure_input_manager(self, element: ConfigElement, access: ElementAccess) -> PendingEntry | None:
+    def _configure_input_manager(
+        self, element: ConfigElement, access: ElementAccess
+    ) -> PendingEntry | None:
         base = Path(element.file).parent
         env = self.options.environ
         directories: dict[PluginSource, list[DriverDirectory]] = {}
-        for prop, source in (("driver_path", PluginSource.DRIVER_PATH), ("driver_scan_path", PluginSource.SCAN_PATH)):
+        for prop, source in (
+            ("driver_path", PluginSource.DRIVER_PATH),
+            ("driver_scan_path", PluginSource.SCAN_PATH),
+        ):
             for value in element.values(prop):
                 if not value.stripped:
                     continue
-                directory = directory_entry(value.text, source, base=base, environ=env, location=value.location)
+                directory = directory_entry(
+                    value.text, source, base=base, environ=env, location=value.location
+                )
                 loc = value.location
                 for variable in directory.undefined:
-                    self._static_diagnostics.append(Diagnostic.make(
-                        "CFG003", f"{prop} {value.stripped!r} uses ${{{variable}}}, which is not set",
-                        loc.path, loc.line, loc.column))
+                    self._static_diagnostics.append(
+                        Diagnostic.make(
+                            "CFG003",
+                            f"{prop} {value.stripped!r} uses ${{{variable}}}, which is not set",
+                            loc.path,
+                            loc.line,
+                            loc.column,
+                        )
+                    )
                 if not directory.exists:
-                    self._static_diagnostics.append(Diagnostic.make(
-                        "DRV010", f"{prop} {value.stripped!r} is not a directory ({directory.path})",
-                        loc.path, loc.line, loc.column))
+                    self._static_diagnostics.append(
+                        Diagnostic.make(
+                            "DRV010",
+                            f"{prop} {value.stripped!r} is not a directory ({directory.path})",
+                            loc.path,
+                            loc.line,
+                            loc.column,
+                        )
+                    )
                 self.search.add_directory(directory)
                 directories.setdefault(source, []).append(directory)
         for index, value in enumerate(element.values("driver")):
@@ -389,16 +462,26 @@ class InputManager:
     def _note_load(self, result: PluginLoadResult, location: Location | None) -> None:
         for diagnostic in result.diagnostics:
             if diagnostic.path is None and location is not None:
-                diagnostic = Diagnostic.make(diagnostic.code, diagnostic.message, location.path, location.line,
-                                             location.column, hint=diagnostic.hint)
+                diagnostic = Diagnostic.make(
+                    diagnostic.code,
+                    diagnostic.message,
+                    location.path,
+                    location.line,
+                    location.column,
+                    hint=diagnostic.hint,
+                )
             if diagnostic not in self._static_diagnostics:
                 self._static_diagnostics.append(diagnostic)
 
-    def _configure_alias(self, element: ConfigElement, access: ElementAccess) -> PendingEntry | None:
+    def _configure_alias(
+        self, element: ConfigElement, access: ElementAccess
+    ) -> PendingEntry | None:
         name = element.full_name
         target = access.string("proxy")
         if not target:
-            return PendingEntry(element, PendingKind.BAD_ALIAS, "its proxy property is empty: it points at no proxy")
+            return PendingEntry(
+                element, PendingKind.BAD_ALIAS, "its proxy property is empty: it points at no proxy"
+            )
         if target == name:
             return PendingEntry(element, PendingKind.BAD_ALIAS, "points at itself")
         if target in self._proxies:
@@ -407,22 +490,34 @@ class InputManager:
             return None
         self._waiters.setdefault(target, set()).add(name)
         if target in self._aliases:
-            return PendingEntry(element, PendingKind.BAD_ALIAS,
-                                f"points at alias {target!r}; an alias must point at a proxy",
-                                f"point it at the proxy {self._aliases[target]!r}")
+            return PendingEntry(
+                element,
+                PendingKind.BAD_ALIAS,
+                f"points at alias {target!r}; an alias must point at a proxy",
+                f"point it at the proxy {self._aliases[target]!r}",
+            )
         if target in self._devices:
-            return PendingEntry(element, PendingKind.BAD_ALIAS,
-                                f"points at device {target!r}; an alias must point at a proxy")
+            return PendingEntry(
+                element,
+                PendingKind.BAD_ALIAS,
+                f"points at device {target!r}; an alias must point at a proxy",
+            )
         unmet = self._unmet_dependency(element)
         if unmet is not None:
             return unmet
-        return PendingEntry(element, PendingKind.BAD_ALIAS, f"points at {target!r}, which is not a proxy")
+        return PendingEntry(
+            element, PendingKind.BAD_ALIAS, f"points at {target!r}, which is not a proxy"
+        )
 
-    def _configure_proxy(self, element: ConfigElement, access: ElementAccess) -> PendingEntry | None:
+    def _configure_proxy(
+        self, element: ConfigElement, access: ElementAccess
+    ) -> PendingEntry | None:
         name = element.full_name
         proxy_class = PROXY_CLASSES.get(element.type)
         if proxy_class is None:
-            return PendingEntry(element, PendingKind.NO_DRIVER, f"gadgetctl has no proxy of type {element.type}")
+            return PendingEntry(
+                element, PendingKind.NO_DRIVER, f"gadgetctl has no proxy of type {element.type}"
+            )
         unmet = self._unmet_dependency(element)
         if unmet is not None:
             return unmet
@@ -462,25 +557,46 @@ class InputManager:
                 if registration is not None:
                     return registration
         for result in self.loader.results.values():
-            if not result.ok and result.info is not None and token in result.info.metadata.element_types:
-                return PendingEntry(element, PendingKind.DRIVER_FAILED,
-                                    f"driver {result.name} provides {token} but failed to load: {result.reason}")
+            if (
+                not result.ok
+                and result.info is not None
+                and token in result.info.metadata.element_types
+            ):
+                return PendingEntry(
+                    element,
+                    PendingKind.DRIVER_FAILED,
+                    f"driver {result.name} provides {token} but failed to load: {result.reason}",
+                )
         hints = []
         missing = sorted(self._missing_drivers)
         if missing:
-            hints.append(f"input_manager names {'driver' if len(missing) == 1 else 'drivers'} {', '.join(missing)}, "
-                         "which were not found")
+            hints.append(
+                f"input_manager names {'driver' if len(missing) == 1 else 'drivers'} {', '.join(missing)}, "
+                "which were not found"
+            )
         loaded = {r.name for r in self.loader.results.values()}
         for info in providers:
             if info.name not in loaded:
-                hints.append(f"plug-in {info.name} ({info.source}) provides {token}: "
-                             f"add <driver>{info.name}</driver> to an input_manager element")
+                hints.append(
+                    f"plug-in {info.name} ({info.source}) provides {token}: "
+                    f"add <driver>{info.name}</driver> to an input_manager element"
+                )
         definition = self.repo.get(token)
-        detail = " (an abstract base type, which cannot be a device)" if definition is not None and definition.abstract else ""
-        return PendingEntry(element, PendingKind.NO_DRIVER, f"no loaded driver handles {token}{detail}",
-                            "; ".join(hints) or None)
+        detail = (
+            " (an abstract base type, which cannot be a device)"
+            if definition is not None and definition.abstract
+            else ""
+        )
+        return PendingEntry(
+            element,
+            PendingKind.NO_DRIVER,
+            f"no loaded driver handles {token}{detail}",
+            "; ".join(hints) or None,
+        )
 
-    def _configure_device(self, element: ConfigElement, access: ElementAccess) -> PendingEntry | None:
+    def _configure_device(
+        self, element: ConfigElement, access: ElementAccess
+    ) -> PendingEntry | None:
         name = element.full_name
         registration = self._registration(element)
         if isinstance(registration, PendingEntry):
@@ -494,7 +610,12 @@ class InputManager:
         try:
             device.config(access)
         except ElementVersionError as err:
-            return PendingEntry(element, PendingKind.TOO_OLD, str(err), "upgrade the element with `gadgetctl upgrade`")
+            return PendingEntry(
+                element,
+                PendingKind.TOO_OLD,
+                str(err),
+                "upgrade the element with `gadgetctl upgrade`",
+            )
         except Exception as err:
             return PendingEntry(element, PendingKind.CONFIG_FAILED, _error_text(err))
         runner: Runner | None = None
@@ -504,7 +625,11 @@ class InputManager:
                 runner.start()
             except Exception as err:
                 device.state = DeviceState.STOPPED
-                return PendingEntry(element, PendingKind.START_FAILED, f"the device failed to start: {describe(err)}")
+                return PendingEntry(
+                    element,
+                    PendingKind.START_FAILED,
+                    f"the device failed to start: {describe(err)}",
+                )
         self._devices[name] = _DeviceEntry(element, device, runner)
         self._device_objects[name] = device
         self._frame_order = None
@@ -562,16 +687,25 @@ class InputManager:
         problem = entry.runner.stop(self.options.stop_timeout)
         if problem:
             loc = entry.element.location
-            self._static_diagnostics.append(Diagnostic.make(
-                "DRV041", f"{entry.device.name}: stopping it: {problem}", loc.path, loc.line, loc.column))
+            self._static_diagnostics.append(
+                Diagnostic.make(
+                    "DRV041",
+                    f"{entry.device.name}: stopping it: {problem}",
+                    loc.path,
+                    loc.line,
+                    loc.column,
+                )
+            )
 
     def _lost_dependencies(self) -> None:
         """Elements pointing at something no longer active go back to pending."""
         changed = True
         while changed:
             changed = False
-            for name, element in [*((n, e.element) for n, e in self._devices.items()),
-                                  *self._alias_elements.items()]:
+            for name, element in [
+                *((n, e.element) for n, e in self._devices.items()),
+                *self._alias_elements.items(),
+            ]:
                 unmet = self._unmet_dependency(element)
                 if unmet is not None:
                     self._teardown(name)
@@ -610,9 +744,15 @@ class InputManager:
                 if type(device) is tuple:
                     device[0].prepare_frame_group(device[1])
 
-    def run(self, rate: float = 60.0, *, frames: int | None = None, duration: float | None = None,
-            on_frame: Callable[[InputManager], bool | None] | None = None,
-            stop: threading.Event | None = None) -> int:
+    def run(
+        self,
+        rate: float = 60.0,
+        *,
+        frames: int | None = None,
+        duration: float | None = None,
+        on_frame: Callable[[InputManager], bool | None] | None = None,
+        stop: threading.Event | None = None,
+    ) -> int:
         """Run frames at ``rate`` Hz until ``frames`` or ``duration`` (seconds of wall clock,
         however many frames that is) is reached, ``stop`` is set or ``on_frame`` returns
         False. Ctrl-C shuts everything down and is re-raised."""
@@ -682,8 +822,10 @@ class InputManager:
         """An object that is replaced whenever the devices or proxies updated each frame
         change (a consumer that planned per device knows its plan holds while it is the same)."""
         if self._frame_order is None:
-            self._frame_order = (_frame_groups([self._device_objects[n] for n in sorted(self._device_objects)]),
-                                 [self._proxies[n] for n in sorted(self._proxies)])
+            self._frame_order = (
+                _frame_groups([self._device_objects[n] for n in sorted(self._device_objects)]),
+                [self._proxies[n] for n in sorted(self._proxies)],
+            )
         return self._frame_order
 
     @property
@@ -744,8 +886,15 @@ class InputManager:
                 for name, e in elements.items():
                     definition = repo.get(e.type)
                     handled = definition is not None and not definition.abstract
-                    nodes.append(Node(name, e.type, e.version, tuple(t for _, t in pointer_targets(e, repo)),
-                                      None if handled else "no handler"))
+                    nodes.append(
+                        Node(
+                            name,
+                            e.type,
+                            e.version,
+                            tuple(t for _, t in pointer_targets(e, repo)),
+                            None if handled else "no handler",
+                        )
+                    )
                 fate = settle(nodes, RunTime.VRJUGGLER, repo.versions)
             self._fate = (self._generation, fate)
         return fate
@@ -805,26 +954,53 @@ class InputManager:
         for pending in self._pending.values():
             result.append(self._pending_status(pending))
         if self._vrjuggler_fate():
-            result = [replace(s, note=note) if (note := self.vrjuggler_difference(s.name)) else s for s in result]
+            result = [
+                replace(s, note=note) if (note := self.vrjuggler_difference(s.name)) else s
+                for s in result
+            ]
         return result
 
     @staticmethod
     def _device_status(name: str, entry: _DeviceEntry) -> ElementStatus:
         device = entry.device
-        reason = device.error if device.state in (DeviceState.FAULTED, DeviceState.RECONNECTING) else None
-        return ElementStatus(name, entry.element.type, ElementKind.DEVICE, device.state.value,
-                             reason, "DRV042" if reason else None, device.stats)
+        reason = (
+            device.error
+            if device.state in (DeviceState.FAULTED, DeviceState.RECONNECTING)
+            else None
+        )
+        return ElementStatus(
+            name,
+            entry.element.type,
+            ElementKind.DEVICE,
+            device.state.value,
+            reason,
+            "DRV042" if reason else None,
+            device.stats,
+        )
 
     @staticmethod
     def _proxy_status(name: str, proxy: Proxy) -> ElementStatus:
-        return ElementStatus(name, proxy.element_type, ElementKind.PROXY, proxy.state.value,
-                             proxy.reason if proxy.stupefied else None, None, target=proxy.device_name)
+        return ElementStatus(
+            name,
+            proxy.element_type,
+            ElementKind.PROXY,
+            proxy.state.value,
+            proxy.reason if proxy.stupefied else None,
+            None,
+            target=proxy.device_name,
+        )
 
     def _pending_status(self, entry: PendingEntry) -> ElementStatus:
         kind = self._classify(entry.element)
         state = UNKNOWN_TYPE if entry.kind is PendingKind.NO_DEFINITION else PENDING
-        return ElementStatus(entry.name, entry.type, kind if isinstance(kind, ElementKind) else None,
-                             state, entry.message, entry.code)
+        return ElementStatus(
+            entry.name,
+            entry.type,
+            kind if isinstance(kind, ElementKind) else None,
+            state,
+            entry.message,
+            entry.code,
+        )
 
 
 def _error_text(err: Exception) -> str:

@@ -66,11 +66,25 @@ class PendingEntry:
 
     def diagnostic(self) -> Diagnostic:
         loc = self.element.location
-        return Diagnostic.make(self.code, f"{self.name} ({self.type}) stays pending: {self.message}",
-                               loc.path, loc.line, loc.column, hint=self.hint)
+        return Diagnostic.make(
+            self.code,
+            f"{self.name} ({self.type}) stays pending: {self.message}",
+            loc.path,
+            loc.line,
+            loc.column,
+            hint=self.hint,
+        )
 
     def to_dict(self) -> dict[str, object]:
         loc = self.element.location
-        return {"name": self.name, "type": self.type, "reason": self.kind.value, "code": self.code,
-                "message": self.message, "hint": self.hint,
-                "path": loc.path, "line": loc.line, "column": loc.column}
+        return {
+            "name": self.name,
+            "type": self.type,
+            "reason": self.kind.value,
+            "code": self.code,
+            "message": self.message,
+            "hint": self.hint,
+            "path": loc.path,
+            "line": loc.line,
+            "column": loc.column,
+        }

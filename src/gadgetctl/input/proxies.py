@@ -90,7 +90,9 @@ class Proxy:
             detail = f": {why_missing}" if why_missing else ""
             self.stupefy(f"device {self.device_name!r} is not configured{detail}")
         elif self.KIND not in device.kinds():
-            self.stupefy(f"device {self.device_name!r} ({device.element_type}) provides no {self.KIND} data")
+            self.stupefy(
+                f"device {self.device_name!r} ({device.element_type}) provides no {self.KIND} data"
+            )
         elif device is not self.device:
             self.device = device
             self.reason = None
@@ -430,7 +432,9 @@ class RumbleProxy(Proxy):
         """Run the device's motors (0 to 1) for ``duration`` seconds; False when stupefied
         or the device cannot rumble now."""
         device = self.device
-        return isinstance(device, Rumble) and not self.stupefied and device.rumble(low, high, duration)
+        return (
+            isinstance(device, Rumble) and not self.stupefied and device.rumble(low, high, duration)
+        )
 
     @property
     def data(self) -> bool:
@@ -438,6 +442,18 @@ class RumbleProxy(Proxy):
         return isinstance(device, Rumble) and not self.stupefied and device.has_rumble
 
 
-PROXY_CLASSES: dict[str, type[Proxy]] = {cls.ELEMENT_TYPE: cls for cls in (
-    AnalogProxy, DigitalProxy, PositionProxy, GloveProxy, GestureProxy, CommandProxy,
-    StringProxy, HatProxy, KeyboardMouseProxy, RumbleProxy)}
+PROXY_CLASSES: dict[str, type[Proxy]] = {
+    cls.ELEMENT_TYPE: cls
+    for cls in (
+        AnalogProxy,
+        DigitalProxy,
+        PositionProxy,
+        GloveProxy,
+        GestureProxy,
+        CommandProxy,
+        StringProxy,
+        HatProxy,
+        KeyboardMouseProxy,
+        RumbleProxy,
+    )
+}

@@ -37,10 +37,14 @@ class Registration:
 def registration_for(device_class: object, element_type: str | None, plugin: str) -> Registration:
     """Validate a class offered for registration; raises :class:`RegistrationError`."""
     if not isinstance(device_class, type) or not issubclass(device_class, Input):
-        raise RegistrationError(f"{device_class!r} is not a device class (a subclass of gadgetctl.input.Input)")
+        raise RegistrationError(
+            f"{device_class!r} is not a device class (a subclass of gadgetctl.input.Input)"
+        )
     token = element_type if element_type is not None else device_class.ELEMENT_TYPE
     if not token:
-        raise RegistrationError(f"{device_class.__qualname__} names no element type (set ELEMENT_TYPE)")
+        raise RegistrationError(
+            f"{device_class.__qualname__} names no element type (set ELEMENT_TYPE)"
+        )
     return Registration(token, device_class, plugin)
 
 
@@ -57,7 +61,9 @@ class DeviceRegistry:
             registry.add(registration_for(device_class, None, BUILTIN))
         return registry
 
-    def register_device(self, device_class: type[Input], element_type: str | None = None) -> Registration:
+    def register_device(
+        self, device_class: type[Input], element_type: str | None = None
+    ) -> Registration:
         """Register ``device_class`` for ``element_type`` (default: its ``ELEMENT_TYPE``)."""
         return self.add(registration_for(device_class, element_type, BUILTIN))
 
@@ -81,8 +87,9 @@ class DeviceRegistry:
         return registration.device_class()
 
 
-def kind_disagreements(element_type: str, kinds: tuple[DeviceKind, ...],
-                       repo: DefinitionRepository) -> list[str]:
+def kind_disagreements(
+    element_type: str, kinds: tuple[DeviceKind, ...], repo: DefinitionRepository
+) -> list[str]:
     """Where the kinds a class provides and the definition's ancestors disagree.
 
     A class that provides digital data needs a definition deriving from digital_device
@@ -94,7 +101,11 @@ def kind_disagreements(element_type: str, kinds: tuple[DeviceKind, ...],
         provides = kind in kinds
         derives = repo.is_a(element_type, base)
         if provides and not derives:
-            problems.append(f"the class provides {kind} data but {element_type} does not derive from {base}")
+            problems.append(
+                f"the class provides {kind} data but {element_type} does not derive from {base}"
+            )
         elif derives and not provides:
-            problems.append(f"{element_type} derives from {base} but the class provides no {kind} data")
+            problems.append(
+                f"{element_type} derives from {base} but the class provides no {kind} data"
+            )
     return problems

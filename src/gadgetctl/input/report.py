@@ -12,7 +12,12 @@ from gadgetctl.input.pending import PendingEntry, PendingKind
 from gadgetctl.input.status import ElementKind
 from gadgetctl.safetext import printable
 
-_PLURALS = {"device": "devices", "proxy": "proxies", "alias": "aliases", "input_manager": "input_managers"}
+_PLURALS = {
+    "device": "devices",
+    "proxy": "proxies",
+    "alias": "aliases",
+    "input_manager": "input_managers",
+}
 
 
 @dataclass(frozen=True)
@@ -24,9 +29,16 @@ class StupefiedProxy:
     diagnostic: Diagnostic
 
     def to_dict(self) -> dict[str, object]:
-        return {"name": self.name, "type": self.type, "device": self.device, "reason": self.reason,
-                "code": self.diagnostic.code, "path": self.diagnostic.path, "line": self.diagnostic.line,
-                "column": self.diagnostic.column}
+        return {
+            "name": self.name,
+            "type": self.type,
+            "device": self.device,
+            "reason": self.reason,
+            "code": self.diagnostic.code,
+            "path": self.diagnostic.path,
+            "line": self.diagnostic.line,
+            "column": self.diagnostic.column,
+        }
 
 
 @dataclass
@@ -44,22 +56,38 @@ class PendingReport:
 
     @property
     def problems(self) -> bool:
-        return bool(self.pending or self.stupefied
-                    or any(d.severity is Severity.ERROR for d in self.diagnostics))
+        return bool(
+            self.pending
+            or self.stupefied
+            or any(d.severity is Severity.ERROR for d in self.diagnostics)
+        )
 
     def all_diagnostics(self) -> list[Diagnostic]:
-        found = ([e.diagnostic() for e in self.pending] + [_unknown_diagnostic(e) for e in self.unknown]
-                 + [s.diagnostic for s in self.stupefied] + self.diagnostics + self.differences)
+        found = (
+            [e.diagnostic() for e in self.pending]
+            + [_unknown_diagnostic(e) for e in self.unknown]
+            + [s.diagnostic for s in self.stupefied]
+            + self.diagnostics
+            + self.differences
+        )
         return sorted(found, key=sort_key)
 
     def summary(self) -> str:
-        configured = ", ".join(f"{n} {_PLURALS[kind] if n != 1 else kind}" for kind, n in sorted(self.configured.items()))
+        configured = ", ".join(
+            f"{n} {_PLURALS[kind] if n != 1 else kind}"
+            for kind, n in sorted(self.configured.items())
+        )
         unknown = f", {len(self.unknown)} of unknown type" if self.unknown else ""
-        differing = (f"; {len(self.differences)} active that VR Juggler would leave pending"
-                     if self.differences else "")
-        return (f"configured: {configured or 'nothing'}; {len(self.pending)} pending, "
-                f"{len(self.stupefied)} stupefied prox{'y' if len(self.stupefied) == 1 else 'ies'}{unknown}"
-                f"{differing}")
+        differing = (
+            f"; {len(self.differences)} active that VR Juggler would leave pending"
+            if self.differences
+            else ""
+        )
+        return (
+            f"configured: {configured or 'nothing'}; {len(self.pending)} pending, "
+            f"{len(self.stupefied)} stupefied prox{'y' if len(self.stupefied) == 1 else 'ies'}{unknown}"
+            f"{differing}"
+        )
 
     def text(self) -> str:
         lines = []
@@ -83,16 +111,25 @@ class PendingReport:
 
 def _unknown_diagnostic(entry: PendingEntry) -> Diagnostic:
     loc = entry.element.location
-    return Diagnostic.make("DRV040", f"{entry.name} is of type {entry.type}, which has no definition: "
-                           "VR Juggler drops it when loading", loc.path, loc.line, loc.column,
-                           severity=Severity.INFO, hint=entry.hint)
+    return Diagnostic.make(
+        "DRV040",
+        f"{entry.name} is of type {entry.type}, which has no definition: "
+        "VR Juggler drops it when loading",
+        loc.path,
+        loc.line,
+        loc.column,
+        severity=Severity.INFO,
+        hint=entry.hint,
+    )
 
 
 def pending_report(manager: InputManager) -> PendingReport:
     entries = manager.pending()
-    report = PendingReport(pending=[e for e in entries if e.kind is not PendingKind.NO_DEFINITION],
-                           unknown=[e for e in entries if e.kind is PendingKind.NO_DEFINITION],
-                           diagnostics=manager.diagnostics)
+    report = PendingReport(
+        pending=[e for e in entries if e.kind is not PendingKind.NO_DEFINITION],
+        unknown=[e for e in entries if e.kind is PendingKind.NO_DEFINITION],
+        diagnostics=manager.diagnostics,
+    )
     for status in manager.statuses():
         if status.state == "pending" or status.kind is None:
             continue
@@ -100,17 +137,30 @@ def pending_report(manager: InputManager) -> PendingReport:
         if status.note:
             element = manager.element(status.name)
             loc = element.location if element is not None else None
-            report.differences.append(Diagnostic.make(
-                "DRV044", f"{status.name} ({status.type}) is {status.state} (VR Juggler would leave it pending: "
-                f"{status.note})", loc.path if loc else None, loc.line if loc else None,
-                loc.column if loc else None))
+            report.differences.append(
+                Diagnostic.make(
+                    "DRV044",
+                    f"{status.name} ({status.type}) is {status.state} (VR Juggler would leave it pending: "
+                    f"{status.note})",
+                    loc.path if loc else None,
+                    loc.line if loc else None,
+                    loc.column if loc else None,
+                )
+            )
         if status.kind is ElementKind.PROXY and status.reason:
             proxy = manager.proxies[status.name]
             element = manager.proxy_element(status.name)
             loc = element.location if element is not None else None
             diagnostic = Diagnostic.make(
-                "DRV043", f"{status.name} ({status.type}) is stupefied: {status.reason}",
-                loc.path if loc else None, loc.line if loc else None, loc.column if loc else None)
-            report.stupefied.append(StupefiedProxy(status.name, status.type, proxy.device_name, status.reason,
-                                                   diagnostic))
+                "DRV043",
+                f"{status.name} ({status.type}) is stupefied: {status.reason}",
+                loc.path if loc else None,
+                loc.line if loc else None,
+                loc.column if loc else None,
+            )
+            report.stupefied.append(
+                StupefiedProxy(
+                    status.name, status.type, proxy.device_name, status.reason, diagnostic
+                )
+            )
     return report

@@ -75,13 +75,13 @@ class SampleBatch:
     @property
     def timestamps(self) -> Any:
         if self._timestamps is None:
-            self._timestamps = self._base_timestamps[self.start:self.stop]
+            self._timestamps = self._base_timestamps[self.start : self.stop]
         return self._timestamps
 
     @property
     def values(self) -> Any:
         if self._values is None:
-            self._values = self._base_values[self.start:self.stop]
+            self._values = self._base_values[self.start : self.stop]
         return self._values
 
     @property
@@ -101,7 +101,10 @@ class SampleBatch:
         if index < 0:
             index += self.stop - self.start
         if self._base_values is not None:  # read the window's arrays without slicing them
-            return Sample(float(self._base_timestamps[self.start + index]), self._base_values[self.start + index])
+            return Sample(
+                float(self._base_timestamps[self.start + index]),
+                self._base_values[self.start + index],
+            )
         return Sample(float(self._timestamps[index]), self._values[index])
 
     def tail(self, count: int) -> SampleBatch:
@@ -124,8 +127,11 @@ class FrameSamples:
 
     def __init__(self, chunks: Iterable[Chunk] = (), count: int | None = None) -> None:
         self.chunks = tuple(chunks) if not isinstance(chunks, (tuple, deque)) else chunks
-        self.count = count if count is not None else sum(
-            1 if isinstance(c, Sample) else len(c) for c in self.chunks)
+        self.count = (
+            count
+            if count is not None
+            else sum(1 if isinstance(c, Sample) else len(c) for c in self.chunks)
+        )
 
     def __len__(self) -> int:
         return self.count
@@ -155,8 +161,11 @@ class FrameSamples:
                 if unit < len(chunk.values):
                     result.append(chunk.values[unit])
             elif len(chunk.values) and unit < len(chunk.values[0]):
-                result.extend(chunk.values[:, unit] if hasattr(chunk.values, "shape")
-                              else [row[unit] for row in chunk.values])
+                result.extend(
+                    chunk.values[:, unit]
+                    if hasattr(chunk.values, "shape")
+                    else [row[unit] for row in chunk.values]
+                )
         return result
 
     def timestamps(self) -> list[float]:
@@ -226,8 +235,14 @@ class SharedWindows:
         for slot, store in enumerate(self.stores):
             store.share(self, slot)
 
-    def publish(self, moment: float, slots: np.ndarray, starts: np.ndarray, stops: np.ndarray,
-                empty: np.ndarray | None = None) -> None:
+    def publish(
+        self,
+        moment: float,
+        slots: np.ndarray,
+        starts: np.ndarray,
+        stops: np.ndarray,
+        empty: np.ndarray | None = None,
+    ) -> None:
         """A group frame at ``moment``: ``slots`` get the windows ``starts`` .. ``stops``
         (each at least one sample, within the slot's arrays); the slots ``empty`` swap with
         nothing new (their newest sample stays); every other slot is not fresh (its device
@@ -250,7 +265,9 @@ class SharedWindows:
         """``slots`` as an index of the per-slot arrays: a slice when it is :attr:`every`."""
         return slice(None) if slots is self.every else slots
 
-    def set_arrays(self, slot: int, timestamps: Any, items: tuple[tuple[DeviceKind, Any], ...]) -> None:
+    def set_arrays(
+        self, slot: int, timestamps: Any, items: tuple[tuple[DeviceKind, Any], ...]
+    ) -> None:
         """The arrays slot ``slot``'s windows are cut from from now on (its store has taken
         its pending window)."""
         current = self.arrays[slot]
@@ -261,7 +278,9 @@ class SharedWindows:
             if upcoming is not None and upcoming[0] is timestamps:
                 self.upcoming[slot] = None
 
-    def set_upcoming(self, slot: int, timestamps: Any, items: tuple[tuple[DeviceKind, Any], ...]) -> None:
+    def set_upcoming(
+        self, slot: int, timestamps: Any, items: tuple[tuple[DeviceKind, Any], ...]
+    ) -> None:
         """The arrays slot ``slot``'s windows will be cut from after its current ones."""
         self.upcoming[slot] = (timestamps, items)
         self.upcoming_generation[slot] += 1
@@ -375,7 +394,9 @@ class SampleStore:
             window = int(shared.window_serial[slot])
             if fresh or window > self._applied:  # a window not made current yet comes first
                 self._applied = window
-                self._window_frames(timestamps, items, int(shared.starts[slot]), int(shared.stops[slot]))
+                self._window_frames(
+                    timestamps, items, int(shared.starts[slot]), int(shared.stops[slot])
+                )
             if not fresh:  # then the empty frame of this serial
                 self._make_current(self._take())
             self._swapped_at = shared.moment
@@ -409,8 +430,9 @@ class SampleStore:
         """Append consecutive samples of one kind."""
         self.add_batches(timestamps, {kind: values})
 
-    def add_batches(self, timestamps: Any,
-                    values: Mapping[DeviceKind, Any] | Iterable[tuple[DeviceKind, Any]]) -> None:
+    def add_batches(
+        self, timestamps: Any, values: Mapping[DeviceKind, Any] | Iterable[tuple[DeviceKind, Any]]
+    ) -> None:
         """Append consecutive samples of several kinds taken at the same times, under one lock.
         ``values``: kind -> array of shape (samples, units, ...), as a mapping or pairs."""
         size = len(timestamps)
@@ -434,7 +456,9 @@ class SampleStore:
                 if channel.count > cap:
                     channel.trim(cap)
 
-    def add_slices(self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]], start: int, stop: int) -> None:
+    def add_slices(
+        self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]], start: int, stop: int
+    ) -> None:
         """Append samples ``start`` .. ``stop - 1`` of arrays computed ahead (``timestamps``
         and, per kind, ``values`` of shape (n, units, ...)) without slicing them now."""
         if stop > start:
@@ -443,7 +467,9 @@ class SampleStore:
             with self._lock:
                 self._add_slices(timestamps, values, start, stop)
 
-    def _add_slices(self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]], start: int, stop: int) -> None:
+    def _add_slices(
+        self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]], start: int, stop: int
+    ) -> None:
         size = stop - start
         channels = self._channels
         cap = self.cap
@@ -473,8 +499,14 @@ class SampleStore:
             taken = self._take()
         self._make_current(taken)
 
-    def add_slices_and_swap(self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]],
-                            start: int, stop: int, moment: float | None = None) -> None:
+    def add_slices_and_swap(
+        self,
+        timestamps: Any,
+        values: Iterable[tuple[DeviceKind, Any]],
+        start: int,
+        stop: int,
+        moment: float | None = None,
+    ) -> None:
         """:meth:`add_slices` then :meth:`swap`, under one lock (a device publishing samples
         computed ahead at the frame); ``moment``: the swap's time when the caller has it.
 
@@ -496,8 +528,9 @@ class SampleStore:
             taken = self._take()
         self._make_current(taken)
 
-    def _window_frames(self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]], start: int,
-                       stop: int) -> None:
+    def _window_frames(
+        self, timestamps: Any, values: Iterable[tuple[DeviceKind, Any]], start: int, stop: int
+    ) -> None:
         """Make each kind's window ``start`` .. ``stop - 1`` the current frame (nothing else
         waits; the caller holds the lock and counted the samples)."""
         current = {}

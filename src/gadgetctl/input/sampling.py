@@ -107,8 +107,9 @@ class ThreadRunner:
     def start(self) -> None:
         self._sup.start()
         if self.device.samples_in_thread():
-            self._thread = threading.Thread(target=self._loop, name=f"gadgetctl-sample-{self.device.name}",
-                                            daemon=True)
+            self._thread = threading.Thread(
+                target=self._loop, name=f"gadgetctl-sample-{self.device.name}", daemon=True
+            )
             self._thread.start()
 
     def _loop(self) -> None:
@@ -228,7 +229,9 @@ class SharedScheduler:
             self._order = None
             if self._thread is None or not self._thread.is_alive():
                 self._stop.clear()
-                self._thread = threading.Thread(target=self._loop, name="gadgetctl-scheduler", daemon=True)
+                self._thread = threading.Thread(
+                    target=self._loop, name="gadgetctl-scheduler", daemon=True
+                )
                 self._thread.start()
         self._wake.set()
 
@@ -245,7 +248,13 @@ class SharedScheduler:
         return len(self._members)
 
     def _loop(self) -> None:
-        clock, changed, wake, stop, members = self._clock, self._changed, self._wake, self._stop, self._members
+        clock, changed, wake, stop, members = (
+            self._clock,
+            self._changed,
+            self._wake,
+            self._stop,
+            self._members,
+        )
         while not stop.is_set():
             moment = clock()
             next_due = moment + self.IDLE_WAKE

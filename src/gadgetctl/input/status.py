@@ -42,10 +42,21 @@ class ElementStatus:
 
     def to_dict(self) -> dict[str, object]:
         return {
-            "name": self.name, "type": self.type, "kind": None if self.kind is None else self.kind.value,
-            "state": self.state, "reason": self.reason, "code": self.code, "target": self.target,
+            "name": self.name,
+            "type": self.type,
+            "kind": None if self.kind is None else self.kind.value,
+            "state": self.state,
+            "reason": self.reason,
+            "code": self.code,
+            "target": self.target,
             "vrjuggler_pending": self.note,
-            "stats": None if self.stats is None else {
-                "samples": self.stats.samples, "dropped": self.stats.dropped, "faults": self.stats.faults,
-                "restarts": self.stats.restarts, "last_error": self.stats.last_error},
+            "stats": None
+            if self.stats is None
+            else {
+                "samples": self.stats.samples,
+                "dropped": self.stats.dropped,
+                "faults": self.stats.faults,
+                "restarts": self.stats.restarts,
+                "last_error": self.stats.last_error,
+            },
         }

@@ -44,9 +44,11 @@ def rotation_axis(axis: Sequence[float], radians: float) -> np.ndarray:
     x, y, z = axis
     c, s, t = math.cos(radians), math.sin(radians), 1.0 - math.cos(radians)
     m = np.eye(4)
-    m[:3, :3] = ((t * x * x + c, t * x * y - s * z, t * x * z + s * y),
-                 (t * x * y + s * z, t * y * y + c, t * y * z - s * x),
-                 (t * x * z - s * y, t * y * z + s * x, t * z * z + c))
+    m[:3, :3] = (
+        (t * x * x + c, t * x * y - s * z, t * x * z + s * y),
+        (t * x * y + s * z, t * y * y + c, t * y * z - s * x),
+        (t * x * z - s * y, t * y * z + s * x, t * z * z + c),
+    )
     return m
 
 
@@ -104,17 +106,45 @@ def _quaternions_by_largest_term(r: np.ndarray) -> np.ndarray:
     branch = np.argmax(np.stack([m00 + m11 + m22, m00, m11, m22], axis=-1), axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
         s = np.sqrt(np.maximum(1e-300, 1.0 + m00 + m11 + m22)) * 2.0
-        w_branch = np.stack([(r[:, 2, 1] - r[:, 1, 2]) / s, (r[:, 0, 2] - r[:, 2, 0]) / s,
-                             (r[:, 1, 0] - r[:, 0, 1]) / s, 0.25 * s], axis=-1)
+        w_branch = np.stack(
+            [
+                (r[:, 2, 1] - r[:, 1, 2]) / s,
+                (r[:, 0, 2] - r[:, 2, 0]) / s,
+                (r[:, 1, 0] - r[:, 0, 1]) / s,
+                0.25 * s,
+            ],
+            axis=-1,
+        )
         s = np.sqrt(np.maximum(1e-300, 1.0 + m00 - m11 - m22)) * 2.0
-        x_branch = np.stack([0.25 * s, (r[:, 0, 1] + r[:, 1, 0]) / s, (r[:, 0, 2] + r[:, 2, 0]) / s,
-                             (r[:, 2, 1] - r[:, 1, 2]) / s], axis=-1)
+        x_branch = np.stack(
+            [
+                0.25 * s,
+                (r[:, 0, 1] + r[:, 1, 0]) / s,
+                (r[:, 0, 2] + r[:, 2, 0]) / s,
+                (r[:, 2, 1] - r[:, 1, 2]) / s,
+            ],
+            axis=-1,
+        )
         s = np.sqrt(np.maximum(1e-300, 1.0 + m11 - m00 - m22)) * 2.0
-        y_branch = np.stack([(r[:, 0, 1] + r[:, 1, 0]) / s, 0.25 * s, (r[:, 1, 2] + r[:, 2, 1]) / s,
-                             (r[:, 0, 2] - r[:, 2, 0]) / s], axis=-1)
+        y_branch = np.stack(
+            [
+                (r[:, 0, 1] + r[:, 1, 0]) / s,
+                0.25 * s,
+                (r[:, 1, 2] + r[:, 2, 1]) / s,
+                (r[:, 0, 2] - r[:, 2, 0]) / s,
+            ],
+            axis=-1,
+        )
         s = np.sqrt(np.maximum(1e-300, 1.0 + m22 - m00 - m11)) * 2.0
-        z_branch = np.stack([(r[:, 0, 2] + r[:, 2, 0]) / s, (r[:, 1, 2] + r[:, 2, 1]) / s, 0.25 * s,
-                             (r[:, 1, 0] - r[:, 0, 1]) / s], axis=-1)
+        z_branch = np.stack(
+            [
+                (r[:, 0, 2] + r[:, 2, 0]) / s,
+                (r[:, 1, 2] + r[:, 2, 1]) / s,
+                0.25 * s,
+                (r[:, 1, 0] - r[:, 0, 1]) / s,
+            ],
+            axis=-1,
+        )
     for index, candidate in enumerate((w_branch, x_branch, y_branch, z_branch)):
         chosen = branch == index
         q[chosen] = candidate[chosen]

@@ -167,18 +167,26 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         super().config(access)
         self.rate = _positive(access.float("rate"), "rate")
         if self.rate > MAX_RATE:
-            raise DeviceConfigError(f"rate {self.rate:g} Hz is above the {MAX_RATE:g} Hz gadgetctl supports")
+            raise DeviceConfigError(
+                f"rate {self.rate:g} Hz is above the {MAX_RATE:g} Hz gadgetctl supports"
+            )
         self.seed = access.integer("seed")
         waves = access.strings("analog_waveform")
         frequencies = _per_channel(access, "analog_frequency", len(waves))
-        self.analog = [AnalogChannel(_enum(Wave, w, "analog_waveform"), _positive(f, "analog_frequency"))
-                       for w, f in zip(waves, frequencies, strict=True)]
-        self.button_periods = [_positive(p, "button_period") for p in access.floats("button_period")]
+        self.analog = [
+            AnalogChannel(_enum(Wave, w, "analog_waveform"), _positive(f, "analog_frequency"))
+            for w, f in zip(waves, frequencies, strict=True)
+        ]
+        self.button_periods = [
+            _positive(p, "button_period") for p in access.floats("button_period")
+        ]
         paths = access.strings("position_path")
         periods = _per_channel(access, "position_period", len(paths))
         radii = _per_channel(access, "position_radius", len(paths))
-        self.positions = [PositionChannel(_enum(Path, p, "position_path"), _positive(t, "position_period"), r)
-                          for p, t, r in zip(paths, periods, radii, strict=True)]
+        self.positions = [
+            PositionChannel(_enum(Path, p, "position_path"), _positive(t, "position_period"), r)
+            for p, t, r in zip(paths, periods, radii, strict=True)
+        ]
         center = access.floats("position_center")
         self.center = (*center, 0.0, 0.0, 0.0)[:3] if center else self.center
         self.event_period = max(0.0, access.float("event_period"))
@@ -302,14 +310,19 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         while self.next_index < end:
             block = self._block
             ahead = self._ahead
-            if (block is None or not block.start <= self.next_index < block.end) and ahead is not None \
-                    and ahead.start <= self.next_index < ahead.end:
+            if (
+                (block is None or not block.start <= self.next_index < block.end)
+                and ahead is not None
+                and ahead.start <= self.next_index < ahead.end
+            ):
                 block = self._block = ahead
                 self._ahead, self._ahead_tried = None, False
             if block is None or not block.start <= self.next_index < block.end:
                 self._ahead, self._ahead_tried = None, False
                 size = max(1, math.ceil(self.rate * BLOCK_SECONDS))
-                if block is None:  # a shorter first block spreads the devices' block computations out
+                if (
+                    block is None
+                ):  # a shorter first block spreads the devices' block computations out
                     size = max(1, size - zlib.crc32(self.name.encode()) % size)
                 block = self._block = self.compute(self.next_index, size)
             stop = min(end, block.end)
@@ -332,17 +345,22 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         t = k / self.rate
         data: dict[DeviceKind, np.ndarray] = {}
         if self.analog:
-            data[DeviceKind.ANALOG] = np.stack([self._analog(i, c, t, start) for i, c in enumerate(self.analog)], axis=1)
+            data[DeviceKind.ANALOG] = np.stack(
+                [self._analog(i, c, t, start) for i, c in enumerate(self.analog)], axis=1
+            )
         if self.button_periods:
-            data[DeviceKind.DIGITAL] = np.stack([(np.mod(t, p) < p / 2).astype(np.int8)
-                                                 for p in self.button_periods], axis=1)
+            data[DeviceKind.DIGITAL] = np.stack(
+                [(np.mod(t, p) < p / 2).astype(np.int8) for p in self.button_periods], axis=1
+            )
         if self.positions:
             matrices = np.stack([self._path(c, t) for c in self.positions], axis=1)
             data[DeviceKind.POSITION] = self.position_filters.apply(matrices)
         events: list[tuple[int, int]] = []
         if self.event_period > 0:
             steps = np.floor(t / self.event_period).astype(np.int64)
-            data[DeviceKind.HAT] = np.asarray(HAT_SEQUENCE, dtype=np.int8)[steps % len(HAT_SEQUENCE)][:, None]
+            data[DeviceKind.HAT] = np.asarray(HAT_SEQUENCE, dtype=np.int8)[
+                steps % len(HAT_SEQUENCE)
+            ][:, None]
             first = math.floor(start / self.rate / self.event_period) + 1
             last = math.floor((start + count - 1) / self.rate / self.event_period)
             for number in range(first, last + 1):
@@ -385,7 +403,11 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         if spec.path is Path.CIRCLE:
             x, y, z = cx + r * np.cos(angle), np.full_like(t, cy), cz + r * np.sin(angle)
         elif spec.path is Path.FIGURE_EIGHT:
-            x, y, z = cx + r * np.sin(angle), np.full_like(t, cy), cz + r * np.sin(angle) * np.cos(angle)
+            x, y, z = (
+                cx + r * np.sin(angle),
+                np.full_like(t, cy),
+                cz + r * np.sin(angle) * np.cos(angle),
+            )
         else:  # spin: turn about +Y in place
             c, s = np.cos(angle), np.sin(angle)
             matrices[:, 0, 0], matrices[:, 0, 2], matrices[:, 2, 0], matrices[:, 2, 2] = c, s, -s, c
@@ -462,7 +484,9 @@ class _FrameGroup:
         devices = self.devices
         with _PUBLISHING:
             moment = now()
-            ends = ((moment - self.t0) * self.rate).astype(np.int64) + 1  # samples whose time has come
+            ends = ((moment - self.t0) * self.rate).astype(
+                np.int64
+            ) + 1  # samples whose time has come
             nexts = self.next
             ready = self.usual & self.running & (self.alone != frame) & (ends - nexts <= self.cap)
             empty = ready & (ends <= nexts)  # nothing came due: an empty frame
@@ -490,8 +514,13 @@ class _FrameGroup:
             else:
                 slots = taken = np.flatnonzero(usual)
             first = self.first[taken]
-            windows.publish(moment, slots, nexts[taken] - first, ends[taken] - first,
-                            np.flatnonzero(empty) if empty.any() else None)
+            windows.publish(
+                moment,
+                slots,
+                nexts[taken] - first,
+                ends[taken] - first,
+                np.flatnonzero(empty) if empty.any() else None,
+            )
             nexts[taken] = ends[taken]
             self.moment = moment
             self.frame = frame

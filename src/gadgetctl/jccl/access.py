@@ -100,7 +100,11 @@ class ElementAccess:
     def slots(self, prop: str) -> int:
         """Values to read: the written count for a variable property, the slot count otherwise."""
         definition = self.definition(prop)
-        return self.count(prop) if definition.variable else max(len(definition.values), self.count(prop))
+        return (
+            self.count(prop)
+            if definition.variable
+            else max(len(definition.values), self.count(prop))
+        )
 
     def strings(self, prop: str) -> list[str]:
         return [self.string(prop, i) for i in range(self.slots(prop))]

@@ -48,23 +48,32 @@ class Session:
     def load(self, paths: Iterable[Path]) -> Configuration:
         from gadgetctl.jccl.configload import load_configuration
 
-        return load_configuration(paths, environ=self.environ, documents=self.documents, files=self.files)
+        return load_configuration(
+            paths, environ=self.environ, documents=self.documents, files=self.files
+        )
 
     def definition_entries(self, config: Configuration) -> list[SearchPathEntry]:
         entries: list[SearchPathEntry] = []
         for config_file in config.files:
-            entries += configuration_entries(config_file.definition_dirs, config_file.path.parent, self.environ)
+            entries += configuration_entries(
+                config_file.definition_dirs, config_file.path.parent, self.environ
+            )
         return entries
 
-    def repository(self, config: Configuration) -> tuple[DefinitionRepository, list[SearchPathEntry]]:
+    def repository(
+        self, config: Configuration
+    ) -> tuple[DefinitionRepository, list[SearchPathEntry]]:
         """The base repository extended by the configuration's definition_path entries and,
         when it needs them, the definitions its driver plug-ins carry."""
         entries = self.definition_entries(config)
         repo = self._extended(entries)
         if self.plugin_definitions is not None and _uses_unknown_type(config, repo):
             known = {e.path.resolve() for e in repo.entries}
-            extra = [SearchPathEntry(raw=str(d), path=d, origin="driver plug-in")
-                     for d in self.plugin_definitions(config) if d.resolve() not in known]
+            extra = [
+                SearchPathEntry(raw=str(d), path=d, origin="driver plug-in")
+                for d in self.plugin_definitions(config)
+                if d.resolve() not in known
+            ]
             if extra:
                 repo = self._extended(entries + extra)
         return repo, entries
@@ -81,8 +90,13 @@ class Session:
     def checker(self, repo: DefinitionRepository) -> ElementChecker:
         checker = self._checkers.get(id(repo))
         if checker is None:
-            shown = "; ".join("bundled definitions" if e.origin == "bundled" else str(e.path)
-                              for e in repo.entries) or "empty"
+            shown = (
+                "; ".join(
+                    "bundled definitions" if e.origin == "bundled" else str(e.path)
+                    for e in repo.entries
+                )
+                or "empty"
+            )
             checker = self._checkers[id(repo)] = ElementChecker(TypeIndex(repo), shown)
         return checker
 
@@ -118,12 +132,23 @@ def _definition_path_findings(entries: list[SearchPathEntry]) -> list[Diagnostic
         if location is None:
             continue
         for name in entry.undefined:
-            found.append(at("CFG003", f"definition directory {entry.raw!r} uses ${{{name}}}, which is "
-                            "not set", location))
+            found.append(
+                at(
+                    "CFG003",
+                    f"definition directory {entry.raw!r} uses ${{{name}}}, which is not set",
+                    location,
+                )
+            )
         if not entry.exists:
-            found.append(at("DEF023", f"definition directory {entry.path} does not exist", location,
-                            hint="Relative directories are resolved against the configuration "
-                            "file's directory (VR Juggler uses the working directory)."))
+            found.append(
+                at(
+                    "DEF023",
+                    f"definition directory {entry.path} does not exist",
+                    location,
+                    hint="Relative directories are resolved against the configuration "
+                    "file's directory (VR Juggler uses the working directory).",
+                )
+            )
     return found
 
 
@@ -139,8 +164,14 @@ def _path_variables(element: ConfigElement, environ: Mapping[str, str]) -> list[
             continue
         for value in values:
             for name in expand(value.stripped, environ).undefined:
-                found.append(at("CFG003", f"{describe(element)}: {prop} {value.stripped!r} uses "
-                                f"${{{name}}}, which is not set", value.location))
+                found.append(
+                    at(
+                        "CFG003",
+                        f"{describe(element)}: {prop} {value.stripped!r} uses "
+                        f"${{{name}}}, which is not set",
+                        value.location,
+                    )
+                )
     return found
 
 
@@ -164,12 +195,18 @@ def _is_configuration(doc: XmlDocument) -> bool:
     return isinstance(tag, str) and tag.rpartition("}")[2] == "configuration"
 
 
-def check_documents(documents: Iterable[XmlDocument], base: DefinitionRepository, *,
-                    together: bool = False, environ: Mapping[str, str] | None = None,
-                    plugin_definitions: Callable[[Configuration], list[Path]] | None = None,
-                    ) -> list[Diagnostic]:
+def check_documents(
+    documents: Iterable[XmlDocument],
+    base: DefinitionRepository,
+    *,
+    together: bool = False,
+    environ: Mapping[str, str] | None = None,
+    plugin_definitions: Callable[[Configuration], list[Path]] | None = None,
+) -> list[Diagnostic]:
     """Configuration-level findings for the configuration documents among ``documents``."""
-    session = Session(base, os.environ if environ is None else environ, plugin_definitions=plugin_definitions)
+    session = Session(
+        base, os.environ if environ is None else environ, plugin_definitions=plugin_definitions
+    )
     given: list[Path] = []
     for doc in documents:
         if _is_configuration(doc):
@@ -207,8 +244,11 @@ def _roots(configs: dict[Path, Configuration]) -> list[Path]:
         for included in files:
             if included != path and included in configs:
                 included_by.setdefault(included, []).append(path)
-    return [path for path in configs
-            if not any(other not in reach[path] for other in included_by.get(path, ()))]
+    return [
+        path
+        for path in configs
+        if not any(other not in reach[path] for other in included_by.get(path, ()))
+    ]
 
 
 def _unique(diagnostics: list[Diagnostic]) -> list[Diagnostic]:
@@ -228,10 +268,14 @@ class OpenedConfiguration:
     session: Session
 
 
-def open_configuration(paths: Iterable[Path], *, definition_dirs: Iterable[Path] = (), bundled: bool = True,
-                       environ: Mapping[str, str] | None = None,
-                       plugin_definitions: Callable[[Configuration], list[Path]] | None = None,
-                       ) -> OpenedConfiguration:
+def open_configuration(
+    paths: Iterable[Path],
+    *,
+    definition_dirs: Iterable[Path] = (),
+    bundled: bool = True,
+    environ: Mapping[str, str] | None = None,
+    plugin_definitions: Callable[[Configuration], list[Path]] | None = None,
+) -> OpenedConfiguration:
     """Load files as one configuration (includes followed) with the repository they are
     judged by. A file that is missing or not well-formed raises :class:`GadgetctlError`."""
     from gadgetctl.errors import GadgetctlError
@@ -245,8 +289,11 @@ def open_configuration(paths: Iterable[Path], *, definition_dirs: Iterable[Path]
     for directory in definition_dirs:
         if not directory.is_dir():
             raise GadgetctlError(f"--definitions {directory}: no such directory")
-    session = Session(default_repository(definition_dirs, bundled=bundled),
-                      os.environ if environ is None else environ, plugin_definitions=plugin_definitions)
+    session = Session(
+        default_repository(definition_dirs, bundled=bundled),
+        os.environ if environ is None else environ,
+        plugin_definitions=plugin_definitions,
+    )
     config = session.load(paths)
     require_loadable(config)
     repo, _ = session.repository(config)

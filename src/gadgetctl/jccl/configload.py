@@ -49,8 +49,12 @@ class ElementReader:
     def location(self, node: etree._Element) -> SourceLocation:
         return SourceLocation(self.doc, node)
 
-    def read(self, node: etree._Element, parent: ConfigElement | None = None,
-             parent_property: str | None = None) -> ConfigElement:
+    def read(
+        self,
+        node: etree._Element,
+        parent: ConfigElement | None = None,
+        parent_property: str | None = None,
+    ) -> ConfigElement:
         name = node.get("name")
         element = ConfigElement(
             node.tag.rpartition("}")[2],  # (an element: the caller skips comments)
@@ -109,7 +113,9 @@ def read_config_file(doc: XmlDocument, path: Path) -> ConfigFile:
         elif tag == "definition_path":
             for entry in child:
                 if _local(entry) == "dir":
-                    config.definition_dirs.append(((entry.text or "").strip(), reader.location(entry).resolved()))
+                    config.definition_dirs.append(
+                        ((entry.text or "").strip(), reader.location(entry).resolved())
+                    )
         elif tag == "elements":
             config.elements.extend(reader.read(e) for e in child if isinstance(e.tag, str))
     config.embedded = reader.embedded
@@ -117,9 +123,14 @@ def read_config_file(doc: XmlDocument, path: Path) -> ConfigFile:
 
 
 class ConfigurationLoader:
-    def __init__(self, *, environ: Mapping[str, str] | None = None, max_size: int = DEFAULT_MAX_SIZE,
-                 documents: dict[Path, XmlDocument] | None = None,
-                 files: dict[Path, ConfigFile] | None = None) -> None:
+    def __init__(
+        self,
+        *,
+        environ: Mapping[str, str] | None = None,
+        max_size: int = DEFAULT_MAX_SIZE,
+        documents: dict[Path, XmlDocument] | None = None,
+        files: dict[Path, ConfigFile] | None = None,
+    ) -> None:
         self.environ = os.environ if environ is None else environ
         self.max_size = max_size
         # Already loaded documents and read files, by resolved path; shared (not copied) so
@@ -142,7 +153,9 @@ class ConfigurationLoader:
         if doc is None:
             doc = load_file(resolved, max_size=self.max_size, display=display)
             self.documents[resolved] = doc
-            self.configuration.diagnostics.extend(d for d in doc.diagnostics if d.code.startswith("XML0"))
+            self.configuration.diagnostics.extend(
+                d for d in doc.diagnostics if d.code.startswith("XML0")
+            )
         return doc
 
     def _load(self, path: Path, resolved: Path, stack: list[Path], display: str | None) -> None:
@@ -180,10 +193,17 @@ class ConfigurationLoader:
             target, key = found
             if key in on_stack:
                 ancestors = [*stack, *(f[1] for f in frames)]
-                chain = " -> ".join(p.name for p in [*ancestors[ancestors.index(key):], key])
-                self.configuration.diagnostics.append(Diagnostic.make(
-                    "CFG002", f"include cycle: {chain}", location.path, location.line, location.column,
-                    hint="VR Juggler would recurse until it crashes; remove one of these includes."))
+                chain = " -> ".join(p.name for p in [*ancestors[ancestors.index(key) :], key])
+                self.configuration.diagnostics.append(
+                    Diagnostic.make(
+                        "CFG002",
+                        f"include cycle: {chain}",
+                        location.path,
+                        location.line,
+                        location.column,
+                        hint="VR Juggler would recurse until it crashes; remove one of these includes.",
+                    )
+                )
                 continue
             edges = self.configuration.includes.setdefault(current, [])
             if key not in edges:
@@ -191,22 +211,43 @@ class ConfigurationLoader:
             try:
                 enter(target, key, _display(target))
             except OSError as err:
-                self.configuration.diagnostics.append(Diagnostic.make(
-                    "CFG001", f"included file {raw.strip()!r} cannot be read: {err.strerror}",
-                    location.path, location.line, location.column))
+                self.configuration.diagnostics.append(
+                    Diagnostic.make(
+                        "CFG001",
+                        f"included file {raw.strip()!r} cannot be read: {err.strerror}",
+                        location.path,
+                        location.line,
+                        location.column,
+                    )
+                )
 
-    def _include_target(self, raw: str, location: Location, parent: Path) -> tuple[Path, Path] | None:
+    def _include_target(
+        self, raw: str, location: Location, parent: Path
+    ) -> tuple[Path, Path] | None:
         """The file an ``<include>`` names and its resolved path, or None (reported)."""
         expansion = expand(raw.strip(), self.environ)
         for name in expansion.undefined:
-            self.configuration.diagnostics.append(Diagnostic.make(
-                "CFG003", f"include {raw.strip()!r} uses ${{{name}}}, which is not set",
-                location.path, location.line, location.column))
+            self.configuration.diagnostics.append(
+                Diagnostic.make(
+                    "CFG003",
+                    f"include {raw.strip()!r} uses ${{{name}}}, which is not set",
+                    location.path,
+                    location.line,
+                    location.column,
+                )
+            )
         target = self.resolve_include(expansion.text, parent.parent)
         if target is None:
-            self.configuration.diagnostics.append(Diagnostic.make(
-                "CFG001", f"included file {raw.strip()!r} not found (looked in {parent.parent} and "
-                f"the working directory)", location.path, location.line, location.column))
+            self.configuration.diagnostics.append(
+                Diagnostic.make(
+                    "CFG001",
+                    f"included file {raw.strip()!r} not found (looked in {parent.parent} and "
+                    f"the working directory)",
+                    location.path,
+                    location.line,
+                    location.column,
+                )
+            )
             return None
         return target, target.resolve()
 
@@ -230,9 +271,13 @@ def _display(path: Path) -> str:
         return str(path)
 
 
-def load_configuration(paths: Iterable[Path], *, environ: Mapping[str, str] | None = None,
-                       documents: dict[Path, XmlDocument] | None = None,
-                       files: dict[Path, ConfigFile] | None = None) -> Configuration:
+def load_configuration(
+    paths: Iterable[Path],
+    *,
+    environ: Mapping[str, str] | None = None,
+    documents: dict[Path, XmlDocument] | None = None,
+    files: dict[Path, ConfigFile] | None = None,
+) -> Configuration:
     return ConfigurationLoader(environ=environ, documents=documents, files=files).load(paths)
 
 
@@ -248,5 +293,11 @@ def require_loadable(configuration: Configuration) -> None:
     errors = [d for d in configuration.diagnostics if d.severity is Severity.ERROR]
     if errors:
         first = errors[0]
-        more = f" (and {len(errors) - 1} more {'error' if len(errors) == 2 else 'errors'}: gadgetctl validate shows them)" if len(errors) > 1 else ""
-        raise GadgetctlError(f"{first.location}: cannot load the configuration: {first.message}{more}")
+        more = (
+            f" (and {len(errors) - 1} more {'error' if len(errors) == 2 else 'errors'}: gadgetctl validate shows them)"
+            if len(errors) > 1
+            else ""
+        )
+        raise GadgetctlError(
+            f"{first.location}: cannot load the configuration: {first.message}{more}"
+        )

@@ -240,7 +240,9 @@ class Configuration:
         loaded element was read from a file and none of those files had any, which spares
         checks of 50,000 elements a look into each."""
         files = self.files
-        return any(f.embedded for f in files) or len(self.loaded) != sum(len(f.elements) for f in files)
+        return any(f.embedded for f in files) or len(self.loaded) != sum(
+            len(f.elements) for f in files
+        )
 
     def all_elements(self) -> Iterator[ConfigElement]:
         """Effective top-level elements and, after each, its embedded elements."""

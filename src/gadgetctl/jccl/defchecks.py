@@ -25,7 +25,9 @@ def _at(code: str, message: str, location: Location | None, **kwargs) -> Diagnos
     return Diagnostic.make(code, message, location.path, location.line, location.column, **kwargs)
 
 
-def check_definition(definition: Definition, order: list[int], repo: DefinitionRepository) -> list[Diagnostic]:
+def check_definition(
+    definition: Definition, order: list[int], repo: DefinitionRepository
+) -> list[Diagnostic]:
     """Checks of one definition file. ``order`` is the version numbers as written."""
     found: list[Diagnostic] = []
     found += _check_version_order(definition, order)
@@ -35,8 +37,14 @@ def check_definition(definition: Definition, order: list[int], repo: DefinitionR
         found += _check_properties(version, repo, newest=number == newest)
         found += _check_parents(version, repo)
         if number != min(definition.versions) and version.upgrade_transform is None:
-            found.append(_at("DEF011", f"{definition.name} version {number} has no upgrade transform from "
-                             f"version {_previous(definition, number)}", version.location))
+            found.append(
+                _at(
+                    "DEF011",
+                    f"{definition.name} version {number} has no upgrade transform from "
+                    f"version {_previous(definition, number)}",
+                    version.location,
+                )
+            )
     return found
 
 
@@ -48,18 +56,35 @@ def _check_version_order(definition: Definition, order: list[int]) -> list[Diagn
     found = []
     seen: set[int] = set()
     for position, number in enumerate(order):
-        location = definition.versions[number].location if number in definition.versions else definition.location
+        location = (
+            definition.versions[number].location
+            if number in definition.versions
+            else definition.location
+        )
         if number in seen:
-            found.append(_at("DEF010", f"version {number} of {definition.name} is defined more than once",
-                             definition.location))
+            found.append(
+                _at(
+                    "DEF010",
+                    f"version {number} of {definition.name} is defined more than once",
+                    definition.location,
+                )
+            )
         elif position and number < max(order[:position]):
-            found.append(_at("DEF009", f"version {number} of {definition.name} comes after version "
-                             f"{max(order[:position])}", location))
+            found.append(
+                _at(
+                    "DEF009",
+                    f"version {number} of {definition.name} comes after version "
+                    f"{max(order[:position])}",
+                    location,
+                )
+            )
         seen.add(number)
     return found
 
 
-def _check_properties(version: DefinitionVersion, repo: DefinitionRepository, *, newest: bool) -> list[Diagnostic]:
+def _check_properties(
+    version: DefinitionVersion, repo: DefinitionRepository, *, newest: bool
+) -> list[Diagnostic]:
     found: list[Diagnostic] = []
     names: set[str] = set()
     label = f"{version.name} v{version.version}"
@@ -70,28 +95,62 @@ def _check_properties(version: DefinitionVersion, repo: DefinitionRepository, *,
         names.add(prop.name)
         if prop.valuetype in _TYPED:
             for slot in prop.values:
-                if slot.default is not None and slot.default.strip() and not parse_value(prop.valuetype, slot.default)[0]:
-                    found.append(_at("DEF001", f"{label}: default {slot.default!r} of {prop.name!r} "
-                                     f"is not a valid {prop.valuetype.value}", where))
+                if (
+                    slot.default is not None
+                    and slot.default.strip()
+                    and not parse_value(prop.valuetype, slot.default)[0]
+                ):
+                    found.append(
+                        _at(
+                            "DEF001",
+                            f"{label}: default {slot.default!r} of {prop.name!r} "
+                            f"is not a valid {prop.valuetype.value}",
+                            where,
+                        )
+                    )
             if prop.enumeration:
                 for choice in prop.enumeration.choices:
                     if not parse_value(prop.valuetype, choice.value)[0]:
-                        found.append(_at("DEF002", f"{label}: enumeration entry {choice.label!r} of "
-                                         f"{prop.name!r} has value {choice.value!r}, not a valid "
-                                         f"{prop.valuetype.value}", where))
+                        found.append(
+                            _at(
+                                "DEF002",
+                                f"{label}: enumeration entry {choice.label!r} of "
+                                f"{prop.name!r} has value {choice.value!r}, not a valid "
+                                f"{prop.valuetype.value}",
+                                where,
+                            )
+                        )
         if prop.variable and len(prop.values) != 1:
-            found.append(_at("DEF003", f"{label}: variable property {prop.name!r} has {len(prop.values)} "
-                             "template values; expected exactly one", where))
+            found.append(
+                _at(
+                    "DEF003",
+                    f"{label}: variable property {prop.name!r} has {len(prop.values)} "
+                    "template values; expected exactly one",
+                    where,
+                )
+            )
         for allowed in prop.allowed_types:
             if allowed not in repo:
-                found.append(_at(
-                    "DEF004", f"{label}: allowed type {allowed!r} of {prop.name!r} is not defined "
-                    "on the search path", where, severity=None if newest else Severity.INFO,
-                    hint=_suggest(allowed, repo.names())))
+                found.append(
+                    _at(
+                        "DEF004",
+                        f"{label}: allowed type {allowed!r} of {prop.name!r} is not defined "
+                        "on the search path",
+                        where,
+                        severity=None if newest else Severity.INFO,
+                        hint=_suggest(allowed, repo.names()),
+                    )
+                )
         inherited = _inherited_property(version, prop.name, repo)
         if inherited is not None and inherited.valuetype is not prop.valuetype:
-            found.append(_at("DEF008", f"{label}: property {prop.name!r} is {prop.valuetype.value} here but "
-                             f"{inherited.valuetype.value} in the inherited definition", where))
+            found.append(
+                _at(
+                    "DEF008",
+                    f"{label}: property {prop.name!r} is {prop.valuetype.value} here but "
+                    f"{inherited.valuetype.value} in the inherited definition",
+                    where,
+                )
+            )
     return found
 
 
@@ -112,8 +171,15 @@ def _check_parents(version: DefinitionVersion, repo: DefinitionRepository) -> li
     found = []
     for parent in version.parents:
         if parent not in repo:
-            found.append(_at("DEF005", f"{version.name} v{version.version}: parent {parent!r} is not defined "
-                             "on the search path", version.location, hint=_suggest(parent, repo.names())))
+            found.append(
+                _at(
+                    "DEF005",
+                    f"{version.name} v{version.version}: parent {parent!r} is not defined "
+                    "on the search path",
+                    version.location,
+                    hint=_suggest(parent, repo.names()),
+                )
+            )
     return found
 
 
@@ -135,11 +201,17 @@ def check_cycles(definitions: Iterable[Definition], repo: DefinitionRepository) 
                 path = " -> ".join([name, *steps])
                 if cut:
                     path += f" -> ... (a cycle of {counted(len(cycle), 'definition')})"
-                found.append(_at("DEF006", f"{name} inherits from itself: {path}", mine[name].newest.location))
+                found.append(
+                    _at(
+                        "DEF006", f"{name} inherits from itself: {path}", mine[name].newest.location
+                    )
+                )
     return found
 
 
-def _cycle_path(start: str, members: set[str], repo: DefinitionRepository) -> tuple[list[str], bool]:
+def _cycle_path(
+    start: str, members: set[str], repo: DefinitionRepository
+) -> tuple[list[str], bool]:
     """The first steps of the cycle from ``start``, and whether the walk was cut short."""
     path, current, seen = [], start, {start}
     while len(path) < _CYCLE_PATH_SHOWN:

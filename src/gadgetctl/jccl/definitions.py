@@ -36,7 +36,9 @@ def parse_value(valuetype: ValueType, text: str) -> tuple[bool, object]:
             number = float(value)
         except ValueError:
             return False, None
-        return (not math.isnan(number) and value.lower() not in ("inf", "-inf", "+inf", "infinity")), number
+        return (
+            not math.isnan(number) and value.lower() not in ("inf", "-inf", "+inf", "infinity")
+        ), number
     if valuetype is ValueType.BOOLEAN:
         if value in BOOLEAN_SPELLINGS:
             return True, BOOLEAN_SPELLINGS[value]

@@ -84,7 +84,9 @@ class DefinitionReader:
         if root is None or _local(root) != "definition":
             return None
         name = (root.get("name") or "").strip()
-        definition = Definition(name=name, location=self.location(root), icon_path=root.get("icon_path"))
+        definition = Definition(
+            name=name, location=self.location(root), icon_path=root.get("icon_path")
+        )
         for node in _children(root, "definition_version"):
             version = self.read_version(name, node)
             if version is None:
@@ -114,8 +116,11 @@ class DefinitionReader:
             help=_text(_only(children, "help")),
             parents=tuple(t for t in (_text(p) for p in children.get("parent", ())) if t),
             categories=tuple(t for t in (_text(c) for c in children.get("category", ())) if t),
-            properties=tuple(self.read_property(p) for p in children.get("property", ())
-                             if (p.get("valuetype") or "") in _VALUETYPES and p.get("name")),
+            properties=tuple(
+                self.read_property(p)
+                for p in children.get("property", ())
+                if (p.get("valuetype") or "") in _VALUETYPES and p.get("name")
+            ),
             upgrade_transform=transform,
             location=self.location(node),
         )
@@ -127,17 +132,23 @@ class DefinitionReader:
         if enum_node is not None:
             enumeration = Enumeration(
                 editable=_bool(enum_node.get("editable")),
-                choices=tuple(EnumChoice(e.get("label") or "", e.get("value") or "")
-                              for e in _children(enum_node, "enum")),
+                choices=tuple(
+                    EnumChoice(e.get("label") or "", e.get("value") or "")
+                    for e in _children(enum_node, "enum")
+                ),
             )
         return PropertyDefinition(
             name=node.get("name") or "",
             valuetype=_VALUETYPES[node.get("valuetype") or ""],
             variable=_bool(node.get("variable")),
             help=_text(_only(children, "help")),
-            values=tuple(ValueSlot(v.get("label") or "", v.get("defaultvalue"))
-                         for v in children.get("value", ())),
-            allowed_types=tuple(t for t in (_text(a) for a in children.get("allowed_type", ())) if t),
+            values=tuple(
+                ValueSlot(v.get("label") or "", v.get("defaultvalue"))
+                for v in children.get("value", ())
+            ),
+            allowed_types=tuple(
+                t for t in (_text(a) for a in children.get("allowed_type", ())) if t
+            ),
             enumeration=enumeration,
             location=self.location(node),
         )

@@ -25,12 +25,14 @@ def definition_summary(repo: DefinitionRepository, name: str) -> dict[str, objec
     }
 
 
-def list_definitions(repo: DefinitionRepository, *, category: str | None = None,
-                     base: str | None = None) -> list[dict[str, object]]:
+def list_definitions(
+    repo: DefinitionRepository, *, category: str | None = None, base: str | None = None
+) -> list[dict[str, object]]:
     rows = []
     for newest in repo.all_newest():
-        if category and not any(c == category or c.startswith(category.rstrip("/") + "/")
-                                for c in newest.categories):
+        if category and not any(
+            c == category or c.startswith(category.rstrip("/") + "/") for c in newest.categories
+        ):
             continue
         if base and not repo.is_a(newest.name, base):
             continue
@@ -61,17 +63,21 @@ def property_record(prop: EffectiveProperty) -> dict[str, object]:
 
 def show_definition(repo: DefinitionRepository, version: DefinitionVersion) -> dict[str, object]:
     summary = definition_summary(repo, version.name)
-    summary.update({
-        "version": version.version,
-        "label": version.label,
-        "abstract": version.abstract,
-        "help": version.help,
-        "parents": list(version.parents),
-        "ancestors": list(repo.ancestors(version.name, version.version)),
-        "missing_parents": repo.missing_parents(version.name, version.version),
-        "has_upgrade_transform": version.upgrade_transform is not None,
-        "properties": [property_record(p) for p in repo.effective_properties(version.name, version.version)],
-    })
+    summary.update(
+        {
+            "version": version.version,
+            "label": version.label,
+            "abstract": version.abstract,
+            "help": version.help,
+            "parents": list(version.parents),
+            "ancestors": list(repo.ancestors(version.name, version.version)),
+            "missing_parents": repo.missing_parents(version.name, version.version),
+            "has_upgrade_transform": version.upgrade_transform is not None,
+            "properties": [
+                property_record(p) for p in repo.effective_properties(version.name, version.version)
+            ],
+        }
+    )
     return summary
 
 
@@ -83,8 +89,12 @@ class TreeNode:
     repeated: bool = False
 
     def to_dict(self) -> dict[str, object]:
-        return {"name": self.name, "missing": self.missing, "repeated": self.repeated,
-                "children": [c.to_dict() for c in self.children]}
+        return {
+            "name": self.name,
+            "missing": self.missing,
+            "repeated": self.repeated,
+            "children": [c.to_dict() for c in self.children],
+        }
 
 
 def inheritance_tree(repo: DefinitionRepository, root: str | None = None) -> list[TreeNode]:

@@ -42,14 +42,25 @@ def check_format(doc: XmlDocument) -> None:
     assert doc.root is not None
     root = doc.root
     local = etree.QName(root).localname
-    if (doc.kind is FileKind.CONFIGURATION and local != "configuration") or (
-        doc.kind is FileKind.DEFINITION and local != "definition"
-    ) or doc.kind is FileKind.UNKNOWN:
-        expected = {"configuration": "<configuration>", "definition": "<definition>"}.get(doc.kind.value)
+    if (
+        (doc.kind is FileKind.CONFIGURATION and local != "configuration")
+        or (doc.kind is FileKind.DEFINITION and local != "definition")
+        or doc.kind is FileKind.UNKNOWN
+    ):
+        expected = {"configuration": "<configuration>", "definition": "<definition>"}.get(
+            doc.kind.value
+        )
         what = f"expected {expected}" if expected else "expected <configuration> or <definition>"
         line, column = doc.locate(root)
-        doc.diagnostics.append(Diagnostic.make(
-            "XML014", f"root element <{local}> is not a JCCL document ({what})", doc.path, line, column))
+        doc.diagnostics.append(
+            Diagnostic.make(
+                "XML014",
+                f"root element <{local}> is not a JCCL document ({what})",
+                doc.path,
+                line,
+                column,
+            )
+        )
         return
     if doc.kind is FileKind.CONFIGURATION:
         _check_configuration(doc, root)
@@ -57,7 +68,9 @@ def check_format(doc: XmlDocument) -> None:
         _check_definition(doc, root)
 
 
-def _pi_location(doc: XmlDocument, pi: etree._ProcessingInstruction) -> tuple[int | None, int | None]:
+def _pi_location(
+    doc: XmlDocument, pi: etree._ProcessingInstruction
+) -> tuple[int | None, int | None]:
     line = pi.sourceline
     if line and line <= len(doc.lines):
         col = doc.lines[line - 1].find("<?" + ns.SETTINGS_PI)
@@ -65,30 +78,57 @@ def _pi_location(doc: XmlDocument, pi: etree._ProcessingInstruction) -> tuple[in
     return line, None
 
 
-def _check_pi(doc: XmlDocument, root: etree._Element, keys: tuple[str, ...], expected: str) -> str | None:
+def _check_pi(
+    doc: XmlDocument, root: etree._Element, keys: tuple[str, ...], expected: str
+) -> str | None:
     pi = settings_pi(root)
     if pi is None:
-        doc.diagnostics.append(Diagnostic.make(
-            "XML010", f"no <?{ns.SETTINGS_PI} {keys[0]}=\"{expected}\"?> processing instruction",
-            doc.path, 1, 1, hint=f"Add <?{ns.SETTINGS_PI} {keys[0]}=\"{expected}\"?> before the root element."))
+        doc.diagnostics.append(
+            Diagnostic.make(
+                "XML010",
+                f'no <?{ns.SETTINGS_PI} {keys[0]}="{expected}"?> processing instruction',
+                doc.path,
+                1,
+                1,
+                hint=f'Add <?{ns.SETTINGS_PI} {keys[0]}="{expected}"?> before the root element.',
+            )
+        )
         return None
     attrs = pi_attributes(pi)
     line, column = _pi_location(doc, pi)
     for key in keys:
         if key in attrs:
-            return attrs[key] if attrs[key] == expected else _wrong_version(doc, key, attrs[key], expected, line, column)
-    doc.diagnostics.append(Diagnostic.make(
-        "XML011", f"processing instruction has no {keys[0]} pseudo-attribute", doc.path, line, column,
-        hint=f"Write <?{ns.SETTINGS_PI} {keys[0]}=\"{expected}\"?>."))
+            return (
+                attrs[key]
+                if attrs[key] == expected
+                else _wrong_version(doc, key, attrs[key], expected, line, column)
+            )
+    doc.diagnostics.append(
+        Diagnostic.make(
+            "XML011",
+            f"processing instruction has no {keys[0]} pseudo-attribute",
+            doc.path,
+            line,
+            column,
+            hint=f'Write <?{ns.SETTINGS_PI} {keys[0]}="{expected}"?>.',
+        )
+    )
     return None
 
 
 def _wrong_version(doc: XmlDocument, key: str, value: str, expected: str, line, column) -> str:
     if key in ns.DEFINITION_VERSION_KEYS and value == "3.0":
         return value  # reported once, with the namespace, as an older definition format
-    doc.diagnostics.append(Diagnostic.make(
-        "XML011", f"file-format version {key}=\"{value}\" is not known; expected \"{expected}\"",
-        doc.path, line, column, hint=f"Use {key}=\"{expected}\"."))
+    doc.diagnostics.append(
+        Diagnostic.make(
+            "XML011",
+            f'file-format version {key}="{value}" is not known; expected "{expected}"',
+            doc.path,
+            line,
+            column,
+            hint=f'Use {key}="{expected}".',
+        )
+    )
     return value
 
 
@@ -104,9 +144,16 @@ def _check_configuration(doc: XmlDocument, root: etree._Element) -> None:
         message = f"there is no configuration namespace {namespace}; expected {ns.CONFIG_NS}"
     else:
         message = f"<configuration> is in namespace {namespace}; expected {ns.CONFIG_NS}"
-    doc.diagnostics.append(Diagnostic.make(
-        "XML012", message, doc.path, line, column,
-        hint=f"Set xmlns=\"{ns.CONFIG_NS}\" (`gadgetctl upgrade` does it)."))
+    doc.diagnostics.append(
+        Diagnostic.make(
+            "XML012",
+            message,
+            doc.path,
+            line,
+            column,
+            hint=f'Set xmlns="{ns.CONFIG_NS}" (`gadgetctl upgrade` does it).',
+        )
+    )
 
 
 def _check_definition(doc: XmlDocument, root: etree._Element) -> None:
@@ -116,16 +163,29 @@ def _check_definition(doc: XmlDocument, root: etree._Element) -> None:
         return
     line, column = doc.locate(root)
     if namespace == ns.OLD_DEFINITION_NS or version == "3.0":
-        doc.diagnostics.append(Diagnostic.make(
-            "XML013", "definition file is in the older format 3.0; VR Juggler 3 reads only format 3.1",
-            doc.path, line, column,
-            hint="Run `gadgetctl upgrade FILE`: it moves the file to the 3.1 namespace and adds "
-                 "<abstract>false</abstract> to each definition_version."))
+        doc.diagnostics.append(
+            Diagnostic.make(
+                "XML013",
+                "definition file is in the older format 3.0; VR Juggler 3 reads only format 3.1",
+                doc.path,
+                line,
+                column,
+                hint="Run `gadgetctl upgrade FILE`: it moves the file to the 3.1 namespace and adds "
+                "<abstract>false</abstract> to each definition_version.",
+            )
+        )
         return
     shown = namespace or "no namespace"
-    doc.diagnostics.append(Diagnostic.make(
-        "XML012", f"<definition> is in {shown}; expected {ns.DEFINITION_NS}", doc.path, line, column,
-        hint=f"Set xmlns=\"{ns.DEFINITION_NS}\" (`gadgetctl upgrade` does it)."))
+    doc.diagnostics.append(
+        Diagnostic.make(
+            "XML012",
+            f"<definition> is in {shown}; expected {ns.DEFINITION_NS}",
+            doc.path,
+            line,
+            column,
+            hint=f'Set xmlns="{ns.DEFINITION_NS}" (`gadgetctl upgrade` does it).',
+        )
+    )
 
 
 def normalised_copy(doc: XmlDocument) -> etree._Element:

@@ -39,7 +39,12 @@ class Node:
         return self.element.name if self.element is not None else self.name
 
     def to_dict(self) -> dict[str, object]:
-        data: dict[str, object] = {"id": self.id, "kind": self.kind, "type": self.type, "name": self.name}
+        data: dict[str, object] = {
+            "id": self.id,
+            "kind": self.kind,
+            "type": self.type,
+            "name": self.name,
+        }
         if self.note:
             data["note"] = self.note
         if self.element is not None:
@@ -78,12 +83,20 @@ class WiringGraph:
         return list(index.get(node_id, ()))
 
     def to_dict(self) -> dict[str, object]:
-        return {"nodes": [n.to_dict() for n in self.nodes.values()], "edges": [e.to_dict() for e in self.edges]}
+        return {
+            "nodes": [n.to_dict() for n in self.nodes.values()],
+            "edges": [e.to_dict() for e in self.edges],
+        }
 
 
 class GraphBuilder:
-    def __init__(self, config: Configuration, index: TypeIndex, built_in: frozenset[str] = frozenset(),
-                 plugins: Mapping[str, str] | None = None) -> None:
+    def __init__(
+        self,
+        config: Configuration,
+        index: TypeIndex,
+        built_in: frozenset[str] = frozenset(),
+        plugins: Mapping[str, str] | None = None,
+    ) -> None:
         self.config = config
         self.index = index
         self.built_in = built_in  # element types handled without a plug-in
@@ -101,8 +114,9 @@ class GraphBuilder:
             return "input_manager"
         if self.index.known(element.type) and self.index.is_a(element.type, "proxy"):
             return "proxy"
-        if element.type in self.built_in or (self.index.known(element.type)
-                                                and self.index.is_a(element.type, "input_device")):
+        if element.type in self.built_in or (
+            self.index.known(element.type) and self.index.is_a(element.type, "input_device")
+        ):
             return "device"
         return "element"
 
@@ -110,16 +124,21 @@ class GraphBuilder:
         view = judged_view(element, self.index)
         if view is None:
             return []
-        return [(name, v.stripped) for name, values in element.properties.items()
-                if (p := view.get(name)) is not None and p.valuetype is ValueType.POINTER
-                for v in values if v.stripped and v.element is None]
+        return [
+            (name, v.stripped)
+            for name, values in element.properties.items()
+            if (p := view.get(name)) is not None and p.valuetype is ValueType.POINTER
+            for v in values
+            if v.stripped and v.element is None
+        ]
 
     def node(self, element: ConfigElement) -> str:
         node_id = self.ids.get(id(element))
         if node_id is None:
             node_id = self.ids[id(element)] = f"n{len(self.graph.nodes)}"
-            self.graph.nodes[node_id] = Node(node_id, self.kind(element), element.type, element.full_name,
-                                             element=element)
+            self.graph.nodes[node_id] = Node(
+                node_id, self.kind(element), element.type, element.full_name, element=element
+            )
         return node_id
 
     def special(self, key: str, kind: str, type_name: str, name: str, note: str | None) -> str:
@@ -131,11 +150,16 @@ class GraphBuilder:
 
     def build(self) -> WiringGraph:
         tops = self.config.elements
-        pointed = {target for e in tops for c in (e, *e.embedded()) for _, target in self.pointers(c)}
+        pointed = {
+            target for e in tops for c in (e, *e.embedded()) for _, target in self.pointers(c)
+        }
         for element in tops:
             family = (element, *element.embedded())
-            wanted = self.kind(element) != "element" or element.name in pointed or \
-                any(self.pointers(c) or c.full_name in pointed for c in family)
+            wanted = (
+                self.kind(element) != "element"
+                or element.name in pointed
+                or any(self.pointers(c) or c.full_name in pointed for c in family)
+            )
             if wanted:
                 self.add_family(element)
         self.add_pointers()
@@ -158,8 +182,13 @@ class GraphBuilder:
             for prop, target_name in self.pointers(element):
                 target = self.by_name.get(target_name) or self.embedded.get(target_name)
                 if target is None:
-                    target_id = self.special(f"missing:{target_name}", "missing", "?", target_name,
-                                             "no element of the configuration has this name")
+                    target_id = self.special(
+                        f"missing:{target_name}",
+                        "missing",
+                        "?",
+                        target_name,
+                        "no element of the configuration has this name",
+                    )
                 else:
                     if id(target) not in self.ids:
                         self.add_family(target)
@@ -187,19 +216,26 @@ class GraphBuilder:
             if name is None:
                 node.note = "no known driver plug-in handles this type"
                 continue
-            plugin = loaded.get(name) or self.special(f"plugin:{name}", "plugin", "plug-in", name,
-                                                      "not loaded by any input_manager")
+            plugin = loaded.get(name) or self.special(
+                f"plugin:{name}", "plugin", "plug-in", name, "not loaded by any input_manager"
+            )
             self.graph.edges.append(Edge(node.id, plugin, HANDLED_BY, "handled by"))
 
 
-def build_graph(config: Configuration, index: TypeIndex, *, built_in: frozenset[str] = frozenset(),
-                plugins: Mapping[str, str] | None = None) -> WiringGraph:
+def build_graph(
+    config: Configuration,
+    index: TypeIndex,
+    *,
+    built_in: frozenset[str] = frozenset(),
+    plugins: Mapping[str, str] | None = None,
+) -> WiringGraph:
     """The wiring of ``config``; ``built_in`` are the element types that need no plug-in,
     ``plugins`` maps the others to the plug-in that handles them."""
     return GraphBuilder(config, index, built_in, plugins).build()
 
 
 # -- rendering ---------------------------------------------------------------------------
+
 
 def _title(node: Node) -> str:
     if node.kind == "plugin":
@@ -285,8 +321,15 @@ def _grouped(graph: WiringGraph, edges: list[Edge]) -> list[Edge | str]:
     return items
 
 
-_DOT_SHAPES = {"alias": "ellipse", "proxy": "box", "device": "box3d", "input_manager": "component",
-               "plugin": "folder", "missing": "octagon", "element": "note"}
+_DOT_SHAPES = {
+    "alias": "ellipse",
+    "proxy": "box",
+    "device": "box3d",
+    "input_manager": "component",
+    "plugin": "folder",
+    "missing": "octagon",
+    "element": "note",
+}
 
 
 def _dot_string(text: str) -> str:
@@ -294,11 +337,18 @@ def _dot_string(text: str) -> str:
 
 
 def render_dot(graph: WiringGraph) -> str:
-    lines = ["digraph wiring {", "  rankdir=LR;", '  node [fontname="Helvetica", fontsize=10];',
-             '  edge [fontname="Helvetica", fontsize=9];']
+    lines = [
+        "digraph wiring {",
+        "  rankdir=LR;",
+        '  node [fontname="Helvetica", fontsize=10];',
+        '  edge [fontname="Helvetica", fontsize=9];',
+    ]
     for node in graph.nodes.values():
-        label = ("plug-in\n" + printable(node.name) if node.kind == "plugin"
-                 else f"{printable(node.type)}\n{printable(node.short_name)}")
+        label = (
+            "plug-in\n" + printable(node.name)
+            if node.kind == "plugin"
+            else f"{printable(node.type)}\n{printable(node.short_name)}"
+        )
         if node.note:
             label += f"\n({printable(node.note)})"
         attrs = [f"label={_dot_string(label)}", f"shape={_DOT_SHAPES.get(node.kind, 'box')}"]
@@ -317,13 +367,25 @@ def render_dot(graph: WiringGraph) -> str:
 
 
 def _mermaid_text(text: str) -> str:
-    return printable(text).replace('"', "#quot;").replace("|", "#124;").replace("<", "#lt;").replace(">", "#gt;")
+    return (
+        printable(text)
+        .replace('"', "#quot;")
+        .replace("|", "#124;")
+        .replace("<", "#lt;")
+        .replace(">", "#gt;")
+    )
 
 
 def render_mermaid(graph: WiringGraph) -> str:
-    shapes = {"alias": ('(["', '"])'), "proxy": ('["', '"]'), "device": ('[["', '"]]'),
-              "input_manager": ('{{"', '"}}'), "plugin": ('[/"', '"/]'), "missing": ('{"', '"}'),
-              "element": ('["', '"]')}
+    shapes = {
+        "alias": ('(["', '"])'),
+        "proxy": ('["', '"]'),
+        "device": ('[["', '"]]'),
+        "input_manager": ('{{"', '"}}'),
+        "plugin": ('[/"', '"/]'),
+        "missing": ('{"', '"}'),
+        "element": ('["', '"]'),
+    }
     lines = ["flowchart LR"]
     for node in graph.nodes.values():
         head = "plug-in" if node.kind == "plugin" else node.type

@@ -90,14 +90,24 @@ class DefinitionRepository:
             try:
                 doc = load_file(path)
             except OSError as err:
-                self.diagnostics.append(Diagnostic.make(
-                    "DEF020", f"definition file on the search path cannot be read: {err.strerror}", str(path)))
+                self.diagnostics.append(
+                    Diagnostic.make(
+                        "DEF020",
+                        f"definition file on the search path cannot be read: {err.strerror}",
+                        str(path),
+                    )
+                )
                 continue
             definition = read_definition(doc, columns=False) if doc.root is not None else None
             if definition is None or not definition.name:
                 first = doc.diagnostics[0].message if doc.diagnostics else "not a definition file"
-                self.diagnostics.append(Diagnostic.make(
-                    "DEF020", f"definition file on the search path was skipped: {first}", str(path)))
+                self.diagnostics.append(
+                    Diagnostic.make(
+                        "DEF020",
+                        f"definition file on the search path was skipped: {first}",
+                        str(path),
+                    )
+                )
                 continue
             entry.contributed += self.add(definition, entry)
 
@@ -110,7 +120,9 @@ class DefinitionRepository:
         for number, version in sorted(definition.versions.items()):
             existing = versions.get(number)
             if existing is not None:
-                self.shadowed.append(Shadowing(definition.name, number, existing.location, version.location))
+                self.shadowed.append(
+                    Shadowing(definition.name, number, existing.location, version.location)
+                )
                 continue
             versions[number] = version
             self._origins[(definition.name, number)] = entry
@@ -217,14 +229,18 @@ class DefinitionRepository:
     def missing_parents(self, name: str, version: int | None = None) -> list[str]:
         return [p for p in self.parents_of(name, version) if p not in self]
 
-    def effective_properties(self, name: str, version: int | None = None) -> list[EffectiveProperty]:
+    def effective_properties(
+        self, name: str, version: int | None = None
+    ) -> list[EffectiveProperty]:
         """Own properties first, then inherited ones depth-first; the first of a name wins."""
         found = self.get(name, version)
         if found is None:
             return []
         result: list[EffectiveProperty] = []
         seen: set[str] = set()
-        chain = [found] + [d for d in (self.get(a) for a in self.ancestors(name, version)) if d is not None]
+        chain = [found] + [
+            d for d in (self.get(a) for a in self.ancestors(name, version)) if d is not None
+        ]
         for owner in chain:
             for prop in owner.properties:
                 if prop.name not in seen:
@@ -232,7 +248,9 @@ class DefinitionRepository:
                     result.append(EffectiveProperty(prop, owner.name, found))
         return result
 
-    def find_property(self, name: str, prop: str, version: int | None = None) -> EffectiveProperty | None:
+    def find_property(
+        self, name: str, prop: str, version: int | None = None
+    ) -> EffectiveProperty | None:
         for candidate in self.effective_properties(name, version):
             if candidate.name == prop:
                 return candidate
@@ -302,7 +320,11 @@ def load_repository(entries: Iterable[SearchPathEntry]) -> DefinitionRepository:
     return DefinitionRepository.from_search_path(entries)
 
 
-def default_repository(extra_dirs: Iterable[Path] = (), *, bundled: bool = True) -> DefinitionRepository:
+def default_repository(
+    extra_dirs: Iterable[Path] = (), *, bundled: bool = True
+) -> DefinitionRepository:
     from gadgetctl.jccl.searchpath import SearchPathOptions, build_search_path
 
-    return load_repository(build_search_path(SearchPathOptions(bundled=bundled, extra_dirs=list(extra_dirs))))
+    return load_repository(
+        build_search_path(SearchPathOptions(bundled=bundled, extra_dirs=list(extra_dirs)))
+    )

@@ -48,9 +48,14 @@ class ResolvedProperty:
     known: bool = True  # False: written, but not a property of the definition
 
     def to_dict(self) -> dict[str, object]:
-        return {"name": self.name, "valuetype": self.valuetype, "variable": self.variable,
-                "inherited_from": self.defined_by, "known": self.known,
-                "values": [v.to_dict() for v in self.values]}
+        return {
+            "name": self.name,
+            "valuetype": self.valuetype,
+            "variable": self.variable,
+            "inherited_from": self.defined_by,
+            "known": self.known,
+            "values": [v.to_dict() for v in self.values],
+        }
 
 
 @dataclass
@@ -65,10 +70,16 @@ class ResolvedElement:
     properties: list[ResolvedProperty] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, object]:
-        return {"type": self.type, "name": self.name, "full_name": self.full_name,
-                "version": self.version, "definition_version": self.definition_version,
-                "file": self.file, "line": self.line,
-                "properties": [p.to_dict() for p in self.properties]}
+        return {
+            "type": self.type,
+            "name": self.name,
+            "full_name": self.full_name,
+            "version": self.version,
+            "definition_version": self.definition_version,
+            "file": self.file,
+            "line": self.line,
+            "properties": [p.to_dict() for p in self.properties],
+        }
 
 
 def judged_view(element: ConfigElement, index: TypeIndex) -> TypeView | None:
@@ -95,19 +106,34 @@ class Resolver:
 
     def element(self, element: ConfigElement) -> ResolvedElement:
         view = judged_view(element, self.index)
-        resolved = ResolvedElement(element.type, element.name, element.full_name, element.version_text,
-                                   view.version if view else None, element.location.path,
-                                   element.location.line)
+        resolved = ResolvedElement(
+            element.type,
+            element.name,
+            element.full_name,
+            element.version_text,
+            view.version if view else None,
+            element.location.path,
+            element.location.line,
+        )
         if view is not None:
             for name, effective in view.properties.items():
                 prop = effective.definition
-                resolved.properties.append(ResolvedProperty(
-                    name, prop.valuetype.value, prop.variable, self.values(prop, element.values(name)),
-                    effective.defined_by if effective.defined_by != element.type else None))
+                resolved.properties.append(
+                    ResolvedProperty(
+                        name,
+                        prop.valuetype.value,
+                        prop.variable,
+                        self.values(prop, element.values(name)),
+                        effective.defined_by if effective.defined_by != element.type else None,
+                    )
+                )
         for name, values in element.properties.items():
             if view is None or name not in view.properties:
-                resolved.properties.append(ResolvedProperty(
-                    name, "unknown", True, [self.unknown(v) for v in values], known=False))
+                resolved.properties.append(
+                    ResolvedProperty(
+                        name, "unknown", True, [self.unknown(v) for v in values], known=False
+                    )
+                )
         return resolved
 
     def values(self, prop: PropertyDefinition, written: list[PropertyValue]) -> list[ResolvedValue]:
@@ -132,11 +158,16 @@ class Resolver:
         return ResolvedValue(value.stripped, WRITTEN)
 
 
-def resolve_configuration(config: Configuration, index: TypeIndex,
-                          names: list[str] | None = None) -> list[ResolvedElement]:
+def resolve_configuration(
+    config: Configuration, index: TypeIndex, names: list[str] | None = None
+) -> list[ResolvedElement]:
     """The effective elements (or those whose name or full name is in ``names``)."""
     resolver = Resolver(index)
     if not names:
         return [resolver.element(e) for e in config.elements]
     wanted = set(names)
-    return [resolver.element(e) for e in config.all_elements() if e.name in wanted or e.full_name in wanted]
+    return [
+        resolver.element(e)
+        for e in config.all_elements()
+        if e.name in wanted or e.full_name in wanted
+    ]

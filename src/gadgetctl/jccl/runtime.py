@@ -11,10 +11,18 @@ from collections.abc import Sequence
 
 # gadget::ProxyDepChecker: these proxies count as configured even when their device is
 # missing (they return default data); command_proxy and string_proxy are not among them.
-STUPEFIED_PROXIES = frozenset({
-    "analog_proxy", "digital_proxy", "gesture_proxy", "glove_proxy", "keyboard_mouse_proxy",
-    "position_proxy", "rumble_proxy", "hat_proxy",
-})
+STUPEFIED_PROXIES = frozenset(
+    {
+        "analog_proxy",
+        "digital_proxy",
+        "gesture_proxy",
+        "glove_proxy",
+        "keyboard_mouse_proxy",
+        "position_proxy",
+        "rumble_proxy",
+        "hat_proxy",
+    }
+)
 
 # cluster::ClusterDepChecker lets cluster_node elements through unconditionally.
 NO_DEPENDENCY_CHECK = STUPEFIED_PROXIES | {"cluster_node"}
@@ -29,7 +37,6 @@ MINIMUM_VERSIONS = {
     "motion_star": 2,
     "fastrak": 2,
 }
-
 
 
 def minimum_version(type_name: str, versions: Sequence[int]) -> int | None:
@@ -55,7 +62,11 @@ REQUIRED_POINTERS: tuple[tuple[str, str, str], ...] = (
     ("proxy", "device", "the proxy is never bound and returns default data"),
     ("simulated_analog_device", "keyboard_mouse_proxy", "the simulated device never sees a key"),
     ("simulated_digital_device", "keyboard_mouse_proxy", "the simulated device never sees a key"),
-    ("simulated_positional_device", "keyboard_mouse_proxy", "the simulated device never sees a key"),
+    (
+        "simulated_positional_device",
+        "keyboard_mouse_proxy",
+        "the simulated device never sees a key",
+    ),
     ("simulated_digital_glove", "keyboard_mouse_proxy", "the simulated device never sees a key"),
     ("simulated_glove_gesture", "keyboard_mouse_proxy", "the simulated device never sees a key"),
     ("simulated_glove_gesture", "glove_position", "the device fails to configure"),
@@ -65,11 +76,13 @@ REQUIRED_POINTERS: tuple[tuple[str, str, str], ...] = (
 
 # String properties whose values VR Juggler passes through environment-variable expansion
 # as paths, by (type, property).
-PATH_PROPERTIES = frozenset({
-    ("input_manager", "driver_path"),
-    ("input_manager", "driver_scan_path"),
-    ("cluster_manager", "plugin_path"),
-})
+PATH_PROPERTIES = frozenset(
+    {
+        ("input_manager", "driver_path"),
+        ("input_manager", "driver_scan_path"),
+        ("cluster_manager", "plugin_path"),
+    }
+)
 
 
 def missing_target_effect(root_type: str, root_name: str, embedded: bool) -> str:
@@ -78,11 +91,15 @@ def missing_target_effect(root_type: str, root_name: str, embedded: bool) -> str
     if root_type in STUPEFIED_PROXIES:
         return "the proxy stays unbound and returns default data"
     if root_type == "cluster_node":
-        return ("on the node that uses it, the embedded element waits until an element of that "
-                "name appears")
+        return (
+            "on the node that uses it, the embedded element waits until an element of that "
+            "name appears"
+        )
     if root_type in ("command_proxy", "string_proxy"):
-        return (f"unlike most proxies, a {root_type} waits for its device, so VR Juggler keeps it "
-                "pending forever")
+        return (
+            f"unlike most proxies, a {root_type} waits for its device, so VR Juggler keeps it "
+            "pending forever"
+        )
     if embedded:
         return f"VR Juggler keeps {root_type} {root_name!r} pending until an element of that name appears"
     return "VR Juggler keeps the element pending until an element of that name appears"

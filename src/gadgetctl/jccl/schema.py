@@ -33,7 +33,9 @@ def readable_path(element: etree._Element) -> str:
         local = etree.QName(node).localname
         parent = node.getparent()
         if parent is not None:
-            same = [c for c in parent if isinstance(c.tag, str) and etree.QName(c).localname == local]
+            same = [
+                c for c in parent if isinstance(c.tag, str) and etree.QName(c).localname == local
+            ]
             if len(same) > 1:
                 local = f"{local}[{same.index(node) + 1}]"
         parts.append(local)
@@ -66,7 +68,11 @@ def element_at(root: etree._Element, path: str) -> etree._Element | None:
 
 def _clean(message: str) -> str:
     message = _CLARK.sub("", message).strip()
-    return re.sub(r"^Element '[^']*'(, attribute '([^']*)')?: ", lambda m: f"attribute {m.group(2)!r}: " if m.group(2) else "", message)
+    return re.sub(
+        r"^Element '[^']*'(, attribute '([^']*)')?: ",
+        lambda m: f"attribute {m.group(2)!r}: " if m.group(2) else "",
+        message,
+    )
 
 
 def check_schema(doc: XmlDocument) -> None:
@@ -87,5 +93,8 @@ def check_schema(doc: XmlDocument) -> None:
             where = readable_path(element)
             line, column = doc.locate(element)  # the copy keeps the original source lines
         message = _clean(entry.message)
-        doc.diagnostics.append(Diagnostic.make(
-            "SCH001", f"{where}: {message}" if where else message, doc.path, line, column))
+        doc.diagnostics.append(
+            Diagnostic.make(
+                "SCH001", f"{where}: {message}" if where else message, doc.path, line, column
+            )
+        )

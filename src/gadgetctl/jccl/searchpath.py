@@ -53,13 +53,21 @@ class SearchPathEntry:
         }
 
 
-def make_entry(raw: str, origin: str, *, base: Path | None = None,
-               environ: Mapping[str, str] | None = None, location: Location | None = None) -> SearchPathEntry:
+def make_entry(
+    raw: str,
+    origin: str,
+    *,
+    base: Path | None = None,
+    environ: Mapping[str, str] | None = None,
+    location: Location | None = None,
+) -> SearchPathEntry:
     expansion = expand(raw, environ)
     path = Path(expansion.text).expanduser()
     if not path.is_absolute() and base is not None:
         path = base / path
-    return SearchPathEntry(raw=raw, path=path, origin=origin, undefined=expansion.undefined, location=location)
+    return SearchPathEntry(
+        raw=raw, path=path, origin=origin, undefined=expansion.undefined, location=location
+    )
 
 
 @dataclass
@@ -74,9 +82,13 @@ def build_search_path(options: SearchPathOptions | None = None) -> list[SearchPa
     env = os.environ if options.environ is None else options.environ
     entries: list[SearchPathEntry] = []
     if options.bundled:
-        entries.append(SearchPathEntry(raw=str(definitions_dir()), path=definitions_dir(), origin="bundled"))
+        entries.append(
+            SearchPathEntry(raw=str(definitions_dir()), path=definitions_dir(), origin="bundled")
+        )
     if env.get("VJ_BASE_DIR"):
-        entries.append(make_entry(str(Path("${VJ_BASE_DIR}") / VJ_DEFINITIONS), "VJ_BASE_DIR", environ=env))
+        entries.append(
+            make_entry(str(Path("${VJ_BASE_DIR}") / VJ_DEFINITIONS), "VJ_BASE_DIR", environ=env)
+        )
     for raw in (env.get("JCCL_DEFINITION_PATH") or "").split(os.pathsep):
         if raw.strip():
             entries.append(make_entry(raw, "JCCL_DEFINITION_PATH", environ=env))
@@ -85,8 +97,17 @@ def build_search_path(options: SearchPathOptions | None = None) -> list[SearchPa
     return entries
 
 
-def configuration_entries(dirs: Iterable[tuple[str, Location]], config_dir: Path,
-                          environ: Mapping[str, str] | None = None) -> list[SearchPathEntry]:
+def configuration_entries(
+    dirs: Iterable[tuple[str, Location]], config_dir: Path, environ: Mapping[str, str] | None = None
+) -> list[SearchPathEntry]:
     """Entries for ``<definition_path><dir>`` values of one configuration file."""
-    return [make_entry(raw.strip(), f"definition_path in {location.path}", base=config_dir,
-                       environ=environ, location=location) for raw, location in dirs]
+    return [
+        make_entry(
+            raw.strip(),
+            f"definition_path in {location.path}",
+            base=config_dir,
+            environ=environ,
+            location=location,
+        )
+        for raw, location in dirs
+    ]

@@ -62,7 +62,7 @@ def _spans(data: bytes, encoding: str | None) -> list[Span]:
     def on_end(name) -> None:
         index = stack.pop()
         start_end = starts[index][1]
-        if data[start_end - 2:start_end] == b"/>":
+        if data[start_end - 2 : start_end] == b"/>":
             ends[index] = start_end
         else:
             ends[index] = tag_end(data, parser.CurrentByteIndex)

@@ -65,7 +65,9 @@ class TypeIndex:
             if definition is None:
                 self._views[key] = None
             else:
-                props = {p.name: p for p in self.repo.effective_properties(type_name, definition.version)}
+                props = {
+                    p.name: p for p in self.repo.effective_properties(type_name, definition.version)
+                }
                 self._views[key] = TypeView(definition, props)
         return self._views[key]
 

@@ -77,7 +77,9 @@ def _scaled(prop: str, per: int, hint: str) -> Callable[[ElementAccess, str], Un
     return count
 
 
-def _children(props: tuple[str, ...], what: str) -> Callable[[ElementAccess, str], UnitRange | None]:
+def _children(
+    props: tuple[str, ...], what: str
+) -> Callable[[ElementAccess, str], UnitRange | None]:
     """One unit per value of each of several variable properties, together."""
 
     def count(access: ElementAccess, kind: str) -> UnitRange | None:
@@ -178,7 +180,9 @@ UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]
     "simulated_positional_device": {"position": _fixed(1)},
     "simulated_relative_position": {"position": _fixed(1)},
     "simulated_setable_position": {"position": _fixed(1)},
-    "elexol_ether24": {"digital": _fixed(24, "Units 0-7 are port A's pins, 8-15 port B's, 16-23 port C's.")},
+    "elexol_ether24": {
+        "digital": _fixed(24, "Units 0-7 are port A's pins, 8-15 port B's, 16-23 port C's.")
+    },
     "TUIO_drv": {
         "digital": _stated("points", "Unit i is touch slot i; raise {prop} for more fingers."),
         "analog": _scaled("points", 2, "Units 2i and 2i+1 are the x and y of touch slot i."),

@@ -52,7 +52,11 @@ class ElementUpgrade:
         return self.to_version != self.from_version
 
     def describe(self) -> str:
-        extra = f", {self.created} new element{'s' if self.created != 1 else ''}" if self.created else ""
+        extra = (
+            f", {self.created} new element{'s' if self.created != 1 else ''}"
+            if self.created
+            else ""
+        )
         if self.dropped:
             extra += f", removed {', '.join(self.dropped)}"
         if not self.upgraded:
@@ -89,8 +93,13 @@ def _local(node: etree._Element) -> str:
 
 def _embedded(node: etree._Element) -> list[etree._Element]:
     """Embedded elements of an element: element children of its property children."""
-    return [child for prop in node if isinstance(prop.tag, str)
-            for child in prop if isinstance(child.tag, str)]
+    return [
+        child
+        for prop in node
+        if isinstance(prop.tag, str)
+        for child in prop
+        if isinstance(child.tag, str)
+    ]
 
 
 def _version(node: etree._Element) -> int | None:
@@ -154,8 +163,13 @@ class ElementUpgrader:
         view = self.index.view(type_name)
         if view is None or (_version(node) or 0) < view.version:
             return []
-        return [prop for prop in node if isinstance(prop.tag, str) and view.get(_local(prop)) is None
-                and self.index.history(type_name, _local(prop))]
+        return [
+            prop
+            for prop in node
+            if isinstance(prop.tag, str)
+            and view.get(_local(prop)) is None
+            and self.index.history(type_name, _local(prop))
+        ]
 
     def drop(self, node: etree._Element) -> list[str]:
         """Remove, in place, the removed properties of ``node``; their names."""
@@ -186,19 +200,25 @@ class ElementUpgrader:
         for number in range(declared + 1, newest + 1):
             definition = self.repo.get(type_name, number)
             if definition is None:
-                raise UpgradeFailure(f"version {number} of {type_name} is not on the search path, so "
-                                     f"there is no way from version {number - 1} to {number}")
+                raise UpgradeFailure(
+                    f"version {number} of {type_name} is not on the search path, so "
+                    f"there is no way from version {number - 1} to {number}"
+                )
             if not definition.upgrade_transform:
                 raise UpgradeFailure(f"version {number} of {type_name} has no upgrade transform")
             try:
                 source = definition.location.path if definition.location is not None else None
                 result = apply_transform(definition.upgrade_transform, current, source)
             except TransformError as err:
-                raise UpgradeFailure(f"{type_name} version {number - 1} -> {number}: {err}") from None
+                raise UpgradeFailure(
+                    f"{type_name} version {number - 1} -> {number}: {err}"
+                ) from None
             first = result[0]
             if _local(first) != type_name:
-                raise UpgradeFailure(f"the {type_name} version {number} transform produced a "
-                                     f"<{_local(first)}>, not a <{type_name}>")
+                raise UpgradeFailure(
+                    f"the {type_name} version {number} transform produced a "
+                    f"<{_local(first)}>, not a <{type_name}>"
+                )
             current = in_namespace(first)
             current.set("version", str(number))
             created += [in_namespace(extra) for extra in result[1:]]
@@ -208,6 +228,7 @@ class ElementUpgrader:
     def check_counts(self, before: etree._Element, after: etree._Element) -> None:
         """Warn about fixed-count properties the transforms gave more values than they have,
         typically because the element already carried a property a newer version adds."""
+
         def counts(node: etree._Element) -> dict[str, int]:
             found: dict[str, int] = {}
             for prop in node:
@@ -226,10 +247,16 @@ class ElementUpgrader:
                 self.warnings.append(
                     f"{type_name} {after.get('name')!r}: after the upgrade {name} has {count} values "
                     f"but {slots} slot{'s' if slots != 1 else ''}; the element already had it before "
-                    "the transform added it. Remove the extra value.")
+                    "the transform added it. Remove the extra value."
+                )
 
-    def upgrade_embedded(self, node: etree._Element, log: list[ElementUpgrade],
-                         lines: dict[tuple, int | None], chain: tuple = ()) -> None:
+    def upgrade_embedded(
+        self,
+        node: etree._Element,
+        log: list[ElementUpgrade],
+        lines: dict[tuple, int | None],
+        chain: tuple = (),
+    ) -> None:
         """Upgrade, in place, the embedded elements of an element tree that is not in a file
         (and drop their removed properties). ``lines`` maps chains of (type, name) from the
         top element to source lines."""
@@ -240,8 +267,16 @@ class ElementUpgrader:
                 dropped = self.drop(child)
                 if dropped:
                     version = _version(child) or 0
-                    log.append(ElementUpgrade(_local(child), child.get("name") or "", lines.get(key), version,
-                                              version, dropped=tuple(dropped)))
+                    log.append(
+                        ElementUpgrade(
+                            _local(child),
+                            child.get("name") or "",
+                            lines.get(key),
+                            version,
+                            version,
+                            dropped=tuple(dropped),
+                        )
+                    )
                 self.upgrade_embedded(child, log, lines, key)
                 continue
             upgraded, created = self.upgrade(child)
@@ -249,8 +284,16 @@ class ElementUpgrader:
             self.upgrade_embedded(upgraded, log, lines, key)
             upgraded.tail = child.tail
             child.getparent().replace(child, upgraded)
-            log.append(ElementUpgrade(_local(child), child.get("name") or "", lines.get(key), *step, len(created),
-                                      tuple(dropped)))
+            log.append(
+                ElementUpgrade(
+                    _local(child),
+                    child.get("name") or "",
+                    lines.get(key),
+                    *step,
+                    len(created),
+                    tuple(dropped),
+                )
+            )
 
 
 def source_lines(node: etree._Element, chain: tuple = ()) -> dict[tuple, int | None]:
@@ -264,8 +307,16 @@ def source_lines(node: etree._Element, chain: tuple = ()) -> dict[tuple, int | N
 
 
 class FileUpgrader:
-    def __init__(self, path: Path, data: bytes, display: str, repo: DefinitionRepository,
-                 environ: Mapping[str, str] | None = None, *, drop_removed: bool = False) -> None:
+    def __init__(
+        self,
+        path: Path,
+        data: bytes,
+        display: str,
+        repo: DefinitionRepository,
+        environ: Mapping[str, str] | None = None,
+        *,
+        drop_removed: bool = False,
+    ) -> None:
         self.result = FileUpgrade(path, display, data)
         self.data = data
         self.repo = repo
@@ -291,7 +342,9 @@ class FileUpgrader:
             self.problem(f"cannot edit the file in place: {err}", code="XML001")
             return self.result
         if len(spans) != len(elements):
-            self.problem("cannot match the file's elements to their positions; not changed", code="XML001")
+            self.problem(
+                "cannot match the file's elements to their positions; not changed", code="XML001"
+            )
             return self.result
         self.spans = dict(zip(elements, spans, strict=True))
         if doc.kind is FileKind.DEFINITION:
@@ -313,9 +366,13 @@ class FileUpgrader:
 
     def with_definition_path(self, root: etree._Element) -> DefinitionRepository:
         """The repository plus the file's <definition_path> directories."""
-        dirs = [((d.text or "").strip(), Location(self.result.display, d.sourceline))
-                for node in root if isinstance(node.tag, str) and _local(node) == "definition_path"
-                for d in node if isinstance(d.tag, str) and _local(d) == "dir"]
+        dirs = [
+            ((d.text or "").strip(), Location(self.result.display, d.sourceline))
+            for node in root
+            if isinstance(node.tag, str) and _local(node) == "definition_path"
+            for d in node
+            if isinstance(d.tag, str) and _local(d) == "dir"
+        ]
         entries = configuration_entries(dirs, self.result.path.resolve().parent, self.environ)
         return self.repo.extended(entries) if entries else self.repo
 
@@ -339,8 +396,16 @@ class FileUpgrader:
                 for prop in removed:
                     self.edits.append(self.patcher.removal(node, prop))
                 version = _version(node) or 0
-                self.result.elements.append(ElementUpgrade(_local(node), node.get("name") or "", node.sourceline,
-                                                           version, version, dropped=names))
+                self.result.elements.append(
+                    ElementUpgrade(
+                        _local(node),
+                        node.get("name") or "",
+                        node.sourceline,
+                        version,
+                        version,
+                        dropped=names,
+                    )
+                )
             for child in upgrader.embedded(node):
                 if not any(child in prop for prop in removed):
                     self.visit(upgrader, child, top)
@@ -352,13 +417,19 @@ class FileUpgrader:
             dropped = upgrader.drop(upgraded)
             upgrader.upgrade_embedded(upgraded, log, source_lines(node))
         except UpgradeFailure as err:
-            self.problem(f"{_local(node)} {node.get('name')!r} (version {step[0]}) cannot be upgraded: "
-                         f"{err}", line)
+            self.problem(
+                f"{_local(node)} {node.get('name')!r} (version {step[0]}) cannot be upgraded: "
+                f"{err}",
+                line,
+            )
             return
         finally:
             for warning in upgrader.warnings:
-                self.result.problems.append(Diagnostic.make("CFG023", warning, self.result.display, line,
-                                                            severity=Severity.WARNING))
+                self.result.problems.append(
+                    Diagnostic.make(
+                        "CFG023", warning, self.result.display, line, severity=Severity.WARNING
+                    )
+                )
             upgrader.warnings.clear()
         span = self.spans[node]
         own = indentation_before(self.data, span.start).decode(self.encoding, "replace")
@@ -370,18 +441,25 @@ class FileUpgrader:
             self.edits += self.patcher.patch(node, upgraded, own, unit)
         top_own = indentation_before(self.data, top.start).decode(self.encoding, "replace")
         for extra in created:  # new top-level elements, after the top-level element
-            text = (self.newline + top_own).encode(self.encoding) + self.serialise(extra, top_own, unit)
+            text = (self.newline + top_own).encode(self.encoding) + self.serialise(
+                extra, top_own, unit
+            )
             self.edits.append(Edit(top.end, top.end, text))
-        self.result.elements.append(ElementUpgrade(_local(node), node.get("name") or "", line, *step, len(created),
-                                                   tuple(dropped)))
+        self.result.elements.append(
+            ElementUpgrade(
+                _local(node), node.get("name") or "", line, *step, len(created), tuple(dropped)
+            )
+        )
         self.result.elements.extend(log)
 
     def indent_unit(self, node: etree._Element, own: str) -> str:
         children = [c for c in node if isinstance(c.tag, str)]
         if children:
-            inner = indentation_before(self.data, self.spans[children[0]].start).decode(self.encoding, "replace")
+            inner = indentation_before(self.data, self.spans[children[0]].start).decode(
+                self.encoding, "replace"
+            )
             if inner.startswith(own) and len(inner) > len(own):
-                return inner[len(own):]
+                return inner[len(own) :]
         return DEFAULT_INDENT
 
     def serialise(self, node: etree._Element, own: str, unit: str) -> bytes:
@@ -405,7 +483,7 @@ class FileUpgrader:
                 if edit.end <= position:
                     continue  # inside an element that is rewritten as a whole
                 raise AssertionError("overlapping upgrade edits")
-            out += self.data[position:edit.start]
+            out += self.data[position : edit.start]
             out += edit.text
             position = edit.end
         out += self.data[position:]
@@ -418,19 +496,36 @@ class FileUpgrader:
         check = parse_bytes(upgraded, self.result.display)
         if check.root is None:
             self.result.upgraded = None
-            self.problem("the upgraded file would not be well-formed; not changed "
-                         f"({check.diagnostics[0].message if check.diagnostics else 'unknown error'})")
+            self.problem(
+                "the upgraded file would not be well-formed; not changed "
+                f"({check.diagnostics[0].message if check.diagnostics else 'unknown error'})"
+            )
 
 
-def upgrade_bytes(path: Path, data: bytes, repo: DefinitionRepository, display: str | None = None,
-                  environ: Mapping[str, str] | None = None, *, drop_removed: bool = False) -> FileUpgrade:
+def upgrade_bytes(
+    path: Path,
+    data: bytes,
+    repo: DefinitionRepository,
+    display: str | None = None,
+    environ: Mapping[str, str] | None = None,
+    *,
+    drop_removed: bool = False,
+) -> FileUpgrade:
     """Upgrade the content ``data`` of ``path`` (which is not read or written)."""
-    return FileUpgrader(path, data, display or str(path), repo, environ, drop_removed=drop_removed).run()
+    return FileUpgrader(
+        path, data, display or str(path), repo, environ, drop_removed=drop_removed
+    ).run()
 
 
-def upgrade_file(path: Path, repo: DefinitionRepository, display: str | None = None,
-                 environ: Mapping[str, str] | None = None, max_size: int = DEFAULT_MAX_SIZE, *,
-                 drop_removed: bool = False) -> FileUpgrade:
+def upgrade_file(
+    path: Path,
+    repo: DefinitionRepository,
+    display: str | None = None,
+    environ: Mapping[str, str] | None = None,
+    max_size: int = DEFAULT_MAX_SIZE,
+    *,
+    drop_removed: bool = False,
+) -> FileUpgrade:
     """Upgrade the file ``path`` (read with the size limit; not written). A file above the
     limit or not a regular file is a failed upgrade with its diagnostic; other I/O errors
     raise :class:`OSError`."""

@@ -34,8 +34,10 @@ def is_number(valuetype: ValueType, text: str) -> bool:
 
 
 def describe_choices(enumeration: Enumeration) -> str:
-    shown = [f"{c.label} ({c.value})" if c.label != c.value else c.label
-             for c in enumeration.choices[:MAX_CHOICES_SHOWN]]
+    shown = [
+        f"{c.label} ({c.value})" if c.label != c.value else c.label
+        for c in enumeration.choices[:MAX_CHOICES_SHOWN]
+    ]
     more = len(enumeration.choices) - MAX_CHOICES_SHOWN
     return ", ".join(shown) + (f", ... ({len(enumeration.choices)} in all)" if more > 0 else "")
 
@@ -43,8 +45,11 @@ def describe_choices(enumeration: Enumeration) -> str:
 def _same_value(valuetype: ValueType, a: str, b: str) -> bool:
     if a == b:
         return True
-    if valuetype in (ValueType.INTEGER, ValueType.FLOAT) and is_number(ValueType.FLOAT, a) \
-            and is_number(ValueType.FLOAT, b):
+    if (
+        valuetype in (ValueType.INTEGER, ValueType.FLOAT)
+        and is_number(ValueType.FLOAT, a)
+        and is_number(ValueType.FLOAT, b)
+    ):
         return float(a) == float(b)
     return False
 
@@ -60,18 +65,22 @@ def _label_problem(prop: PropertyDefinition, raw: str) -> ValueProblem | None:
     if near is not None:
         reads = _reading(prop.valuetype, raw)
         return ValueProblem(
-            "CFG027", f"{prop.name} {raw!r} is not a label of its enumeration: labels are "
+            "CFG027",
+            f"{prop.name} {raw!r} is not a label of its enumeration: labels are "
             f"case-sensitive, so it is not replaced by {near.label}'s value {near.value!r}"
             + (f" and is read as {reads}" if reads else ""),
-            f"Write {near.label!r}. Choices: {describe_choices(enumeration)}.")
+            f"Write {near.label!r}. Choices: {describe_choices(enumeration)}.",
+        )
     if enumeration.editable:
         return None
 
     close = close_names(raw, [c.label for c in enumeration.choices], cutoff=0.6)
     hint = f"Did you mean {', '.join(repr(c) for c in close)}? " if close else ""
     return ValueProblem(
-        "CFG028", f"{prop.name} {raw!r} is none of its enumeration's labels or values",
-        f"{hint}Choices: {describe_choices(enumeration)}.")
+        "CFG028",
+        f"{prop.name} {raw!r} is none of its enumeration's labels or values",
+        f"{hint}Choices: {describe_choices(enumeration)}.",
+    )
 
 
 def _reading(valuetype: ValueType, text: str) -> str | None:
@@ -104,14 +113,25 @@ def check_text(prop: PropertyDefinition, text: str) -> ValueProblem | None:
         what = "an integer" if valuetype is ValueType.INTEGER else "a number"
         hint = None
         if not value:
-            hint = (f"Remove the tag to get the default {default!r}." if default
-                    else "Write a value or remove the tag.")
-        return ValueProblem("CFG025", f"{prop.name}: {shown} is not {what}; VR Juggler reads it as "
-                            f"{_reading(valuetype, value)} without a warning", hint)
+            hint = (
+                f"Remove the tag to get the default {default!r}."
+                if default
+                else "Write a value or remove the tag."
+            )
+        return ValueProblem(
+            "CFG025",
+            f"{prop.name}: {shown} is not {what}; VR Juggler reads it as "
+            f"{_reading(valuetype, value)} without a warning",
+            hint,
+        )
     if valuetype is ValueType.BOOLEAN and value not in _BOOLEANS:
         shown = "an empty value" if not value else repr(value)
         lowered = value.lower()
         hint = f"Write {lowered!r}." if lowered in ("true", "false") else "Write true or false."
-        return ValueProblem("CFG026", f"{prop.name}: {shown} is not true, false, 1 or 0; VR Juggler's "
-                            "run time reads it as true", hint)
+        return ValueProblem(
+            "CFG026",
+            f"{prop.name}: {shown} is not true, false, 1 or 0; VR Juggler's "
+            "run time reads it as true",
+            hint,
+        )
     return None

@@ -34,7 +34,9 @@ UNHANDLED = "unhandled"
 _UNJUDGED = object()  # a kind whose blocking is not worked out yet (None: it blocks nothing)
 _NOT_BLOCKED = ("",)
 _STAYS = "which stays pending itself"
-_node = partial(tuple.__new__, Node)  # Node(...) without its Python-level __new__ (50,000 per check)
+_node = partial(
+    tuple.__new__, Node
+)  # Node(...) without its Python-level __new__ (50,000 per check)
 #: A pending element, why it is pending where (the run time wording) and its unmet pointers.
 _Waiting = tuple[ConfigElement, str, list[tuple[PointerValue, "ConfigElement | None", str]]]
 #: Said of an element VR Juggler leaves pending where gadgetctl deliberately runs it.
@@ -133,7 +135,11 @@ class Wiring:
                             found.append(missing)
                         continue
                     prop = pointer[1]
-                    if last_takes is None or last_takes[0] is not prop or last_takes[1] != target.type:
+                    if (
+                        last_takes is None
+                        or last_takes[0] is not prop
+                        or last_takes[1] != target.type
+                    ):
                         last_takes = (prop, target.type, self._takes(prop, target.type))
                     if not last_takes[2]:
                         wrong.append((pointer, target))
@@ -355,7 +361,12 @@ class Wiring:
         position: dict[int, int] = {}  # element -> its place in waiting
         leader: dict[int, int] = {}  # place in waiting -> the place it follows in a chain
         later: list[int] = []  # places whose leader is found after the walk
-        blocked, by_name, embedded, reports = self.blocked, self.by_name, self.embedded, self.reports
+        blocked, by_name, embedded, reports = (
+            self.blocked,
+            self.by_name,
+            self.embedded,
+            self.reports,
+        )
         for element in self.effective:
             name = element.name
             if name in active:

@@ -21,7 +21,11 @@ from gadgetctl.diagnostics import Diagnostic
 
 _DECLARED_ENCODING = re.compile(rb"^<\?xml[^>]*?encoding\s*=\s*[\"']([A-Za-z][A-Za-z0-9._-]*)[\"']")
 _DOCTYPE = re.compile(rb"<!DOCTYPE", re.IGNORECASE)
-_BOMS = ((codecs.BOM_UTF8, "utf-8"), (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"))
+_BOMS = (
+    (codecs.BOM_UTF8, "utf-8"),
+    (codecs.BOM_UTF16_LE, "utf-16"),
+    (codecs.BOM_UTF16_BE, "utf-16"),
+)
 
 
 class FileKind(StrEnum):
@@ -93,7 +97,9 @@ class XmlDocument:
             return line_no, starts[min(self._rank_on_line(element), len(starts) - 1)]
         return self._search_back(line_no, local)
 
-    def locate_tag(self, line_no: int | None, local: str, index: int) -> tuple[int | None, int | None]:
+    def locate_tag(
+        self, line_no: int | None, local: str, index: int
+    ) -> tuple[int | None, int | None]:
         """Line and column of the ``index``-th ``<local`` start tag on ``line_no`` (the line
         libxml2 gives, where the tag ends), searching backwards for a tag that spans lines."""
         if not line_no or line_no > len(self.lines):
@@ -191,8 +197,9 @@ def text_codec(name: str) -> bool:
 
 
 # Text codecs that cannot be an XML file's encoding: they do not decode ASCII as ASCII.
-_NOT_FOR_XML = frozenset({"punycode", "idna", "raw-unicode-escape", "unicode-escape", "undefined",
-                          "uu", "quopri"})
+_NOT_FOR_XML = frozenset(
+    {"punycode", "idna", "raw-unicode-escape", "unicode-escape", "undefined", "uu", "quopri"}
+)
 
 
 def _position_of_offset(data: bytes, offset: int, encoding: str) -> tuple[int, int]:
@@ -209,22 +216,34 @@ def _decode(doc: XmlDocument, data: bytes) -> str | None:
     if not text_codec(encoding):
         doc.text = data.decode("latin-1")
         line, column = _encoding_position(data)
-        doc.diagnostics.append(Diagnostic.make(
-            "XML002", f"unknown encoding {encoding!r} declared; read as Latin-1", doc.path, line, column,
-            hint="Declare encoding=\"UTF-8\" and save the file as UTF-8."))
+        doc.diagnostics.append(
+            Diagnostic.make(
+                "XML002",
+                f"unknown encoding {encoding!r} declared; read as Latin-1",
+                doc.path,
+                line,
+                column,
+                hint='Declare encoding="UTF-8" and save the file as UTF-8.',
+            )
+        )
         return "ISO-8859-1"
     try:
         doc.text = data.decode(encoding)
         return None
     except UnicodeDecodeError as err:
         line, column = _position_of_offset(data, err.start, encoding)
-        bad = data[err.start:err.start + 1].hex().upper()
-        doc.diagnostics.append(Diagnostic.make(
-            "XML002",
-            f"byte 0x{bad} is not valid {encoding.upper()}; the rest of the file is read as Latin-1",
-            doc.path, line, column,
-            hint=f"Re-save the file as {encoding.upper()} (this byte is "
-                 f"{data[err.start:err.start + 1].decode('latin-1')!r} in Latin-1)."))
+        bad = data[err.start : err.start + 1].hex().upper()
+        doc.diagnostics.append(
+            Diagnostic.make(
+                "XML002",
+                f"byte 0x{bad} is not valid {encoding.upper()}; the rest of the file is read as Latin-1",
+                doc.path,
+                line,
+                column,
+                hint=f"Re-save the file as {encoding.upper()} (this byte is "
+                f"{data[err.start : err.start + 1].decode('latin-1')!r} in Latin-1).",
+            )
+        )
         doc.text = data.decode("latin-1")
         return "ISO-8859-1"
 
@@ -240,33 +259,58 @@ def _report_doctype(doc: XmlDocument, data: bytes) -> None:
     if match is None:
         return
     line, column = _position_of_offset(data, match.start(), "utf-8")
-    doc.diagnostics.append(Diagnostic.make(
-        "XML003", "document type declaration ignored: no DTD is loaded and no entity is expanded",
-        doc.path, line, column, hint="JCCL files need no DOCTYPE; remove it."))
+    doc.diagnostics.append(
+        Diagnostic.make(
+            "XML003",
+            "document type declaration ignored: no DTD is loaded and no entity is expanded",
+            doc.path,
+            line,
+            column,
+            hint="JCCL files need no DOCTYPE; remove it.",
+        )
+    )
 
 
 def _report_entities(doc: XmlDocument, root: etree._Element) -> None:
     for entity in root.iter(etree.Entity):
         parent = entity.getparent()
         line, column = doc.locate(parent) if parent is not None else (None, None)
-        doc.diagnostics.append(Diagnostic.make(
-            "XML003", f"entity reference {entity.text} was not expanded", doc.path, line, column,
-            hint="Write the text itself instead of an entity reference."))
+        doc.diagnostics.append(
+            Diagnostic.make(
+                "XML003",
+                f"entity reference {entity.text} was not expanded",
+                doc.path,
+                line,
+                column,
+                hint="Write the text itself instead of an entity reference.",
+            )
+        )
 
 
 def parse_bytes(data: bytes, path: str, kind: FileKind = FileKind.UNKNOWN) -> XmlDocument:
     doc = XmlDocument(path=path, kind=kind)
     override = _decode(doc, data)
     _report_doctype(doc, data)
-    parser = _parser() if override is None else etree.XMLParser(
-        encoding=override, resolve_entities=False, no_network=True, load_dtd=False,
-        huge_tree=False, collect_ids=False)
+    parser = (
+        _parser()
+        if override is None
+        else etree.XMLParser(
+            encoding=override,
+            resolve_entities=False,
+            no_network=True,
+            load_dtd=False,
+            huge_tree=False,
+            collect_ids=False,
+        )
+    )
     try:
         root = etree.fromstring(data, parser)
     except etree.XMLSyntaxError as err:
         line, column = err.position if err.position else (err.lineno, None)
         message = re.sub(r", line \d+, column \d+$", "", err.msg or "XML syntax error")
-        doc.diagnostics.append(Diagnostic.make("XML001", message, path, line or None, column or None))
+        doc.diagnostics.append(
+            Diagnostic.make("XML001", message, path, line or None, column or None)
+        )
         return doc
     doc.root = root
     _report_entities(doc, root)
@@ -275,7 +319,9 @@ def parse_bytes(data: bytes, path: str, kind: FileKind = FileKind.UNKNOWN) -> Xm
     return doc
 
 
-def load_file(path: Path, *, max_size: int = DEFAULT_MAX_SIZE, display: str | None = None) -> XmlDocument:
+def load_file(
+    path: Path, *, max_size: int = DEFAULT_MAX_SIZE, display: str | None = None
+) -> XmlDocument:
     """Read (at most ``max_size`` bytes) and parse one file. A file above the limit or not a
     regular file is a diagnostic; other I/O errors propagate as :class:`OSError`."""
     shown = display or str(path)

@@ -51,6 +51,7 @@ def compile_transform(stylesheet: bytes) -> etree.XSLT:
 def in_namespace(node: etree._Element, namespace: str = CONFIG_NS) -> etree._Element:
     """A deep copy of ``node`` with every element in ``namespace`` as the default namespace
     (whatever namespace or prefix it had), comments and processing instructions dropped."""
+
     def rebuild(source: etree._Element) -> etree._Element:
         local = etree.QName(source).localname
         target = etree.Element(f"{{{namespace}}}{local}", nsmap={None: namespace})
@@ -72,7 +73,9 @@ def in_namespace(node: etree._Element, namespace: str = CONFIG_NS) -> etree._Ele
     return rebuild(node)
 
 
-def apply_transform(stylesheet: bytes, element: etree._Element, source: str | None = None) -> list[etree._Element]:
+def apply_transform(
+    stylesheet: bytes, element: etree._Element, source: str | None = None
+) -> list[etree._Element]:
     """The elements a stylesheet makes of one element: the upgraded element first, then any
     new elements it creates. ``element`` itself is not changed.
 
@@ -96,7 +99,9 @@ def apply_transform(stylesheet: bytes, element: etree._Element, source: str | No
     try:
         answer = run_sandboxed(stylesheet, etree.tostring(element))
     except SandboxError as err:
-        raise TransformError(f"the upgrade stylesheet of {source or 'a definition'} was {err}") from None
+        raise TransformError(
+            f"the upgrade stylesheet of {source or 'a definition'} was {err}"
+        ) from None
     except ValueError as err:
         raise TransformError(f"{err} (stylesheet of {source or 'a definition'})") from None
     wrapper = etree.fromstring(answer, _safe_parser())

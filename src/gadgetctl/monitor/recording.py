@@ -80,9 +80,16 @@ class Recorder:
     (KeyboardInterrupt), ``terminated`` (:class:`Terminated`) or ``error``.
     """
 
-    def __init__(self, path: str | Path, header_info: Mapping[str, object] | None = None, *,
-                 overwrite: bool = False, flush_interval: float = 0.1,
-                 clock: Callable[[], float] = time.monotonic, stream: BinaryIO | None = None) -> None:
+    def __init__(
+        self,
+        path: str | Path,
+        header_info: Mapping[str, object] | None = None,
+        *,
+        overwrite: bool = False,
+        flush_interval: float = 0.1,
+        clock: Callable[[], float] = time.monotonic,
+        stream: BinaryIO | None = None,
+    ) -> None:
         self.path = Path(path)
         self.flush_interval = flush_interval
         self.samples = self.markers = self.frames = 0
@@ -110,8 +117,14 @@ class Recorder:
         self._last_flush = clock()
 
     @classmethod
-    def to_stream(cls, stream: BinaryIO, header_info: Mapping[str, object] | None = None, *,
-                  name: str = "<stdout>", clock: Callable[[], float] = time.monotonic) -> Recorder:
+    def to_stream(
+        cls,
+        stream: BinaryIO,
+        header_info: Mapping[str, object] | None = None,
+        *,
+        name: str = "<stdout>",
+        clock: Callable[[], float] = time.monotonic,
+    ) -> Recorder:
         """A recorder writing to an open binary stream (e.g. ``sys.stdout.buffer``), which
         :meth:`close` flushes but leaves open."""
         return cls(name, header_info, clock=clock, stream=stream)
@@ -119,8 +132,9 @@ class Recorder:
     def __enter__(self) -> Recorder:
         return self
 
-    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
-                 tb: object) -> None:
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: object
+    ) -> None:
         if exc_type is None:
             self.close("closed")
             return
@@ -207,11 +221,16 @@ class Recorder:
         """Append an element status record."""
         self._write_record(record)
 
-    def write_stats(self, devices: Mapping[str, Mapping[str, object]],
-                    timestamp: float | None = None) -> None:
+    def write_stats(
+        self, devices: Mapping[str, Mapping[str, object]], timestamp: float | None = None
+    ) -> None:
         """Append a statistics snapshot (device name -> statistic -> value)."""
-        self._write_record(StatsRecord(self._clock() if timestamp is None else timestamp,
-                                       {name: dict(v) for name, v in devices.items()}))
+        self._write_record(
+            StatsRecord(
+                self._clock() if timestamp is None else timestamp,
+                {name: dict(v) for name, v in devices.items()},
+            )
+        )
 
     def close(self, reason: str = "closed") -> None:
         """Write pending samples and the end record, then close the file (idempotent)."""
@@ -221,8 +240,11 @@ class Recorder:
             if self._writing:  # a write was interrupted: end its partial line
                 self._write("\n")
             self.flush()
-            self._write(encode_record(EndRecord(self._clock(), reason, self.samples,
-                                                self.markers, self.frames)))
+            self._write(
+                encode_record(
+                    EndRecord(self._clock(), reason, self.samples, self.markers, self.frames)
+                )
+            )
         finally:
             self.closed = True
             if self._owns_file:
@@ -279,8 +301,10 @@ def _read_header(path: Path) -> HeaderRecord:
         obj = json.loads(first.decode("utf-8"))
     except (UnicodeDecodeError, ValueError):
         if at_end and not first.endswith(b"\n") and first.startswith(b'{"v":'):
-            raise RecordingError(f"{path}: the recording ends inside its header "
-                                 "(the writer was stopped while starting)") from None
+            raise RecordingError(
+                f"{path}: the recording ends inside its header "
+                "(the writer was stopped while starting)"
+            ) from None
         raise _not_a_recording(path, "the first line is not a JSON header") from None
     if not isinstance(obj, dict) or obj.get("type") != "header" or obj.get("format") != FORMAT_NAME:
         raise _not_a_recording(path, f"the first line is not a {FORMAT_NAME!r} header")
@@ -288,8 +312,10 @@ def _read_header(path: Path) -> HeaderRecord:
     if not isinstance(version, int) or isinstance(version, bool) or version < 1:
         raise _not_a_recording(path, f"invalid format version {version!r}")
     if version > FORMAT_VERSION:
-        raise RecordingError(f"{path}: recording format version {version} is newer than this "
-                             f"gadgetctl reads ({FORMAT_VERSION}); upgrade gadgetctl")
+        raise RecordingError(
+            f"{path}: recording format version {version} is newer than this "
+            f"gadgetctl reads ({FORMAT_VERSION}); upgrade gadgetctl"
+        )
     try:
         header = decode_record(obj)
     except RecordFormatError as exc:
@@ -307,8 +333,11 @@ def _records(path: Path, problems: list[RecordingProblem]) -> Iterator[Record]:
         f.readline(MAX_HEADER_BYTES)
         for number, line in enumerate(bounded_lines(f, MAX_RECORD_BYTES), start=2):
             if line is None:
-                problems.append(RecordingProblem(
-                    number, "error", f"record longer than {MAX_RECORD_BYTES} bytes skipped"))
+                problems.append(
+                    RecordingProblem(
+                        number, "error", f"record longer than {MAX_RECORD_BYTES} bytes skipped"
+                    )
+                )
                 continue
             last = not line.endswith(b"\n")
             if not line.strip():
@@ -320,11 +349,19 @@ def _records(path: Path, problems: list[RecordingProblem]) -> Iterator[Record]:
                 continue
             except RecordFormatError as exc:
                 if last:
-                    problems.append(RecordingProblem(
-                        number, "warning", "truncated last line ignored (the recording was interrupted)"))
+                    problems.append(
+                        RecordingProblem(
+                            number,
+                            "warning",
+                            "truncated last line ignored (the recording was interrupted)",
+                        )
+                    )
                 elif _looks_truncated(line):
-                    problems.append(RecordingProblem(
-                        number, "warning", "incomplete record ignored (a write was interrupted)"))
+                    problems.append(
+                        RecordingProblem(
+                            number, "warning", "incomplete record ignored (a write was interrupted)"
+                        )
+                    )
                 else:
                     problems.append(RecordingProblem(number, "error", f"malformed record: {exc}"))
                 continue

@@ -114,8 +114,9 @@ class HeaderRecord:
     version: int = FORMAT_VERSION
 
     @classmethod
-    def now(cls, info: Mapping[str, object] | None = None, *,
-            clock: Any = time.monotonic) -> HeaderRecord:
+    def now(
+        cls, info: Mapping[str, object] | None = None, *, clock: Any = time.monotonic
+    ) -> HeaderRecord:
         """A header stamped with the current wall-clock and ``clock`` times."""
         from gadgetctl import __version__
 
@@ -124,8 +125,15 @@ class HeaderRecord:
         return cls(created, wall, clock(), f"gadgetctl {__version__}", dict(info or {}))
 
 
-Record = (SampleRecord | MarkerRecord | FrameRecord | StatsRecord | StatusRecord | EndRecord
-          | HeaderRecord)
+Record = (
+    SampleRecord
+    | MarkerRecord
+    | FrameRecord
+    | StatsRecord
+    | StatusRecord
+    | EndRecord
+    | HeaderRecord
+)
 
 
 # --------------------------------------------------------------------------- encoding
@@ -198,8 +206,13 @@ def _prefix(device: str, kind: str) -> str:
     if text is None:
         if not isinstance(device, str) or not isinstance(kind, str):
             raise TypeError("device and kind of a sample record must be strings")
-        text = ('{"v":1,"type":"sample","device":' + json.dumps(device)
-                + ',"kind":' + json.dumps(kind) + ',"unit":')
+        text = (
+            '{"v":1,"type":"sample","device":'
+            + json.dumps(device)
+            + ',"kind":'
+            + json.dumps(kind)
+            + ',"unit":'
+        )
         if len(_PREFIXES) < _PREFIX_CACHE_LIMIT:
             _PREFIXES[key] = text
     return text
@@ -243,11 +256,15 @@ def encode_samples(records: Iterable[SampleRecord]) -> str:
             tail = "}\n"
         else:
             tail = ',"raw":' + encode_value(raw) + "}\n"
-        append(prefix
-               + (repr(unit) if type(unit) is int else _unit(unit))
-               + ',"timestamp":'
-               + (repr(ts) if type(ts) is float and ts - ts == 0.0 else _timestamp(ts))
-               + ',"value":' + vtext + tail)
+        append(
+            prefix
+            + (repr(unit) if type(unit) is int else _unit(unit))
+            + ',"timestamp":'
+            + (repr(ts) if type(ts) is float and ts - ts == 0.0 else _timestamp(ts))
+            + ',"value":'
+            + vtext
+            + tail
+        )
     return "".join(parts)
 
 
@@ -258,8 +275,13 @@ def _scalar_text(value: object) -> str:
     return encode_value(value)
 
 
-def encode_rows(device: str, kind: str, timestamps: Iterable[float],
-                rows: Iterable[Iterable[object]], raw_rows: Iterable[Iterable[object]] | None = None) -> str:
+def encode_rows(
+    device: str,
+    kind: str,
+    timestamps: Iterable[float],
+    rows: Iterable[Iterable[object]],
+    raw_rows: Iterable[Iterable[object]] | None = None,
+) -> str:
     """Sample records of consecutive samples of one device and kind, as NDJSON lines.
 
     ``rows[i][unit]`` is the value of ``unit`` at ``timestamps[i]``; ``raw_rows`` (same
@@ -274,20 +296,34 @@ def encode_rows(device: str, kind: str, timestamps: Iterable[float],
     if raw_rows is None:
         raw_rows = itertools.repeat(None)
     for ts, row, raws in zip(timestamps, rows, raw_rows):  # noqa: B905 - raw_rows may repeat None
-        stamp = (',"timestamp":' + (repr(ts) if type(ts) is float and ts - ts == 0.0 else _timestamp(ts))
-                 + ',"value":')
+        stamp = (
+            ',"timestamp":'
+            + (repr(ts) if type(ts) is float and ts - ts == 0.0 else _timestamp(ts))
+            + ',"value":'
+        )
         if len(heads) < len(row):
             heads.extend(prefix + repr(u) for u in range(len(heads), len(row)))
         if raws is None:
             for unit, value in enumerate(row):
                 t = type(value)
-                append(heads[unit] + stamp
-                       + (repr(value) if (t is float and value - value == 0.0) or t is int else encode_value(value))
-                       + "}\n")
+                append(
+                    heads[unit]
+                    + stamp
+                    + (
+                        repr(value)
+                        if (t is float and value - value == 0.0) or t is int
+                        else encode_value(value)
+                    )
+                    + "}\n"
+                )
         else:
             for unit, (value, raw) in enumerate(zip(row, raws, strict=True)):
                 t = type(value)
-                vtext = repr(value) if (t is float and value - value == 0.0) or t is int else encode_value(value)
+                vtext = (
+                    repr(value)
+                    if (t is float and value - value == 0.0) or t is int
+                    else encode_value(value)
+                )
                 if raw is value or (type(raw) is t and t in _SCALARS and raw == value):
                     append(heads[unit] + stamp + vtext + "}\n")
                 else:
@@ -300,32 +336,69 @@ def encode_record(record: Record) -> str:
     if isinstance(record, SampleRecord):
         return encode_samples((record,))
     if isinstance(record, MarkerRecord):
-        obj: dict[str, object] = {"v": FORMAT_VERSION, "type": "marker", "name": record.name,
-                                  "timestamp": record.timestamp}
+        obj: dict[str, object] = {
+            "v": FORMAT_VERSION,
+            "type": "marker",
+            "name": record.name,
+            "timestamp": record.timestamp,
+        }
     elif isinstance(record, FrameRecord):
-        obj = {"v": FORMAT_VERSION, "type": "frame", "frame": record.frame,
-               "timestamp": record.timestamp,
-               "devices": {name: {"count": dev.count,
-                                  "values": {kind: {str(u): v for u, v in units.items()}
-                                             for kind, units in dev.values.items()}}
-                           for name, dev in record.devices.items()}}
+        obj = {
+            "v": FORMAT_VERSION,
+            "type": "frame",
+            "frame": record.frame,
+            "timestamp": record.timestamp,
+            "devices": {
+                name: {
+                    "count": dev.count,
+                    "values": {
+                        kind: {str(u): v for u, v in units.items()}
+                        for kind, units in dev.values.items()
+                    },
+                }
+                for name, dev in record.devices.items()
+            },
+        }
     elif isinstance(record, StatsRecord):
-        obj = {"v": FORMAT_VERSION, "type": "stats", "timestamp": record.timestamp,
-               "devices": {name: dict(values) for name, values in record.devices.items()}}
+        obj = {
+            "v": FORMAT_VERSION,
+            "type": "stats",
+            "timestamp": record.timestamp,
+            "devices": {name: dict(values) for name, values in record.devices.items()},
+        }
     elif isinstance(record, StatusRecord):
-        obj = {"v": FORMAT_VERSION, "type": "status", "timestamp": record.timestamp,
-               "name": record.name, "element": record.element,
-               "element_type": record.element_type, "state": record.state,
-               "reason": record.reason}
+        obj = {
+            "v": FORMAT_VERSION,
+            "type": "status",
+            "timestamp": record.timestamp,
+            "name": record.name,
+            "element": record.element,
+            "element_type": record.element_type,
+            "state": record.state,
+            "reason": record.reason,
+        }
     elif isinstance(record, EndRecord):
-        obj = {"v": FORMAT_VERSION, "type": "end", "timestamp": record.timestamp,
-               "reason": record.reason, "samples": record.samples, "markers": record.markers,
-               "frames": record.frames}
+        obj = {
+            "v": FORMAT_VERSION,
+            "type": "end",
+            "timestamp": record.timestamp,
+            "reason": record.reason,
+            "samples": record.samples,
+            "markers": record.markers,
+            "frames": record.frames,
+        }
     elif isinstance(record, HeaderRecord):
-        obj = {"v": record.version, "type": "header", "format": FORMAT_NAME,
-               "created": record.created, "wall_time": record.wall_time,
-               "monotonic": record.monotonic, "clock": "monotonic",
-               "generator": record.generator, "info": dict(record.info)}
+        obj = {
+            "v": record.version,
+            "type": "header",
+            "format": FORMAT_NAME,
+            "created": record.created,
+            "wall_time": record.wall_time,
+            "monotonic": record.monotonic,
+            "clock": "monotonic",
+            "generator": record.generator,
+            "info": dict(record.info),
+        }
     else:
         raise TypeError(f"not a record: {type(record).__name__}")
     if isinstance(obj.get("timestamp"), (int, float)):
@@ -381,7 +454,9 @@ def _frame_devices(obj: Mapping[str, Any]) -> dict[str, FrameDevice]:
             try:
                 values[kind] = {int(u): v for u, v in units.items()}
             except ValueError:
-                raise RecordFormatError(f"frame values of {name!r}/{kind} have a non-integer unit") from None
+                raise RecordFormatError(
+                    f"frame values of {name!r}/{kind} have a non-integer unit"
+                ) from None
         devices[name] = FrameDevice(_field(entry, "count", int), values)
     return devices
 
@@ -394,7 +469,9 @@ def decode_record(obj: object) -> Record:
     if version < 1:
         raise RecordFormatError(f"invalid version {version}")
     if version > FORMAT_VERSION:
-        raise RecordFormatError(f"record version {version} is newer than this reader ({FORMAT_VERSION})")
+        raise RecordFormatError(
+            f"record version {version} is newer than this reader ({FORMAT_VERSION})"
+        )
     kind = _field(obj, "type", str)
     if kind == "sample":
         if "value" not in obj:
@@ -403,8 +480,14 @@ def decode_record(obj: object) -> Record:
         unit = _field(obj, "unit", int)
         if not 0 <= unit < MAX_UNITS:
             raise RecordFormatError(f"unit {unit} out of range (0 to {MAX_UNITS - 1})")
-        return SampleRecord(_field(obj, "device", str), _field(obj, "kind", str),
-                            unit, _time(obj), value, obj.get("raw", value))
+        return SampleRecord(
+            _field(obj, "device", str),
+            _field(obj, "kind", str),
+            unit,
+            _time(obj),
+            value,
+            obj.get("raw", value),
+        )
     if kind == "frame":
         return FrameRecord(_field(obj, "frame", int), _time(obj), _frame_devices(obj))
     if kind == "marker":
@@ -417,22 +500,36 @@ def decode_record(obj: object) -> Record:
     if kind == "status":
         element = obj.get("element")
         reason = obj.get("reason")
-        return StatusRecord(_time(obj), _field(obj, "name", str),
-                            element if isinstance(element, str) else None,
-                            str(obj.get("element_type", "")), _field(obj, "state", str),
-                            reason if isinstance(reason, str) else None)
+        return StatusRecord(
+            _time(obj),
+            _field(obj, "name", str),
+            element if isinstance(element, str) else None,
+            str(obj.get("element_type", "")),
+            _field(obj, "state", str),
+            reason if isinstance(reason, str) else None,
+        )
     if kind == "end":
-        return EndRecord(_time(obj), _field(obj, "reason", str), _field(obj, "samples", int),
-                         _optional(obj, "markers", int, 0), _optional(obj, "frames", int, 0))
+        return EndRecord(
+            _time(obj),
+            _field(obj, "reason", str),
+            _field(obj, "samples", int),
+            _optional(obj, "markers", int, 0),
+            _optional(obj, "frames", int, 0),
+        )
     if kind == "header":
         if obj.get("format") != FORMAT_NAME:
             raise RecordFormatError(f"header format is not {FORMAT_NAME!r}")
         info = obj.get("info", {})
         if not isinstance(info, dict):
             raise RecordFormatError("header field 'info' is not an object")
-        return HeaderRecord(str(obj.get("created", "")), _optional(obj, "wall_time", float, 0.0),
-                            _time(obj, "monotonic") if "monotonic" in obj else 0.0,
-                            str(obj.get("generator", "")), info, version)
+        return HeaderRecord(
+            str(obj.get("created", "")),
+            _optional(obj, "wall_time", float, 0.0),
+            _time(obj, "monotonic") if "monotonic" in obj else 0.0,
+            str(obj.get("generator", "")),
+            info,
+            version,
+        )
     raise UnknownRecordType(f"unknown record type {kind!r}")
 
 

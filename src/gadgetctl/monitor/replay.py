@@ -48,13 +48,23 @@ class ReplaySchedule:
     are released together, to save sleeps.
     """
 
-    def __init__(self, records: Iterable[object], speed: float = 1.0, loop: bool = False, *,
-                 mapping: Mapping[str, str] | None = None, max_loops: int | None = None,
-                 rebase: bool = True, tolerance: float = 0.001,
-                 clock: Callable[[], float] = time.monotonic,
-                 sleep: Callable[[float], object] = time.sleep) -> None:
+    def __init__(
+        self,
+        records: Iterable[object],
+        speed: float = 1.0,
+        loop: bool = False,
+        *,
+        mapping: Mapping[str, str] | None = None,
+        max_loops: int | None = None,
+        rebase: bool = True,
+        tolerance: float = 0.001,
+        clock: Callable[[], float] = time.monotonic,
+        sleep: Callable[[float], object] = time.sleep,
+    ) -> None:
         if math.isnan(speed) or speed < 0:
-            raise ValueError(f"replay speed must be 0 (as fast as possible) or positive, not {speed}")
+            raise ValueError(
+                f"replay speed must be 0 (as fast as possible) or positive, not {speed}"
+            )
         if max_loops is not None and max_loops < 1:
             raise ValueError("max_loops must be at least 1")
         self.speed = speed
@@ -84,8 +94,11 @@ class ReplaySchedule:
         targets: dict[str, list[str]] = {}
         for name in names:
             targets.setdefault(self.mapping.get(name, name), []).append(name)
-        warnings += [f"{' and '.join(map(repr, sources))} all become {target!r}"
-                     for target, sources in targets.items() if len(sources) > 1]
+        warnings += [
+            f"{' and '.join(map(repr, sources))} all become {target!r}"
+            for target, sources in targets.items()
+            if len(sources) > 1
+        ]
         return tuple(warnings)
 
     @property
@@ -104,8 +117,16 @@ class ReplaySchedule:
         for record, offset in zip(self._records[i:j], self._offsets[i:j], strict=True):
             stamp = (start + (offset + base) / scale) if self.rebase else record.timestamp + base
             if isinstance(record, SampleRecord):
-                out.append(SampleRecord(mapping.get(record.device, record.device), record.kind,
-                                        record.unit, stamp, record.value, record.raw))
+                out.append(
+                    SampleRecord(
+                        mapping.get(record.device, record.device),
+                        record.kind,
+                        record.unit,
+                        stamp,
+                        record.value,
+                        record.raw,
+                    )
+                )
             else:
                 out.append(MarkerRecord(record.name, stamp))
         return out

@@ -54,8 +54,16 @@ from gadgetctl.monitor.replay import ReplaySchedule
 REPLAY_ELEMENT_TYPE = "replay_device"
 DEFINITION_FILE = Path(__file__).with_name("replay_device.jdef")
 #: Kinds a replay device can play back (keyboard and mouse events are not replayed).
-REPLAYABLE = (DeviceKind.ANALOG, DeviceKind.DIGITAL, DeviceKind.POSITION, DeviceKind.GLOVE,
-              DeviceKind.GESTURE, DeviceKind.COMMAND, DeviceKind.STRING, DeviceKind.HAT)
+REPLAYABLE = (
+    DeviceKind.ANALOG,
+    DeviceKind.DIGITAL,
+    DeviceKind.POSITION,
+    DeviceKind.GLOVE,
+    DeviceKind.GESTURE,
+    DeviceKind.COMMAND,
+    DeviceKind.STRING,
+    DeviceKind.HAT,
+)
 _REPLAYABLE_NAMES = {k.value for k in REPLAYABLE}
 
 
@@ -141,8 +149,9 @@ def _mapped(mapping: Mapping[str, str], name: str) -> str:
     return mapping.get(name, name)
 
 
-def recorded_devices(header: HeaderRecord, schedule: ReplaySchedule,
-                     mapping: Mapping[str, str]) -> dict[str, RecordedDevice]:
+def recorded_devices(
+    header: HeaderRecord, schedule: ReplaySchedule, mapping: Mapping[str, str]
+) -> dict[str, RecordedDevice]:
     """The recorded devices (renamed), from the header's element list and the samples."""
     info = header.info if isinstance(header.info, Mapping) else {}
     elements = info.get("elements")
@@ -173,17 +182,29 @@ def recorded_devices(header: HeaderRecord, schedule: ReplaySchedule,
         for kind, count in (described.get("units") or {}).items():
             if isinstance(count, int) and units.get(kind, 0) < count <= MAX_UNITS:
                 units[kind] = count
-        device = RecordedDevice(name, original, str(described.get("type", "")),
-                                sorted(set(declared) | (kinds & _REPLAYABLE_NAMES),
-                                       key=[k.value for k in REPLAYABLE].index), units)
-        if isinstance(described.get("min"), (int, float)) and isinstance(described.get("max"), (int, float)):
+        device = RecordedDevice(
+            name,
+            original,
+            str(described.get("type", "")),
+            sorted(
+                set(declared) | (kinds & _REPLAYABLE_NAMES), key=[k.value for k in REPLAYABLE].index
+            ),
+            units,
+        )
+        if isinstance(described.get("min"), (int, float)) and isinstance(
+            described.get("max"), (int, float)
+        ):
             device.minimum, device.maximum = float(described["min"]), float(described["max"])
         devices[name] = device
     return devices
 
 
-def check_mapping(mapping: Mapping[str, str], recorded: Iterable[str], configuration: Configuration | None,
-                  path: Path) -> None:
+def check_mapping(
+    mapping: Mapping[str, str],
+    recorded: Iterable[str],
+    configuration: Configuration | None,
+    path: Path,
+) -> None:
     """Raise :class:`ReplayError` when ``--map OLD=NEW`` names a device the recording does
     not hold, or (with a configuration) an element the configuration does not have, before
     anything is configured or opened: a mistyped NEW would leave the configuration's own
@@ -191,12 +212,18 @@ def check_mapping(mapping: Mapping[str, str], recorded: Iterable[str], configura
     from gadgetctl.suggest import with_suggestion
 
     recorded = list(recorded)
-    problems = [with_suggestion(f"{old!r} is not a device of the recording {path}", old, recorded)
-                for old in mapping if old not in recorded]
+    problems = [
+        with_suggestion(f"{old!r} is not a device of the recording {path}", old, recorded)
+        for old in mapping
+        if old not in recorded
+    ]
     if configuration is not None:
         names = [e.name for e in configuration.elements]
-        problems += [with_suggestion(f"{new!r} is not an element of the configuration", new, names)
-                     for new in mapping.values() if new not in names]
+        problems += [
+            with_suggestion(f"{new!r} is not an element of the configuration", new, names)
+            for new in mapping.values()
+            if new not in names
+        ]
     if problems:
         raise ReplayError(f"--map: {'; '.join(problems)}")
 
@@ -205,13 +232,25 @@ def _value(text: object, where: Location) -> PropertyValue:
     return PropertyValue(str(text), where)
 
 
-def _element(type_name: str, name: str, where: Location, properties: Mapping[str, Sequence[object]],
-             version: str = "1") -> ConfigElement:
-    return ConfigElement(type_name, name, version, where,
-                         {prop: [_value(v, where) for v in values] for prop, values in properties.items()})
+def _element(
+    type_name: str,
+    name: str,
+    where: Location,
+    properties: Mapping[str, Sequence[object]],
+    version: str = "1",
+) -> ConfigElement:
+    return ConfigElement(
+        type_name,
+        name,
+        version,
+        where,
+        {prop: [_value(v, where) for v in values] for prop, values in properties.items()},
+    )
 
 
-def replay_element(device: RecordedDevice, where: Location, original: ConfigElement | None = None) -> ConfigElement:
+def replay_element(
+    device: RecordedDevice, where: Location, original: ConfigElement | None = None
+) -> ConfigElement:
     """The ``replay_device`` element standing in for ``device`` (min and max from the
     element it replaces, else from the recording)."""
     props: dict[str, list[object]] = {"kind": list(device.kinds)}
@@ -228,8 +267,13 @@ def replay_element(device: RecordedDevice, where: Location, original: ConfigElem
     return _element(REPLAY_ELEMENT_TYPE, device.name, where, props)
 
 
-def plan_replay(header: HeaderRecord, schedule: ReplaySchedule, path: Path,
-                configuration: Configuration | None, mapping: Mapping[str, str]) -> ReplayPlan:
+def plan_replay(
+    header: HeaderRecord,
+    schedule: ReplaySchedule,
+    path: Path,
+    configuration: Configuration | None,
+    mapping: Mapping[str, str],
+) -> ReplayPlan:
     """The elements to configure: the given configuration with its recorded devices
     replaced, or one synthesised from the header."""
     devices = recorded_devices(header, schedule, mapping)
@@ -249,11 +293,20 @@ def plan_replay(header: HeaderRecord, schedule: ReplaySchedule, path: Path,
                 elements.append(element)
         for name, device in devices.items():
             if name not in present:
-                hint = f" (map it with --map {device.recorded_name}=NAME)" if name == device.recorded_name else ""
-                notes.append(f"recorded device {name!r} is not in the configuration; it is replayed on its own{hint}")
+                hint = (
+                    f" (map it with --map {device.recorded_name}=NAME)"
+                    if name == device.recorded_name
+                    else ""
+                )
+                notes.append(
+                    f"recorded device {name!r} is not in the configuration; it is replayed on its own{hint}"
+                )
                 elements.append(replay_element(device, where))
-        result = Configuration(files=list(configuration.files), loaded=elements,
-                               diagnostics=list(configuration.diagnostics))
+        result = Configuration(
+            files=list(configuration.files),
+            loaded=elements,
+            diagnostics=list(configuration.diagnostics),
+        )
         return ReplayPlan(devices, elements, notes, result)
     info = header.info if isinstance(header.info, Mapping) else {}
     described = info.get("elements")
@@ -274,12 +327,16 @@ def plan_replay(header: HeaderRecord, schedule: ReplaySchedule, path: Path,
             props["unit"] = [int(entry.get("unit", 0) or 0)]
         proxies[name] = _element(proxy_type, name, where, props)
         if target not in names:
-            notes.append(f"proxy {name!r} points at {target!r}, which the recording has no samples of")
+            notes.append(
+                f"proxy {name!r} points at {target!r}, which the recording has no samples of"
+            )
     elements.extend(proxies.values())
     for original, entry in described.items():
         if isinstance(entry, Mapping) and entry.get("element") == "alias":
             target = _mapped(mapping, str(entry.get("proxy", "")))
-            elements.append(_element("alias", _mapped(mapping, original), where, {"proxy": [target]}))
+            elements.append(
+                _element("alias", _mapped(mapping, original), where, {"proxy": [target]})
+            )
     return ReplayPlan(devices, elements, notes, Configuration(loaded=elements))
 
 
@@ -318,8 +375,12 @@ def _datum(kind: str, record: SampleRecord) -> Any:
 class ReplayFeeder:
     """Releases a recording's samples into the replay devices, in a daemon thread."""
 
-    def __init__(self, schedule: ReplaySchedule, lookup: Callable[[str], Input | None],
-                 units: Mapping[str, Mapping[str, int]] | None = None) -> None:
+    def __init__(
+        self,
+        schedule: ReplaySchedule,
+        lookup: Callable[[str], Input | None],
+        units: Mapping[str, Mapping[str, int]] | None = None,
+    ) -> None:
         self.schedule = schedule
         self._lookup = lookup
         self._units = {name: dict(u) for name, u in (units or {}).items()}
@@ -375,14 +436,22 @@ class ReplayFeeder:
                 continue
             if record.kind not in _REPLAYABLE_NAMES:
                 continue
-            groups.setdefault((record.device, record.kind, record.timestamp), {})[record.unit] = record
+            groups.setdefault((record.device, record.kind, record.timestamp), {})[record.unit] = (
+                record
+            )
         devices: dict[str, Input | None] = {}
         for (name, kind, timestamp), units in groups.items():
-            device = devices.get(name) if name in devices else devices.setdefault(name, self._lookup(name))
+            device = (
+                devices.get(name)
+                if name in devices
+                else devices.setdefault(name, self._lookup(name))
+            )
             if not isinstance(device, ReplayDevice) or DeviceKind(kind) not in device.kinds():
                 continue
             last = self._last.get((name, kind))
-            count = max(max(units) + 1, self._units.get(name, {}).get(kind, 0), len(last) if last else 0)
+            count = max(
+                max(units) + 1, self._units.get(name, {}).get(kind, 0), len(last) if last else 0
+            )
             if last is None or len(last) < count:
                 last = (last or []) + [_neutral(kind) for _ in range(count - len(last or []))]
             values = list(last)
@@ -397,7 +466,8 @@ class ReplayFeeder:
             self.fed += 1
 
 
-def make_schedule(records: Iterable[object], *, speed: float, loop: bool,
-                  mapping: Mapping[str, str] | None) -> ReplaySchedule:
+def make_schedule(
+    records: Iterable[object], *, speed: float, loop: bool, mapping: Mapping[str, str] | None
+) -> ReplaySchedule:
     """A schedule stamping released samples on the input manager's clock."""
     return ReplaySchedule(records, speed, loop, mapping=mapping, clock=now)

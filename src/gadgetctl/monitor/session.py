@@ -224,9 +224,12 @@ class GatheredFrames(Mapping[str, Mapping[DeviceKind, FrameSamples]]):
 
     __slots__ = ("_own", "_shared", "groups")
 
-    def __init__(self, own: dict[str, Mapping[DeviceKind, FrameSamples]],
-                 shared: Mapping[str, tuple[SharedWindows, int, Input]] = _NOTHING,
-                 groups: Sequence[SharedGroup] = ()) -> None:
+    def __init__(
+        self,
+        own: dict[str, Mapping[DeviceKind, FrameSamples]],
+        shared: Mapping[str, tuple[SharedWindows, int, Input]] = _NOTHING,
+        groups: Sequence[SharedGroup] = (),
+    ) -> None:
         self._own = own
         self._shared = shared
         self.groups = groups
@@ -265,9 +268,21 @@ class _GatherPlan:
 
     __slots__ = ("arrangement", "groups", "own", "shared", "watch")
 
-    def __init__(self, arrangement: object, watch: list[str], own: list[str],
-                 shared: dict[str, tuple[SharedWindows, int, Input]], groups: list[SharedGroup]) -> None:
-        self.arrangement, self.watch, self.own, self.shared, self.groups = arrangement, watch, own, shared, groups
+    def __init__(
+        self,
+        arrangement: object,
+        watch: list[str],
+        own: list[str],
+        shared: dict[str, tuple[SharedWindows, int, Input]],
+        groups: list[SharedGroup],
+    ) -> None:
+        self.arrangement, self.watch, self.own, self.shared, self.groups = (
+            arrangement,
+            watch,
+            own,
+            shared,
+            groups,
+        )
 
 
 _NO_GATHERING = GatheredFrames({})
@@ -358,12 +373,16 @@ class DeviceTrack:
 
     def _scan_digital(self, frame: FrameSamples) -> None:
         try:
-            parts = [np.asarray([chunk.values]) if type(chunk) is Sample else _rows(chunk.values)
-                     for chunk in frame.chunks]
+            parts = [
+                np.asarray([chunk.values]) if type(chunk) is Sample else _rows(chunk.values)
+                for chunk in frame.chunks
+            ]
             rows = (np.concatenate(parts) if len(parts) > 1 else parts[0]) != 0
         except ValueError:  # units changed within the frame: look at the newest sample only
             newest = frame.newest
-            rows = np.asarray([newest.values]) != 0 if newest is not None else np.zeros((0, 0), bool)
+            rows = (
+                np.asarray([newest.values]) != 0 if newest is not None else np.zeros((0, 0), bool)
+            )
         if not rows.size:
             return
         units = rows.shape[1]
@@ -372,7 +391,7 @@ class DeviceTrack:
             previous = rows[0]
             presses = np.zeros(units, dtype=np.int64)
             if self.presses is not None:
-                presses[:min(units, len(self.presses))] = self.presses[:units]
+                presses[: min(units, len(self.presses))] = self.presses[:units]
             self.presses = presses
         stacked = np.vstack((previous[None, :], rows)).astype(np.int8)
         steps = np.diff(stacked, axis=0)
@@ -417,9 +436,19 @@ class DeviceTrack:
                     views.append(UnitView(kind.value, unit, value, raw, history=history))
             elif kind is DeviceKind.DIGITAL:
                 for unit, state in enumerate(values):
-                    changed = bool(self.changed[unit]) if self.changed is not None and unit < len(self.changed) else False
-                    presses = int(self.presses[unit]) if self.presses is not None and unit < len(self.presses) else 0
-                    views.append(UnitView(kind.value, unit, int(state), changed=changed, presses=presses))
+                    changed = (
+                        bool(self.changed[unit])
+                        if self.changed is not None and unit < len(self.changed)
+                        else False
+                    )
+                    presses = (
+                        int(self.presses[unit])
+                        if self.presses is not None and unit < len(self.presses)
+                        else 0
+                    )
+                    views.append(
+                        UnitView(kind.value, unit, int(state), changed=changed, presses=presses)
+                    )
             elif kind is DeviceKind.KEYBOARD_MOUSE:
                 held = getattr(device, "held", frozenset())
                 views.append(UnitView(kind.value, 0, sorted(k.name for k in held)))
@@ -463,8 +492,9 @@ def _json_value(kind: DeviceKind, value: Any) -> Any:
     return tolist() if tolist is not None else value
 
 
-def encode_frame(name: str, kind: DeviceKind, frame: FrameSamples, device: Input,
-                 pose: str = MATRIX) -> tuple[str, int]:
+def encode_frame(
+    name: str, kind: DeviceKind, frame: FrameSamples, device: Input, pose: str = MATRIX
+) -> tuple[str, int]:
     """Sample records (NDJSON text, count) of every sample of one kind in one frame;
     positions in the ``pose`` format (:mod:`gadgetctl.monitor.poses`)."""
     parts: list[str] = []
@@ -481,7 +511,11 @@ def encode_frame(name: str, kind: DeviceKind, frame: FrameSamples, device: Input
             rows = [row]
             count += len(row)
             if analog:
-                parts.append(encode_rows(name, label, stamps, [[device.normalize(float(v)) for v in row]], rows))
+                parts.append(
+                    encode_rows(
+                        name, label, stamps, [[device.normalize(float(v)) for v in row]], rows
+                    )
+                )
             else:
                 parts.append(encode_rows(name, label, stamps, rows))
             continue
@@ -517,7 +551,7 @@ def _encode_poses(name: str, frame: FrameSamples, pose: str) -> tuple[str, int]:
         matrices = matrices.reshape(len(stamps), -1, 4, 4)
         units = matrices.shape[1]
         flat = pose_values(matrices, pose)
-        rows = [flat[i * units:(i + 1) * units] for i in range(len(stamps))]
+        rows = [flat[i * units : (i + 1) * units] for i in range(len(stamps))]
         parts.append(encode_rows(name, "position", stamps, rows))
         count += len(stamps) * units
     return "".join(parts), count
@@ -577,10 +611,18 @@ class MonitorSession:
     name them (one record per frame with new data).
     """
 
-    def __init__(self, manager: InputManager, configuration: Configuration | None = None, *,
-                 selectors: Sequence[str] = (), rate: float = 60.0,
-                 history: float = DEFAULT_HISTORY_SECONDS, source: ReplaySource | None = None,
-                 info: Mapping[str, object] | None = None, statistics: bool = True) -> None:
+    def __init__(
+        self,
+        manager: InputManager,
+        configuration: Configuration | None = None,
+        *,
+        selectors: Sequence[str] = (),
+        rate: float = 60.0,
+        history: float = DEFAULT_HISTORY_SECONDS,
+        source: ReplaySource | None = None,
+        info: Mapping[str, object] | None = None,
+        statistics: bool = True,
+    ) -> None:
         if not rate > 0:
             raise ValueError("the frame rate must be positive")
         self.manager = manager
@@ -590,7 +632,9 @@ class MonitorSession:
         self.history = max(2, round(history * rate))
         self.source = source
         self.info = dict(info or {})
-        self.statistics = statistics  # False: gather samples only (no statistics, presses, histories)
+        self.statistics = (
+            statistics  # False: gather samples only (no statistics, presses, histories)
+        )
         self.frame = 0
         self.started_at: float | None = None
         #: When :meth:`start` began configuring (no sample of the session is older).
@@ -708,8 +752,13 @@ class MonitorSession:
         what :meth:`frame_samples` gives, in one read-only mapping (replaced each frame)."""
         return self._gathered
 
-    def add_sink(self, opener: Callable[[Mapping[str, object]], Recorder], *, per_frame: bool = False,
-                 pose: str = MATRIX) -> None:
+    def add_sink(
+        self,
+        opener: Callable[[Mapping[str, object]], Recorder],
+        *,
+        per_frame: bool = False,
+        pose: str = MATRIX,
+    ) -> None:
         """Add a writer: ``opener(header_info)`` makes the :class:`Recorder` once the header is
         known (after the first samples, at most :data:`SINK_WARMUP` seconds in). With
         ``per_frame`` it gets frame records instead of sample records; ``pose`` chooses how
@@ -738,8 +787,11 @@ class MonitorSession:
             device = manager.device(name)
             if device is not None:
                 devices.append(name)
-                entry: dict[str, object] = {"element": DEVICE, "type": device.element_type,
-                                            "kinds": [k.value for k in device.kinds()]}
+                entry: dict[str, object] = {
+                    "element": DEVICE,
+                    "type": device.element_type,
+                    "kinds": [k.value for k in device.kinds()],
+                }
                 track = self._tracks.get(name)
                 units = dict(track.units) if track is not None else {}
                 for kind in device.store.kinds:
@@ -753,14 +805,23 @@ class MonitorSession:
                 continue
             proxy = manager.proxies.get(name)
             if proxy is not None:
-                elements[name] = {"element": PROXY, "type": proxy.element_type,
-                                  "device": proxy.device_name, "unit": proxy.unit}
+                elements[name] = {
+                    "element": PROXY,
+                    "type": proxy.element_type,
+                    "device": proxy.device_name,
+                    "unit": proxy.unit,
+                }
                 continue
             target = manager.aliases.get(name)
             if target is not None:
                 elements[name] = {"element": ALIAS, "type": "alias", "proxy": target}
-        return {**self.info, "devices": devices, "elements": elements,
-                "selection": list(self.selectors), "frame_rate": self.rate}
+        return {
+            **self.info,
+            "devices": devices,
+            "elements": elements,
+            "selection": list(self.selectors),
+            "frame_rate": self.rate,
+        }
 
     def _names_with_targets(self) -> list[str]:
         """The selected names plus the proxies and devices they lead to."""
@@ -785,8 +846,14 @@ class MonitorSession:
         """End :meth:`frames` after the current frame."""
         self._stop = True
 
-    def frames(self, *, duration: float | None = None, frames: int | None = None,
-               sleep: Callable[[float], object] = time.sleep, stop_at_end: bool = True) -> Iterator[Frame]:
+    def frames(
+        self,
+        *,
+        duration: float | None = None,
+        frames: int | None = None,
+        sleep: Callable[[float], object] = time.sleep,
+        stop_at_end: bool = True,
+    ) -> Iterator[Frame]:
         """Run frames at the session's rate until ``duration`` seconds (wall clock, however
         many frames that is) or ``frames`` frames, :meth:`stop`, or the end of a replay
         (unless ``stop_at_end`` is false: then :attr:`finished` is set and frames go on);
@@ -813,7 +880,9 @@ class MonitorSession:
                 yield frame
                 if self.has_slack():  # work done ahead, when it does not make the next frame late
                     self.manager.prepare()
-                if source_done and not self.finished:  # the feeder had finished before this frame swapped
+                if (
+                    source_done and not self.finished
+                ):  # the feeder had finished before this frame swapped
                     self.finished = True
                     if stop_at_end:
                         break
@@ -894,7 +963,9 @@ class MonitorSession:
             track = self._tracks[name] = DeviceTrack(name, device, self.history, self.statistics)
         return track
 
-    def _gather(self, names: Iterable[str], gathered: dict[str, Mapping[DeviceKind, FrameSamples]]) -> int:
+    def _gather(
+        self, names: Iterable[str], gathered: dict[str, Mapping[DeviceKind, FrameSamples]]
+    ) -> int:
         """Update the tracks of ``names`` (watched devices) and put what each delivered this
         frame in ``gathered``; returns the samples (sampling instants)."""
         samples = 0
@@ -964,7 +1035,9 @@ class MonitorSession:
         poses = {s.pose for s in self._sinks if s.per_frame}
         if poses:
             self._emit("frame", {pose: self.frame_record(pose) for pose in sorted(poses)}, 0)
-        if not self._sinks_open and (self._warm() or moment - (self.started_at or moment) >= SINK_WARMUP):
+        if not self._sinks_open and (
+            self._warm() or moment - (self.started_at or moment) >= SINK_WARMUP
+        ):
             self._open_sinks()
 
     def warm(self) -> bool:
@@ -1045,11 +1118,18 @@ class MonitorSession:
                     continue
                 self._proxy_stamps[name] = proxy.timestamp
                 value, raw = proxy_value(proxy)
-                value = pose_values(value, pose)[0] if isinstance(proxy, PositionProxy) else _plain_json(value)
+                value = (
+                    pose_values(value, pose)[0]
+                    if isinstance(proxy, PositionProxy)
+                    else _plain_json(value)
+                )
                 raw = value if raw is None else raw
                 unit = proxy.unit if proxy.HAS_UNIT else 0
-                parts.append(encode_samples([SampleRecord(name, proxy.KIND.value, unit, proxy.timestamp,
-                                                          value, raw)]))
+                parts.append(
+                    encode_samples(
+                        [SampleRecord(name, proxy.KIND.value, unit, proxy.timestamp, value, raw)]
+                    )
+                )
                 count += 1
         return "".join(parts), count
 
@@ -1068,21 +1148,32 @@ class MonitorSession:
                     if latest is None:
                         continue
                     if kind is DeviceKind.ANALOG and isinstance(track.device, Analog):
-                        values[kind.value] = {u: track.device.normalize(float(v)) for u, v in enumerate(latest.values)}
+                        values[kind.value] = {
+                            u: track.device.normalize(float(v)) for u, v in enumerate(latest.values)
+                        }
                     elif kind is DeviceKind.POSITION:
                         values[kind.value] = dict(enumerate(pose_values(latest.values, pose)))
                     else:
-                        values[kind.value] = {u: _json_value(kind, v) for u, v in enumerate(latest.values)}
+                        values[kind.value] = {
+                            u: _json_value(kind, v) for u, v in enumerate(latest.values)
+                        }
                 devices[name] = FrameDevice(track.count, values)
                 continue
             proxy = manager.proxy(name)
             if proxy is None:
                 continue
             value, _ = proxy_value(proxy)
-            fresh = proxy.timestamp is not None and self._proxy_stamps.get("frame:" + name) != proxy.timestamp
+            fresh = (
+                proxy.timestamp is not None
+                and self._proxy_stamps.get("frame:" + name) != proxy.timestamp
+            )
             self._proxy_stamps["frame:" + name] = proxy.timestamp
             unit = proxy.unit if proxy.HAS_UNIT else 0
-            value = pose_values(value, pose)[0] if isinstance(proxy, PositionProxy) else _plain_json(value)
+            value = (
+                pose_values(value, pose)[0]
+                if isinstance(proxy, PositionProxy)
+                else _plain_json(value)
+            )
             devices[name] = FrameDevice(1 if fresh else 0, {proxy.KIND.value: {unit: value}})
         return FrameRecord(self.frame, self.frame_timestamp, devices)
 
@@ -1092,7 +1183,9 @@ class MonitorSession:
             current = (state, reason)
             if self._statuses.get(name) != current:
                 self._statuses[name] = current
-                self._emit("status", StatusRecord(moment, name, element, element_type, state, reason), 0)
+                self._emit(
+                    "status", StatusRecord(moment, name, element, element_type, state, reason), 0
+                )
 
     def mark(self, name: str | None = None) -> MarkerRecord:
         """Write a marker (named ``marker N`` when no name is given) to every sink."""
@@ -1132,11 +1225,18 @@ class MonitorSession:
         device = manager.device(name)
         if device is not None:
             state = device.state
-            reason = device.error if state in (DeviceState.FAULTED, DeviceState.RECONNECTING) else None
+            reason = (
+                device.error if state in (DeviceState.FAULTED, DeviceState.RECONNECTING) else None
+            )
             return DEVICE, device.element_type, state.value, reason
         proxy = manager.proxies.get(name)
         if proxy is not None:
-            return PROXY, proxy.element_type, proxy.state.value, proxy.reason if proxy.stupefied else None
+            return (
+                PROXY,
+                proxy.element_type,
+                proxy.state.value,
+                proxy.reason if proxy.stupefied else None,
+            )
         target = manager.aliases.get(name)
         if target is not None:
             proxy = manager.proxies.get(target)
@@ -1145,7 +1245,12 @@ class MonitorSession:
             return ALIAS, "alias", proxy.state.value, proxy.reason if proxy.stupefied else None
         status = manager.status(name)
         if status is not None and status.state in (PENDING, UNKNOWN_TYPE):
-            return (status.kind.value if status.kind is not None else None), status.type, status.state, status.reason
+            return (
+                (status.kind.value if status.kind is not None else None),
+                status.type,
+                status.state,
+                status.reason,
+            )
         element = manager.element(name)
         return None, element.type if element is not None else "", "removed", "no longer configured"
 
@@ -1193,24 +1298,45 @@ class MonitorSession:
 
     def keyboards(self) -> list[str]:
         """Names of keyboard/mouse devices that receive terminal keys."""
-        return [name for name, device in self.manager.devices.items()
-                if DeviceKind.KEYBOARD_MOUSE in device.kinds()]
+        return [
+            name
+            for name, device in self.manager.devices.items()
+            if DeviceKind.KEYBOARD_MOUSE in device.kinds()
+        ]
 
-    def snapshot(self, moment: float | None = None, *, names: Iterable[str] | None = None) -> Snapshot:
+    def snapshot(
+        self, moment: float | None = None, *, names: Iterable[str] | None = None
+    ) -> Snapshot:
         """Everything a view shows, for the selected elements (or ``names`` of them)."""
         moment = now() if moment is None else moment
-        views = [self.element_view(name, moment) for name in (self._selected if names is None else names)]
-        return Snapshot(self.frame, self.frame_timestamp, moment - (self.started_at or moment),
-                        self.frame_rate, views, self.markers[-5:], self.keyboards(),
-                        self._samples_written, self.finished)
+        views = [
+            self.element_view(name, moment) for name in (self._selected if names is None else names)
+        ]
+        return Snapshot(
+            self.frame,
+            self.frame_timestamp,
+            moment - (self.started_at or moment),
+            self.frame_rate,
+            views,
+            self.markers[-5:],
+            self.keyboards(),
+            self._samples_written,
+            self.finished,
+        )
 
     def element_view(self, name: str, moment: float | None = None) -> ElementView:
         """One element's status, statistics and values now."""
         moment = now() if moment is None else moment
         manager = self.manager
         element, element_type, state, reason = self._status_of(name)
-        view = ElementView(name, element or PENDING, element_type, state, reason,
-                           note=manager.vrjuggler_difference(name))
+        view = ElementView(
+            name,
+            element or PENDING,
+            element_type,
+            state,
+            reason,
+            note=manager.vrjuggler_difference(name),
+        )
         device = manager.device(name)
         if device is not None:
             track = self._current_track(name)
@@ -1238,7 +1364,11 @@ class MonitorSession:
             if live:
                 if isinstance(proxy, AnalogProxy) and unit < len(track.analog_history):
                     history = track.analog_history[unit]
-                if isinstance(proxy, DigitalProxy) and track.presses is not None and unit < len(track.presses):
+                if (
+                    isinstance(proxy, DigitalProxy)
+                    and track.presses is not None
+                    and unit < len(track.presses)
+                ):
                     presses = int(track.presses[unit])
             changed = isinstance(proxy, DigitalProxy) and value in (2, 3)
             view.values = [UnitView(proxy.KIND.value, unit, value, raw, changed, presses, history)]

@@ -24,8 +24,13 @@ def _bucket_means(data: np.ndarray, width: int) -> np.ndarray:
         return np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
 
 
-def sparkline(values: Iterable[float | None] | np.ndarray, width: int = 40, *,
-              lo: float | None = None, hi: float | None = None) -> str:
+def sparkline(
+    values: Iterable[float | None] | np.ndarray,
+    width: int = 40,
+    *,
+    lo: float | None = None,
+    hi: float | None = None,
+) -> str:
     """``width`` bars for ``values``: each bar is the mean of its bucket of values.
 
     NaN, infinite and None values are left out of the means; a bucket without any finite
@@ -47,6 +52,10 @@ def sparkline(values: Iterable[float | None] | np.ndarray, width: int = 40, *,
     span = high - low
     if not span > 1e-12 * max(1.0, abs(high), abs(low)):
         return "".join(MID if p else GAP for p in present)
-    levels = np.clip(np.rint((np.where(present, means, low) - low) / span * (len(BARS) - 1)),
-                     0, len(BARS) - 1).astype(np.int64)
-    return "".join(BARS[level] if p else GAP for level, p in zip(levels.tolist(), present.tolist(), strict=True))
+    levels = np.clip(
+        np.rint((np.where(present, means, low) - low) / span * (len(BARS) - 1)), 0, len(BARS) - 1
+    ).astype(np.int64)
+    return "".join(
+        BARS[level] if p else GAP
+        for level, p in zip(levels.tolist(), present.tolist(), strict=True)
+    )

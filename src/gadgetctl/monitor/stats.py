@@ -65,8 +65,9 @@ def _nearest_rank(sorted_or_partitioned: np.ndarray, n: int, percent: float) -> 
 class DeviceStats:
     """Running statistics of one device's sample timestamps."""
 
-    def __init__(self, name: str, *, window: float = DEFAULT_WINDOW,
-                 history: int = DEFAULT_HISTORY) -> None:
+    def __init__(
+        self, name: str, *, window: float = DEFAULT_WINDOW, history: int = DEFAULT_HISTORY
+    ) -> None:
         if window <= 0:
             raise ValueError("window must be positive")
         if history < 2:
@@ -141,7 +142,9 @@ class DeviceStats:
         if at is not None:
             ends = self._frame_ends
             ends.append((float(at), self.count))
-            while len(ends) > 1 and ends[1][0] <= at - self.window:  # keep one frame before the window
+            while (
+                len(ends) > 1 and ends[1][0] <= at - self.window
+            ):  # keep one frame before the window
                 ends.popleft()
 
     # ---------------------------------------------------------------- numpy side
@@ -164,11 +167,11 @@ class DeviceStats:
             return
         end = self._ring_pos + len(batch)
         if end <= cap:
-            self._ring[self._ring_pos:end] = batch
+            self._ring[self._ring_pos : end] = batch
         else:
             split = cap - self._ring_pos
-            self._ring[self._ring_pos:] = batch[:split]
-            self._ring[:end - cap] = batch[split:]
+            self._ring[self._ring_pos :] = batch[:split]
+            self._ring[: end - cap] = batch[split:]
         self._ring_pos = end % cap
         self._ring_len = min(cap, self._ring_len + len(batch))
 
@@ -176,8 +179,8 @@ class DeviceStats:
         """The ``history`` newest timestamps, oldest first (a copy)."""
         self._consolidate()
         if self._ring_len < self.history:
-            return self._ring[:self._ring_len].copy()
-        return np.concatenate((self._ring[self._ring_pos:], self._ring[:self._ring_pos]))
+            return self._ring[: self._ring_len].copy()
+        return np.concatenate((self._ring[self._ring_pos :], self._ring[: self._ring_pos]))
 
     # ---------------------------------------------------------------- figures
 
@@ -251,14 +254,24 @@ class DeviceStats:
         """All figures at once; ``now`` (same clock as the timestamps) enables age and decay."""
         p50, p99, jitter = self.interval_stats()
         return DeviceSnapshot(
-            name=self.name, count=self.count, first_timestamp=self.first_timestamp,
-            newest_timestamp=self.newest_timestamp, mean_rate=self.mean_rate,
-            window_rate=self.window_rate(now), p50_interval=p50, p99_interval=p99,
-            max_gap=self.max_gap, jitter=jitter, dropped=self.dropped, faults=self.faults,
-            age=None if now is None else self.age(now), frames=self.frames,
+            name=self.name,
+            count=self.count,
+            first_timestamp=self.first_timestamp,
+            newest_timestamp=self.newest_timestamp,
+            mean_rate=self.mean_rate,
+            window_rate=self.window_rate(now),
+            p50_interval=p50,
+            p99_interval=p99,
+            max_gap=self.max_gap,
+            jitter=jitter,
+            dropped=self.dropped,
+            faults=self.faults,
+            age=None if now is None else self.age(now),
+            frames=self.frames,
             samples_per_frame=self.samples_per_frame,
             mean_samples_per_frame=self._frame_samples / self.frames if self.frames else None,
-            window_samples_per_frame=self.window_samples_per_frame(now))
+            window_samples_per_frame=self.window_samples_per_frame(now),
+        )
 
 
 class MonitorStats:
@@ -272,7 +285,9 @@ class MonitorStats:
     def device(self, name: str) -> DeviceStats:
         stats = self._devices.get(name)
         if stats is None:
-            stats = self._devices[name] = DeviceStats(name, window=self.window, history=self.history)
+            stats = self._devices[name] = DeviceStats(
+                name, window=self.window, history=self.history
+            )
         return stats
 
     def add_timestamps(self, name: str, timestamps: Sequence[float] | np.ndarray) -> None:
@@ -289,7 +304,7 @@ class MonitorStats:
 
     def end_frame(self, names: Iterable[str] | None = None, at: float | None = None) -> None:
         """A frame boundary for every device (or the ``names`` given), at ``at``."""
-        for stats in (self._devices.values() if names is None else map(self.device, names)):
+        for stats in self._devices.values() if names is None else map(self.device, names):
             stats.end_frame(at)
 
     def snapshot(self, now: float | None = None) -> dict[str, DeviceSnapshot]:

@@ -58,15 +58,21 @@ class UnitSummary:
     rotation_min: tuple[float, float, float] | None = None
     rotation_max: tuple[float, float, float] | None = None
     sparklines: dict[str, str] | None = None
-    turn: float | None = None  # positions: the largest angle (degrees) away from the first orientation
+    turn: float | None = (
+        None  # positions: the largest angle (degrees) away from the first orientation
+    )
 
     def to_dict(self) -> dict[str, object]:
         result: dict[str, object] = {
-            "kind": self.kind, "unit": self.unit, "samples": self.samples,
-            "minimum": self.minimum, "maximum": self.maximum,
+            "kind": self.kind,
+            "unit": self.unit,
+            "samples": self.samples,
+            "minimum": self.minimum,
+            "maximum": self.maximum,
             "translation_min": list(self.translation_min) if self.translation_min else None,
             "translation_max": list(self.translation_max) if self.translation_max else None,
-            "sparkline": self.sparkline}
+            "sparkline": self.sparkline,
+        }
         if self.kind == "position":
             result["rotation_min_degrees"] = list(self.rotation_min) if self.rotation_min else None
             result["rotation_max_degrees"] = list(self.rotation_max) if self.rotation_max else None
@@ -96,12 +102,20 @@ class DeviceSummary:
     units: tuple[UnitSummary, ...]
 
     def to_dict(self) -> dict[str, object]:
-        return {"name": self.name, "kinds": list(self.kinds), "samples": self.samples,
-                "updates": self.updates, "first_timestamp": self.first_timestamp,
-                "last_timestamp": self.last_timestamp, "duration": self.duration,
-                "mean_rate": self.mean_rate, "median_interval": self.median_interval,
-                "max_interval": self.max_interval, "gaps": self.gaps.to_dict(),
-                "units": [u.to_dict() for u in self.units]}
+        return {
+            "name": self.name,
+            "kinds": list(self.kinds),
+            "samples": self.samples,
+            "updates": self.updates,
+            "first_timestamp": self.first_timestamp,
+            "last_timestamp": self.last_timestamp,
+            "duration": self.duration,
+            "mean_rate": self.mean_rate,
+            "median_interval": self.median_interval,
+            "max_interval": self.max_interval,
+            "gaps": self.gaps.to_dict(),
+            "units": [u.to_dict() for u in self.units],
+        }
 
 
 @dataclass(frozen=True, slots=True)
@@ -122,15 +136,28 @@ class RecordingSummary:
 
     def to_dict(self) -> dict[str, object]:
         start = self.first_timestamp
-        return {"path": self.path, "created": self.created, "info": self.info,
-                "samples": self.samples, "frames": self.frames, "duration": self.duration,
-                "end_reason": self.end_reason,
-                "markers": [{"name": m.name, "timestamp": m.timestamp,
-                             "offset": None if start is None else m.timestamp - start}
-                            for m in self.markers],
-                "devices": [d.to_dict() for d in self.devices],
-                "problems": [{"line": p.line, "severity": p.severity, "message": p.message}
-                             for p in self.problems]}
+        return {
+            "path": self.path,
+            "created": self.created,
+            "info": self.info,
+            "samples": self.samples,
+            "frames": self.frames,
+            "duration": self.duration,
+            "end_reason": self.end_reason,
+            "markers": [
+                {
+                    "name": m.name,
+                    "timestamp": m.timestamp,
+                    "offset": None if start is None else m.timestamp - start,
+                }
+                for m in self.markers
+            ],
+            "devices": [d.to_dict() for d in self.devices],
+            "problems": [
+                {"line": p.line, "severity": p.severity, "message": p.message}
+                for p in self.problems
+            ],
+        }
 
 
 # --------------------------------------------------------------------------- accumulation
@@ -166,8 +193,19 @@ def _angles(value: object) -> list[float]:
 
 
 class _UnitAccumulator:
-    __slots__ = ("angles", "first", "high", "kind", "low", "pending", "samples", "series", "translations", "turn",
-                 "unit")
+    __slots__ = (
+        "angles",
+        "first",
+        "high",
+        "kind",
+        "low",
+        "pending",
+        "samples",
+        "series",
+        "translations",
+        "turn",
+        "unit",
+    )
 
     def __init__(self, kind: str, unit: int) -> None:
         self.kind, self.unit, self.samples = kind, unit, 0
@@ -217,7 +255,11 @@ class _UnitAccumulator:
 
     def _position_summary(self, width: int) -> UnitSummary:
         self._flush_angles()
-        xyz = np.frombuffer(self.translations, dtype=np.float64).reshape(-1, 3) if self.translations else None
+        xyz = (
+            np.frombuffer(self.translations, dtype=np.float64).reshape(-1, 3)
+            if self.translations
+            else None
+        )
         if xyz is None or not np.isfinite(xyz).all(axis=1).any():
             return UnitSummary(self.kind, self.unit, self.samples)
         readable = xyz[np.isfinite(xyz).all(axis=1)]
@@ -230,12 +272,17 @@ class _UnitAccumulator:
             lines[name] = sparkline(column, width)
         angles = np.frombuffer(self.angles, dtype=np.float64).reshape(-1, 3)
         a_lo, a_hi = angles.min(axis=0), angles.max(axis=0)
-        return UnitSummary(self.kind, self.unit, self.samples,
-                           translation_min=(float(lo[0]), float(lo[1]), float(lo[2])),
-                           translation_max=(float(hi[0]), float(hi[1]), float(hi[2])),
-                           rotation_min=(float(a_lo[0]), float(a_lo[1]), float(a_lo[2])),
-                           rotation_max=(float(a_hi[0]), float(a_hi[1]), float(a_hi[2])),
-                           sparklines=lines, turn=self.turn)
+        return UnitSummary(
+            self.kind,
+            self.unit,
+            self.samples,
+            translation_min=(float(lo[0]), float(lo[1]), float(lo[2])),
+            translation_max=(float(hi[0]), float(hi[1]), float(hi[2])),
+            rotation_min=(float(a_lo[0]), float(a_lo[1]), float(a_lo[2])),
+            rotation_max=(float(a_hi[0]), float(a_hi[1]), float(a_hi[2])),
+            sparklines=lines,
+            turn=self.turn,
+        )
 
     def summary(self, width: int) -> UnitSummary:
         if self.kind == "string":
@@ -245,13 +292,20 @@ class _UnitAccumulator:
         series = np.frombuffer(self.series, dtype=np.float64) if self.series else np.empty(0)
         line = sparkline(series, width)
         if self.kind == "glove":
-            return UnitSummary(self.kind, self.unit, self.samples, self.low, self.high,
-                               sparkline=line)
+            return UnitSummary(
+                self.kind, self.unit, self.samples, self.low, self.high, sparkline=line
+            )
         finite = series[np.isfinite(series)]
         if finite.size == 0:
             return UnitSummary(self.kind, self.unit, self.samples, sparkline=line)
-        return UnitSummary(self.kind, self.unit, self.samples, float(finite.min()),
-                           float(finite.max()), sparkline=line)
+        return UnitSummary(
+            self.kind,
+            self.unit,
+            self.samples,
+            float(finite.min()),
+            float(finite.max()),
+            sparkline=line,
+        )
 
 
 class _DeviceAccumulator:
@@ -282,20 +336,34 @@ class _DeviceAccumulator:
             median = float(np.median(intervals))
             threshold = GAP_FACTOR * median
             above = intervals[intervals > threshold]
-            gaps = GapSummary(threshold, int(above.size), float(above.max()) if above.size else None)
+            gaps = GapSummary(
+                threshold, int(above.size), float(above.max()) if above.size else None
+            )
             largest = float(intervals.max())
         else:
             median = largest = None
             gaps = GapSummary(None, 0, None)
         rate = (stamps.size - 1) / duration if duration > 0 else 0.0
         units = tuple(self.units[key].summary(width) for key in sorted(self.units))
-        return DeviceSummary(self.name, tuple(sorted({k for k, _ in self.units})), self.samples,
-                             int(stamps.size), first, last, duration, rate, median, largest,
-                             gaps, units)
+        return DeviceSummary(
+            self.name,
+            tuple(sorted({k for k, _ in self.units})),
+            self.samples,
+            int(stamps.size),
+            first,
+            last,
+            duration,
+            rate,
+            median,
+            largest,
+            gaps,
+            units,
+        )
 
 
-def summarize_records(records: Iterable[object], *, width: int = 40) -> tuple[
-        list[DeviceSummary], list[MarkerRecord], int, EndRecord | None]:
+def summarize_records(
+    records: Iterable[object], *, width: int = 40
+) -> tuple[list[DeviceSummary], list[MarkerRecord], int, EndRecord | None]:
     """(devices sorted by name, markers, frame count, end record) of decoded records."""
     devices: dict[str, _DeviceAccumulator] = {}
     markers: list[MarkerRecord] = []
@@ -329,8 +397,15 @@ def summarize(recording: Recording, *, width: int = 40) -> RecordingSummary:
     first = min(firsts) if firsts else None
     duration = (max(lasts) - first) if first is not None else 0.0
     return RecordingSummary(
-        path=str(recording.path), created=recording.header.created,
-        info=dict(recording.header.info), samples=sum(d.samples for d in devices),
-        frames=frames, first_timestamp=first, duration=duration,
-        end_reason=end.reason if end else None, markers=tuple(markers), devices=tuple(devices),
-        problems=tuple(recording.problems))
+        path=str(recording.path),
+        created=recording.header.created,
+        info=dict(recording.header.info),
+        samples=sum(d.samples for d in devices),
+        frames=frames,
+        first_timestamp=first,
+        duration=duration,
+        end_reason=end.reason if end else None,
+        markers=tuple(markers),
+        devices=tuple(devices),
+        problems=tuple(recording.problems),
+    )

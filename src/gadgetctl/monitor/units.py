@@ -17,8 +17,16 @@ LENGTH_UNITS: dict[str, float] = {
     "inches": 39.3701,
     "centimeters": 100.0,
 }
-LENGTH_ALIASES = {"m": "meters", "ft": "feet", "in": "inches", "cm": "centimeters",
-                  "meter": "meters", "foot": "feet", "inch": "inches", "centimeter": "centimeters"}
+LENGTH_ALIASES = {
+    "m": "meters",
+    "ft": "feet",
+    "in": "inches",
+    "cm": "centimeters",
+    "meter": "meters",
+    "foot": "feet",
+    "inch": "inches",
+    "centimeter": "centimeters",
+}
 GIMBAL_EPSILON = 1e-9
 
 
@@ -85,7 +93,14 @@ def euler_xyz_degrees(matrix: Sequence[Sequence[float]] | np.ndarray) -> np.ndar
 def rotation_from_euler_xyz_degrees(x: float, y: float, z: float) -> np.ndarray:
     """The 3x3 rotation ``Rx(x) · Ry(y) · Rz(z)`` (degrees)."""
     a, b, c = (math.radians(v) for v in (x, y, z))
-    ca, sa, cb, sb, cc, sc = math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(c), math.sin(c)
+    ca, sa, cb, sb, cc, sc = (
+        math.cos(a),
+        math.sin(a),
+        math.cos(b),
+        math.sin(b),
+        math.cos(c),
+        math.sin(c),
+    )
     rx = np.array([[1, 0, 0], [0, ca, -sa], [0, sa, ca]])
     ry = np.array([[cb, 0, sb], [0, 1, 0], [-sb, 0, cb]])
     rz = np.array([[cc, -sc, 0], [sc, cc, 0], [0, 0, 1]])
@@ -119,8 +134,10 @@ def rotation_from_quaternion(w: float, x: float, y: float, z: float) -> np.ndarr
     if n == 0:
         raise ValueError("the zero quaternion is not a rotation")
     w, x, y, z = w / n, x / n, y / n, z / n
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )

@@ -12,8 +12,14 @@ from gadgetctl.diagnostics import Diagnostic
 FORMATS = ("text", "json", "github", "sarif")
 
 
-def render(fmt: str, diagnostics: Sequence[Diagnostic], *, files_checked: int = 0,
-           color: bool = False, hints: bool = True) -> str:
+def render(
+    fmt: str,
+    diagnostics: Sequence[Diagnostic],
+    *,
+    files_checked: int = 0,
+    color: bool = False,
+    hints: bool = True,
+) -> str:
     if fmt == "text":
         from gadgetctl.report.text import render_text
 

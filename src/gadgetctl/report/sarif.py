@@ -58,16 +58,20 @@ def sarif_log(diagnostics: Sequence[Diagnostic]) -> dict:
     return {
         "$schema": SARIF_SCHEMA,
         "version": "2.1.0",
-        "runs": [{
-            "tool": {"driver": {
-                "name": "gadgetctl",
-                "version": __version__,
-                "informationUri": "https://pypi.org/project/gadgetctl/",
-                "rules": [_rule(code) for code in codes],
-            }},
-            "columnKind": "unicodeCodePoints",
-            "results": [_result(d, index[d.code]) for d in diagnostics],
-        }],
+        "runs": [
+            {
+                "tool": {
+                    "driver": {
+                        "name": "gadgetctl",
+                        "version": __version__,
+                        "informationUri": "https://pypi.org/project/gadgetctl/",
+                        "rules": [_rule(code) for code in codes],
+                    }
+                },
+                "columnKind": "unicodeCodePoints",
+                "results": [_result(d, index[d.code]) for d in diagnostics],
+            }
+        ],
     }
 
 

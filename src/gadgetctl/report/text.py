@@ -16,8 +16,10 @@ def format_line(d: Diagnostic, *, color: bool = False) -> str:
     severity = d.severity.value
     location, message = printable(str(d.location)), printable(d.message)
     if color:
-        return (f"{_BOLD}{location}{_RESET}: {_COLORS[severity]}{severity}{_RESET} "
-                f"{_DIM}{d.code}{_RESET} {message}")
+        return (
+            f"{_BOLD}{location}{_RESET}: {_COLORS[severity]}{severity}{_RESET} "
+            f"{_DIM}{d.code}{_RESET} {message}"
+        )
     return f"{location}: {severity} {d.code} {message}"
 
 
@@ -35,8 +37,13 @@ def summary_line(diagnostics: Sequence[Diagnostic], files_checked: int) -> str:
     return f"{head}: {', '.join(parts)} in {counted(affected, 'file')}"
 
 
-def render_text(diagnostics: Sequence[Diagnostic], *, files_checked: int = 0,
-                color: bool = False, hints: bool = True) -> str:
+def render_text(
+    diagnostics: Sequence[Diagnostic],
+    *,
+    files_checked: int = 0,
+    color: bool = False,
+    hints: bool = True,
+) -> str:
     lines = []
     for d in diagnostics:
         lines.append(format_line(d, color=color))

@@ -15,10 +15,18 @@ import importlib
 from typing import Any
 
 _EXPORTS = {
-    "DEFAULT_TRANSPORT": "model", "DEFAULT_TYPES": "model", "TRANSPORT_NAMES": "model",
-    "TYPE_NAMES": "model", "DriverNames": "model", "DriverSpec": "model", "ScaffoldError": "model",
-    "GeneratedFile": "generate", "ScaffoldResult": "generate", "generate": "generate",
-    "scaffold": "generate", "summary_lines": "generate",
+    "DEFAULT_TRANSPORT": "model",
+    "DEFAULT_TYPES": "model",
+    "TRANSPORT_NAMES": "model",
+    "TYPE_NAMES": "model",
+    "DriverNames": "model",
+    "DriverSpec": "model",
+    "ScaffoldError": "model",
+    "GeneratedFile": "generate",
+    "ScaffoldResult": "generate",
+    "generate": "generate",
+    "scaffold": "generate",
+    "summary_lines": "generate",
 }
 
 __all__ = sorted(_EXPORTS)

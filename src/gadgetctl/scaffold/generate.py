@@ -27,29 +27,48 @@ INDENT = "    "
 
 #: Short nouns for the units of each type, for docstrings.
 _UNIT_NOUNS = {
-    "analog": "axes", "digital": "buttons", "position": "tracked sensors", "glove": "gloves",
-    "gesture": "gestures", "command": "commands", "string": "texts", "hat": "hat switches",
+    "analog": "axes",
+    "digital": "buttons",
+    "position": "tracked sensors",
+    "glove": "gloves",
+    "gesture": "gestures",
+    "command": "commands",
+    "string": "texts",
+    "hat": "hat switches",
 }
 #: What each base device class reads in its config().
-_BASE_READS = {"analog": "min and max (Analog)", "position": "position_filters (Position)",
-               "glove": "glove_position (Glove)"}
+_BASE_READS = {
+    "analog": "min and max (Analog)",
+    "position": "position_filters (Position)",
+    "glove": "glove_position (Glove)",
+}
 #: A record of each kind for the README's example line.
 _EXAMPLE_VALUES = {
-    "analog": "0.5 -0.25", "digital": "1 0 0 0", "position": "0.5 1.5 0.0 90.0 0.0 0.0 ...",
-    "glove": "0.75 0.75 0.375 0.0 ...", "gesture": "2", "command": "7", "string": "hello world",
+    "analog": "0.5 -0.25",
+    "digital": "1 0 0 0",
+    "position": "0.5 1.5 0.0 90.0 0.0 0.0 ...",
+    "glove": "0.75 0.75 0.375 0.0 ...",
+    "gesture": "2",
+    "command": "7",
+    "string": "hello world",
     "hat": "1",
 }
-_TRANSPORT_SHORT = {"serial": "a serial line", "udp": "UDP", "tcp": "TCP", "file": "a FIFO",
-                    "none": "nothing"}
+_TRANSPORT_SHORT = {
+    "serial": "a serial line",
+    "udp": "UDP",
+    "tcp": "TCP",
+    "file": "a FIFO",
+    "none": "nothing",
+}
 _EMULATOR_DESCRIPTION = {
     "serial": "It owns the master side of an ``os.openpty()`` pair; a driver opens the\n"
-              "slave (``address``) as a serial port.",
+    "slave (``address``) as a serial port.",
     "udp": "It sends UDP datagrams to a port of this computer (``address``), where the\n"
-           "driver receives them.",
+    "driver receives them.",
     "tcp": "It is a TCP server on this computer (``address``) to which a driver connects,\n"
-           "one at a time.",
+    "one at a time.",
     "file": "It creates a FIFO (``address``) and writes to whoever opens it for reading, as\n"
-            "a device does through its device file.",
+    "a device does through its device file.",
 }
 
 
@@ -72,11 +91,18 @@ class ScaffoldResult:
     def to_dict(self) -> dict[str, object]:
         spec = self.spec
         return {
-            "name": spec.names.camel, "plugin": spec.names.plugin, "element_type": spec.names.element_type,
-            "types": list(spec.types), "transport": spec.transport, "vendor": spec.vendor,
-            "package": spec.package, "distribution": spec.names.distribution if spec.package else None,
-            "directory": str(spec.target), "plugin_directory": str(spec.plugin_dir),
-            "written": self.written, "files": [str(p) for p in self.paths],
+            "name": spec.names.camel,
+            "plugin": spec.names.plugin,
+            "element_type": spec.names.element_type,
+            "types": list(spec.types),
+            "transport": spec.transport,
+            "vendor": spec.vendor,
+            "package": spec.package,
+            "distribution": spec.names.distribution if spec.package else None,
+            "directory": str(spec.target),
+            "plugin_directory": str(spec.plugin_dir),
+            "written": self.written,
+            "files": [str(p) for p in self.paths],
         }
 
 
@@ -196,7 +222,9 @@ def join_words(words: list[str]) -> str:
 
 def template_flags(spec: DriverSpec) -> dict[str, bool]:
     flags = {name: name in spec.types for name in DEVICE_TYPES}
-    flags.update({name: spec.transport == name for name in ("serial", "udp", "tcp", "file", "none")})
+    flags.update(
+        {name: spec.transport == name for name in ("serial", "udp", "tcp", "file", "none")}
+    )
     flags["package"] = spec.package
     return flags
 
@@ -215,9 +243,11 @@ def _garbage_lines(spec: DriverSpec) -> list[bytes]:
 
 
 def _xml_property(prop) -> list[str]:
-    lines = [f"    <property valuetype={quoteattr(prop.valuetype)} "
-             f"variable={quoteattr('true' if prop.variable else 'false')} name={quoteattr(prop.name)}>",
-             f"      <help>{escape(prop.help)}</help>"]
+    lines = [
+        f"    <property valuetype={quoteattr(prop.valuetype)} "
+        f"variable={quoteattr('true' if prop.variable else 'false')} name={quoteattr(prop.name)}>",
+        f"      <help>{escape(prop.help)}</help>",
+    ]
     default = "" if prop.default is None else f" defaultvalue={quoteattr(prop.default)}"
     lines.append(f"      <value label={quoteattr(prop.label)}{default}/>")
     lines += [f"      <allowed_type>{t}</allowed_type>" for t in prop.allowed_types]
@@ -237,20 +267,26 @@ def _jconf_proxies(spec: DriverSpec) -> list[str]:
     lines = []
     aliases = spec.aliases()
     for _alias, proxy, proxy_type, unit in aliases:
-        lines += [f"      <{proxy_type} name={quoteattr(proxy)} version=\"1\">",
-                  f"         <device>{spec.names.camel}</device>",
-                  f"         <unit>{unit}</unit>",
-                  f"      </{proxy_type}>"]
+        lines += [
+            f'      <{proxy_type} name={quoteattr(proxy)} version="1">',
+            f"         <device>{spec.names.camel}</device>",
+            f"         <unit>{unit}</unit>",
+            f"      </{proxy_type}>",
+        ]
     if "gesture" in spec.types:
-        lines.append("      <!-- No gesture proxy: the standard gesture_proxy only accepts "
-                     "simulated_glove_gesture devices (and VR Juggler never activates one); "
-                     "gadgetctl monitor shows the device's gestures. -->")
+        lines.append(
+            "      <!-- No gesture proxy: the standard gesture_proxy only accepts "
+            "simulated_glove_gesture devices (and VR Juggler never activates one); "
+            "gadgetctl monitor shows the device's gestures. -->"
+        )
     if aliases:
         lines.append("      <!-- Applications look their inputs up by these names. -->")
     for alias, proxy, _proxy_type, _unit in aliases:
-        lines += [f"      <alias name={quoteattr(alias)} version=\"1\">",
-                  f"         <proxy>{escape(proxy)}</proxy>",
-                  "      </alias>"]
+        lines += [
+            f'      <alias name={quoteattr(alias)} version="1">',
+            f"         <proxy>{escape(proxy)}</proxy>",
+            "      </alias>",
+        ]
     return lines
 
 
@@ -283,55 +319,96 @@ def template_values(spec: DriverSpec) -> dict[str, str]:
     device_class, emulator_class = camel + "Device", camel + "Emulator"
     types = spec.device_types
     kinds_phrase = join_words(spec.types)
-    units_summary = join_words([f"{t.units} {t.name} units ({_UNIT_NOUNS[t.name]})" if t.units > 1
-                                else f"1 {t.name} unit" for t in types])
-    base_reads = ", ".join(["the element's name"] + [_BASE_READS[t] for t in spec.types if t in _BASE_READS])
+    units_summary = join_words(
+        [
+            f"{t.units} {t.name} units ({_UNIT_NOUNS[t.name]})"
+            if t.units > 1
+            else f"1 {t.name} unit"
+            for t in types
+        ]
+    )
+    base_reads = ", ".join(
+        ["the element's name"] + [_BASE_READS[t] for t in spec.types if t in _BASE_READS]
+    )
     parents = [t.parent for t in types if t.parent] or ["input_device"]
     transport = spec.transport
     emulated = transport != "none"
 
-    kinds_table = [f'{INDENT}"{t.name}": ({t.units}, {t.width}, {t.number}),  # {t.layout}' for t in types]
+    kinds_table = [
+        f'{INDENT}"{t.name}": ({t.units}, {t.width}, {t.number}),  # {t.layout}' for t in types
+    ]
     units_table = [f'{INDENT}"{t.name}": {t.units},' for t in types]
     garbage_table = [f"{INDENT}{py_bytes(line)}," for line in _garbage_lines(spec)]
 
     metadata = spec.transport_metadata()
-    transports_assignment = "\n".join(py_literal("TRANSPORTS = ", {element_type: metadata})) if metadata else ""
-    element_types_assignment = "\n".join(py_literal("ELEMENT_TYPES = ", {element_type: tuple(spec.types)}))
+    transports_assignment = (
+        "\n".join(py_literal("TRANSPORTS = ", {element_type: metadata})) if metadata else ""
+    )
+    element_types_assignment = "\n".join(
+        py_literal("ELEMENT_TYPES = ", {element_type: tuple(spec.types)})
+    )
 
     gadgetctl_names = [t.device_class for t in types] + ["DeviceConfigError", "SamplingMode"]
     plugin = names.plugin
     if emulated:
         plugin_imports = [
-            py_import(f"{plugin}.emulator", ["GARBAGE", emulator_class, "encode_record", "pattern"]),
-            py_import(f"{plugin}.standalone",
-                      ["KINDS", driver_class, record_class, "decode_record", "split_records"]),
+            py_import(
+                f"{plugin}.emulator", ["GARBAGE", emulator_class, "encode_record", "pattern"]
+            ),
+            py_import(
+                f"{plugin}.standalone",
+                ["KINDS", driver_class, record_class, "decode_record", "split_records"],
+            ),
         ]
     else:
-        plugin_imports = [py_import(f"{plugin}.standalone", ["KINDS", driver_class, record_class, "read_device"])]
+        plugin_imports = [
+            py_import(f"{plugin}.standalone", ["KINDS", driver_class, record_class, "read_device"])
+        ]
     if "position" in spec.types:
         plugin_imports.append(py_import(f"{plugin}.wrapper", ["pose_matrix"]))
 
     aliases = tuple(alias for alias, *_ in spec.aliases())
-    config_values = {"serial": "port=emulator.address", "file": "path=emulator.address",
-                     "udp": "port=str(emulator.port)", "tcp": "host=emulator.host, port=str(emulator.port)",
-                     "none": ""}[transport]
+    config_values = {
+        "serial": "port=emulator.address",
+        "file": "path=emulator.address",
+        "udp": "port=str(emulator.port)",
+        "tcp": "host=emulator.host, port=str(emulator.port)",
+        "none": "",
+    }[transport]
     first = types[0]
-    tested = (f"the standalone driver against its emulator over {_TRANSPORT_SHORT[transport]}"
-              if emulated else "the standalone driver")
+    tested = (
+        f"the standalone driver against its emulator over {_TRANSPORT_SHORT[transport]}"
+        if emulated
+        else "the standalone driver"
+    )
     address = spec.example_address
-    example_where = {"serial": f"the pty link {address}", "file": f"the FIFO {address}",
-                     "udp": f"UDP port {address} on 127.0.0.1", "tcp": f"TCP port {address} on 127.0.0.1",
-                     "none": ""}[transport]
-    summary = (f"Provides {units_summary} over {spec.transport_info.phrase}."
-               if emulated else f"Provides {units_summary}; {spec.transport_info.phrase}.")
-    definition_help = (f"{spec.label}: {units_summary}, over {spec.transport_info.phrase}. "
-                       f"(Generated by gadgetctl scaffold: describe the device here.)")
+    example_where = {
+        "serial": f"the pty link {address}",
+        "file": f"the FIFO {address}",
+        "udp": f"UDP port {address} on 127.0.0.1",
+        "tcp": f"TCP port {address} on 127.0.0.1",
+        "none": "",
+    }[transport]
+    summary = (
+        f"Provides {units_summary} over {spec.transport_info.phrase}."
+        if emulated
+        else f"Provides {units_summary}; {spec.transport_info.phrase}."
+    )
+    definition_help = (
+        f"{spec.label}: {units_summary}, over {spec.transport_info.phrase}. "
+        f"(Generated by gadgetctl scaffold: describe the device here.)"
+    )
     if not emulated:
-        definition_help = (f"{spec.label}: {units_summary}, read by the driver itself. "
-                           f"(Generated by gadgetctl scaffold: describe the device here.)")
-    device_comment = (f"The device. Its transport properties match the emulator's defaults "
-                      f"(gadgetctl emulate {plugin})." if emulated
-                      else "The device: the driver reads it rate times per second.")
+        definition_help = (
+            f"{spec.label}: {units_summary}, read by the driver itself. "
+            f"(Generated by gadgetctl scaffold: describe the device here.)"
+        )
+    device_comment = (
+        f"The device. Its transport properties match the emulator's defaults "
+        f"(gadgetctl emulate {plugin})."
+        if emulated
+        else "The device: the driver reads it rate times per second."
+    )
     return {
         "label": spec.label,
         "label_xml": escape(spec.label),
@@ -349,17 +426,25 @@ def template_values(spec: DriverSpec) -> dict[str, str]:
         "standalone_intro": wrap(
             f"The device needs no port: the driver reads it directly (for example through the "
             f"vendor's library) in :func:`read_device`, whose placeholder makes up {kinds_phrase} data."
-            if not emulated else
-            f"The device sends its data over {spec.transport_info.phrase}. The placeholder protocol "
+            if not emulated
+            else f"The device sends its data over {spec.transport_info.phrase}. The placeholder protocol "
             f"is one line of ASCII text per record, ``<kind> <numbers...>``: {kinds_phrase}, with "
             f"the units of each kind in turn (see ``KINDS``). Everything about the data format is "
             f"in the PROTOCOL section below: replace it with the real device's protocol, and the "
-            f"emulator's copy in emulator.py with it."),
+            f"emulator's copy in emulator.py with it."
+        ),
         "class_summary": wrap(f"An ``{element_type}`` element: {units_summary}.", INDENT, '"""'),
-        "config_doc": wrap(f"Read the element. The base types' configuration comes first (the "
-                           f"driver guide's \"important\" note): {base_reads}.", INDENT * 2, '"""', '"""'),
-        "tests_intro": wrap(f"First {tested}, then the whole plug-in in gadgetctl's input manager "
-                            "with example.jconf."),
+        "config_doc": wrap(
+            f"Read the element. The base types' configuration comes first (the "
+            f'driver guide\'s "important" note): {base_reads}.',
+            INDENT * 2,
+            '"""',
+            '"""',
+        ),
+        "tests_intro": wrap(
+            f"First {tested}, then the whole plug-in in gadgetctl's input manager "
+            "with example.jconf."
+        ),
         "kinds_phrase": kinds_phrase,
         "units_summary": units_summary,
         "base_reads": base_reads,
@@ -377,12 +462,15 @@ def template_values(spec: DriverSpec) -> dict[str, str]:
         "standalone_import": py_import(".standalone", [driver_class, record_class]),
         "class_header": py_class_header(device_class, [t.device_class for t in types]),
         "disconnected_header": py_class_header(camel + "Disconnected", [camel + "Error"]),
-        "read_records_header": py_def_header("read_records", [f"driver: {driver_class}"],
-                                             f"list[{record_class}]"),
+        "read_records_header": py_def_header(
+            "read_records", [f"driver: {driver_class}"], f"list[{record_class}]"
+        ),
         "connect_header": py_def_header("connect", [f"emulator: {emulator_class}"], driver_class),
         "dispatch": "\n".join(_dispatch(spec)),
         "plugin_imports": "\n".join(plugin_imports),
-        "aliases_assignment": "\n".join(py_literal("ALIASES = ", aliases)) if aliases else "ALIASES = ()",
+        "aliases_assignment": "\n".join(py_literal("ALIASES = ", aliases))
+        if aliases
+        else "ALIASES = ()",
         "config_values": config_values,
         "tests_where": "the project's folder" if spec.package else "the plug-in's folder",
         "tests_against": " against its emulator (over the real transport)" if emulated else "",
@@ -396,16 +484,27 @@ def template_values(spec: DriverSpec) -> dict[str, str]:
         "kinds_rows": "\n".join(f"| `{t.name}` | {t.units} | {t.layout} |" for t in types),
         "example_line": f"{first.name} {_EXAMPLE_VALUES[first.name]}",
         "example_where": example_where,
-        "run_commands": "\n".join(aligned(run_steps(
-            spec, f"src/{plugin}" if spec.package else plugin, ".",
-        ))),
+        "run_commands": "\n".join(
+            aligned(
+                run_steps(
+                    spec,
+                    f"src/{plugin}" if spec.package else plugin,
+                    ".",
+                )
+            )
+        ),
         "transport_properties": join_words([f"`{p.name}`" for p in spec.transport_properties()]),
-        "position_note": (", and position records into 4x4 matrices (`pose_matrix()`)"
-                          if "position" in spec.types else ""),
-        "sampling_note": (" from a thread shared with other devices, `rate` times per second"
-                          if not emulated else
-                          " in a loop in the device's own thread; `sample()` returns after at "
-                          "most `SAMPLE_TIMEOUT` seconds, so the device can stop"),
+        "position_note": (
+            ", and position records into 4x4 matrices (`pose_matrix()`)"
+            if "position" in spec.types
+            else ""
+        ),
+        "sampling_note": (
+            " from a thread shared with other devices, `rate` times per second"
+            if not emulated
+            else " in a loop in the device's own thread; `sample()` returns after at "
+            "most `SAMPLE_TIMEOUT` seconds, so the device can stop"
+        ),
     }
 
 
@@ -437,8 +536,10 @@ def _plan(spec: DriverSpec) -> list[tuple[str, str]]:
 def generate(spec: DriverSpec) -> list[GeneratedFile]:
     """Every file of the driver ``spec`` describes, rendered (nothing is written)."""
     flags, values = template_flags(spec), template_values(spec)
-    return [GeneratedFile(Path(path), _tidy(render(template, flags, values)))
-            for template, path in _plan(spec)]
+    return [
+        GeneratedFile(Path(path), _tidy(render(template, flags, values)))
+        for template, path in _plan(spec)
+    ]
 
 
 def _tidy(text: str) -> str:
@@ -454,8 +555,10 @@ def scaffold(spec: DriverSpec, *, force: bool = False, dry_run: bool = False) ->
     target = spec.target
     if target.exists() and not force:
         what = "directory" if target.is_dir() else "file"
-        raise ScaffoldError(f"{target} already exists ({what}); choose another --dir or NAME, "
-                            "or give --force to overwrite the generated files in it")
+        raise ScaffoldError(
+            f"{target} already exists ({what}); choose another --dir or NAME, "
+            "or give --force to overwrite the generated files in it"
+        )
     if target.exists() and not target.is_dir():
         raise ScaffoldError(f"{target} exists and is not a directory")
     if spec.directory.exists() and not spec.directory.is_dir():
@@ -477,7 +580,9 @@ def _write_tree(target: Path, files: list[GeneratedFile], *, force: bool) -> Non
     moving = False
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-        staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
+        staging = Path(
+            tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+        )
         for generated in files:
             path = staging / generated.path
             path.parent.mkdir(parents=True, exist_ok=True)
@@ -521,21 +626,31 @@ def run_steps(spec: DriverSpec, plugin_dir: str, where: str) -> list[tuple[str, 
     plugin = spec.names.plugin
     emulated = spec.transport != "none"
     if spec.package:
-        steps = [(f"gadgetctl validate {plugin_dir}", "the .jdef and example.jconf: clean"),
-                 (f"pip install --editable '{where}[test]'",
-                  "gadgetctl finds it by its entry point; [test] brings pytest"),
-                 ("gadgetctl drivers list", f"shows {plugin}"),
-                 (f"gadgetctl drivers load {plugin}", "imports and checks it")]
+        steps = [
+            (f"gadgetctl validate {plugin_dir}", "the .jdef and example.jconf: clean"),
+            (
+                f"pip install --editable '{where}[test]'",
+                "gadgetctl finds it by its entry point; [test] brings pytest",
+            ),
+            ("gadgetctl drivers list", f"shows {plugin}"),
+            (f"gadgetctl drivers load {plugin}", "imports and checks it"),
+        ]
         if emulated:
             steps.append((f"gadgetctl emulate {plugin}", "the device, in a second terminal"))
         tests = "python -m pytest" if where == "." else f"cd {where} && python -m pytest"
     else:
-        steps = [(f"gadgetctl validate {plugin_dir}", "the .jdef and example.jconf: clean"),
-                 (f"gadgetctl drivers list --driver-path {where}", f"shows {plugin}"),
-                 (f"gadgetctl drivers load --driver-path {where} {plugin}", "imports and checks it")]
+        steps = [
+            (f"gadgetctl validate {plugin_dir}", "the .jdef and example.jconf: clean"),
+            (f"gadgetctl drivers list --driver-path {where}", f"shows {plugin}"),
+            (f"gadgetctl drivers load --driver-path {where} {plugin}", "imports and checks it"),
+        ]
         if emulated:
-            steps.append((f"gadgetctl emulate --driver-path {where} {plugin}",
-                           "the device, in a second terminal"))
+            steps.append(
+                (
+                    f"gadgetctl emulate --driver-path {where} {plugin}",
+                    "the device, in a second terminal",
+                )
+            )
         tests = f"cd {plugin_dir} && python -m pytest"
     steps.append((f"gadgetctl monitor {plugin_dir}/example.jconf", "live samples"))
     if not spec.package:  # a package's [test] extra brings pytest
@@ -560,8 +675,10 @@ def summary_lines(result: ScaffoldResult, cwd: Path | None = None) -> list[str]:
         except ValueError:
             return str(path)
 
-    lines = [f"{names.camel}: plug-in {names.plugin}, element type {names.element_type}, "
-             f"{join_words(list(spec.types))} over {spec.transport_info.phrase}"]
+    lines = [
+        f"{names.camel}: plug-in {names.plugin}, element type {names.element_type}, "
+        f"{join_words(list(spec.types))} over {spec.transport_info.phrase}"
+    ]
     verb = "created" if result.written else "would create"
     lines += [f"  {verb} {shown(p)}" for p in result.paths]
     if not result.written:
@@ -570,7 +687,8 @@ def summary_lines(result: ScaffoldResult, cwd: Path | None = None) -> list[str]:
     where = shown(spec.target) if spec.package else shown(spec.plugin_dir.parent)
     lines.append("next:")
     lines += aligned(run_steps(spec, plugin_dir, where), "  ")
-    lines.append(f"The protocol goes into the PROTOCOL section of {plugin_dir}/standalone.py "
-                 f"(see {shown(spec.target / 'README.md')}).")
+    lines.append(
+        f"The protocol goes into the PROTOCOL section of {plugin_dir}/standalone.py "
+        f"(see {shown(spec.target / 'README.md')})."
+    )
     return lines
-

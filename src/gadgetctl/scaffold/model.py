@@ -49,25 +49,104 @@ class DeviceType:
 DEVICE_TYPES: dict[str, DeviceType] = {
     t.name: t
     for t in (
-        DeviceType("analog", "Analog", "analog_device", 2, 1, "float",
-                   "axes, from -1 to 1", "analog_proxy", "Axis", "/Devices/Analog"),
-        DeviceType("digital", "Digital", "digital_device", 4, 1, "int",
-                   "buttons: 0 released, 1 pressed", "digital_proxy", "Button", "/Devices/Digital"),
-        DeviceType("position", "Position", "positional_device", 2, 6, "float",
-                   "x y z in meters, yaw pitch roll in degrees", "position_proxy", "Sensor",
-                   "/Devices/Positional"),
-        DeviceType("glove", "Glove", "glove_device", 1, 24, "float",
-                   "6 x 4 joint angles in radians", "glove_proxy", "Glove", "/Devices/Glove"),
+        DeviceType(
+            "analog",
+            "Analog",
+            "analog_device",
+            2,
+            1,
+            "float",
+            "axes, from -1 to 1",
+            "analog_proxy",
+            "Axis",
+            "/Devices/Analog",
+        ),
+        DeviceType(
+            "digital",
+            "Digital",
+            "digital_device",
+            4,
+            1,
+            "int",
+            "buttons: 0 released, 1 pressed",
+            "digital_proxy",
+            "Button",
+            "/Devices/Digital",
+        ),
+        DeviceType(
+            "position",
+            "Position",
+            "positional_device",
+            2,
+            6,
+            "float",
+            "x y z in meters, yaw pitch roll in degrees",
+            "position_proxy",
+            "Sensor",
+            "/Devices/Positional",
+        ),
+        DeviceType(
+            "glove",
+            "Glove",
+            "glove_device",
+            1,
+            24,
+            "float",
+            "6 x 4 joint angles in radians",
+            "glove_proxy",
+            "Glove",
+            "/Devices/Glove",
+        ),
         # Gestures have no base definition, and the standard gesture_proxy only accepts
         # simulated_glove_gesture devices, so the example configuration has no proxy for them.
-        DeviceType("gesture", "Gesture", None, 1, 1, "int",
-                   "gesture number, -1 for none", None, "Gesture", None),
-        DeviceType("command", "Command", "command_device", 1, 1, "int",
-                   "command number", "command_proxy", "Command", None),
-        DeviceType("string", "String", "string_device", 1, 0, "str",
-                   "text: the rest of the line", "string_proxy", "Text", None),
-        DeviceType("hat", "Hat", "hat_device", 1, 1, "int",
-                   "hat bits: 1 up, 2 right, 4 down, 8 left", "hat_proxy", "Hat", None),
+        DeviceType(
+            "gesture",
+            "Gesture",
+            None,
+            1,
+            1,
+            "int",
+            "gesture number, -1 for none",
+            None,
+            "Gesture",
+            None,
+        ),
+        DeviceType(
+            "command",
+            "Command",
+            "command_device",
+            1,
+            1,
+            "int",
+            "command number",
+            "command_proxy",
+            "Command",
+            None,
+        ),
+        DeviceType(
+            "string",
+            "String",
+            "string_device",
+            1,
+            0,
+            "str",
+            "text: the rest of the line",
+            "string_proxy",
+            "Text",
+            None,
+        ),
+        DeviceType(
+            "hat",
+            "Hat",
+            "hat_device",
+            1,
+            1,
+            "int",
+            "hat bits: 1 up, 2 right, 4 down, 8 left",
+            "hat_proxy",
+            "Hat",
+            None,
+        ),
     )
 }
 
@@ -110,10 +189,17 @@ TRANSPORTS: dict[str, Transport] = {
 _SNAKE = re.compile(r"[a-z][a-z0-9]*(?:_[a-z0-9]+)*")
 _CAMEL_BOUNDARY = re.compile(r"(?<=[a-z0-9])(?=[A-Z])|(?<=[A-Z])(?=[A-Z][a-z])")
 #: Names the generated code imports or defines besides the driver's own.
-_RESERVED_CAMEL = frozenset({
-    *(t.device_class for t in DEVICE_TYPES.values()),
-    "Input", "SamplingMode", "DeviceConfigError", "ElementAccess", "Path", "Template",
-})
+_RESERVED_CAMEL = frozenset(
+    {
+        *(t.device_class for t in DEVICE_TYPES.values()),
+        "Input",
+        "SamplingMode",
+        "DeviceConfigError",
+        "ElementAccess",
+        "Path",
+        "Template",
+    }
+)
 
 
 def camel_to_snake(name: str) -> str:
@@ -153,19 +239,23 @@ class DriverNames:
         if not (base.isascii() and base.isidentifier()):
             raise ScaffoldError(
                 f"NAME {raw!r} is not a valid name: use ASCII letters, digits and underscores, "
-                "starting with a letter (e.g. AcmeWand or acme_wand)")
+                "starting with a letter (e.g. AcmeWand or acme_wand)"
+            )
         if base.startswith("_") or "__" in base or base.endswith("_"):
             raise ScaffoldError(f"NAME {raw!r} may not start or end with '_' or contain '__'")
         if "_" in base or base.islower():
             if not _SNAKE.fullmatch(base):
                 raise ScaffoldError(
                     f"NAME {raw!r} mixes cases with underscores: write it in CamelCase "
-                    f"({snake_to_camel(base.lower())}) or snake_case ({base.lower()})")
+                    f"({snake_to_camel(base.lower())}) or snake_case ({base.lower()})"
+                )
             camel, element_type = snake_to_camel(base), base
         else:
             if not base[0].isupper():
-                raise ScaffoldError(f"NAME {raw!r}: a CamelCase name starts with a capital letter "
-                                    f"({base[0].upper() + base[1:]})")
+                raise ScaffoldError(
+                    f"NAME {raw!r}: a CamelCase name starts with a capital letter "
+                    f"({base[0].upper() + base[1:]})"
+                )
             camel, element_type = base, camel_to_snake(base)
         names = cls(camel, element_type)
         names._check()
@@ -176,14 +266,18 @@ class DriverNames:
         if len(self.camel) > MAX_NAME or len(self.element_type) > MAX_NAME:
             raise ScaffoldError(f"NAME {shown} is too long: at most {MAX_NAME} characters")
         if self.element_type.lower().startswith("xml"):
-            raise ScaffoldError(f"NAME {shown}: XML reserves names starting with 'xml'; "
-                                "the element type cannot be one")
+            raise ScaffoldError(
+                f"NAME {shown}: XML reserves names starting with 'xml'; "
+                "the element type cannot be one"
+            )
         for word in (self.camel, self.element_type):
             if keyword.iskeyword(word) or keyword.issoftkeyword(word):
                 raise ScaffoldError(f"NAME {shown}: {word!r} is a Python keyword")
         if self.camel in _RESERVED_CAMEL:
-            raise ScaffoldError(f"NAME {shown}: {self.camel} is a name the generated code "
-                                "already uses; choose a more specific name")
+            raise ScaffoldError(
+                f"NAME {shown}: {self.camel} is a name the generated code "
+                "already uses; choose a more specific name"
+            )
         clash = standard_clash(self)
         if clash:
             raise ScaffoldError(f"NAME {shown} clashes with {clash}; choose another name")
@@ -229,7 +323,9 @@ def parse_types(types: list[str] | tuple[str, ...]) -> tuple[str, ...]:
 def parse_transport(transport: str) -> str:
     name = str(transport).strip().lower()
     if name not in TRANSPORTS:
-        raise ScaffoldError(f"unknown transport {transport!r}; choose from {', '.join(TRANSPORT_NAMES)}")
+        raise ScaffoldError(
+            f"unknown transport {transport!r}; choose from {', '.join(TRANSPORT_NAMES)}"
+        )
     return name
 
 
@@ -245,16 +341,32 @@ class DriverSpec:
     directory: Path = field(default_factory=Path)
 
     @classmethod
-    def create(cls, name: str, types: list[str] | tuple[str, ...] = (), transport: str = DEFAULT_TRANSPORT,
-               *, vendor: str = "", package: bool = False, directory: Path | str = ".") -> DriverSpec:
+    def create(
+        cls,
+        name: str,
+        types: list[str] | tuple[str, ...] = (),
+        transport: str = DEFAULT_TRANSPORT,
+        *,
+        vendor: str = "",
+        package: bool = False,
+        directory: Path | str = ".",
+    ) -> DriverSpec:
         """Check everything the command line gives; raises :class:`ScaffoldError`."""
         vendor = " ".join(vendor.split())
         if any(c in vendor for c in "<>&\"'\\") or "--" in vendor or not vendor.isprintable():
-            raise ScaffoldError(f"--vendor {vendor!r}: use letters, digits, spaces and simple punctuation")
+            raise ScaffoldError(
+                f"--vendor {vendor!r}: use letters, digits, spaces and simple punctuation"
+            )
         if len(vendor) > MAX_VENDOR:
             raise ScaffoldError(f"--vendor {vendor!r} is too long: at most {MAX_VENDOR} characters")
-        return cls(DriverNames.parse(name), parse_types(types), parse_transport(transport), vendor,
-                   package, Path(directory))
+        return cls(
+            DriverNames.parse(name),
+            parse_types(types),
+            parse_transport(transport),
+            vendor,
+            package,
+            Path(directory),
+        )
 
     # -- derived -------------------------------------------------------------------------
 
@@ -291,73 +403,149 @@ class DriverSpec:
     def example_address(self) -> str:
         """Where example.jconf points the device, and where the emulator is by default."""
         element_type = self.names.element_type
-        return {"serial": f"/tmp/{element_type}-tty", "file": f"/tmp/{element_type}-fifo",
-                "udp": str(self.port_number), "tcp": str(self.port_number), "none": ""}[self.transport]
+        return {
+            "serial": f"/tmp/{element_type}-tty",
+            "file": f"/tmp/{element_type}-fifo",
+            "udp": str(self.port_number),
+            "tcp": str(self.port_number),
+            "none": "",
+        }[self.transport]
 
     def properties(self) -> list[Property]:
         """The properties the .jdef declares (besides the inherited ones), in order."""
         props = list(self.transport_properties())
         if "analog" in self.types:
             props += [
-                Property("min", "float", "Lowest raw value",
-                         "Raw analog value that analog proxies read as 0.0 (the placeholder "
-                         "protocol sends -1 to 1).", "-1.0", "-1.0"),
-                Property("max", "float", "Highest raw value",
-                         "Raw analog value that analog proxies read as 1.0.", "1.0", "1.0"),
+                Property(
+                    "min",
+                    "float",
+                    "Lowest raw value",
+                    "Raw analog value that analog proxies read as 0.0 (the placeholder "
+                    "protocol sends -1 to 1).",
+                    "-1.0",
+                    "-1.0",
+                ),
+                Property(
+                    "max",
+                    "float",
+                    "Highest raw value",
+                    "Raw analog value that analog proxies read as 1.0.",
+                    "1.0",
+                    "1.0",
+                ),
             ]
         if "glove" in self.types:
             sensor = self.alias_name("position", 0) if "position" in self.types else None
-            props.append(Property(
-                "glove_position", "configelementpointer", "Hand tracker proxy",
-                "Position proxy (or alias of one) of the tracker sensor on the glove, which places "
-                "the hand in space. Leave it empty for an untracked glove.", None, sensor,
-                allowed_types=("alias", "position_proxy")))
+            props.append(
+                Property(
+                    "glove_position",
+                    "configelementpointer",
+                    "Hand tracker proxy",
+                    "Position proxy (or alias of one) of the tracker sensor on the glove, which places "
+                    "the hand in space. Leave it empty for an untracked glove.",
+                    None,
+                    sensor,
+                    allowed_types=("alias", "position_proxy"),
+                )
+            )
         if "gesture" in self.types:
-            props.append(Property(
-                "gesture_names", "string", "Gesture name",
-                "Name of each gesture the device reports, by gesture number (0 first).", "",
-                variable=True, examples=("open", "fist", "point")))
+            props.append(
+                Property(
+                    "gesture_names",
+                    "string",
+                    "Gesture name",
+                    "Name of each gesture the device reports, by gesture number (0 first).",
+                    "",
+                    variable=True,
+                    examples=("open", "fist", "point"),
+                )
+            )
         return props
 
     def transport_properties(self) -> list[Property]:
         example = self.example_address
         if self.transport == "serial":
             return [
-                Property("port", "string", "Serial port",
-                         "Serial port the device is plugged into, as the operating system names "
-                         "it: /dev/ttyUSB0 or /dev/ttyS0 on Linux, COM3 on Windows. A pyserial URL "
-                         "such as socket://host:port works too.", "/dev/ttyUSB0", example),
-                Property("baud", "integer", "Line speed (bit/s)",
-                         "Serial line speed in bits per second; it must match the device's setting.",
-                         "9600", "9600"),
+                Property(
+                    "port",
+                    "string",
+                    "Serial port",
+                    "Serial port the device is plugged into, as the operating system names "
+                    "it: /dev/ttyUSB0 or /dev/ttyS0 on Linux, COM3 on Windows. A pyserial URL "
+                    "such as socket://host:port works too.",
+                    "/dev/ttyUSB0",
+                    example,
+                ),
+                Property(
+                    "baud",
+                    "integer",
+                    "Line speed (bit/s)",
+                    "Serial line speed in bits per second; it must match the device's setting.",
+                    "9600",
+                    "9600",
+                ),
             ]
         if self.transport == "udp":
             return [
-                Property("port", "integer", "Receive port",
-                         "Local UDP port on which the driver receives the device's datagrams.",
-                         example, example),
-                Property("listen_address", "string", "Receive address",
-                         "Local address to receive on; empty for every network interface, "
-                         "127.0.0.1 for this computer only.", "", "127.0.0.1"),
+                Property(
+                    "port",
+                    "integer",
+                    "Receive port",
+                    "Local UDP port on which the driver receives the device's datagrams.",
+                    example,
+                    example,
+                ),
+                Property(
+                    "listen_address",
+                    "string",
+                    "Receive address",
+                    "Local address to receive on; empty for every network interface, "
+                    "127.0.0.1 for this computer only.",
+                    "",
+                    "127.0.0.1",
+                ),
             ]
         if self.transport == "tcp":
             return [
-                Property("host", "string", "Device host",
-                         "Host name or address of the device, which accepts the driver's TCP "
-                         "connection.", "localhost", "127.0.0.1"),
-                Property("port", "integer", "Device port",
-                         "TCP port on which the device accepts the connection.", example, example),
+                Property(
+                    "host",
+                    "string",
+                    "Device host",
+                    "Host name or address of the device, which accepts the driver's TCP "
+                    "connection.",
+                    "localhost",
+                    "127.0.0.1",
+                ),
+                Property(
+                    "port",
+                    "integer",
+                    "Device port",
+                    "TCP port on which the device accepts the connection.",
+                    example,
+                    example,
+                ),
             ]
         if self.transport == "file":
             return [
-                Property("path", "string", "Device file",
-                         "Device file the driver reads, e.g. a character device under /dev; a FIFO "
-                         "or any other readable file works too.",
-                         f"/dev/{self.names.element_type}0", example),
+                Property(
+                    "path",
+                    "string",
+                    "Device file",
+                    "Device file the driver reads, e.g. a character device under /dev; a FIFO "
+                    "or any other readable file works too.",
+                    f"/dev/{self.names.element_type}0",
+                    example,
+                ),
             ]
         return [
-            Property("rate", "float", "Sample rate (Hz)",
-                     "How many times per second the driver reads the device.", "60.0", "60.0"),
+            Property(
+                "rate",
+                "float",
+                "Sample rate (Hz)",
+                "How many times per second the driver reads the device.",
+                "60.0",
+                "60.0",
+            ),
         ]
 
     def transport_metadata(self) -> dict[str, str] | None:
@@ -382,6 +570,12 @@ class DriverSpec:
             if device_type.proxy is None:
                 continue
             for unit in range(device_type.units):
-                found.append((self.alias_name(device_type.name, unit),
-                              self.proxy_name(device_type.name, unit), device_type.proxy, unit))
+                found.append(
+                    (
+                        self.alias_name(device_type.name, unit),
+                        self.proxy_name(device_type.name, unit),
+                        device_type.proxy,
+                        unit,
+                    )
+                )
         return found

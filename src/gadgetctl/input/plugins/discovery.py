@@ -138,11 +138,19 @@ def plugin_at(path: Path) -> PluginInfo | None:
     return None
 
 
-def _plugin(name: str, path: Path, package: bool, source: PluginSource, origin: str,
-            module: str | None = None) -> PluginInfo:
+def _plugin(
+    name: str,
+    path: Path,
+    package: bool,
+    source: PluginSource,
+    origin: str,
+    module: str | None = None,
+) -> PluginInfo:
     source_file = path / "__init__.py" if package else path
     definitions = sorted(p for p in path.glob("*.jdef") if p.is_file()) if package else []
-    return PluginInfo(name, path, source, read_metadata(source_file), package, origin, module, definitions)
+    return PluginInfo(
+        name, path, source, read_metadata(source_file), package, origin, module, definitions
+    )
 
 
 def scan_directory(directory: DriverDirectory) -> list[PluginInfo]:
@@ -155,8 +163,12 @@ def scan_directory(directory: DriverDirectory) -> list[PluginInfo]:
             continue
         if entry.is_dir() and (entry / "__init__.py").is_file():
             found.append(_plugin(entry.name, entry, True, directory.source, str(directory.path)))
-        elif (entry.is_file() and entry.suffix == ".py" and entry.name not in _SKIPPED_MODULES
-              and not entry.name.startswith("test_")):
+        elif (
+            entry.is_file()
+            and entry.suffix == ".py"
+            and entry.name not in _SKIPPED_MODULES
+            and not entry.name.startswith("test_")
+        ):
             found.append(_plugin(entry.stem, entry, False, directory.source, str(directory.path)))
     return found
 
@@ -178,23 +190,37 @@ def find_module_file(module: str) -> tuple[Path, bool] | None:
 def entry_point_plugins() -> list[PluginInfo]:
     """Plug-ins of installed distributions (entry point group ``gadgetctl.drivers``)."""
     found: list[PluginInfo] = []
-    for entry in sorted(importlib_metadata.entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
+    for entry in sorted(
+        importlib_metadata.entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name
+    ):
         module = entry.value.partition(":")[0].strip()
         dist = getattr(entry, "dist", None)
-        origin = f"{entry.name} = {entry.value}" + (f" ({dist.name} {dist.version})" if dist else "")
+        origin = f"{entry.name} = {entry.value}" + (
+            f" ({dist.name} {dist.version})" if dist else ""
+        )
         located = find_module_file(module)
         if located is None:
             meta = PluginMetadata()
             meta.problems.append(f"module {module!r} of the entry point is not on sys.path")
-            found.append(PluginInfo(entry.name, Path(module), PluginSource.ENTRY_POINT, meta, False, origin, module))
+            found.append(
+                PluginInfo(
+                    entry.name, Path(module), PluginSource.ENTRY_POINT, meta, False, origin, module
+                )
+            )
             continue
         path, package = located
         found.append(_plugin(entry.name, path, package, PluginSource.ENTRY_POINT, origin, module))
     return found
 
 
-def directory_entry(raw: str, source: PluginSource, *, base: Path | None = None,
-                    environ: Mapping[str, str] | None = None, location: Location | None = None) -> DriverDirectory:
+def directory_entry(
+    raw: str,
+    source: PluginSource,
+    *,
+    base: Path | None = None,
+    environ: Mapping[str, str] | None = None,
+    location: Location | None = None,
+) -> DriverDirectory:
     expansion = expand(raw.strip(), environ)
     path = Path(expansion.text).expanduser()
     if not path.is_absolute() and base is not None:
@@ -202,8 +228,9 @@ def directory_entry(raw: str, source: PluginSource, *, base: Path | None = None,
     return DriverDirectory(path, source, raw, location, expansion.undefined)
 
 
-def standard_directories(extra: Iterable[Path] = (), *, bundled: bool = True,
-                         environ: Mapping[str, str] | None = None) -> list[DriverDirectory]:
+def standard_directories(
+    extra: Iterable[Path] = (), *, bundled: bool = True, environ: Mapping[str, str] | None = None
+) -> list[DriverDirectory]:
     """Bundled drivers, GADGETCTL_DRIVER_PATH, then ``extra`` (``--driver-path``)."""
     env = os.environ if environ is None else environ
     dirs: list[DriverDirectory] = []
@@ -220,15 +247,25 @@ def standard_directories(extra: Iterable[Path] = (), *, bundled: bool = True,
 class DriverSearch:
     """The places plug-ins are looked for, and what is found there."""
 
-    def __init__(self, directories: Iterable[DriverDirectory] = (), *, entry_points: bool = True) -> None:
+    def __init__(
+        self, directories: Iterable[DriverDirectory] = (), *, entry_points: bool = True
+    ) -> None:
         self.directories: list[DriverDirectory] = list(directories)
         self.entry_points = entry_points
         self._plugins: list[PluginInfo] | None = None
 
     @classmethod
-    def standard(cls, extra: Iterable[Path] = (), *, bundled: bool = True, entry_points: bool = True,
-                 environ: Mapping[str, str] | None = None) -> DriverSearch:
-        return cls(standard_directories(extra, bundled=bundled, environ=environ), entry_points=entry_points)
+    def standard(
+        cls,
+        extra: Iterable[Path] = (),
+        *,
+        bundled: bool = True,
+        entry_points: bool = True,
+        environ: Mapping[str, str] | None = None,
+    ) -> DriverSearch:
+        return cls(
+            standard_directories(extra, bundled=bundled, environ=environ), entry_points=entry_points
+        )
 
     def add_directory(self, directory: DriverDirectory) -> None:
         if all(d.path != directory.path or d.source != directory.source for d in self.directories):
@@ -262,19 +299,33 @@ class DriverSearch:
         # VR Juggler's input_manager definition spells some plug-ins differently from their
         # library (its "Optitrack_drv" is the OptiTrack_drv library; Windows does not care):
         # a single plug-in whose name differs only in case is the one meant.
-        folded = [p for p in self.plugins() if p.name.casefold() == name.casefold() and p.shadowed_by is None]
+        folded = [
+            p
+            for p in self.plugins()
+            if p.name.casefold() == name.casefold() and p.shadowed_by is None
+        ]
         return folded[0] if len(folded) == 1 else None
 
     def in_directory(self, directory: DriverDirectory) -> list[PluginInfo]:
-        return [p for p in self.plugins() if p.origin == str(directory.path) and p.shadowed_by is None]
+        return [
+            p for p in self.plugins() if p.origin == str(directory.path) and p.shadowed_by is None
+        ]
 
     def providers(self, element_type: str) -> list[PluginInfo]:
         """Plug-ins whose metadata declares ``element_type``."""
-        return [p for p in self.plugins() if p.shadowed_by is None and element_type in p.metadata.element_types]
+        return [
+            p
+            for p in self.plugins()
+            if p.shadowed_by is None and element_type in p.metadata.element_types
+        ]
 
     def definition_dirs(self) -> list[Path]:
         """Directories of plug-ins that carry ``.jdef`` files (for the definition search path)."""
-        return [p.definition_dir for p in self.plugins() if p.definition_dir is not None and p.shadowed_by is None]
+        return [
+            p.definition_dir
+            for p in self.plugins()
+            if p.definition_dir is not None and p.shadowed_by is None
+        ]
 
     def describe_places(self) -> str:
         places = ["installed entry points"] if self.entry_points else []

@@ -47,8 +47,13 @@ class Emulator:
         return doc.strip().splitlines()[0] if doc else ""
 
     def to_dict(self) -> dict[str, object]:
-        return {"plugin": self.plugin.name, "element_types": sorted(self.plugin.declared_types()[0]),
-                "path": str(self.path), "source": self.plugin.source.value, "summary": self.summary}
+        return {
+            "plugin": self.plugin.name,
+            "element_types": sorted(self.plugin.declared_types()[0]),
+            "path": str(self.path),
+            "source": self.plugin.source.value,
+            "summary": self.summary,
+        }
 
 
 def emulator_of(info: PluginInfo) -> Emulator | None:
@@ -79,8 +84,10 @@ def find_emulator(name: str, search: DriverSearch) -> Emulator:
             emulator = emulator_of(info)
             if emulator is None:
                 available = ", ".join(e.plugin.name for e in emulators(search)) or "none"
-                raise EmulatorLookupError(f"driver plug-in {info.name} ({info.path}) ships no emulator "
-                                          f"({EMULATOR_FILE}); plug-ins with one: {available}")
+                raise EmulatorLookupError(
+                    f"driver plug-in {info.name} ({info.path}) ships no emulator "
+                    f"({EMULATOR_FILE}); plug-ins with one: {available}"
+                )
             return emulator
     candidates: dict[str, str] = {}
     for info in plugins:
@@ -89,7 +96,9 @@ def find_emulator(name: str, search: DriverSearch) -> Emulator:
     close = close_names(wanted, candidates)
     suggestion = sorted({candidates[c] for c in close})
     hint = f"; did you mean {' or '.join(suggestion)}?" if suggestion else ""
-    raise EmulatorLookupError(f"no driver plug-in named {name!r} (looked in {search.describe_places()}){hint}")
+    raise EmulatorLookupError(
+        f"no driver plug-in named {name!r} (looked in {search.describe_places()}){hint}"
+    )
 
 
 def module_name(emulator: Emulator) -> str:

@@ -74,8 +74,14 @@ class PluginLoadResult:
             "ok": self.ok,
             "path": None if self.info is None else str(self.info.path),
             "source": None if self.info is None else self.info.source.value,
-            "registered": [{"element_type": r.element_type, "class": r.class_name,
-                            "device_types": [k.value for k in r.kinds]} for r in self.registrations],
+            "registered": [
+                {
+                    "element_type": r.element_type,
+                    "class": r.class_name,
+                    "device_types": [k.value for k in r.kinds],
+                }
+                for r in self.registrations
+            ],
             "error": self.reason if self.reason is not None else self.error,
             "diagnostics": [d.to_dict() for d in self.diagnostics],
         }
@@ -108,8 +114,9 @@ def import_plugin(info: PluginInfo) -> ModuleType:
     if name in sys.modules:
         return sys.modules[name]
     if info.package:
-        spec = importlib.util.spec_from_file_location(name, info.path / "__init__.py",
-                                                      submodule_search_locations=[str(info.path)])
+        spec = importlib.util.spec_from_file_location(
+            name, info.path / "__init__.py", submodule_search_locations=[str(info.path)]
+        )
     else:
         spec = importlib.util.spec_from_file_location(name, info.path)
     if spec is None or spec.loader is None:
@@ -155,10 +162,20 @@ class PluginLoader:
             from gadgetctl.suggest import did_you_mean
 
             close = did_you_mean(name, [p.name for p in search.plugins()])
-            return PluginLoadResult(name, None, reason="not found", diagnostics=[Diagnostic.make(
-                "DRV001", f"driver plug-in {name!r} not found (looked in {search.describe_places()})",
-                hint=close[0].upper() + close[1:] if close else
-                "write the plug-in's module or package name, without platform extension or _d suffix")])
+            return PluginLoadResult(
+                name,
+                None,
+                reason="not found",
+                diagnostics=[
+                    Diagnostic.make(
+                        "DRV001",
+                        f"driver plug-in {name!r} not found (looked in {search.describe_places()})",
+                        hint=close[0].upper() + close[1:]
+                        if close
+                        else "write the plug-in's module or package name, without platform extension or _d suffix",
+                    )
+                ],
+            )
         return self.load(info)
 
     def load(self, info: PluginInfo) -> PluginLoadResult:
@@ -169,9 +186,15 @@ class PluginLoader:
             try:
                 self._load(info, result)
             except PluginError as err:
-                path, line = (str(info.source_file), None) if err.__cause__ is None else _where(err.__cause__, info)
+                path, line = (
+                    (str(info.source_file), None)
+                    if err.__cause__ is None
+                    else _where(err.__cause__, info)
+                )
                 result.reason = str(err)
-                result.diagnostics.append(Diagnostic.make(err.code, f"{info.name}: {err}", path, line))
+                result.diagnostics.append(
+                    Diagnostic.make(err.code, f"{info.name}: {err}", path, line)
+                )
             self.results[key] = result
         return self.results[key]
 
@@ -184,8 +207,11 @@ class PluginLoader:
         self._add_definitions(info)
         open_place = writable_by_others(info)
         if open_place is not None and not writable_places_accepted():
-            raise PluginError("DRV011", f"not imported: {open_place} can be written by other users "
-                                        "(give --trust-driver-path to accept it)")
+            raise PluginError(
+                "DRV011",
+                f"not imported: {open_place} can be written by other users "
+                "(give --trust-driver-path to accept it)",
+            )
         try:
             module = import_plugin(info)
         except (Exception, SystemExit) as err:
@@ -193,7 +219,9 @@ class PluginLoader:
         if meta.api_version is None:
             version = getattr(module, API_VERSION, None)
             if not isinstance(version, int):
-                raise PluginError("DRV007", f"declares no {API_VERSION} (the plug-in API it was written for)")
+                raise PluginError(
+                    "DRV007", f"declares no {API_VERSION} (the plug-in API it was written for)"
+                )
             self._check_version(version)
         register = getattr(module, REGISTER, None)
         if not callable(register):
@@ -214,45 +242,75 @@ class PluginLoader:
             for registration in registrar.staged:
                 existing = self.registry.get(registration.element_type)
                 if existing is not None and existing.device_class is not registration.device_class:
-                    result.diagnostics.append(Diagnostic.make(
-                        "DRV009", f"{info.name}: {registration.element_type} is already handled by "
-                        f"{existing.class_name} ({existing.plugin}); that one stays", str(info.source_file)))
+                    result.diagnostics.append(
+                        Diagnostic.make(
+                            "DRV009",
+                            f"{info.name}: {registration.element_type} is already handled by "
+                            f"{existing.class_name} ({existing.plugin}); that one stays",
+                            str(info.source_file),
+                        )
+                    )
                     continue
                 result.registrations.append(self.registry.add(registration))
 
     @staticmethod
     def _check_version(version: int) -> None:
         if version != PLUGIN_API_VERSION:
-            raise PluginError("DRV002", f"written for plug-in API version {version}, but this gadgetctl "
-                              f"provides version {PLUGIN_API_VERSION}")
+            raise PluginError(
+                "DRV002",
+                f"written for plug-in API version {version}, but this gadgetctl "
+                f"provides version {PLUGIN_API_VERSION}",
+            )
 
     def _add_definitions(self, info: PluginInfo) -> None:
         directory = info.definition_dir
         if directory is not None and all(e.path != directory for e in self.repo.entries):
-            self.repo.load_entry(SearchPathEntry(raw=str(directory), path=directory, origin=f"driver {info.name}"))
+            self.repo.load_entry(
+                SearchPathEntry(raw=str(directory), path=directory, origin=f"driver {info.name}")
+            )
 
-    def _check(self, info: PluginInfo, staged: list[Registration], result: PluginLoadResult) -> None:
+    def _check(
+        self, info: PluginInfo, staged: list[Registration], result: PluginLoadResult
+    ) -> None:
         path = str(info.source_file)
         declared = info.metadata.element_types
         for registration in staged:
             token, kinds = registration.element_type, registration.kinds
             where = f"{info.name}: {registration.device_class.__name__} for {token}"
             if token not in self.repo:
-                result.diagnostics.append(Diagnostic.make(
-                    "DRV005", f"{where}: no definition of {token} on the definition search path", path,
-                    hint="ship a .jdef for it in the plug-in's folder, or fix ELEMENT_TYPE"))
+                result.diagnostics.append(
+                    Diagnostic.make(
+                        "DRV005",
+                        f"{where}: no definition of {token} on the definition search path",
+                        path,
+                        hint="ship a .jdef for it in the plug-in's folder, or fix ELEMENT_TYPE",
+                    )
+                )
                 continue
             for problem in kind_disagreements(token, kinds, self.repo):
                 result.diagnostics.append(Diagnostic.make("DRV006", f"{where}: {problem}", path))
             if declared and token not in declared:
-                result.diagnostics.append(Diagnostic.make(
-                    "DRV008", f"{where}: ELEMENT_TYPES does not declare {token}", path))
+                result.diagnostics.append(
+                    Diagnostic.make(
+                        "DRV008", f"{where}: ELEMENT_TYPES does not declare {token}", path
+                    )
+                )
             elif declared and set(declared[token]) != set(kinds):
-                result.diagnostics.append(Diagnostic.make(
-                    "DRV008", f"{where}: ELEMENT_TYPES declares {', '.join(declared[token]) or 'no device types'} "
-                    f"but the class provides {', '.join(kinds) or 'none'}", path))
+                result.diagnostics.append(
+                    Diagnostic.make(
+                        "DRV008",
+                        f"{where}: ELEMENT_TYPES declares {', '.join(declared[token]) or 'no device types'} "
+                        f"but the class provides {', '.join(kinds) or 'none'}",
+                        path,
+                    )
+                )
         registered = {r.element_type for r in staged}
         for token in declared:
             if token not in registered:
-                result.diagnostics.append(Diagnostic.make(
-                    "DRV008", f"{info.name}: ELEMENT_TYPES declares {token} but register() does not register it", path))
+                result.diagnostics.append(
+                    Diagnostic.make(
+                        "DRV008",
+                        f"{info.name}: ELEMENT_TYPES declares {token} but register() does not register it",
+                        path,
+                    )
+                )

@@ -57,7 +57,9 @@ class PluginMetadata:
         return {
             "api_version": self.api_version,
             "plugin_name": self.plugin_name,
-            "element_types": {t: [k.value for k in kinds] for t, kinds in self.element_types.items()},
+            "element_types": {
+                t: [k.value for k in kinds] for t, kinds in self.element_types.items()
+            },
             "transports": {t: [dict(d) for d in specs] for t, specs in self.transports.items()},
             "has_register": self.has_register,
             "summary": self.summary,
@@ -72,8 +74,12 @@ def _assignments(tree: ast.Module) -> dict[str, ast.expr]:
             for target in node.targets:
                 if isinstance(target, ast.Name) and target.id in _NAMES:
                     found[target.id] = node.value
-        elif (isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name)
-              and node.value is not None and node.target.id in _NAMES):
+        elif (
+            isinstance(node, ast.AnnAssign)
+            and isinstance(node.target, ast.Name)
+            and node.value is not None
+            and node.target.id in _NAMES
+        ):
             found[node.target.id] = node.value
     return found
 
@@ -82,9 +88,13 @@ def _defines_register(tree: ast.Module) -> bool:
     for node in tree.body:
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name == REGISTER:
             return True
-        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == REGISTER for t in node.targets):
+        if isinstance(node, ast.Assign) and any(
+            isinstance(t, ast.Name) and t.id == REGISTER for t in node.targets
+        ):
             return True
-        if isinstance(node, ast.ImportFrom) and any((a.asname or a.name) == REGISTER for a in node.names):
+        if isinstance(node, ast.ImportFrom) and any(
+            (a.asname or a.name) == REGISTER for a in node.names
+        ):
             return True
     return False
 
@@ -106,7 +116,9 @@ def parse_metadata(source: str, filename: str = "<plugin>") -> PluginMetadata:
         except (ValueError, TypeError, SyntaxError, MemoryError, RecursionError):
             if name == API_VERSION:
                 meta.api_version_dynamic = True
-            meta.problems.append(f"{name} is not a literal, so it cannot be read without importing the plug-in")
+            meta.problems.append(
+                f"{name} is not a literal, so it cannot be read without importing the plug-in"
+            )
             continue
         if name == API_VERSION:
             if isinstance(value, int) and not isinstance(value, bool):
@@ -151,7 +163,9 @@ def _transport_problem(spec: object) -> str | None:
     unknown = [k for k in spec if k != "kind" and k not in required + optional]
     if missing or unknown:
         return f"{spec['kind']} transport: " + "; ".join(
-            ([f"missing {', '.join(missing)}"] if missing else []) + ([f"unknown {', '.join(unknown)}"] if unknown else []))
+            ([f"missing {', '.join(missing)}"] if missing else [])
+            + ([f"unknown {', '.join(unknown)}"] if unknown else [])
+        )
     if not all(isinstance(v, str) and v for v in spec.values()):
         return "values must be property names"
     return None

@@ -28,9 +28,12 @@ class SimAnalog(SimInput, Analog):
         self.increments = read_bindings(access, "increment_keypress")
         self.decrements = read_bindings(access, "decrement_keypress")
         if len(self.decrements) < len(self.increments):
-            self.warn("DRV023", f"{len(self.increments)} increment bindings but only {len(self.decrements)} "
-                      "decrement bindings; the units without one can only increase",
-                      hint="add a decrement_keypress for every increment_keypress")
+            self.warn(
+                "DRV023",
+                f"{len(self.increments)} increment bindings but only {len(self.decrements)} "
+                "decrement bindings; the units without one can only increase",
+                hint="add a decrement_keypress for every increment_keypress",
+            )
         self.delta = access.float("delta")
         self.initial_value = access.float("initial_value")
         self.auto_return = access.boolean("auto_return")

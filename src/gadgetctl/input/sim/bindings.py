@@ -35,7 +35,11 @@ class KeyBinding:
         key = Key(self.key).name if self.key in Key._value2member_map_ else str(self.key)
         if self.modifier == Modifier.ANY:
             return key
-        modifier = Modifier(self.modifier).name if self.modifier in Modifier._value2member_map_ else str(self.modifier)
+        modifier = (
+            Modifier(self.modifier).name
+            if self.modifier in Modifier._value2member_map_
+            else str(self.modifier)
+        )
         return f"{modifier}+{key}"
 
 
@@ -47,8 +51,10 @@ def read_binding(element: ConfigElement, access: ElementAccess) -> KeyBinding:
 def read_bindings(access: ElementAccess, prop: str) -> list[KeyBinding | None]:
     """The bindings of ``prop`` by slot; an empty slot is None."""
     access.definition(prop)
-    return [None if v.element is None else read_binding(v.element, access)
-            for v in access.element.values(prop)]
+    return [
+        None if v.element is None else read_binding(v.element, access)
+        for v in access.element.values(prop)
+    ]
 
 
 class SimInput(Input):
@@ -63,13 +69,18 @@ class SimInput(Input):
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)
-        self.keyboard_proxy = access.string(KEYBOARD_PROPERTY) if access.has(KEYBOARD_PROPERTY) else ""
+        self.keyboard_proxy = (
+            access.string(KEYBOARD_PROPERTY) if access.has(KEYBOARD_PROPERTY) else ""
+        )
         if not self.keyboard_proxy:
             if access.element.texts(OLD_KEYBOARD_PROPERTY):
                 raise ElementVersionError(
                     f"version {access.element.version_text} element names an {OLD_KEYBOARD_PROPERTY}, which "
-                    f"no longer exists; upgrade it (gadgetctl upgrade) to use {KEYBOARD_PROPERTY}")
-            raise DeviceConfigError(f"{KEYBOARD_PROPERTY} is empty: the device would never see a key")
+                    f"no longer exists; upgrade it (gadgetctl upgrade) to use {KEYBOARD_PROPERTY}"
+                )
+            raise DeviceConfigError(
+                f"{KEYBOARD_PROPERTY} is empty: the device would never see a key"
+            )
 
     def keyboard(self) -> KeyboardMouseProxy | None:
         """The keyboard/mouse proxy, updated for the current frame."""

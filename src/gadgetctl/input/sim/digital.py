@@ -23,8 +23,10 @@ class SimDigital(SimInput, Digital):
 
     def states(self) -> list[int]:
         keyboard = self.keyboard()
-        return [DigitalState.ON if b is not None and b.count(keyboard) > 0 else DigitalState.OFF
-                for b in self.bindings]
+        return [
+            DigitalState.ON if b is not None and b.count(keyboard) > 0 else DigitalState.OFF
+            for b in self.bindings
+        ]
 
     def update_data(self) -> None:
         self.add_digital_sample(self.states())

@@ -30,14 +30,19 @@ class SimDigitalGlove(SimInput, Glove, Digital):
         super().config(access)
         bindings = read_bindings(access, "key_pair")
         if len(bindings) > self.UNITS:
-            self.warn("DRV023", f"{len(bindings)} key_pair bindings; only the first {self.UNITS} "
-                      "(five fingers of two gloves) are used")
+            self.warn(
+                "DRV023",
+                f"{len(bindings)} key_pair bindings; only the first {self.UNITS} "
+                "(five fingers of two gloves) are used",
+            )
         self.bindings = (bindings + [None] * self.UNITS)[: self.UNITS]
 
     def update_data(self) -> None:
         keyboard = self.keyboard()
-        states = [DigitalState.ON if b is not None and b.count(keyboard) > 0 else DigitalState.OFF
-                  for b in self.bindings]
+        states = [
+            DigitalState.ON if b is not None and b.count(keyboard) > 0 else DigitalState.OFF
+            for b in self.bindings
+        ]
         angles = np.zeros((GLOVES, *GLOVE_SHAPE))
         for unit, state in enumerate(states):
             if state:
@@ -64,8 +69,10 @@ class SimGloveGesture(SimInput, Glove, Gesture):
     def config(self, access: ElementAccess) -> None:
         super().config(access)
         self.bindings = read_bindings(access, "key_presses")
-        self.gesture_names = [b.name if b is not None and b.name else f"gesture {i}"
-                              for i, b in enumerate(self.bindings)]
+        self.gesture_names = [
+            b.name if b is not None and b.name else f"gesture {i}"
+            for i, b in enumerate(self.bindings)
+        ]
 
     def update_data(self) -> None:
         keyboard = self.keyboard()

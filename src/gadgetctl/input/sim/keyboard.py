@@ -11,8 +11,12 @@ from gadgetctl.jccl.access import ElementAccess
 
 MIN_KEYBOARD_VERSION = 2
 DEFAULT_SENSITIVITY = 0.5  # replaces a mouse_sensitivity of 0, as Gadgeteer does
-_SCROLL_PROPERTIES = {ScrollDirection.UP: "scroll_up_button", ScrollDirection.DOWN: "scroll_down_button",
-                      ScrollDirection.LEFT: "scroll_left_button", ScrollDirection.RIGHT: "scroll_right_button"}
+_SCROLL_PROPERTIES = {
+    ScrollDirection.UP: "scroll_up_button",
+    ScrollDirection.DOWN: "scroll_down_button",
+    ScrollDirection.LEFT: "scroll_left_button",
+    ScrollDirection.RIGHT: "scroll_right_button",
+}
 
 
 class KeyboardMouseDevice(KeyboardMouse):
@@ -29,8 +33,10 @@ class KeyboardMouseDevice(KeyboardMouse):
         super().config(access)
         version = access.element.version
         if version is None or version < MIN_KEYBOARD_VERSION:
-            raise ElementVersionError(f"element version {access.element.version_text} is too old: "
-                                    f"keyboard_mouse_device needs version {MIN_KEYBOARD_VERSION} (gadgetctl upgrade)")
+            raise ElementVersionError(
+                f"element version {access.element.version_text} is too old: "
+                f"keyboard_mouse_device needs version {MIN_KEYBOARD_VERSION} (gadgetctl upgrade)"
+            )
         if access.has("mouse_sensitivity"):
             self.mouse_sensitivity = access.float("mouse_sensitivity") or DEFAULT_SENSITIVITY
         if access.has("scroll_as_buttons"):
@@ -74,7 +80,9 @@ class InputWindow(Input):
         super().config(access)
         self.keyboard_device = access.string(self.KEYBOARD_DEVICE_PROPERTY)
         if not self.keyboard_device:
-            raise DeviceConfigError(f"{self.KEYBOARD_DEVICE_PROPERTY} is empty: the window's events would go nowhere")
+            raise DeviceConfigError(
+                f"{self.KEYBOARD_DEVICE_PROPERTY} is empty: the window's events would go nowhere"
+            )
 
     def start_sampling(self) -> None:
         if self.context is None:

@@ -18,19 +18,21 @@ LOCAL, GLOBAL = 0, 1
 
 #: The 12 key_pair slots of simulated_positional_device, in Gadgeteer's order:
 #: (translation direction, None) or (None, (rotation axis, sign)).
-MOVES: tuple[tuple[tuple[float, float, float] | None, tuple[tuple[float, float, float], float] | None], ...] = (
-    ((0, 0, -1), None),            # 0 forward
-    ((0, 0, 1), None),             # 1 back
-    ((-1, 0, 0), None),            # 2 left
-    ((1, 0, 0), None),             # 3 right
-    ((0, 1, 0), None),             # 4 up
-    ((0, -1, 0), None),            # 5 down
-    (None, ((0, 1, 0), -1.0)),     # 6 yaw right
-    (None, ((0, 1, 0), 1.0)),      # 7 yaw left
-    (None, ((1, 0, 0), 1.0)),      # 8 pitch up
-    (None, ((1, 0, 0), -1.0)),     # 9 pitch down
-    (None, ((0, 0, -1), 1.0)),     # 10 roll counter-clockwise
-    (None, ((0, 0, -1), -1.0)),    # 11 roll clockwise
+MOVES: tuple[
+    tuple[tuple[float, float, float] | None, tuple[tuple[float, float, float], float] | None], ...
+] = (
+    ((0, 0, -1), None),  # 0 forward
+    ((0, 0, 1), None),  # 1 back
+    ((-1, 0, 0), None),  # 2 left
+    ((1, 0, 0), None),  # 3 right
+    ((0, 1, 0), None),  # 4 up
+    ((0, -1, 0), None),  # 5 down
+    (None, ((0, 1, 0), -1.0)),  # 6 yaw right
+    (None, ((0, 1, 0), 1.0)),  # 7 yaw left
+    (None, ((1, 0, 0), 1.0)),  # 8 pitch up
+    (None, ((1, 0, 0), -1.0)),  # 9 pitch down
+    (None, ((0, 0, -1), 1.0)),  # 10 roll counter-clockwise
+    (None, ((0, 0, -1), -1.0)),  # 11 roll clockwise
 )
 
 
@@ -58,8 +60,11 @@ class SimPosition(SimInput, Position):
         super().config(access)
         self.bindings = read_bindings(access, "key_pair")[: self.SLOTS]
         if len(self.bindings) < self.SLOTS:
-            self.warn("DRV023", f"only {len(self.bindings)} of {self.SLOTS} key_pair bindings; "
-                      "the movements of the missing slots have no key")
+            self.warn(
+                "DRV023",
+                f"only {len(self.bindings)} of {self.SLOTS} key_pair bindings; "
+                "the movements of the missing slots have no key",
+            )
         self.bindings += [None] * (self.SLOTS - len(self.bindings))
         position, rotation = access.floats("initial_position"), access.floats("initial_rotation")
         self.matrix = translation(*position[:3]) @ euler_xyz_degrees(*rotation[:3])
@@ -112,7 +117,9 @@ class SimRelativePosition(Position):
     def config(self, access: ElementAccess) -> None:
         super().config(access)
         self.base_proxy, self.relative_proxy = (access.string(p) for p in self.PROPERTIES)
-        for prop, value in zip(self.PROPERTIES, (self.base_proxy, self.relative_proxy), strict=True):
+        for prop, value in zip(
+            self.PROPERTIES, (self.base_proxy, self.relative_proxy), strict=True
+        ):
             if not value:
                 raise DeviceConfigError(f"{prop} is empty")
 
@@ -124,7 +131,9 @@ class SimRelativePosition(Position):
         base, relative = self._proxy(self.base_proxy), self._proxy(self.relative_proxy)
         base_m = base.matrix if base is not None else np.eye(4)
         relative_m = relative.matrix if relative is not None else np.eye(4)
-        stamp = relative.timestamp if relative is not None and relative.timestamp is not None else None
+        stamp = (
+            relative.timestamp if relative is not None and relative.timestamp is not None else None
+        )
         self.add_position_sample([base_m @ relative_m], stamp)
         super().update_data()
 
