@@ -63,7 +63,6 @@ class ElementChecker:
         self._cache: dict[int, tuple[ConfigElement, ElementReport]] = {}
         self._values: dict[tuple[int, str], ValueProblem | None] = {}
         self._clean_views: dict[tuple[str, int | None], TypeView] = {}
-        self._required_cache: dict[tuple[str, int], list[tuple[PropertyDefinition, str]]] = {}
         self._plans: dict[int, tuple] = {}  # id of a view -> see _plan (which holds the view)
 
     def check(self, element: ConfigElement) -> ElementReport:
@@ -319,6 +318,7 @@ class ElementChecker:
         value: PropertyValue,
         report: ElementReport,
     ) -> None:
+        """One value's findings (a pointer's plain values are taken by :meth:`_check`)."""
         if prop.valuetype is ValueType.CONFIGELEMENT:
             if value.element is None:
                 if value.stripped:
@@ -342,11 +342,6 @@ class ElementChecker:
                     value.location,
                 )
             )
-            return
-        if prop.valuetype is ValueType.POINTER:
-            target = value.text.strip()
-            if target:
-                report.pointers.append(_pointer((element, prop, value, target)))
             return
         key = (id(prop), value.text)
         try:
@@ -390,19 +385,16 @@ class ElementChecker:
         self._check(child, report)
 
     def _required(self, view: TypeView) -> list[tuple[PropertyDefinition, str]]:
-        key = (view.name, view.version)
-        found = self._required_cache.get(key)
-        if found is None:
-            found = []
-            for base, prop_name, effect in REQUIRED_POINTERS:
-                prop = view.get(prop_name)
-                if (
-                    prop is not None
-                    and prop.valuetype is ValueType.POINTER
-                    and self.index.is_a(view.name, base)
-                ):
-                    found.append((prop, effect))
-            self._required_cache[key] = found
+        """The pointers an element of ``view`` must set, with what happens when one is not."""
+        found = []
+        for base, prop_name, effect in REQUIRED_POINTERS:
+            prop = view.get(prop_name)
+            if (
+                prop is not None
+                and prop.valuetype is ValueType.POINTER
+                and self.index.is_a(view.name, base)
+            ):
+                found.append((prop, effect))
         return found
 
     def _check_required(
