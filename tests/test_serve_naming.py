@@ -114,7 +114,7 @@ def test_serve_list_json_with_renames_and_a_selection(cli):
     assert result.exit_code == 0, result.stderr
     served = {e["element"]: e for e in json.loads(result.stdout)["served"]}
     assert served["Waveform Tracker"]["vrpn_name"] == "Tracker0"
-    assert served["Waveform Tracker"]["vrpn"] == ["tracker"]
+    assert served["Waveform Tracker"]["vrpn"] == ["tracker", "text"]  # events: strings, commands
     assert served["Waveform Tracker"]["units"] == {"tracker": 3}
     assert served["VJButton0"] == {
         "element": "VJButton0",
@@ -154,3 +154,64 @@ def test_serve_usage_errors_are_one_line_with_exit_2(cli, args, message):
     assert result.exit_code == 2
     assert message in result.stderr and "Traceback" not in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
+
+
+HOSTILE_NAMES = """<?xml version="1.0" encoding="UTF-8"?>
+<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
+<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="hostile">
+   <elements>
+      <waveform_device name="Dev&#10;::error::forged&#13;&#x202E;x&#x85;y&#x2028;z" version="1">
+         <rate>100.0</rate><position_path>circle</position_path>
+      </waveform_device>
+      <position_proxy name="Prox&#10;::error::f&#x2028;orged" version="1">
+         <device>Dev&#10;::error::forged&#13;&#x202E;x&#x85;y&#x2028;z</device>
+         <unit>0</unit>
+      </position_proxy>
+      <alias name="Wand" version="1">
+         <proxy>Prox&#10;::error::f&#x2028;orged</proxy>
+      </alias>
+   </elements>
+</configuration>
+"""
+
+
+@pytest.mark.timeout(60)
+def test_serve_list_escapes_names_from_the_configuration(cli, tmp_path):
+    from conftest import write
+
+    config = write(tmp_path / "hostile.jconf", HOSTILE_NAMES)
+    result = cli("serve", str(config), "--list", "--no-check")
+    assert result.exit_code == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert len(lines) == 3  # one line per served element, whatever the names hold
+    assert not any(line.startswith("::") for line in lines)
+    for unsafe in ("\r", "\u202e", "\x85", "\u2028"):
+        assert unsafe not in result.stdout
+    by_name = {line.split()[0]: line for line in lines}
+    assert "of Prox\\n::error::f\\u2028orged:" in by_name["Wand"]  # the alias's proxy
+    proxy = next(line for name, line in by_name.items() if name.startswith("Prox"))
+    assert "of Dev\\n::error::forged\\r\\u202ex\\x85y\\u2028z unit 0" in proxy
+    assert "(element 'Prox\\n::error::f\\u2028orged')" in proxy
+
+
+@pytest.mark.timeout(60)
+def test_serve_list_shows_text_for_string_and_command_units_before_any_event(cli):
+    # Waveform Tracker's events (strings and commands) come every 2 s, after --list's
+    # warm-up; clients receive them as Text, so --list says so. Waveform Sticks makes none.
+    result = cli("serve", "examples/waveform.jconf", "--list", "--format", "json", cwd=REPO)
+    assert result.exit_code == 0, result.stderr
+    served = {e["element"]: e for e in json.loads(result.stdout)["served"]}
+    assert served["Waveform Tracker"]["vrpn"] == ["tracker", "text"]
+    assert "text" not in served["Waveform Sticks"]["vrpn"]
+    assert served["Tracker String Proxy"]["vrpn"] == ["text"]
+    text = cli("serve", "examples/waveform.jconf", "--list", cwd=REPO).stdout
+    tracker = next(line for line in text.splitlines() if line.startswith("Waveform_Tracker "))
+    assert "Tracker (3 sensors), Text," in tracker
+
+
+@pytest.mark.timeout(60)
+def test_serve_given_a_directory_names_serve(cli):
+    result = cli("serve", "examples/", cwd=REPO)
+    assert result.exit_code == 2
+    assert "examples/: is a directory; serve takes configuration files" in result.stderr
+    assert "monitor" not in result.stderr

@@ -198,9 +198,10 @@ def monitor(
 
 
 def split_arguments(
-    arguments: list[str], *, require_config: bool = True
+    arguments: list[str], *, require_config: bool = True, command: str = "monitor"
 ) -> tuple[list[Path], list[str]]:
-    """Existing ``*.jconf`` files are configurations, the rest NAME patterns."""
+    """Existing ``*.jconf`` files are configurations, the rest NAME patterns; ``command``
+    (monitor, serve) is named in the errors."""
     import os
 
     from gadgetctl.errors import GadgetctlError
@@ -218,8 +219,8 @@ def split_arguments(
                 require_file(path)
         elif (argument.endswith("/") or not configs) and is_dir(path):
             raise GadgetctlError(
-                f"{argument}: is a directory; monitor takes configuration files (*.jconf) "
-                "before the names to show"
+                f"{argument}: is a directory; {command} takes configuration files (*.jconf) "
+                f"before the names to {'serve' if command == 'serve' else 'show'}"
             )
         selectors.append(argument)
     if not configs and require_config:
@@ -231,8 +232,8 @@ def split_arguments(
         if os.path.exists(first) or "/" in arguments[0] or first.suffix:
             require_file(first)  # says what is wrong with a mistyped path
         raise GadgetctlError(
-            "no configuration given: CONFIG arguments are existing files ending in .jconf "
-            "(or vrpn:Device@host)"
+            "no configuration given: CONFIG arguments are existing files ending in .jconf"
+            + (" (or vrpn:Device@host)" if command == "monitor" else "")
         )
     return configs, selectors
 

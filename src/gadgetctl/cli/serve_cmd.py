@@ -109,7 +109,7 @@ def serve(
     from gadgetctl.serve.naming import parse_renames
     from gadgetctl.serve.service import ServeOptions, ServeService
 
-    configs, selectors = split_arguments(arguments)
+    configs, selectors = split_arguments(arguments, command="serve")
     if check:  # the configuration findings first, as monitor does
         from gadgetctl.cli.preflight import check_before_running
 
@@ -211,13 +211,18 @@ def _print_list(catalog, fmt: DataFormat) -> None:
     if not catalog:
         emit("nothing to serve")
         return
+    from gadgetctl.safetext import printable
+
     width = max(len(e.vrpn_name) for e in catalog)
     lines = []
     for entry in catalog:
-        origin = "" if entry.vrpn_name == entry.element else f"  (element {entry.element!r})"
-        source = f" of {entry.source}" if entry.source else ""
+        # element, type and source names come from the configuration: escaped, one line each
+        origin = (
+            "" if entry.vrpn_name == entry.element else f"  (element '{printable(entry.element)}')"
+        )
+        source = f" of {printable(entry.source)}" if entry.source else ""
         lines.append(
-            f"{entry.vrpn_name:<{width}}  {entry.kind} {entry.element_type}{source}: "
+            f"{entry.vrpn_name:<{width}}  {entry.kind} {printable(entry.element_type)}{source}: "
             f"{_units_text(entry)}{origin}"
         )
     emit("\n".join(lines))

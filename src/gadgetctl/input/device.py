@@ -119,6 +119,12 @@ class Input:
         cls._kinds_of_class = tuple(seen)
         return cls._kinds_of_class
 
+    def configured_kinds(self) -> tuple[DeviceKind, ...]:
+        """The kinds this device may deliver as configured (every kind of its class unless a
+        driver knows better): what a consumer that cannot wait for sporadic data, such as
+        strings and commands, may expect."""
+        return self.kinds()
+
     # -- what drivers implement ----------------------------------------------------------
 
     def config(self, access: ElementAccess) -> None:

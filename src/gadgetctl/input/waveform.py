@@ -191,6 +191,17 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         self.center = (*center, 0.0, 0.0, 0.0)[:3] if center else self.center
         self.event_period = max(0.0, access.float("event_period"))
 
+    def configured_kinds(self) -> tuple[DeviceKind, ...]:
+        """The kinds its configuration makes: events (hat, command, string) only with an
+        ``event_period``."""
+        made = {
+            DeviceKind.ANALOG: bool(self.analog),
+            DeviceKind.DIGITAL: bool(self.button_periods),
+            DeviceKind.POSITION: bool(self.positions),
+        }
+        events = self.event_period > 0
+        return tuple(k for k in self.kinds() if made.get(k, events))
+
     # -- sampling -----------------------------------------------------------------------
 
     def start_sampling(self) -> None:

@@ -98,17 +98,25 @@ def proxy_role(proxy: Proxy) -> Role | None:
     return None
 
 
+#: Kinds that come as events, whenever they come: a warm-up cannot wait for them.
+SPORADIC_KINDS = (DeviceKind.STRING, DeviceKind.COMMAND)
+
+
 def _device_entry(manager: InputManager, name: str) -> ServedElement | None:
     """A device's roles are the kinds it has delivered so far (a waveform device provides
-    every kind but may be configured with no positions); all its kinds before any sample."""
+    every kind but may be configured with no positions), all its kinds before any sample,
+    and Text when its configuration makes strings or commands (events, which the served
+    device sends whenever they come, delivered yet or not)."""
     device = manager.device(name)
     if device is None:
         return None
     kinds = device.kinds()
     delivered = [k for k in kinds if device.store.latest(k) is not None]
+    configured = device.configured_kinds()
+    sporadic = [k for k in SPORADIC_KINDS if k in configured and k not in delivered]
     units: dict[Role, int] = {}
     found: set[Role] = set()
-    for kind in delivered or kinds:
+    for kind in [*delivered, *sporadic] if delivered else configured:
         role = KIND_ROLES.get(kind)
         if role is None:
             continue
@@ -118,7 +126,7 @@ def _device_entry(manager: InputManager, name: str) -> ServedElement | None:
             units[role] = max(units.get(role, 0), len(latest.values))
     roles = tuple(r for r in Role if r in found)
     not_served = tuple(
-        k.value for k in kinds if k not in KIND_ROLES and (not delivered or k in delivered)
+        k.value for k in configured if k not in KIND_ROLES and (not delivered or k in delivered)
     )
     analog = (
         (device.analog_min, device.analog_max)
