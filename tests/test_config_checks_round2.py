@@ -142,8 +142,9 @@ def test_a_later_command_line_file_overrides_an_earlier_one(check):
     assert found.path.endswith("local.jconf")
 
 
-def test_an_identical_copy_is_info_and_unrelated_files_are_warned(check):
-    # two side-by-side includes: neither includes the other
+def test_an_identical_copy_is_info_and_a_later_side_by_side_include_overrides(check):
+    # two side-by-side includes: include order is load order (issue 26 item 2), so the later
+    # one overrides the earlier one as a later given file would
     files = {
         "top.jconf": configuration("", includes=("a.jconf", "b.jconf")),
         "a.jconf": configuration(tracker()),
@@ -151,9 +152,10 @@ def test_an_identical_copy_is_info_and_unrelated_files_are_warned(check):
     }
     (found,) = check(files=files, only=("top.jconf",))
     assert (
-        found.code == "CFG040"
-        and found.severity is Severity.WARNING
+        found.code == "CFG042"
+        and found.severity is Severity.INFO
         and found.path.endswith("b.jconf")
+        and "top.jconf includes b.jconf after a.jconf" in found.message
     )
     # the same, byte for byte: harmless
     files["b.jconf"] = configuration(tracker())

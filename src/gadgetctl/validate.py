@@ -177,6 +177,7 @@ def check_configurations(
         together=options.together,
         environ=options.environ,
         plugin_definitions=plugin_definition_finder(options.environ),
+        plugin_names=plugin_name_finder(options.environ),
     )
 
 
@@ -188,6 +189,18 @@ def plugin_definition_finder(environ=None):
         from gadgetctl.input.definitions import driver_definition_dirs
 
         return driver_definition_dirs(configuration=config, environ=environ)
+
+    return find
+
+
+def plugin_name_finder(environ=None):
+    """A function giving the names of the driver plug-ins a configuration can load."""
+
+    def find(config) -> set[str]:
+        from gadgetctl.input.definitions import driver_search_for
+
+        search = driver_search_for(configuration=config, environ=environ)
+        return {p.name for p in search.plugins() if p.shadowed_by is None}
 
     return find
 

@@ -42,6 +42,8 @@ class Session:
     #: Definition folders of driver plug-ins usable by a configuration (their own element
     #: types); consulted only when the configuration uses a type the repository lacks.
     plugin_definitions: Callable[[Configuration], list[Path]] | None = None
+    #: Names of the driver plug-ins a configuration can load (exact spelling).
+    plugin_names: Callable[[Configuration], set[str]] | None = None
     _repos: dict[tuple[Path, ...], DefinitionRepository] = field(default_factory=dict)
     _checkers: dict[int, ElementChecker] = field(default_factory=dict)
 
@@ -108,16 +110,31 @@ def check_configuration(config: Configuration, session: Session, scope: Scope) -
     found += _definition_path_findings(entries)
     checker = session.checker(repo)
     reports: dict[int, ElementReport] = {}
+    notes: list[tuple[Diagnostic, str]] = []
     for element in config.loaded:
         report = checker.check(element)
         reports[id(element)] = report
         found += report.diagnostics
+        if report.notes:
+            notes += report.notes
         if element.type in _PATH_TYPES:
             found += _path_variables(element, session.environ)
     retain(reports)
+    if notes:
+        found += _suggestions(notes, config, session)
     found += check_wiring(config, reports, checker.index, scope)
     found += proxy_unit_problems(config.elements, repo)
     return found
+
+
+def _suggestions(
+    notes: list[tuple[Diagnostic, str]], config: Configuration, session: Session
+) -> list[Diagnostic]:
+    """The notes whose value no element and no loadable plug-in has as its exact name."""
+    names = {e.name for e in config.all_elements()}
+    if session.plugin_names is not None:
+        names |= session.plugin_names(config)
+    return [diagnostic for diagnostic, value in notes if value not in names]
 
 
 def _uses_unknown_type(config: Configuration, repo: DefinitionRepository) -> bool:
@@ -202,10 +219,14 @@ def check_documents(
     together: bool = False,
     environ: Mapping[str, str] | None = None,
     plugin_definitions: Callable[[Configuration], list[Path]] | None = None,
+    plugin_names: Callable[[Configuration], set[str]] | None = None,
 ) -> list[Diagnostic]:
     """Configuration-level findings for the configuration documents among ``documents``."""
     session = Session(
-        base, os.environ if environ is None else environ, plugin_definitions=plugin_definitions
+        base,
+        os.environ if environ is None else environ,
+        plugin_definitions=plugin_definitions,
+        plugin_names=plugin_names,
     )
     given: list[Path] = []
     for doc in documents:

@@ -10,7 +10,7 @@ from __future__ import annotations
 from functools import partial
 from typing import NamedTuple
 
-from gadgetctl.diagnostics import Diagnostic
+from gadgetctl.diagnostics import Diagnostic, Severity
 from gadgetctl.jccl.configuration import ConfigElement, PropertyValue, SourceLocation
 from gadgetctl.jccl.definitions import Location, PropertyDefinition, ValueType
 from gadgetctl.jccl.runtime import REQUIRED_POINTERS
@@ -38,12 +38,15 @@ class ElementReport:
     """What checking one element found: its diagnostics, its pointer values, and the view of
     its definition it (and each embedded element) was judged by, by ``id`` of the element."""
 
-    __slots__ = ("diagnostics", "pointers", "views")
+    __slots__ = ("diagnostics", "notes", "pointers", "views")
 
     def __init__(self) -> None:
         self.diagnostics: list[Diagnostic] = []
         self.pointers: list[PointerValue] = []
         self.views: dict[int, TypeView | None] = {}
+        #: Suggestions that hold unless a plug-in or element has the value's exact name:
+        #: (the finding, the value without surrounding white space). None when there are none.
+        self.notes: list[tuple[Diagnostic, str]] | None = None
 
 
 def at(code: str, message: str, location: Location | SourceLocation, **kwargs) -> Diagnostic:
@@ -348,15 +351,32 @@ class ElementChecker:
             problem = self._values[key]
         except KeyError:
             problem = self._values[key] = check_text(prop, value.text)
-        if problem is not None:
-            report.diagnostics.append(
-                at(
-                    problem.code,
-                    f"{describe(element)}: {problem.message}",
-                    value.location,
-                    hint=problem.hint,
+        if problem is None:
+            return
+        if problem.note:
+            if report.notes is None:
+                report.notes = []
+            report.notes.append(
+                (
+                    at(
+                        problem.code,
+                        f"{describe(element)}: {problem.message}",
+                        value.location,
+                        hint=problem.hint,
+                        severity=Severity.INFO,
+                    ),
+                    value.text.strip(),
                 )
             )
+            return
+        report.diagnostics.append(
+            at(
+                problem.code,
+                f"{describe(element)}: {problem.message}",
+                value.location,
+                hint=problem.hint,
+            )
+        )
 
     def _check_embedded(
         self,

@@ -26,6 +26,9 @@ class ValueProblem:
     code: str
     message: str
     hint: str | None = None
+    #: A suggestion only (info), dropped where a plug-in or element has the value's exact
+    #: name: the value differs in case from a label of an editable enumeration.
+    note: bool = False
 
 
 def is_number(valuetype: ValueType, text: str) -> bool:
@@ -62,6 +65,17 @@ def _label_problem(prop: PropertyDefinition, raw: str) -> ValueProblem | None:
     if any(_same_value(prop.valuetype, raw, c.value) for c in enumeration.choices):
         return None
     near = enumeration.case_insensitive_label(raw)
+    if near is not None and enumeration.editable:
+        # VR Juggler uses the text of an editable enumeration as written: 'OptiTrack_drv'
+        # is the Unix plug-in VR Juggler's list spells 'Optitrack_drv'.
+        return ValueProblem(
+            "CFG027",
+            f"{prop.name} {raw!r} differs only in case from the label {near.label!r}; the "
+            "enumeration is editable, so VR Juggler uses the text as written, and no plug-in "
+            "or element has that exact name",
+            f"If {near.label!r} is meant, write it so.",
+            note=True,
+        )
     if near is not None:
         reads = _reading(prop.valuetype, raw)
         return ValueProblem(

@@ -204,10 +204,11 @@ class Wiring:
                 )
                 continue
             why = relation.override(earlier, element)
-            if why is None and _same_text(earlier, element):
-                why = "an identical copy"
+            # The same words in every mode: an identical copy repeats, whatever the order.
+            if _same_text(earlier, element):
+                why = "an identical copy" + ("" if why is None else f"; {why}")
             if why is not None:
-                verb = "repeats" if why == "an identical copy" else "overrides"
+                verb = "repeats" if why.startswith("an identical copy") else "overrides"
                 found.append(
                     at(
                         "CFG042",
@@ -588,7 +589,25 @@ class _FileRelation:
         first, second = self.root_index(old), self.root_index(new)
         if first is not None and second is not None and first < second:
             return f"{new.name} is given after {old.name}"
+        # Include order is load order (VR Juggler's): a file that includes both, the later
+        # one's branch after the earlier one's, makes the later an override like a later file.
+        includer = self.common_includer(old, new)
+        if includer is not None:
+            return f"{includer.name} includes {new.name} after {old.name}"
         return None
+
+    def common_includer(self, old: Path, new: Path) -> Path | None:
+        """The nearest file that reaches both ``old`` and ``new`` through different includes,
+        ``old``'s include coming first."""
+        best: tuple[int, Path] | None = None
+        for including, targets in self.config.includes.items():
+            branches = [i for i, t in enumerate(targets) if old in self.reach(t)]
+            later = [i for i, t in enumerate(targets) if new in self.reach(t)]
+            if branches and later and min(branches) < min(later):
+                size = len(self.reach(including))
+                if best is None or size < best[0]:
+                    best = (size, including)
+        return None if best is None else best[1]
 
 
 def _same_text(one: ConfigElement, other: ConfigElement) -> bool:

@@ -199,7 +199,10 @@ CODES += [
         "enumeration label in the wrong case",
         "The value matches one of the property's enumeration labels except for case. Labels are "
         "case-sensitive, so VR Juggler does not substitute the label's value and reads the text "
-        "itself, usually as 0.",
+        "itself, usually as 0. In an editable enumeration (input_manager's driver) any text is "
+        "taken as written, so there it is only a suggestion (info), and none at all when a "
+        "plug-in or element has the value's exact name (OptiTrack_drv is a real plug-in that "
+        "the list spells Optitrack_drv).",
         "<device_units>feet</device_units>   (the label is Feet = 0.3048; read as 0.0)",
         "Write the label exactly as the definition spells it.",
     ),
@@ -303,10 +306,11 @@ CODES += [
         "duplicate element name",
         "Two elements of the configuration have the same name. VR Juggler silently keeps the "
         "one loaded last, at the first one's position, and every pointer to the name reaches "
-        "that one. Within one file, or between two files neither of which includes the other "
-        "(two mixins included side by side, say), it may be an accident. An including file "
-        "or a later given file overriding an element, or a byte-identical copy in another "
-        "file, is reported as CFG042 (info) instead.",
+        "that one. Within one file, or between two files that are neither included one by the "
+        "other nor loaded in an order (files checked separately), it may be an accident. An "
+        "including file, a later given file or a later include of a common file (a base and a "
+        "role file included side by side) overriding an element, or a byte-identical copy in "
+        "another file, is reported as CFG042 (info) instead.",
         'C4.base.jconf: <alias name="VJHead">  and  C4.mstar.jconf: <alias name="VJHead">',
         "Rename or remove one of them, or, when one file is meant to override the other, "
         "include the other file from it.",
@@ -317,8 +321,9 @@ CODES += [
         I,
         "element overrides an element of an included or earlier file",
         "An element has the name of an element loaded before it from a file it supersedes: a "
-        "file the later element's file includes (directly or not), or a file given before it "
-        "on the command line (--together). JCCL's rule is that the later element replaces "
+        "file the later element's file includes (directly or not), a file given before it "
+        "on the command line (--together), or a file included before it by a file that "
+        "includes both (include order is load order). JCCL's rule is that the later element replaces "
         "the earlier one at the earlier one's place, and modular configurations rely on it "
         "(a mixin that replaces VJHead, a device file that redefines a tracker of its base). "
         "A byte-identical copy of an element from another file is reported the same way.",

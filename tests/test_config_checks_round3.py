@@ -1,0 +1,113 @@
+"""Configuration checks, round three (issue 26): each item reproduced by a small file made
+for it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from gadgetctl.diagnostics import Category, Severity
+from gadgetctl.validate import ValidateOptions, validate_paths
+
+from jccl_samples import CONFIG_NS
+
+ALL = (Category.CONFIG, Category.XML, Category.SCHEMA)
+
+
+def jconf(body: str, includes: tuple[str, ...] = ()) -> str:
+    lines = "".join(f"   <include>{name}</include>\n" for name in includes)
+    return (
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+        f'<configuration xmlns="{CONFIG_NS}" name="t">\n{lines}'
+        f"   <elements>\n{body}   </elements>\n</configuration>\n"
+    )
+
+
+def findings(*paths: Path, together: bool = False, environ=None):
+    options = ValidateOptions(together=together, environ=environ or {})
+    result = validate_paths(list(paths), options)
+    return [d for d in result.diagnostics if d.category in ALL]
+
+
+def write(path: Path, text: str) -> Path:
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+# -- 1. editable enumerations take any text ---------------------------------------------------
+
+
+def manager(driver: str) -> str:
+    return (
+        '      <input_manager name="Input" version="2">\n'
+        f"         <driver>{driver}</driver>\n"
+        "      </input_manager>\n"
+    )
+
+
+def test_a_plugin_spelled_differently_from_the_enumeration_label_is_no_finding(tmp_path):
+    # 'Optitrack_drv' is the label; the plug-in (ours and VR Juggler's Unix one) is OptiTrack_drv.
+    assert findings(write(tmp_path / "a.jconf", jconf(manager("OptiTrack_drv")))) == []
+
+
+def test_a_case_variant_of_a_label_without_such_a_plugin_is_only_a_suggestion(tmp_path):
+    (found,) = findings(write(tmp_path / "a.jconf", jconf(manager("dtrack_drv"))))
+    assert found.code == "CFG027" and found.severity is Severity.INFO
+    assert "'DTrack_drv'" in found.hint and "as written" in found.message
+    assert findings(write(tmp_path / "b.jconf", jconf(manager("MyOwnTracker_drv")))) == []
+
+
+# -- 2. a later sibling include overrides an earlier one ----------------------------------------
+
+
+def alias(name: str, proxy: str) -> str:
+    return f'      <alias name="{name}" version="1"><proxy>{proxy}</proxy></alias>\n'
+
+
+def sim_head(name: str) -> str:
+    return (
+        f'      <position_proxy name="{name}" version="1">\n'
+        "         <device>Sim</device><unit>0</unit>\n"
+        "      </position_proxy>\n"
+    )
+
+
+def test_a_later_include_overriding_an_earlier_sibling_include_is_an_override(tmp_path):
+    write(tmp_path / "base.jconf", jconf(alias("VJHead", "Head A") + sim_head("Head A")))
+    write(tmp_path / "role.jconf", jconf(alias("VJHead", "Head B") + sim_head("Head B")))
+    system = write(tmp_path / "system.jconf", jconf("", includes=("base.jconf", "role.jconf")))
+    dupes = [d for d in findings(system) if d.code in ("CFG040", "CFG042")]
+    assert [(d.code, d.severity) for d in dupes] == [("CFG042", Severity.INFO)]
+    assert "system.jconf includes role.jconf after base.jconf" in dupes[0].message
+    # the same pair given in that order is the same finding
+    together = findings(tmp_path / "base.jconf", tmp_path / "role.jconf", together=True)
+    assert [d.code for d in together if d.code in ("CFG040", "CFG042")] == ["CFG042"]
+
+
+# -- 4. one fact, one finding ---------------------------------------------------------------
+
+
+def test_an_identical_copy_is_worded_the_same_in_both_modes(tmp_path):
+    write(tmp_path / "a.jconf", jconf(alias("VJHead", "Head A") + sim_head("Head A")))
+    write(tmp_path / "b.jconf", jconf(alias("VJHead", "Head A")))
+    main = write(tmp_path / "main.jconf", jconf("", includes=("a.jconf", "b.jconf")))
+    alone = [d for d in findings(main) if d.code == "CFG042"]
+    together = [
+        d
+        for d in findings(tmp_path / "a.jconf", tmp_path / "b.jconf", together=True)
+        if d.code == "CFG042"
+    ]
+    assert len(alone) == len(together) == 1
+    assert " repeats " in alone[0].message and " repeats " in together[0].message
+    assert "(an identical copy" in alone[0].message and "(an identical copy" in together[0].message
+
+
+def test_text_directly_inside_elements_or_configuration_is_one_finding(tmp_path):
+    text = jconf("      stray\n" + alias("VJHead", "Head A") + sim_head("Head A")).replace(
+        "   <elements>", "   oops\n   <elements>"
+    )
+    found = findings(write(tmp_path / "a.jconf", text))
+    assert sorted(d.code for d in found if d.code[:3] in ("XML", "SCH")) == ["XML015", "XML015"]
+    # text in an element without child elements is still a schema error
+    bare = jconf("").replace("   <elements>\n   </elements>", "   <elements>oops</elements>")
+    assert [d.code for d in findings(write(tmp_path / "b.jconf", bare))] == ["SCH001"]
