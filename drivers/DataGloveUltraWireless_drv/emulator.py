@@ -8,7 +8,7 @@ discards it):
 
 ``idle``        both hands rest half bent
 ``motion``      every sensor sweeps its range, each at its own pace
-``buttons``     both hands step through an open hand and a fist (gestures 0 and 15)
+``buttons``     both hands step through an open hand and a fist (gestures 15 and 0)
 ``garbage``     motion with junk between records and records broken at their end
 ``disconnect``  ``disconnect_after`` records of motion, then the line is hung up
 """

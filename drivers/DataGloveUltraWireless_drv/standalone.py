@@ -12,7 +12,25 @@ ring-little, little near and little far.
 
 Readings are auto-ranged, as the C++ driver does: each sensor of each glove keeps the least
 and greatest raw reading seen since the range was last reset and reports where the reading
-lies between them (0..1; 0 while the range is empty).
+lies between them (0..1; unknown while the range is empty, which the wrapper shows as 0).
+A greater raw reading is a more bent joint.
+
+Gestures follow ``DataGloveUltraWirelessStandalone.cpp`` (``getSensorState``,
+``getJointState``, ``computeGesture``): a sensor is *closed* above the upper threshold, *open*
+below the lower one and undefined between them (or while its range is empty); a finger (its
+near and far sensors) is closed when either sensor is closed, else open when either is open,
+and undefined only when both are. Bit k of the gesture (index 1, middle 2, ring 4, little 8)
+is set while finger k is **open**, as in the C++ and gadgetctl's DataGlove: a flat hand is 15,
+a fist 0, and any undefined finger makes the gesture -1.
+
+``auto_range_reset`` (the definition: "reset minimum and maximum joint values on all-open and
+all-closed gestures"): a record whose gesture is 15 (all open) becomes its glove's minimum on
+every sensor, one whose gesture is 0 (a fist) its maximum, so an old extreme (a glove pulled
+on, a knock) is forgotten at the next flat hand or fist. Fixed from the C++, marked in
+:meth:`AutoRange.after_gesture`: it resets the minimum after gesture 0 and the maximum after
+15 (written for bits set on bent fingers, before its gesture set them on open ones), so a held
+fist collapses each range to one value and reads 0/0; and it resets at the glove's next record,
+unless a record of the other glove came between.
 
 Decoding is bounded: a record whose end byte is not ``>`` is a bad record, the bytes up to
 the next ``<`` are skipped as one run, and the buffer never holds more than one record.
@@ -74,39 +92,81 @@ class RecordScanner(ResyncScanner[GloveRecord]):
         return decode_record(record)
 
 
-class AutoRange:
-    """Per glove and sensor: the least and greatest reading since :meth:`reset`."""
+#: Finger states (``JOINT_OPEN``, ``JOINT_CLOSED``, ``JOINT_UNDEFINED`` in the C++).
+OPEN, CLOSED, UNDEFINED = 1, 0, -1
+#: The gestures after which ``auto_range_reset`` restarts a glove's range ends.
+ALL_OPEN, ALL_CLOSED = 15, 0
 
-    def __init__(self) -> None:
+
+class AutoRange:
+    """Per glove and sensor: the least and greatest reading since the range was (re)started.
+    With ``auto_reset``, :meth:`after_gesture` restarts one end of a glove's ranges (see the
+    module's description)."""
+
+    def __init__(self, auto_reset: bool = False) -> None:
+        self.auto_reset = auto_reset
+        self.reset()
+
+    def reset(self) -> None:
         self.low: list[list[int | None]] = [[None] * SENSORS for _ in (PORT_A, PORT_B)]
         self.high: list[list[int | None]] = [[None] * SENSORS for _ in (PORT_A, PORT_B)]
 
-    def reset(self) -> None:
-        self.__init__()
-
-    def scale(self, record: GloveRecord) -> tuple[float, ...]:
-        """Each reading's place in its sensor's range so far (0 while the range is empty)."""
+    def scale(self, record: GloveRecord) -> tuple[float | None, ...]:
+        """Each reading's place in its sensor's range so far (None while the range is empty)."""
         low, high = self.low[record.port], self.high[record.port]
-        out = []
+        out: list[float | None] = []
         for i, value in enumerate(record.raw):
             lo = value if low[i] is None else min(low[i], value)  # type: ignore[type-var]
             hi = value if high[i] is None else max(high[i], value)  # type: ignore[type-var]
             low[i], high[i] = lo, hi
-            out.append((value - lo) / (hi - lo) if hi > lo else 0.0)
+            out.append((value - lo) / (hi - lo) if hi > lo else None)
         return tuple(out)
 
+    def after_gesture(self, record: GloveRecord, number: int) -> None:
+        """``record`` gave gesture ``number``: with ``auto_reset``, all open (15) restarts the
+        glove's minima at this record's readings and a fist (0) its maxima."""
+        if not self.auto_reset or number not in (ALL_OPEN, ALL_CLOSED):
+            return
+        # Fixed from the C++, which restarts the minima after 0 and the maxima after 15, and
+        # only at the next record (and only if no record of the other glove came between):
+        # a held fist then collapses every range to one value and reads 0/0.
+        ends = self.low if number == ALL_OPEN else self.high
+        ends[record.port] = list(record.raw)
 
-def gesture(scaled: tuple[float, ...], lower: float = 0.35, upper: float = 0.65) -> int:
-    """A gesture number 0..15 from the index, middle, ring and little fingers (bit k set when
-    finger k is bent past ``upper``, clear when open below ``lower``); -1 while any of them
-    is between the thresholds."""
+
+def sensor_state(value: float | None, lower: float, upper: float) -> int:
+    """Closed above ``upper``, open below ``lower``, else (an empty range too) undefined."""
+    if value is None:
+        return UNDEFINED
+    if value > upper:
+        return CLOSED
+    if value < lower:
+        return OPEN
+    return UNDEFINED
+
+
+def finger_state(near: int, far: int) -> int:
+    """A finger from its two sensors: closed when either is closed, else open when either is
+    open, undefined only when both are (the C++ ``getJointState``)."""
+    if CLOSED in (near, far):
+        return CLOSED
+    if OPEN in (near, far):
+        return OPEN
+    return UNDEFINED
+
+
+def gesture(scaled: tuple[float | None, ...], lower: float = 0.35, upper: float = 0.65) -> int:
+    """A gesture number 0..15 from the index, middle, ring and little fingers: bit k set
+    while finger k is open (flat hand 15, fist 0); -1 while any of them is undefined."""
     number = 0
     for bit, (near, far) in enumerate(GESTURE_FINGERS):
-        bend = (scaled[near] + scaled[far]) / 2
-        if bend > upper:
-            number |= 1 << bit
-        elif bend >= lower:
+        state = finger_state(
+            sensor_state(scaled[near], lower, upper), sensor_state(scaled[far], lower, upper)
+        )
+        if state == UNDEFINED:
             return NO_GESTURE
+        if state == OPEN:
+            number |= 1 << bit
     return number
 
 

@@ -2,11 +2,15 @@
 
 Units: analog 0..13 are glove A's sensors (thumb near, thumb far, thumb-index, index near,
 index far, index-middle, middle near, middle far, middle-ring, ring near, ring far,
-ring-little, little near, little far), 14..27 glove B's, each auto-ranged to 0..1 (a glove
-not heard from yet reads 0). Command unit 0 is glove A's gesture, 1 glove B's: bit k set
-while finger k (index, middle, ring, little) is bent past ``gesture_upper_threshold``, -1
-while a finger is between that and ``gesture_lower_threshold``. ``auto_range_reset``
-(definition version 2) starts every sensor's range afresh each time the device starts.
+ring-little, little near, little far), 14..27 glove B's, each auto-ranged to 0..1 (a sensor
+whose range is still empty, a glove not heard from yet included, reads 0). Command unit 0 is
+glove A's gesture, 1 glove B's, as VR Juggler computes it: bit k set while finger k (index,
+middle, ring, little) is open, a flat hand 15, a fist 0, -1 while a finger is undefined (both
+its sensors between ``gesture_lower_threshold`` and ``gesture_upper_threshold``; one closed
+sensor makes the finger closed). ``auto_range_reset`` (definition version 2, default true)
+makes a record with an all-open gesture its glove's minima and one with a fist its maxima;
+the ranges are kept across reconnections, as the C++ object keeps them. The rules and what
+was fixed from the C++ are in ``standalone.py``.
 
 Differences from the C++, on purpose: a record from a port that is not enabled is dropped
 (the C++ read it as glove B's when port A was disabled); every record read is added (the C++
@@ -47,8 +51,7 @@ class UltraGloveDevice(Analog, Command, CarriedCounters):
         self.baud = 115200
         self.enabled = (True, True)
         self.lower, self.upper = 0.35, 0.65
-        self.reset_range = True
-        self.range = AutoRange()
+        self.range = AutoRange(auto_reset=True)
         self.receiver: UltraGlove | None = None
         self.ignored = 0
         self._analog = [0.0] * (2 * SENSORS)
@@ -63,7 +66,7 @@ class UltraGloveDevice(Analog, Command, CarriedCounters):
         if access.has("gesture_lower_threshold"):
             self.lower = access.float("gesture_lower_threshold")
             self.upper = access.float("gesture_upper_threshold")
-            self.reset_range = access.boolean("auto_range_reset")
+            self.range.auto_reset = access.boolean("auto_range_reset")
         if not self.port:
             raise DeviceConfigError("port is empty: name the serial device the receiver is on")
         if self.baud <= 0:
@@ -85,8 +88,6 @@ class UltraGloveDevice(Analog, Command, CarriedCounters):
             poll_interval=self.poll_interval,
         )
         receiver.open()
-        if self.reset_range:
-            self.range.reset()
         self.receiver = receiver
         self.counts.attach(receiver)
 
@@ -104,8 +105,10 @@ class UltraGloveDevice(Analog, Command, CarriedCounters):
                 continue
             scaled = self.range.scale(record)
             first = SENSORS * (record.port - PORT_A)
-            self._analog[first : first + SENSORS] = scaled
-            self._gestures[record.port] = gesture(scaled, self.lower, self.upper)
+            self._analog[first : first + SENSORS] = [0.0 if v is None else v for v in scaled]
+            number = gesture(scaled, self.lower, self.upper)
+            self._gestures[record.port] = number
+            self.range.after_gesture(record, number)
             self.add_analog_sample(self._analog, stamp)
             self.add_command_sample(self._gestures, stamp)
 

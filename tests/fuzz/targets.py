@@ -636,7 +636,7 @@ def _ultraglove(data: bytes) -> None:
         gesture,
     )
 
-    scanner, ranged = RecordScanner(), AutoRange()
+    scanner, ranged = RecordScanner(), AutoRange(auto_reset=True)
     got = []
     for start in range(0, len(data), 17):  # arbitrary chunks, as reads split the line
         got += scanner.feed(data[start : start + 17])
@@ -646,7 +646,9 @@ def _ultraglove(data: bytes) -> None:
     for record in got:
         assert record.port in (0, 1) and len(record.raw) == SENSORS
         scaled = ranged.scale(record)
-        assert all(0.0 <= v <= 1.0 for v in scaled) and -1 <= gesture(scaled) <= 15
+        number = gesture(scaled)
+        assert all(v is None or 0.0 <= v <= 1.0 for v in scaled) and -1 <= number <= 15
+        ranged.after_gesture(record, number)
 
 
 # -- Linux joystick -------------------------------------------------------------------------------

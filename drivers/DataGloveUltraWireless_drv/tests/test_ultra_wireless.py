@@ -8,6 +8,7 @@ from DataGloveUltraWireless_drv.emulator import UltraGloveEmulator, encode_recor
 from DataGloveUltraWireless_drv.standalone import (
     RECORD_SIZE,
     AutoRange,
+    GloveRecord,
     RecordScanner,
     UltraGlove,
     decode_record,
@@ -49,6 +50,8 @@ def auto_ranged(sent: list[tuple[int, tuple[int, ...]]]) -> list[tuple[int, tupl
     return out
 
 
+NO_RESET = "<auto_range_reset>false</auto_range_reset>"
+
 emulator = emulator_fixture(UltraGloveEmulator, rate=200.0)
 managers = managers_fixture("DataGloveUltraWireless_drv", tune={"data_glove_ultra_wireless": FAST})
 
@@ -66,15 +69,74 @@ def test_records_decode_as_the_protocol_says() -> None:
     assert decode_record(bytes([0x3C, 0x45]) + record[2:]).port == 1
     assert decode_record(record[:-1] + b"!") is None  # no end marker
     ranged = AutoRange()
-    assert ranged.scale(got) == (0.0,) * 14  # an empty range reads 0
+    assert ranged.scale(got) == (None,) * 14  # an empty range reads as unknown
     lower = decode_record(bytes([0x3C, 0x42, 0x00, 0x00, 0x01]) + bytes(19) + bytes(4) + b">")
     assert ranged.scale(lower)[1] == 0.0 and ranged.scale(got)[1] == 1.0
-    # gesture bits: index, middle, ring, little bent (their near and far sensors)
-    fist = (1.0,) * 14
-    assert gesture(fist) == 15 and gesture((0.0,) * 14) == 0
-    point = tuple(0.0 if i in (3, 4) else 1.0 for i in range(14))
-    assert gesture(point) == 0b1110
-    assert gesture((0.5,) * 14) == -1
+
+
+def hand(index: float, middle: float, ring: float, little: float, far_offset: float = 0.0):
+    """Fourteen scaled readings: each finger's near and far sensor at the value given (the far
+    one moved by ``far_offset``), thumb and spreads half bent."""
+    values = [0.5] * 14
+    for near, value in zip((3, 6, 9, 12), (index, middle, ring, little), strict=True):
+        values[near], values[near + 1] = value, value + far_offset
+    return tuple(values)
+
+
+@pytest.mark.parametrize(
+    ("scaled", "number"),
+    [
+        (hand(0.0, 0.0, 0.0, 0.0), 15),  # flat hand: every finger open
+        (hand(1.0, 1.0, 1.0, 1.0), 0),  # fist
+        (hand(0.1, 0.9, 0.9, 0.9), 1),  # pointing: index open
+        (hand(0.1, 0.1, 0.9, 0.9), 3),  # index and middle open
+        (hand(0.9, 0.9, 0.9, 0.1), 8),  # little finger open
+        (hand(0.2, 0.3, 0.9, 0.2), 11),
+        (hand(0.1, 0.5, 0.1, 0.1), -1),  # middle between the thresholds
+        ((0.0,) * 3 + (None, 0.9) + (0.0,) * 9, 14),  # one sensor undefined: the other decides
+        ((0.0,) * 3 + (0.1, 0.9) + (0.0,) * 9, 14),  # one sensor closed: the finger is closed
+        ((0.0,) * 3 + (0.1, 0.5) + (0.0,) * 9, 15),  # open beside undefined: open
+        ((0.0,) * 3 + (None, None) + (0.0,) * 9, -1),  # both sensors unknown
+    ],
+)
+def test_gesture_numbers_of_known_hands(scaled, number) -> None:
+    # VR Juggler's computeGesture: a finger's bit is set while it is open (flat hand 15, fist
+    # 0); getJointState: closed wins, else open wins, undefined only if both are
+    assert gesture(scaled) == number
+
+
+def test_thresholds_are_strict_and_configurable() -> None:
+    assert gesture(hand(0.35, 0.35, 0.35, 0.35)) == -1  # not below the lower threshold
+    assert gesture(hand(0.65, 0.65, 0.65, 0.65)) == -1  # not above the upper threshold
+    assert gesture(hand(0.3, 0.3, 0.3, 0.7), lower=0.4, upper=0.6) == 7
+
+
+def test_auto_range_reset_restarts_the_ends_at_flat_hands_and_fists() -> None:
+    def record(value: int) -> GloveRecord:
+        return GloveRecord(0, (value,) * 14)
+
+    ranged = AutoRange(auto_reset=True)
+    steps = []
+    for value in (100, 3900, 600, 600, 3400, 3400, 1000, 700):
+        scaled = ranged.scale(record(value))
+        number = gesture(scaled)
+        ranged.after_gesture(record(value), number)
+        steps.append((round(scaled[3], 3) if scaled[3] is not None else None, number))
+    assert steps == [
+        (None, -1),  # an empty range: unknown
+        (1.0, 0),  # a fist: 3900 stays the maximum
+        (0.132, 15),  # flat: 600 becomes the minimum (100 is forgotten)
+        (0.0, 15),
+        (0.848, 0),  # a fist at 3400 becomes the maximum (3900 is forgotten)
+        (1.0, 0),
+        (0.143, 15),  # (1000 - 600) / (3400 - 600); now 1000 is the minimum
+        (0.0, 15),  # 700 is below it: the minimum follows
+    ]
+    still = AutoRange(auto_reset=False)
+    for value in (100, 3900, 600):
+        scaled = still.scale(record(value))
+        still.after_gesture(record(value), gesture(scaled))
+    assert still.low[0][3] == 100 and still.high[0][3] == 3900
 
 
 def test_junk_runs_are_counted_once_and_the_buffer_stays_bounded() -> None:
@@ -104,11 +166,11 @@ def test_standalone_reads_both_ports_in_order(emulator) -> None:
 # -- in the input manager ---------------------------------------------------------------------
 
 
-def test_units_of_both_gloves_and_their_gestures(emulator, managers) -> None:
+def test_units_of_both_gloves(emulator, managers) -> None:
     emu = emulator("buttons", rate=100.0)
-    manager = managers(gloves("Gloves", emu.address))
+    manager = managers(gloves("Gloves", emu.address, NO_RESET))
     assert not manager.pending()
-    frame, analog, commands = frame_recorder(
+    frame, analog, _commands = frame_recorder(
         manager, "Gloves", DeviceKind.ANALOG, DeviceKind.COMMAND
     )
     assert wait_until(lambda: len(analog) > 16, step=frame)
@@ -123,10 +185,30 @@ def test_units_of_both_gloves_and_their_gestures(emulator, managers) -> None:
     # the record sent before the driver came is discarded, unless it was on its way
     candidates = [replayed(emu.sent), replayed([emu.probe, *emu.sent])]
     assert any(analog == [pytest.approx(w) for w in want] for want in candidates), analog[:3]
-    seen = {value for c in commands for value in c}
-    assert {0, 15} <= seen  # open hands and fists on both gloves
-    manager.update()
-    assert manager.proxy("Gloves A").data in (0, 15, -1)
+
+
+def test_flat_hands_read_15_and_fists_0(emulator, managers) -> None:
+    # the buttons scenario: every sensor of a glove reads 400 then 3600 (its first records),
+    # then 500 (flat hand) and 3500 (fist) in turn, three records of each per glove
+    emu = emulator("buttons", rate=100.0)
+    manager = managers(gloves("Gloves", emu.address))  # auto_range_reset is on by default
+    frame, _analog, commands = frame_recorder(
+        manager, "Gloves", DeviceKind.ANALOG, DeviceKind.COMMAND
+    )
+    assert wait_until(lambda: len(commands) > 20, step=frame)
+
+    def expected(sent: list[tuple[int, tuple[int, ...]]]) -> list[tuple[int, int]]:
+        gestures, seen, out = [-1, -1], [0, 0], []
+        for port, raw in sent[: len(commands)]:
+            # the first record of a glove leaves its ranges empty: no gesture yet
+            gestures[port] = -1 if seen[port] == 0 else (15 if raw[0] <= 500 else 0)
+            seen[port] += 1
+            out.append(tuple(gestures))
+        return out
+
+    candidates = [expected(emu.sent), expected([emu.probe, *emu.sent])]
+    assert [tuple(c) for c in commands] in candidates, commands[:8]
+    assert {15, 0} <= {value for c in commands for value in c}
 
 
 def test_a_disabled_port_is_not_read(emulator, managers) -> None:
@@ -144,7 +226,7 @@ def test_a_disabled_port_is_not_read(emulator, managers) -> None:
 
 def test_garbage_is_resynchronised_and_counted_without_a_fault(emulator, managers) -> None:
     emu = emulator("garbage")
-    manager = managers(gloves("Gloves", emu.address))
+    manager = managers(gloves("Gloves", emu.address, NO_RESET))
     frame, analog, _commands = frame_recorder(
         manager, "Gloves", DeviceKind.ANALOG, DeviceKind.COMMAND
     )
