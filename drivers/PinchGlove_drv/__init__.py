@@ -6,8 +6,9 @@ between fingers opens or closes. ``standalone.py`` holds the protocol,
 ``wrapper.py`` feeds the input manager, ``emulator.py`` plays the glove box on a
 pseudo-terminal.
 
-Digital units 0..4 are the left thumb..pinky, 5..9 the right thumb..pinky;
-glove units 0 and 1 are the left and right hand.
+Digital units 0..4 are the left pinky, ring, middle, index and thumb (bit k of the
+left contact byte), 5..9 the right ones in the same order; glove units 0 and 1 are
+the left and right hand.
 """
 
 GADGETCTL_API_VERSION = 1

@@ -45,7 +45,8 @@ Groups = tuple[tuple[int, int], ...]
 
 SCENARIOS = ("idle", "touches", "buttons", "motion", "garbage", "disconnect")
 
-L_THUMB, L_INDEX, L_MIDDLE, L_RING, L_PINKY = (1 << k for k in range(5))
+# The device's finger bits (see standalone.FINGER_BITS): 0x10 thumb .. 0x01 pinky.
+L_THUMB, L_INDEX, L_MIDDLE, L_RING, L_PINKY = 0x10, 0x08, 0x04, 0x02, 0x01
 R_THUMB, R_INDEX, R_MIDDLE, R_RING, R_PINKY = L_THUMB, L_INDEX, L_MIDDLE, L_RING, L_PINKY
 
 #: The press/release sequence of the ``touches`` scenario (one frame per step).
@@ -91,7 +92,7 @@ def encode_frame(groups: Groups, timestamp: int | None) -> bytes:
     for left, right in groups:
         out += bytes([left & 0x1F, right & 0x1F])
     if timestamp is not None:
-        out += bytes([timestamp >> 7 & 0x7F, timestamp & 0x7F])
+        out += bytes([timestamp & 0x7F, timestamp >> 7 & 0x7F])  # low 7 bits first
     out.append(END)
     return bytes(out)
 
@@ -103,7 +104,7 @@ def touch_steps(scenario: str) -> Iterator[Groups]:
     if scenario == "motion":
         step = 0
         while True:
-            finger = 1 << (1 + step % 4)
+            finger = (L_INDEX, L_MIDDLE, L_RING, L_PINKY)[step % 4]
             yield ((L_THUMB | finger, 0),) if step // 4 % 2 == 0 else ((0, R_THUMB | finger),)
             yield ()
             step += 1

@@ -2,7 +2,9 @@
 
 The glove box sends nothing until a contact between fingers changes. Each touch
 frame lists the contact groups that are closed: one ``(left, right)`` byte pair
-per group, bit k of a byte being finger k (thumb..pinky) of that hand. Frames
+per group, a bit per finger of that hand: 0x10 thumb, 0x08 index, 0x04 middle,
+0x02 ring, 0x01 pinky (as two implementations independent of VR Juggler read it:
+Vrui's FakespacePinchGlove and VESS's vsPinchGloveBox). Frames
 start with ``0x80`` (no timestamp) or ``0x81`` (two 7-bit timestamp bytes before
 the end) and end with ``0x8F``. Commands are two bytes; replies are ``0x82 text
 0x8F`` info frames.
@@ -42,7 +44,16 @@ QUERIES = {
 CONFUSED = b"?"
 
 HANDS = ("left", "right")
+#: Gadgeteer's glove components, in their order (the rows of the glove angles).
 FINGERS = ("thumb", "index", "middle", "ring", "pinky")
+#: The bit of each finger in a contact byte. Fix: VR Juggler's ``PinchGloveStandalone`` turns
+#: bit k into digital unit k and ``Glove::getGloveDataFromDigitalData`` then takes unit k as
+#: glove component k, so its glove angles show the pinky as the thumb. The digital units keep
+#: VR Juggler's numbering (unit k is bit k, so configurations read the same switches); the
+#: glove rows follow the fingers the device names.
+FINGER_BITS = {"thumb": 0x10, "index": 0x08, "middle": 0x04, "ring": 0x02, "pinky": 0x01}
+#: The finger of each digital unit of one hand (unit k is bit k).
+UNIT_FINGERS = ("pinky", "ring", "middle", "index", "thumb")
 JOINTS_PER_FINGER = 4
 DIGITAL_UNITS = len(HANDS) * len(FINGERS)
 FINGER_MASK = (1 << len(FINGERS)) - 1
@@ -83,8 +94,8 @@ class HandSample:
 
     @classmethod
     def from_bits(cls, hand: str, bits: int) -> HandSample:
-        """Build a hand from a 5-bit mask (bit k = finger k)."""
-        contacts = tuple(bool(bits >> k & 1) for k in range(len(FINGERS)))
+        """Build a hand from a contact byte (see :data:`FINGER_BITS`)."""
+        contacts = tuple(bool(bits & FINGER_BITS[finger]) for finger in FINGERS)
         angles = tuple((TOUCHING_ANGLE if c else 0.0,) * JOINTS_PER_FINGER for c in contacts)
         return cls(hand, contacts, angles)
 
@@ -97,8 +108,8 @@ class HandSample:
 class PinchSample:
     """One decoded touch frame (or the all-open state after start-up).
 
-    ``digital`` has 10 values of 0/1: units 0..4 are the left thumb..pinky and
-    5..9 the right thumb..pinky. ``hands`` are glove units 0 (left) and 1 (right).
+    ``digital`` has 10 values of 0/1: unit k is bit k of the left byte (0 pinky .. 4 thumb),
+    5 + k bit k of the right byte (5 pinky .. 9 thumb), as VR Juggler numbers them. ``hands`` are glove units 0 (left) and 1 (right).
     ``groups`` keeps the raw ``(left bits, right bits)`` contact groups, and
     ``timestamp`` the 14-bit tick count (None for frames without one).
     """
@@ -143,9 +154,10 @@ def decode_frame(start: int, body: bytes) -> PinchSample | None:
     if start == START_DATA_TS:
         if len(body) < 2:
             return None
-        # The C++ driver reads one byte past the end here; the two bytes before
-        # 0x8F are the timestamp, high 7 bits first.
-        timestamp = body[-2] << 7 | body[-1]
+        # The two bytes before 0x8F are the timestamp, low 7 bits first, as FreeVR's
+        # vr_input.pinch.c reads it (first + 128 * second). Fix: VR Juggler's C++ reads
+        # one byte past the end here (it never uses the value).
+        timestamp = body[-2] | body[-1] << 7
         body = body[:-2]
     if len(body) % 2:
         return None

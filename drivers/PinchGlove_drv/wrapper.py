@@ -2,10 +2,12 @@
 
 Units, as Gadgeteer's PinchGlove driver and ``Glove::getGloveDataFromDigitalData`` give them:
 
-* digital unit ``5 * hand + finger``: 0..4 the left thumb..pinky, 5..9 the right
-  thumb..pinky, 1 while that fingertip touches another;
-* glove unit 0 the left hand, 1 the right; each finger row holds π/2 in all four joints
-  while it touches, 0 otherwise; the wrist row stays 0.
+* digital unit ``5 * hand + bit``: 0..4 the left pinky, ring, middle, index, thumb, 5..9 the
+  right ones in the same order (bit k of the hand's contact byte, as VR Juggler numbers
+  them), 1 while that fingertip touches another;
+* glove unit 0 the left hand, 1 the right; each finger row (thumb first) holds π/2 in all
+  four joints while that finger touches, 0 otherwise; the wrist row stays 0. Fix: the C++
+  filled row k from unit k, which put the pinky's contact in the thumb's row.
 
 Differences from the C++ wrapper, on purpose:
 

@@ -76,13 +76,14 @@ def test_touch_frames_decode_to_digital_and_glove(emulator) -> None:
     with PinchGlove(emu.address, **FAST) as glove:
         samples = read_samples(glove, len(TOUCH_SEQUENCE))
 
-    # Step by step, written out from the protocol description.
-    assert samples[0].digital == (1, 1, 0, 0, 0, 0, 0, 0, 0, 0)  # left thumb + index
+    # Step by step, written out from the protocol description: unit k is bit k of the hand's
+    # byte, pinky (0x01) first, thumb (0x10) last.
+    assert samples[0].digital == (0, 0, 0, 1, 1, 0, 0, 0, 0, 0)  # left thumb + index
     assert samples[1].digital == OPEN
-    assert samples[2].digital == (0, 0, 0, 0, 0, 1, 0, 1, 0, 0)  # right thumb + middle
-    assert samples[4].digital == (1, 0, 0, 0, 0, 1, 0, 0, 0, 0)  # both thumbs
-    assert samples[5].digital == (1, 0, 0, 0, 1, 0, 0, 0, 1, 1)  # two groups ORed
-    assert samples[5].groups == ((0b10001, 0), (0, 0b11000))
+    assert samples[2].digital == (0, 0, 0, 0, 0, 0, 0, 1, 0, 1)  # right thumb + middle
+    assert samples[4].digital == (0, 0, 0, 0, 1, 0, 0, 0, 0, 1)  # both thumbs
+    assert samples[5].digital == (1, 0, 0, 0, 1, 1, 1, 0, 0, 0)  # two groups ORed
+    assert samples[5].groups == ((0b10001, 0), (0, 0b00011))
     assert samples[6].digital == OPEN
 
     for sample, (groups, stamp) in zip(samples, emu.sent, strict=False):
@@ -104,7 +105,7 @@ def test_timestamps_off_gives_plain_frames(emulator) -> None:
         first = glove.sample()
     assert first is not None
     assert first.timestamp is None
-    assert first.digital == (1, 1, 0, 0, 0, 0, 0, 0, 0, 0)
+    assert first.digital == (0, 0, 0, 1, 1, 0, 0, 0, 0, 0)
 
 
 def test_motion_scenario_is_deterministic(emulator) -> None:
@@ -113,13 +114,13 @@ def test_motion_scenario_is_deterministic(emulator) -> None:
         samples = read_samples(glove, 10)
     # thumb taps index, middle, ring, pinky (releases in between), then the right hand
     assert [s.digital for s in samples[0:8:2]] == [
-        digital_of(0b00011, 0),
-        digital_of(0b00101, 0),
-        digital_of(0b01001, 0),
+        digital_of(0b11000, 0),
+        digital_of(0b10100, 0),
+        digital_of(0b10010, 0),
         digital_of(0b10001, 0),
     ]
     assert all(s.digital == OPEN for s in samples[1:8:2])
-    assert samples[8].digital == digital_of(0, 0b00011)
+    assert samples[8].digital == digital_of(0, 0b11000)
 
 
 def test_garbage_is_counted_and_skipped(emulator) -> None:
@@ -145,7 +146,7 @@ def test_truncated_frame_then_silence_is_counted(emulator) -> None:
         emu.send_raw(bytes([0x81, 0x01]))  # a frame that never ends
         assert glove.sample() is None
         assert glove.bad_frames == 1
-        emu.send_raw(bytes([0x81, 0x01, 0x01, 0x00, 0x05, 0x8F]))  # reference example
+        emu.send_raw(bytes([0x81, 0x01, 0x01, 0x05, 0x00, 0x8F]))  # timestamp low 7 bits first
         sample = glove.sample()
     assert sample is not None
     assert sample.digital == (1, 0, 0, 0, 0, 1, 0, 0, 0, 0)
@@ -211,7 +212,7 @@ def test_decode_frame_rules() -> None:
     sample = decode_frame(0x81, bytes([0x01, 0x01, 0x12, 0x34]))
     assert sample is not None
     assert sample.digital == (1, 0, 0, 0, 0, 1, 0, 0, 0, 0)
-    assert sample.timestamp == 0x12 << 7 | 0x34
+    assert sample.timestamp == 0x34 << 7 | 0x12  # low 7 bits first
     released = decode_frame(0x81, bytes([0x00, 0x07]))
     assert released is not None and released.digital == OPEN and released.groups == ()
     assert decode_frame(0x80, bytes([0x01])) is None  # odd pair bytes

@@ -11,6 +11,7 @@ from PinchGlove_drv.emulator import (
     DEFAULT_INFO,
     L_INDEX,
     L_PINKY,
+    L_RING,
     L_THUMB,
     R_INDEX,
     R_PINKY,
@@ -52,7 +53,7 @@ managers = managers_fixture("PinchGlove_drv", tune={"pinch_glove": FAST})
 def glove_element(name: str, port: str) -> str:
     proxies = "".join(
         f'<digital_proxy name="{name} {hand} {finger}" version="1"><device>{name}</device>'
-        f"<unit>{5 * h + f}</unit></digital_proxy>\n"
+        f"<unit>{5 * h + 4 - f}</unit></digital_proxy>\n"  # unit k is bit k: pinky 0, thumb 4
         for h, hand in enumerate(("Left", "Right"))
         for f, finger in enumerate(FINGERS)
     )
@@ -109,7 +110,7 @@ def test_initial_state_then_touch_frames_reach_proxies_and_aliases(
     touch(((L_THUMB, R_THUMB),))  # both thumbs touch each other
     on, off = DigitalState.TOGGLE_ON, DigitalState.OFF
     assert digital_states(manager, lefts) == [on, off, off, off, off]
-    assert digital_states(manager, rights) == [on, off, off, off, off]  # right thumb is unit 5
+    assert digital_states(manager, rights) == [on, off, off, off, off]  # right thumb is unit 9
     for alias in ("VJLeftGlove", "VJRightGlove"):
         angles = manager.proxy(alias).data
         np.testing.assert_array_equal(angles[0], [BENT] * 4)
@@ -123,7 +124,7 @@ def test_initial_state_then_touch_frames_reach_proxies_and_aliases(
     assert digital_states(manager, rights) == [DigitalState.TOGGLE_OFF, off, off, on, on]
     right = manager.proxy("VJRightGlove").data
     assert [bool(row.any()) for row in right] == [False, False, False, True, True, False]
-    assert device.store.frame(DeviceKind.DIGITAL).newest.values == (1, 0, 0, 0, 1, 0, 0, 0, 1, 1)
+    assert device.store.frame(DeviceKind.DIGITAL).newest.values == (1, 0, 0, 0, 1, 1, 1, 0, 0, 0)
 
     touch(())  # hands open again
     assert all(
@@ -151,8 +152,8 @@ def test_touch_stream_arrives_in_order(tmp_path, emulator, managers) -> None:
     angles = device.store.latest(DeviceKind.GLOVE).values
     assert angles.shape == (2, 6, 4)
     digital = device.store.latest(DeviceKind.DIGITAL).values
-    for unit in range(10):
-        assert (angles[unit // 5, unit % 5] == (BENT if digital[unit] else 0.0)).all()
+    for unit in range(10):  # unit k is bit k (pinky 0 .. thumb 4); glove rows start at the thumb
+        assert (angles[unit // 5, 4 - unit % 5] == (BENT if digital[unit] else 0.0)).all()
 
 
 def test_garbage_is_skipped_without_a_fault(tmp_path, emulator, managers) -> None:
@@ -263,8 +264,10 @@ def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> N
 def test_corpus_pinch_mixin_delivers_through_its_proxies(tmp_path, emulator, managers) -> None:
     """pinch.mixin.jconf with only its port changed. Its right-hand digital proxies are numbered
     6-10, one more than the driver's units 5-9 (reference 3.4; Glove.cpp maps 5*hand+finger):
-    the driver warns, PinchRightPinky (unit 10) is stupefied and PinchRightThumb (unit 6)
-    follows the right index finger."""
+    the driver warns, PinchRightPinky (unit 10) is stupefied. Its names also take unit 0 for
+    the thumb, where the glove box's bit 0 is the pinky (Vrui and VESS agree; VR Juggler's
+    PinchGloveStandalone only passes bit k on as unit k): on real hardware "PinchLeftThumb"
+    follows the left pinky and "PinchRightThumb" (unit 6) the right ring finger."""
     emu = emulator("idle")
     manager = managers(
         corpus_copy(
@@ -283,21 +286,21 @@ def test_corpus_pinch_mixin_delivers_through_its_proxies(tmp_path, emulator, man
     device = manager.device("FakespacePinchGlove")
     assert device.glove_position_proxies == ["GlovePos Proxy"]  # read, unlike the C++ wrapper
     before = device.frames
-    emu.send_raw(encode_frame(((L_THUMB | L_INDEX, R_THUMB | R_INDEX),), 1))
+    emu.send_raw(encode_frame(((L_PINKY | L_RING, R_PINKY | R_RING),), 1))
     assert wait_until(lambda: device.frames > before)
     manager.update()
 
-    assert manager.proxy("PinchLeftThumb").data == DigitalState.TOGGLE_ON
-    assert manager.proxy("PinchLeftIndex").data == DigitalState.TOGGLE_ON
+    assert manager.proxy("PinchLeftThumb").data == DigitalState.TOGGLE_ON  # unit 0: left pinky
+    assert manager.proxy("PinchLeftIndex").data == DigitalState.TOGGLE_ON  # unit 1: left ring
     assert manager.proxy("PinchLeftMiddle").data == DigitalState.OFF
-    assert manager.proxy("PinchRightThumb").data == DigitalState.TOGGLE_ON  # unit 6: right index
+    assert manager.proxy("PinchRightThumb").data == DigitalState.TOGGLE_ON  # unit 6: right ring
     assert manager.proxy("PinchRightIndex").data == DigitalState.OFF  # unit 7: right middle
     pinky = manager.proxy("PinchRightPinky")
     assert pinky.stupefied and "unit 10 is out of range" in pinky.reason
     glove = manager.proxy("GloveProxy")  # unit 0, the left hand
     assert not glove.stupefied
-    np.testing.assert_array_equal(glove.data[:2], np.full((2, 4), BENT))
-    assert not glove.data[2:].any()
+    np.testing.assert_array_equal(glove.data[3:5], np.full((2, 4), BENT))  # ring and pinky rows
+    assert not glove.data[:3].any() and not glove.data[5:].any()
     # the glove's position comes from its glove_position proxy (the simulated tracker)
     np.testing.assert_allclose(glove.position, manager.proxy("GlovePos Proxy").matrix)
     assert not np.allclose(glove.position, np.eye(4))
