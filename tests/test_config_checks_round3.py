@@ -111,3 +111,73 @@ def test_text_directly_inside_elements_or_configuration_is_one_finding(tmp_path)
     # text in an element without child elements is still a schema error
     bare = jconf("").replace("   <elements>\n   </elements>", "   <elements>oops</elements>")
     assert [d.code for d in findings(write(tmp_path / "b.jconf", bare))] == ["SCH001"]
+
+
+# -- 3. checks that hold in every version run before upgrade too -------------------------------
+
+
+def test_an_old_simulated_device_without_a_keyboard_proxy_is_reported_before_upgrade(tmp_path):
+    old = (
+        '      <simulated_analog_device name="Sim" version="1">\n'
+        "         <event_window_proxy></event_window_proxy>\n"
+        "      </simulated_analog_device>\n"
+    )
+    found = findings(write(tmp_path / "a.jconf", jconf(old)))
+    assert {"CFG012", "CFG033"} <= {d.code for d in found}
+    (required,) = [d for d in found if d.code == "CFG033"]
+    assert "event_window_proxy is empty" in required.message and required.line == 6
+    assert "never sees a key" in required.message
+
+
+# -- 5. upgrade output follows the file ----------------------------------------------------------
+
+
+def upgraded(tmp_path: Path, body: str, *, drop_removed: bool = False) -> str:
+    from gadgetctl.jccl.repository import default_repository
+    from gadgetctl.jccl.upgrade import upgrade_bytes
+
+    data = jconf(body).encode()
+    result = upgrade_bytes(
+        tmp_path / "a.jconf", data, default_repository([]), drop_removed=drop_removed
+    )
+    assert not result.problems, result.problems
+    assert result.upgraded is not None
+    return result.upgraded.decode()
+
+
+def test_new_properties_of_a_one_line_element_stay_on_its_line(tmp_path):
+    body = (
+        '      <display_window name="W" version="5"><size>640</size><size>480</size>'
+        "<pipe>0</pipe></display_window>\n"
+    )
+    text = upgraded(tmp_path, body)
+    (line,) = [line for line in text.splitlines() if "display_window" in line]
+    assert line.startswith('      <display_window name="W" version="6"><size>640</size>')
+    assert "<allow_mouse_locking>true</allow_mouse_locking></display_window>" in line
+
+
+def test_new_empty_elements_are_written_as_the_file_writes_them(tmp_path):
+    body = (
+        '      <display_window name="W" version="3">\n'
+        "         <size>640</size>\n"
+        "         <pipe>0</pipe>\n"
+        "         <act_as_event_source />\n"
+        "      </display_window>\n"
+    )
+    text = upgraded(tmp_path, body)
+    assert "<keyboard_mouse_device_name />" in text and "<keyboard_mouse_device_name/>" not in text
+
+
+def test_a_renamed_property_left_in_a_newer_element_is_carried_not_dropped(tmp_path):
+    body = (
+        '      <display_system name="Pipes" version="3">\n'
+        "         <number_of_pipes>1</number_of_pipes>\n"
+        "         <x11_pipes>:0.0</x11_pipes>\n"
+        "         <use_swap_group>false</use_swap_group>\n"
+        "      </display_system>\n"
+    )
+    (found,) = findings(write(tmp_path / "a.jconf", jconf(body)))
+    assert found.code == "CFG021" and "pipes" in found.hint and "--drop-removed" not in found.hint
+    for drop in (False, True):
+        text = upgraded(tmp_path, body, drop_removed=drop)
+        assert "<pipes>:0.0</pipes>" in text and "x11_pipes" not in text

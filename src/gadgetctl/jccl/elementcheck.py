@@ -13,7 +13,7 @@ from typing import NamedTuple
 from gadgetctl.diagnostics import Diagnostic, Severity
 from gadgetctl.jccl.configuration import ConfigElement, PropertyValue, SourceLocation
 from gadgetctl.jccl.definitions import Location, PropertyDefinition, ValueType
-from gadgetctl.jccl.runtime import REQUIRED_POINTERS
+from gadgetctl.jccl.runtime import RENAMED_PROPERTIES, REQUIRED_POINTERS, renamed_from
 from gadgetctl.jccl.typeindex import TypeIndex, TypeView
 from gadgetctl.jccl.valuecheck import ValueProblem, check_text
 from gadgetctl.suggest import close_names
@@ -257,6 +257,15 @@ class ElementChecker:
         if older:
             last = max(older, key=lambda o: (o.type == element.type, o.version))
             owner = "" if last.type == element.type else f" {last.type}"
+            renamed = RENAMED_PROPERTIES.get((element.type, name))
+            if renamed is not None and renamed in view.properties:
+                return at(
+                    "CFG021",
+                    f"{describe(element)}: {name!r} is no property of {judged}; version "
+                    f"{last.version + 1} renamed it {renamed!r}, and VR Juggler ignores the old name",
+                    first.location,
+                    hint=f"Rename it {renamed!r}, keeping its values (`gadgetctl upgrade FILE` does).",
+                )
             return at(
                 "CFG021",
                 f"{describe(element)}: {name!r} is no property of {judged}; it was "
@@ -409,6 +418,9 @@ class ElementChecker:
         found = []
         for base, prop_name, effect in REQUIRED_POINTERS:
             prop = view.get(prop_name)
+            if prop is None:  # an old version: the same pointer under its old name
+                old_name = renamed_from(view.name, prop_name)
+                prop = view.get(old_name) if old_name is not None else None
             if (
                 prop is not None
                 and prop.valuetype is ValueType.POINTER

@@ -59,7 +59,8 @@ class Patcher:
         data: bytes,
         spans: dict[etree._Element, Span],
         encoding: str,
-        serialise: Callable[[etree._Element, str, str], bytes],
+        # (own indentation and unit, or None and None for a compact copy without layout)
+        serialise: Callable[[etree._Element, str | None, str | None], bytes],
         newline: str = "\n",
     ) -> None:
         self.data = data
@@ -97,11 +98,22 @@ class Patcher:
                 close = self.data.rfind(b"</", span.start_end, span.end)
                 edits.append(Edit(span.start_end, close, self.encode(_escape_text(new_text))))
             return edits
-        inner = indentation_before(self.data, self.spans[old_children[0]].start).decode(
-            self.encoding, "replace"
-        )
+        first = self.spans[old_children[0]].start
+        # A compact element (its first property on its start tag's line, e.g. all on one
+        # line) gets new children the way it writes its own: on that line, separated as its
+        # first two are.
+        compact = b"\n" not in self.data[span.start : first]
+        inner = indentation_before(self.data, first).decode(self.encoding, "replace")
         if not inner:
             inner = own + unit
+        separator = self.newline + inner
+        if compact:
+            between = b""
+            if len(old_children) > 1:
+                between = self.data[
+                    self.spans[old_children[0]].end : self.spans[old_children[1]].start
+                ]
+            separator = between.decode(self.encoding, "replace") if not between.strip() else ""
         old_keys = [content_key(c) for c in old_children]
         new_keys = [content_key(c) for c in new_children]
         matcher = SequenceMatcher(None, old_keys, new_keys, autojunk=False)
@@ -125,7 +137,8 @@ class Patcher:
                 else:
                     at = self.spans[old_children[i1 - 1]].end if i1 > 0 else span.start_end
                 text = b"".join(
-                    self.encode(self.newline + inner) + self.serialise(c, inner, unit)
+                    self.encode(separator)
+                    + (self.serialise(c, None, None) if compact else self.serialise(c, inner, unit))
                     for c in new_children[j1:j2]
                 )
                 edits.append(Edit(at, at, text))

@@ -74,6 +74,33 @@ REQUIRED_POINTERS: tuple[tuple[str, str, str], ...] = (
     ("simulated_relative_position", "relative_proxy", "the device has nothing to follow"),
 )
 
+# Properties a newer definition version renamed, as (type, old name) -> new name: the
+# upgrade transforms carry the values over. Checks that hold in every version (a required
+# pointer) follow the old name in an old element, and `upgrade` renames an old name left in
+# an element that already declares the newer version (its value would be lost otherwise).
+RENAMED_PROPERTIES: dict[tuple[str, str], str] = {
+    ("display_system", "x11_pipes"): "pipes",
+    **{
+        (simulated, "event_window_proxy"): "keyboard_mouse_proxy"
+        for simulated in (
+            "simulated_analog_device",
+            "simulated_digital_device",
+            "simulated_digital_glove",
+            "simulated_glove_gesture",
+            "simulated_positional_device",
+        )
+    },
+}
+
+
+def renamed_from(type_name: str, new_name: str) -> str | None:
+    """The older name of ``type_name``'s property ``new_name``, if a version renamed it."""
+    for (owner, old), new in RENAMED_PROPERTIES.items():
+        if owner == type_name and new == new_name:
+            return old
+    return None
+
+
 # String properties whose values VR Juggler passes through environment-variable expansion
 # as paths, by (type, property).
 PATH_PROPERTIES = frozenset(

@@ -14,6 +14,7 @@ is left unchanged and the problem reported.
 
 from __future__ import annotations
 
+import copy
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -28,6 +29,7 @@ from gadgetctl.jccl.formatupgrade import Edit, configuration_format, definition_
 from gadgetctl.jccl.namespaces import CONFIG_NS
 from gadgetctl.jccl.patch import Patcher
 from gadgetctl.jccl.repository import DefinitionRepository
+from gadgetctl.jccl.runtime import RENAMED_PROPERTIES
 from gadgetctl.jccl.searchpath import configuration_entries
 from gadgetctl.jccl.spans import Span, element_spans, indentation_before
 from gadgetctl.jccl.typeindex import TypeIndex
@@ -46,6 +48,7 @@ class ElementUpgrade:
     to_version: int
     created: int = 0  # new elements the transforms made
     dropped: tuple[str, ...] = ()  # properties removed (--drop-removed)
+    renamed: tuple[tuple[str, str], ...] = ()  # (old, new) property names, values kept
 
     @property
     def upgraded(self) -> bool:
@@ -57,6 +60,8 @@ class ElementUpgrade:
             if self.created
             else ""
         )
+        if self.renamed:
+            extra += ", renamed " + ", ".join(f"{old} to {new}" for old, new in self.renamed)
         if self.dropped:
             extra += f", removed {', '.join(self.dropped)}"
         if not self.upgraded:
@@ -122,6 +127,24 @@ def indent_tree(node: etree._Element, own: str, unit: str) -> None:
         indent_tree(child, own + unit, unit)
 
 
+def compact_tree(node: etree._Element) -> None:
+    """Drop the layout (blank text between child elements) of ``node``'s tree."""
+    children = [c for c in node if isinstance(c.tag, str)]
+    if not children:
+        return
+    if not (node.text or "").strip():
+        node.text = None
+    for child in children:
+        if not (child.tail or "").strip():
+            child.tail = None
+        compact_tree(child)
+
+
+_SPACED_EMPTY = re.compile(rb"<[^<>!?]*\s/>")
+_TIGHT_EMPTY = re.compile(rb"<[^<>!?]*[^\s/]/>")
+_EMPTY_TAG_END = re.compile(r"(?<=[^\s/])/>")
+
+
 class ElementUpgrader:
     """Upgrades element trees against one repository; with ``drop_removed``, also removes
     the properties their newest definition no longer has (those `validate` reports as
@@ -170,6 +193,23 @@ class ElementUpgrader:
             and view.get(_local(prop)) is None
             and self.index.history(type_name, _local(prop))
         ]
+
+    def renamed_properties(self, node: etree._Element) -> list[tuple[etree._Element, str]]:
+        """Property children under a name that the element's (current) version renamed,
+        with the new name: the element declares the newer version but kept the old name,
+        whose values VR Juggler would ignore. Not when the new name is written too."""
+        type_name = _local(node)
+        view = self.index.view(type_name)
+        if view is None or (_version(node) or 0) < view.version:
+            return []
+        children = [c for c in node if isinstance(c.tag, str)]
+        names = {_local(c) for c in children}
+        found = []
+        for prop in children:
+            new = RENAMED_PROPERTIES.get((type_name, _local(prop)))
+            if new is not None and new not in names and view.get(new) is not None:
+                found.append((prop, new))
+        return found
 
     def drop(self, node: etree._Element) -> list[str]:
         """Remove, in place, the removed properties of ``node``; their names."""
@@ -324,6 +364,8 @@ class FileUpgrader:
         self.drop_removed = drop_removed
         self.encoding = declared_encoding(data)
         self.newline = "\r\n" if b"\r\n" in data[:4096] else "\n"
+        # how the file ends its empty elements: <x /> or <x/>
+        self.spaced_empty = len(_SPACED_EMPTY.findall(data)) > len(_TIGHT_EMPTY.findall(data))
         self.edits: list[Edit] = []
         self.format_edits: list[Edit] = []
 
@@ -390,8 +432,12 @@ class FileUpgrader:
     def visit(self, upgrader: ElementUpgrader, node: etree._Element, top: Span) -> None:
         step = upgrader.needs(node)
         if step is None:
-            removed = upgrader.removed_properties(node)
-            if removed:
+            renames = upgrader.renamed_properties(node)
+            carried = {id(prop) for prop, _ in renames}
+            removed = [p for p in upgrader.removed_properties(node) if id(p) not in carried]
+            if renames:
+                self.edits += self.rename(node, renames)
+            if removed or renames:
                 names = tuple(dict.fromkeys(_local(p) for p in removed))
                 for prop in removed:
                     self.edits.append(self.patcher.removal(node, prop))
@@ -404,6 +450,7 @@ class FileUpgrader:
                         version,
                         version,
                         dropped=names,
+                        renamed=tuple((_local(p), new) for p, new in renames),
                     )
                 )
             for child in upgrader.embedded(node):
@@ -452,6 +499,19 @@ class FileUpgrader:
         )
         self.result.elements.extend(log)
 
+    def rename(self, node: etree._Element, renames: list[tuple[etree._Element, str]]) -> list[Edit]:
+        """Edits giving the renamed properties of ``node`` their new names, values kept."""
+        renamed_copy = copy.deepcopy(node)
+        new_names = {
+            index: new for index, child in enumerate(node) for prop, new in renames if child is prop
+        }
+        for index, child in enumerate(renamed_copy):
+            if index in new_names:
+                child.tag = etree.QName(etree.QName(child).namespace, new_names[index]).text
+        span = self.spans[node]
+        own = indentation_before(self.data, span.start).decode(self.encoding, "replace")
+        return self.patcher.patch(node, renamed_copy, own, self.indent_unit(node, own))
+
     def indent_unit(self, node: etree._Element, own: str) -> str:
         children = [c for c in node if isinstance(c.tag, str)]
         if children:
@@ -462,11 +522,18 @@ class FileUpgrader:
                 return inner[len(own) :]
         return DEFAULT_INDENT
 
-    def serialise(self, node: etree._Element, own: str, unit: str) -> bytes:
-        indent_tree(node, own, unit)
+    def serialise(self, node: etree._Element, own: str | None, unit: str | None) -> bytes:
+        """``node`` laid out one child per line from ``own`` by ``unit``, or written
+        compactly (no layout at all) when they are None; empty elements as the file writes them."""
+        if own is None or unit is None:
+            compact_tree(node)
+        else:
+            indent_tree(node, own, unit)
         node.tail = None
         text = etree.tostring(node, encoding="unicode")
         text = re.sub(r'\sxmlns="' + re.escape(CONFIG_NS) + '"', "", text, count=1)
+        if self.spaced_empty:
+            text = _EMPTY_TAG_END.sub(" />", text)
         if self.newline != "\n":
             text = text.replace("\n", self.newline)
         return text.encode(self.encoding, "xmlcharrefreplace")
