@@ -122,6 +122,7 @@ class Endpoint:
         self._decoder = StreamDecoder()
         self.dropped = 0  # messages not queued because the output buffer was full
         self.sent_messages = 0
+        self.bytes_read = 0
         self.counters: Counter[str] = Counter()
         #: ``codecs.decode`` to attach reports to user messages, or None.
         self.decode: Callable[[str, bytes], object] | None = None
@@ -131,16 +132,18 @@ class Endpoint:
     def fileno(self) -> int:
         return self.sock.fileno()
 
-    def read(self, received: float) -> list[Message]:
-        """Read what the socket has; the peer's user messages, ids translated to names."""
+    def read(self, received: float, size: int = RECV_CHUNK) -> list[Message]:
+        """Read what the socket has, at most ``size`` bytes (counted in ``bytes_read``); the
+        peer's user messages, ids translated to names."""
         try:
-            data = self.sock.recv(RECV_CHUNK)
+            data = self.sock.recv(size)
         except (BlockingIOError, InterruptedError):
             return []
         except OSError as exc:
             raise ConnectionDropped(f"connection error: {exc.strerror or exc}") from None
         if not data:
             raise ConnectionDropped("closed by the peer")
+        self.bytes_read += len(data)
         if not self.opened:
             need = COOKIE_SIZE - len(self._cookie)
             self._cookie += data[:need]

@@ -17,6 +17,12 @@ the datagram's own source address (so the server cannot be made to connect to a 
 ``allow`` may restrict which addresses are served, and a client that does not complete the
 cookie exchange within ``handshake_timeout`` is closed.
 
+Input is budgeted per client and pass (:data:`READ_BUDGET` bytes, :data:`MESSAGE_BUDGET`
+messages): a client that floods the server (pings at megabytes a second) is served at that
+pace, its excess left waiting (in its socket, or read and handled in the next passes;
+counted in ``input_deferred`` and ``messages_deferred``), so it never holds up a pass, the
+frames of the thread that polls, or the other clients.
+
 Thread use: :meth:`poll` runs the I/O (typically in a thread of its own); :meth:`send`,
 :meth:`register_sender` and the others may be called from any thread.
 """
@@ -51,6 +57,20 @@ CONNECTING = "connecting"
 HANDSHAKE = "handshake"
 OPEN = "open"
 
+#: Connections the kernel completes and holds for the server before it accepts them (capped
+#: by ``net.core.somaxconn``). A burst of connects beyond it has its SYNs dropped, and each
+#: such client waits a second for its retry: at 16, every 17th of a burst did.
+LISTEN_BACKLOG = 1024
+
+#: Each client's input budget per pass of :meth:`VrpnServer.poll`: at most this many bytes
+#: read from its socket (what is left waits in the kernel, and TCP slows the sender down)...
+READ_BUDGET = 4096
+#: ...and at most this many of its messages handled (pings answered, messages passed on);
+#: the rest of a read waits for the next passes, during which its socket is not read.
+#: So a client flooding the server costs a pass a bounded amount of work, and the frames
+#: and the other clients of the same thread wait at most that long for it.
+MESSAGE_BUDGET = 32
+
 
 class ServerClient:
     """One client of a :class:`VrpnServer`."""
@@ -64,6 +84,11 @@ class ServerClient:
         self.endpoint: Endpoint | None = None
         self.sock: socket.socket | None = None  # while the call-back connect is under way
         self.closed = False
+        #: Messages read but over this pass's budget: handled by the next passes (at most
+        #: one read's worth: the socket is not read again until they are).
+        self.pending: list[Message] = []
+        #: Passes in which this client used its whole input budget (more input waited).
+        self.deferred = 0
 
     @property
     def dropped(self) -> int:
@@ -157,7 +182,7 @@ class VrpnServer:
                 if self.port == 0 and exc.errno == errno.EADDRINUSE:
                     continue  # the UDP port of an OS-chosen TCP port was taken: pick again
                 raise
-            tcp.listen(16)
+            tcp.listen(LISTEN_BACKLOG)
             tcp.setblocking(False)
             udp.setblocking(False)
             self._tcp, self._udp, self.port = tcp, udp, port
@@ -328,13 +353,19 @@ class VrpnServer:
             self._expire(time.monotonic())
             readers: list = [self._tcp, self._udp, self._wake_r]
             writers: list = []
+            backlog: list[ServerClient] = []  # messages read in an earlier pass wait
             for client in self._clients.values():
                 if client.sock is not None:
                     writers.append(client.sock)
                 elif client.endpoint is not None:
-                    readers.append(client.endpoint)
+                    if client.pending:
+                        backlog.append(client)
+                    else:
+                        readers.append(client.endpoint)
                     if client.endpoint.wants_write:
                         writers.append(client.endpoint)
+            if backlog:
+                timeout = 0.0
         try:
             r, w, _ = select.select(readers, writers, [], timeout)
         except (OSError, ValueError):
@@ -352,6 +383,9 @@ class VrpnServer:
                     self._lobs()
                 else:
                     self._read(ready, wall)
+            for client in backlog:
+                if not client.closed:
+                    self._handle(client, client.pending)
             for ready in w:
                 if isinstance(ready, Endpoint):
                     client = self._client_of(ready)
@@ -396,8 +430,9 @@ class VrpnServer:
         return client
 
     def _accept(self) -> None:
+        """Accept every connection waiting (at most a full backlog) in this one pass."""
         assert self._tcp is not None
-        for _ in range(64):
+        for _ in range(LISTEN_BACKLOG):
             try:
                 sock, address = self._tcp.accept()
             except (BlockingIOError, InterruptedError):
@@ -485,14 +520,31 @@ class VrpnServer:
         client = self._client_of(ep)
         if client is None:
             return
+        before = ep.bytes_read
         try:
-            messages = ep.read(wall)
+            messages = ep.read(wall, READ_BUDGET)
             if ep.opened and client.state == HANDSHAKE:
                 self._opened(client, ep)
         except ConnectionDropped as exc:
             self._close_client(client, exc.reason)
             return
+        if ep.bytes_read - before >= READ_BUDGET:  # more may wait in the socket
+            client.deferred += 1
+            self.counters["input_deferred"] += 1
+        if len(messages) > MESSAGE_BUDGET:
+            self.counters["messages_deferred"] += len(messages) - MESSAGE_BUDGET
+        self._handle(client, messages)
+
+    def _handle(self, client: ServerClient, messages: list[Message]) -> None:
+        """The client's messages up to its budget; the rest wait in ``client.pending``."""
+        if len(messages) > MESSAGE_BUDGET:
+            client.pending = messages[MESSAGE_BUDGET:]
+            messages = messages[:MESSAGE_BUDGET]
+        else:
+            client.pending = []
         for m in messages:
+            if client.closed:
+                return
             if m.type == PING:
                 self._pong(client, m)
             elif self.on_message is not None:
