@@ -16,7 +16,11 @@ fanning out to many clients. Both run `gadgetctl serve` as a separate process on
    the frame (feeding, framing, queueing, the first write to every client), the frame period,
    and the clients' latency as in 2; with the CPU of the frame thread and of the clients.
 
-Run: python bench/bench_vrpn.py [--seconds 5] [--part ingest|fanout|breakdown] [--devices 100] [--clients 8]
+4. Flood (``--part flood``, not part of ``all``): the fan-out without, then with one more
+   client pinging at 3 MB/s (issue 24 item 4); the other clients' latency with the flood
+   against without.
+
+Run: python bench/bench_vrpn.py [--seconds 5] [--part ingest|fanout|breakdown|flood] [--devices 100] [--clients 8]
 [--walking-clients]
 
 The fan-out clients keep what they receive with its receipt time and walk it after the run
@@ -45,7 +49,16 @@ import numpy as np
 from common import REPO, Report
 
 from gadgetctl.vrpn import codecs
-from gadgetctl.vrpn.wire import COOKIE_SIZE, HEADER_SIZE, make_cookie, padded
+from gadgetctl.vrpn.wire import (
+    COOKIE_SIZE,
+    HEADER_SIZE,
+    SENDER_DESCRIPTION,
+    TYPE_DESCRIPTION,
+    make_cookie,
+    pack_description,
+    pack_message,
+    padded,
+)
 
 HEAD = """<?xml version="1.0" encoding="UTF-8"?>
 <?org-vrjuggler-jccl-settings configuration.version="3.0"?>
@@ -349,6 +362,43 @@ def _client(port: int, seconds: float, rate: float, results, defer: bool = True)
     )  # the first tenth: the connection's start
 
 
+def _flooder(port: int, seconds: float, rate: float, sender: str, results) -> None:
+    """A hostile client (issue 24 item 4): pings from a served sender at ``rate`` bytes per
+    second (as fast as serve takes them when it takes fewer), reading and discarding the
+    pongs (the worst case for serve: every pong is written)."""
+    sock = socket.create_connection(("127.0.0.1", port), timeout=10)
+    port_of = sock.getsockname()[1]
+    sock.sendall(
+        make_cookie()
+        + pack_description(SENDER_DESCRIPTION, 0, sender)
+        + pack_description(TYPE_DESCRIPTION, 0, codecs.PING)
+    )
+
+    def discard() -> None:
+        try:
+            while sock.recv(1 << 20):
+                pass
+        except OSError:
+            pass
+
+    threading.Thread(target=discard, daemon=True).start()
+    ping = pack_message(0, 0, b"", 0.0)
+    step = 0.01
+    chunk = ping * max(1, int(rate * step) // len(ping))
+    sent = 0
+    end = time.monotonic() + seconds
+    due = time.monotonic()
+    try:
+        while time.monotonic() < end:
+            sock.sendall(chunk)
+            sent += len(chunk)
+            due += step
+            time.sleep(max(0.0, due - time.monotonic()))
+    finally:
+        sock.close()
+    results.put({"flooded": sent, "client": f"127.0.0.1:{port_of}"})
+
+
 def fanout(
     report: Report,
     seconds: float,
@@ -356,30 +406,43 @@ def fanout(
     devices: int = 100,
     clients: int = 8,
     defer: bool = True,
-) -> None:
+    flood: float = 0.0,
+) -> dict[str, float]:
+    """The fan-out (with ``flood``, a client pinging at that many bytes per second too);
+    returns the latency percentiles and serve's share of a core."""
     rate = 1000.0
     config = tmp / "fanout.jconf"
     config.write_text(fanout_config(devices, rate))
     served = Served(config)
     context = multiprocessing.get_context("fork")
     results = context.Queue()
+    flooded = context.Queue()
     try:
         procs = [
             context.Process(target=_client, args=(served.port, seconds, rate, results, defer))
             for _ in range(clients)
         ]
+        if flood:
+            procs.append(
+                context.Process(
+                    target=_flooder, args=(served.port, seconds, flood, served.names[0], flooded)
+                )
+            )
         for p in procs:
             p.start()
         time.sleep(0.5)
         cpu0, wall0 = served.cpu(), time.perf_counter()
         time.sleep(max(0.1, seconds - 1.0))
         serve_cpu, wall = served.cpu() - cpu0, time.perf_counter() - wall0
-        outcomes = [results.get(timeout=seconds + 60) for _ in procs]
+        outcomes = [results.get(timeout=seconds + 60) for _ in range(clients)]
+        flooder = flooded.get(timeout=seconds + 60) if flood else {"flooded": 0, "client": ""}
         for p in procs:
             p.join(30)
-        gone = served.wait_disconnects(clients)
+        gone = served.wait_disconnects(len(procs))
     finally:
         served.stop()
+    gone = [e for e in gone if e["client"] != flooder["client"]]  # the readers' losses
+    sent = flooder["flooded"]
     latency = np.concatenate([o["latency"] for o in outcomes]) * 1000
     dropped = sum(e["dropped"] for e in gone)
     lost = sum(o["lost"] for o in outcomes) + dropped
@@ -387,7 +450,15 @@ def fanout(
     print(
         f"  {devices} waveform devices at {rate:g} Hz ({devices * rate:,.0f} pose reports/s) to {clients} "
         f"TCP clients, {seconds:g} s"
+        + (f", a client flooding pings at {flood / 1e6:g} MB/s" if flood else "")
     )
+    if flood:
+        stopped = next((e for e in served.events if e["event"] == "stopped"), {})
+        counters = stopped.get("counters", {})
+        report.figure("flooder: pings sent (serve took them at)", sent / seconds / 1e6, "MB/s")
+        report.figure(
+            "serve: passes with the input budget used", counters.get("input_deferred", 0), ""
+        )
     report.figure("reports lost over TCP (all clients)", lost, "reports", target=0)
     report.figure("messages per second per client", per_client, "msg/s")
     report.figure("sample-to-client latency p50", float(np.percentile(latency, 50)), "ms")
@@ -398,6 +469,21 @@ def fanout(
     report.figure(
         "serve CPU per report per client", serve_cpu / (per_client * clients * wall) * 1e6, "us"
     )
+    return {
+        "p50": float(np.percentile(latency, 50)),
+        "p99": float(np.percentile(latency, 99)),
+        "cpu": serve_cpu / wall * 100,
+    }
+
+
+def flooded(report: Report, seconds: float, tmp: Path, devices: int, clients: int) -> None:
+    """The fan-out without, then with a client flooding pings at 3 MB/s (issue 24 item 4):
+    the other clients' latency with the flood against without, in the same run."""
+    calm = fanout(report, seconds, tmp, devices, clients)
+    stormy = fanout(report, seconds, tmp, devices, clients, flood=3e6)
+    report.ratio("latency p50 with the flooder / without", stormy["p50"], calm["p50"])
+    report.ratio("latency p99 with the flooder / without", stormy["p99"], calm["p99"])
+    report.ratio("serve CPU with the flooder / without", stormy["cpu"], calm["cpu"])
 
 
 def breakdown(
@@ -526,7 +612,9 @@ def breakdown(
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--seconds", type=float, default=5.0)
-    parser.add_argument("--part", choices=("ingest", "fanout", "breakdown", "all"), default="all")
+    parser.add_argument(
+        "--part", choices=("ingest", "fanout", "breakdown", "flood", "all"), default="all"
+    )
     parser.add_argument(
         "--devices", type=int, default=100, help="fan-out: waveform devices at 1 kHz"
     )
@@ -557,6 +645,9 @@ def main() -> None:
                 args.clients,
                 not args.walking_clients,
             )
+        if args.part == "flood":
+            print("serve fan-out, without and with a client flooding pings")
+            flooded(report, args.seconds, Path(tmp), args.devices, args.clients)
         if args.part == "breakdown":
             print("serve fan-out, where the time goes (serve in this process)")
             breakdown(
