@@ -3,13 +3,18 @@ only the shared emulator scaffolding, :mod:`gadgetctl.emulation`).
 
 It says ``M3`` once its pty is open (a pty carries no RTS to wait for); once a driver has
 opened the line (the ``M3`` left the line's input queue: opening a port discards it, or it was
-read) it sends a serial-mouse packet ``rate`` times a second: 3 bytes, or 4 while the middle
-button is down. Packets are held back while the driver lags, so ``sent`` lists what the
-driver can read. Scenarios:
+read) it steps its scenario ``rate`` times a second and sends a serial-mouse packet (3 bytes,
+or 4 while the middle button is down) at a step where the ball is pushed off centre or a
+button changed, and nothing otherwise: a real Wanda is silent at rest (VRPN ``vrpn_Wanda.C``),
+and does not always send the centred packet when the ball is let go (neither does this one).
+Packets are held back while the driver lags, so ``sent`` lists what the driver can read.
+Scenarios:
 
-``idle``        joystick centred, no button pressed
-``motion``      the joystick circles (to its -34..34 limits)
-``buttons``     buttons 0, 1 (the middle one, 4-byte packets) and 2 press in turn
+``idle``        at rest: joystick centred, no button pressed, nothing sent
+``motion``      the joystick circles (to its -34..34 limits), let go for ``REST`` steps
+                (silent) after each turn
+``buttons``     buttons 0, 1 (the middle one, 4-byte packets) and 2 press and release in turn,
+                the ball at rest: one packet per change
 ``garbage``     motion, with junk and broken packets between the packets
 ``disconnect``  ``disconnect_after`` packets, then hang-up
 """
@@ -29,6 +34,9 @@ DEFAULT_LINK = "/tmp/gadgetctl-wanda"
 QUIET = 0.1
 #: Unread bytes beyond which packets are held back (no reader).
 BACKLOG = 64
+
+#: Steps of a turn of the ``motion`` circle, then of rest (the ball let go: silence).
+TURN, REST = 90, 30
 
 #: Junk put between packets by the ``garbage`` scenario, in turn.
 GARBAGE_CHUNKS: tuple[bytes, ...] = (
@@ -54,10 +62,17 @@ def controls(scenario: str, step: int) -> Sample:
     if scenario == "buttons":
         pressed = step // 10 % 3 if step % 10 < 5 else None
         return tuple(int(pressed == k) for k in range(3)), (0, 0)  # type: ignore[return-value]
+    if scenario == "motion" and step % (TURN + REST) >= TURN:
+        return (0, 0, 0), (0, 0)  # let go
     if scenario in ("motion", "garbage", "disconnect"):
         t = step / 15.0
         return (0, 0, 0), (round(34 * math.cos(t)), round(34 * math.sin(t)))
     return (0, 0, 0), (0, 0)
+
+
+def sends(now: Sample, before: Sample) -> bool:
+    """Whether a Wanda sends a packet: the ball is off centre, or a button changed."""
+    return now[1] != (0, 0) or now[0] != before[0]
 
 
 class WandaEmulator(PtyDeviceEmulator):
@@ -85,6 +100,8 @@ class WandaEmulator(PtyDeviceEmulator):
             drain=linger,
         )
         self.sent: list[Sample] = []
+        self._step = 0
+        self._state: Sample = ((0, 0, 0), (0, 0))  # at rest
 
     @property
     def reader(self) -> bool:
@@ -109,8 +126,11 @@ class WandaEmulator(PtyDeviceEmulator):
             return
         if self.unread() > BACKLOG:
             return  # the reader fell behind: hold the packets back
-        step = len(self.sent)
+        step, self._step = self._step, self._step + 1
         buttons, axes = controls(self.scenario, step)
+        before, self._state = self._state, (buttons, axes)
+        if not sends(self._state, before):
+            return  # at rest: silence
         out = b""
         if self.scenario == "garbage":
             out += GARBAGE_CHUNKS[step % len(GARBAGE_CHUNKS)]

@@ -14,6 +14,12 @@ Packets: the first byte has bit 6 set (sync), the others have it clear.
 The joystick is absolute: X = -int8(X bits) (the Wanda's X runs the other way), Y = int8(Y
 bits), both clamped to -34..34 as Gadgeteer does.
 
+A Wanda sends nothing while the ball is at rest and no button changes (VRPN ``vrpn_Wanda.C``,
+whose comment says so and which centres the joystick after 0.2 s without a packet; VR
+Juggler's ``WandaStandalone.cpp`` ignores read timeouts), so silence is not a disconnect: only
+a lost line (a hang-up, an unplugged adapter) is. A pulled cable on a real RS-232 port cannot
+be told from rest, by this driver or any other.
+
 Only the standard library and pyserial (through :mod:`gadgetctl.transport.serialline`) are
 used.
 """
@@ -86,7 +92,11 @@ class PacketScanner(ResyncScanner[WandaPacket]):
     7-bit line cannot carry) are skipped a whole run at a time, counted once in
     ``bad_records`` and byte by byte in ``skipped_bytes``. A 3-byte packet is held until the
     next byte says whether a 4th follows, or until the line goes quiet (``quiet``): packets
-    of two sizes, so the search is the Wanda's own, the counting the shared one."""
+    of two sizes, so the search is the Wanda's own, the counting the shared one. ``M3``
+    followed by a sync byte (or by silence) is the Wanda's hello, said again whenever it is
+    powered up: counted in ``hellos``, not as junk."""
+
+    hellos: int = 0
 
     def feed(self, data: bytes, *, quiet: bool = False) -> list[WandaPacket]:
         """Add bytes; ``quiet`` says no more are coming now (a held packet is complete)."""
@@ -100,6 +110,12 @@ class PacketScanner(ResyncScanner[WandaPacket]):
                 while pos < len(buf) and (buf[pos] & 0x80 or not buf[pos] & SYNC):
                     pos += 1
                 self.skip(pos - start)
+                continue
+            if buf.startswith(HELLO, pos) and (
+                (len(buf) - pos == 2 and quiet) or (len(buf) - pos > 2 and buf[pos + 2] & SYNC)
+            ):
+                self.hellos += 1  # M3 again: the Wanda was powered up (or reset) anew
+                pos += len(HELLO)
                 continue
             if len(buf) - pos < 3 or (len(buf) - pos == 3 and not quiet):
                 break  # wait for the rest (or the byte after a 3-byte packet)
@@ -121,9 +137,8 @@ class Wanda(ScannedDevice):
     """An Ascension Wanda on a serial line.
 
     ``read_timeout`` (seconds; the element's ``read_timeout`` is in ms) bounds one read;
-    ``hello_timeout`` the wait for ``M3``; ``reset_time`` each half of the RTS pulse;
-    ``silence_timeout`` of no byte at all after which the Wanda counts as gone (a Wanda at
-    rest still reports).
+    ``hello_timeout`` the wait for ``M3``; ``reset_time`` each half of the RTS pulse.
+    ``heard_at`` is the :func:`time.monotonic` time of the last byte (silence is rest).
     """
 
     def __init__(
@@ -133,16 +148,14 @@ class Wanda(ScannedDevice):
         read_timeout: float = 0.02,
         hello_timeout: float = 2.0,
         reset_time: float = 0.1,
-        silence_timeout: float = 2.0,
     ) -> None:
         self.line = SerialLine(port, LineSettings(BAUD, bytesize=7), poll_interval=read_timeout)
         self.read_timeout = read_timeout
         self.hello_timeout = hello_timeout
         self.reset_time = reset_time
-        self.silence_timeout = silence_timeout
         self.scanner = PacketScanner()
         self._early: list[WandaPacket] = []  # packets that came with the hello
-        self._heard_at = 0.0
+        self.heard_at = 0.0
 
     def open(self) -> None:
         if self.line.is_open:
@@ -155,7 +168,7 @@ class Wanda(ScannedDevice):
                 self.line.set_lines(rts=True)
                 time.sleep(self.reset_time)
             self._hello(reset)
-            self._heard_at = time.monotonic()
+            self.heard_at = time.monotonic()
         except SerialLineLost as exc:
             self.line.close()
             raise WandaDisconnected(str(exc)) from exc
@@ -171,8 +184,8 @@ class Wanda(ScannedDevice):
         return self.line.degraded
 
     def read(self) -> list[WandaPacket]:
-        """The packets that arrived within ``read_timeout`` (possibly none). Raises
-        :class:`WandaDisconnected` when the line is lost or silent for ``silence_timeout``."""
+        """The packets that arrived within ``read_timeout`` (possibly none: a Wanda at rest
+        is silent). Raises :class:`WandaDisconnected` when the line is lost."""
         try:
             data = self.line.read(self.read_timeout)
         except SerialLineLost as exc:
@@ -180,26 +193,23 @@ class Wanda(ScannedDevice):
         packets = self.scanner.feed(data, quiet=not data)
         if self._early:
             packets, self._early = self._early + packets, []
-        now = time.monotonic()
         if data:
-            self._heard_at = now
-        elif now - self._heard_at > self.silence_timeout:
-            raise WandaDisconnected(f"no data from the Wanda for {self.silence_timeout:g} s")
+            self.heard_at = time.monotonic()
         return packets
 
     def _hello(self, reset: bool) -> None:
-        """Wait for ``M3``; what follows it stays for the packet scanner. Without RTS (a pty)
-        the Wanda was not reset and may have said ``M3`` before anyone listened (opening a
-        port discards what waited): two valid packets then stand for it."""
+        """After a reset, wait for ``M3``; what follows it stays for the packet scanner.
+        Without RTS (a pty) the Wanda was not reset: its ``M3`` may be long gone (opening a
+        port can discard it) and at rest it says nothing more, so nothing is waited for; an
+        ``M3`` still in the line is the scanner's to recognise."""
+        if not reset:
+            return
         got = bytearray()
         deadline = time.monotonic() + self.hello_timeout
         while True:
             index = got.find(HELLO)
             if index >= 0:
                 self._early = self.scanner.feed(bytes(got[index + 2 :]))
-                return
-            if not reset and len(PacketScanner().feed(bytes(got))) >= 2:
-                self._early = self.scanner.feed(bytes(got))
                 return
             if len(got) > MAX_HELLO_SCAN:
                 raise WandaProtocolError(f"no M3 among {len(got)} bytes: {bytes(got[:16])!r}")

@@ -6,12 +6,20 @@ joystick's X and Y, raw -34..34. As Gadgeteer's Wanda driver does, the analog ra
 34 whatever ``min``/``max`` say (the definition's defaults, 0 and 255, would leave the
 joystick near one end).
 
-Differences from the C++, on purpose: a lost or silent line raises from ``sample`` and the
+A Wanda is silent while its ball is at rest and no button changes, so silence is not a fault
+(the C++ ignores read timeouts); and as VRPN's ``vrpn_Wanda.C`` found, the Wanda may not send
+the centred packet when the ball is let go, so after ``rest_time`` (VRPN's 0.2 s) without a
+packet a joystick that was off centre reads centred again (one analog sample (0, 0); the
+buttons keep their state).
+
+Differences from the C++, on purpose: a lost line (a hang-up) raises from ``sample`` and the
 input manager restarts the device; bytes outside packets are counted (``bad_records``,
 ``skipped_bytes``) and skipped; a sample is added per packet, not per read.
 """
 
 from __future__ import annotations
+
+import time
 
 from gadgetctl.input import Analog, DeviceConfigError, Digital
 from gadgetctl.jccl.access import ElementAccess
@@ -29,13 +37,14 @@ class WandaDevice(Digital, Analog, CarriedCounters):
     # Protocol timing in seconds (the C++ driver's); tests shorten them.
     reset_time = 0.1  # each half of the RTS pulse (only where the line has RTS)
     hello_timeout = 2.0  # for the Wanda's M3
-    silence_timeout = 2.0  # no byte for this long: the line counts as lost
+    rest_time = 0.2  # no packet for this long with the joystick off centre: it is centred
 
     def __init__(self) -> None:
         super().__init__()
         self.port = ""
         self.read_timeout = 0.02
         self.wanda: Wanda | None = None
+        self._axes: tuple[int, int] = (0, 0)
         self.counts = CarriedCounts(SCANNER_COUNTERS)  # over every connection
 
     def config(self, access: ElementAccess) -> None:
@@ -55,7 +64,6 @@ class WandaDevice(Digital, Analog, CarriedCounters):
             read_timeout=self.read_timeout,
             hello_timeout=self.hello_timeout,
             reset_time=self.reset_time,
-            silence_timeout=self.silence_timeout,
         )
         wanda.open()
         self.wanda = wanda
@@ -65,8 +73,13 @@ class WandaDevice(Digital, Analog, CarriedCounters):
         wanda = self.wanda
         if wanda is None:
             raise WandaError("the Wanda is not open")
-        for packet in wanda.read():  # raises WandaDisconnected when the line is lost or silent
+        packets = wanda.read()  # raises WandaDisconnected when the line is lost
+        for packet in packets:
             self._add(packet)
+        resting = time.monotonic() - wanda.heard_at > self.rest_time
+        if not packets and self._axes != (0, 0) and resting:
+            self._axes = (0, 0)  # let go without a centred packet (VRPN's observation)
+            self.add_analog_sample([0.0, 0.0], self.now())
 
     def stop_sampling(self) -> None:
         wanda, self.wanda = self.wanda, None
@@ -78,3 +91,4 @@ class WandaDevice(Digital, Analog, CarriedCounters):
         stamp = self.now()
         self.add_digital_sample(list(packet.buttons), stamp)
         self.add_analog_sample([float(v) for v in packet.axes], stamp)
+        self._axes = packet.axes

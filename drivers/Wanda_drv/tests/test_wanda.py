@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import pytest
@@ -125,6 +126,57 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
     emu.stop()
     resumes_within(manager, "W", lambda: emulator("motion", link=link), lambda: device.records)
     assert device.restarts >= 1
+
+
+def test_a_wanda_at_rest_is_silent_and_stays_connected(emulator, managers) -> None:
+    # a real Wanda sends nothing while the ball rests and no button changes (VRPN's
+    # vrpn_Wanda.C); the driver used to call 2 s of that a lost line and reconnect
+    emu = emulator("idle")
+    manager = managers(element(emu.address))
+    device = manager.device("W")
+    assert wait_until(lambda: emu.reader, step=manager.update)
+    resting_until = time.monotonic() + 3.0  # longer than the 2 s the driver used to allow
+    while time.monotonic() < resting_until:
+        manager.update()
+        assert device.faults == 0 and manager.status("W").state == "running"
+        time.sleep(0.02)
+    assert emu.sent == [] and device.records == 0  # it really was silent
+    emu.send_raw(encode_packet((0, 0, 1), (0, 0)))  # then a button is pressed
+    assert wait_until(
+        lambda: device.store.latest(DeviceKind.DIGITAL) is not None, step=manager.update
+    )
+    assert device.store.latest(DeviceKind.DIGITAL).values == (0, 0, 1)
+    assert device.restarts == 0
+
+
+def test_a_ball_let_go_without_a_centred_packet_reads_centred(emulator, managers) -> None:
+    # VRPN found the Wanda may not send the packet that says the ball is centred again, and
+    # centres its joystick after 0.2 s without a packet
+    emu = emulator("idle")
+    manager = managers(element(emu.address))
+    device = manager.device("W")
+    assert wait_until(lambda: emu.reader, step=manager.update)
+    emu.send_raw(encode_packet((0, 0, 0), (20, -10)))
+    seen: list[tuple] = []
+
+    def frame() -> None:
+        manager.update()
+        seen.extend(s.values for s in device.store.frame(DeviceKind.ANALOG))
+
+    assert wait_until(lambda: seen[-1:] == [(0.0, 0.0)], step=frame), seen
+    assert seen == [(20.0, -10.0), (0.0, 0.0)]
+    assert manager.proxy("X").data == pytest.approx(0.5)
+
+
+def test_the_emulator_is_silent_at_rest_and_sends_changes_only() -> None:
+    from Wanda_drv.emulator import REST, TURN, controls, sends
+
+    steps = [controls("buttons", step) for step in range(40)]
+    changes = [i for i in range(1, 40) if sends(steps[i], steps[i - 1])]
+    assert changes == [5, 10, 15, 20, 25, 30, 35]  # press and release, nothing between
+    assert not sends(controls("idle", 7), controls("idle", 6))
+    resting = [controls("motion", s) for s in range(TURN, TURN + REST)]
+    assert all(not sends(now, resting[0]) for now in resting)
 
 
 def corpus_example(tmp_path: Path, port: str) -> Path:
