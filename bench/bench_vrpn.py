@@ -20,7 +20,10 @@ fanning out to many clients. Both run `gadgetctl serve` as a separate process on
    client pinging at 3 MB/s (issue 24 item 4); the other clients' latency with the flood
    against without.
 
-Run: python bench/bench_vrpn.py [--seconds 5] [--part ingest|fanout|breakdown|flood] [--devices 100] [--clients 8]
+5. Hostile (``--part hostile``, not part of ``all``): serve's memory while a client describes
+   ever-new sender names, against its memory without it (issue 24: within 2x).
+
+Run: python bench/bench_vrpn.py [--seconds 5] [--part ingest|fanout|breakdown|flood|hostile] [--devices 100] [--clients 8]
 [--walking-clients]
 
 The fan-out clients keep what they receive with its receipt time and walk it after the run
@@ -609,11 +612,95 @@ def breakdown(
     )
 
 
+# -------------------------------------------------------------------- 5. hostile memory
+
+
+def rss_bytes(pid: int) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) * 1024
+    return 0
+
+
+def _describer(port: int, seconds: float, results) -> None:
+    """A hostile client (issue 24 item 1): sender descriptions that keep their ids within
+    0..1999 but bring ever-new names of 90 characters, as fast as serve reads them."""
+    sock = socket.create_connection(("127.0.0.1", port), timeout=10)
+    sock.sendall(make_cookie())
+
+    def discard() -> None:
+        try:
+            while sock.recv(1 << 20):
+                pass
+        except OSError:
+            pass
+
+    threading.Thread(target=discard, daemon=True).start()
+    sent = 0
+    number = 0
+    end = time.monotonic() + seconds
+    try:
+        while time.monotonic() < end:
+            batch = b"".join(
+                pack_description(SENDER_DESCRIPTION, (number + i) % 2000, f"n{number + i:089d}")
+                for i in range(1000)
+            )
+            number += 1000
+            sock.sendall(batch)
+            sent += 1000
+    except OSError:
+        pass
+    finally:
+        sock.close()
+    results.put(sent)
+
+
+def hostile_memory(report: Report, seconds: float, tmp: Path) -> None:
+    """serve's memory (RSS) with one hostile client describing ever-new sender names for
+    ``seconds``, against its memory with a well-behaved client only, in the same run;
+    target (issue 24): within 2x."""
+    rate = 1000.0
+    config = tmp / "hostile.jconf"
+    config.write_text(fanout_config(4, rate))
+    served = Served(config)
+    context = multiprocessing.get_context("fork")
+    results, described = context.Queue(), context.Queue()
+    try:
+        reader = context.Process(target=_client, args=(served.port, 2 * seconds + 2, rate, results))
+        reader.start()
+        time.sleep(1.0)
+        calm = 0
+        for _ in range(5):  # with the reader served, before the hostile client
+            calm = max(calm, rss_bytes(served.process.pid))
+            time.sleep(0.1)
+        hostile = context.Process(target=_describer, args=(served.port, seconds, described))
+        hostile.start()
+        peak = calm
+        deadline = time.monotonic() + seconds + 1
+        while time.monotonic() < deadline:
+            peak = max(peak, rss_bytes(served.process.pid))
+            time.sleep(0.1)
+        names = described.get(timeout=60)
+        hostile.join(30)
+        results.get(timeout=seconds + 60)
+        reader.join(30)
+    finally:
+        served.stop()
+    print(
+        f"  4 waveform devices at {rate:g} Hz to 1 client; a hostile client describing {names:,} new sender names in {seconds:g} s"
+    )
+    report.figure("serve RSS with the well-behaved client", calm / 1e6, "MB")
+    report.figure("serve RSS, peak with the hostile client", peak / 1e6, "MB")
+    report.figure("serve RSS hostile / calm", peak / calm, "x", target=2.0)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--seconds", type=float, default=5.0)
     parser.add_argument(
-        "--part", choices=("ingest", "fanout", "breakdown", "flood", "all"), default="all"
+        "--part",
+        choices=("ingest", "fanout", "breakdown", "flood", "hostile", "all"),
+        default="all",
     )
     parser.add_argument(
         "--devices", type=int, default=100, help="fan-out: waveform devices at 1 kHz"
@@ -648,6 +735,9 @@ def main() -> None:
         if args.part == "flood":
             print("serve fan-out, without and with a client flooding pings")
             flooded(report, args.seconds, Path(tmp), args.devices, args.clients)
+        if args.part == "hostile":
+            print("serve's memory with a hostile client")
+            hostile_memory(report, args.seconds, Path(tmp))
         if args.part == "breakdown":
             print("serve fan-out, where the time goes (serve in this process)")
             breakdown(
