@@ -181,3 +181,96 @@ def test_a_renamed_property_left_in_a_newer_element_is_carried_not_dropped(tmp_p
     for drop in (False, True):
         text = upgraded(tmp_path, body, drop_removed=drop)
         assert "<pipes>:0.0</pipes>" in text and "x11_pipes" not in text
+
+
+# -- 6. config show gives values as VR Juggler reads them ----------------------------------------
+
+
+def test_config_show_gives_a_number_that_does_not_parse_as_it_is_read(tmp_path, cli):
+    import json
+
+    body = (
+        '      <dtrack name="Input" version="1">\n'
+        "         <command_port>abc</command_port>\n"
+        "      </dtrack>\n"
+    )
+    path = write(tmp_path / "a.jconf", jconf(body))
+    shown = cli("config", "show", path, "--element", "Input")
+    (line,) = [line for line in shown.stdout.splitlines() if "command_port" in line]
+    assert line.split()[1] == "0" and "'abc' does not parse as an integer" in line
+    data = json.loads(cli("config", "show", path, "--element", "Input", "--format", "json").stdout)
+    (prop,) = [p for p in data[0]["properties"] if p["name"] == "command_port"]
+    assert prop["values"][0]["value"] == "0" and prop["values"][0]["written"] == "abc"
+
+
+# -- 7. defs sees the definitions of installed plug-ins ------------------------------------------
+
+
+def test_defs_list_and_show_see_a_plugin_installed_through_its_entry_point(
+    tmp_path, monkeypatch, cli
+):
+    import json
+    import sys
+
+    site = tmp_path / "site"
+    plugin = site / "gadget_defs_extra" / "plug"
+    plugin.mkdir(parents=True)
+    (site / "gadget_defs_extra" / "__init__.py").write_text("")
+    (plugin / "__init__.py").write_text(
+        'GADGETCTL_API_VERSION = 1\nPLUGIN_NAME = "Extra_drv"\n'
+        'ELEMENT_TYPES = {"extra_knob": ("analog",)}\n'
+    )
+    (plugin / "extra_knob.jdef").write_text(
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<?org-vrjuggler-jccl-settings definition.version="3.1"?>\n'
+        '<definition xmlns="http://www.vrjuggler.org/jccl/xsd/3.1/definition" name="extra_knob">\n'
+        '  <definition_version version="1" label="Extra knob">\n'
+        "    <abstract>false</abstract><help>A knob.</help><parent>analog_device</parent>\n"
+        "    <category>/Devices/Analog</category>\n"
+        '    <property valuetype="integer" variable="false" name="knob_count">\n'
+        '      <help>Knobs.</help><value label="Knobs" defaultvalue="1"/>\n'
+        "    </property>\n"
+        "    <upgrade_transform/>\n"
+        "  </definition_version>\n"
+        "</definition>\n"
+    )
+    dist = site / "gadget_defs_extra-1.0.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: gadget-defs-extra\nVersion: 1.0\n")
+    (dist / "entry_points.txt").write_text(
+        "[gadgetctl.drivers]\nExtra_drv = gadget_defs_extra.plug\n"
+    )
+    monkeypatch.syspath_prepend(str(site))
+    listed = cli("defs", "list", "--format", "json")
+    assert listed.exit_code == 0 and "extra_knob" in listed.stdout
+    shown = cli("defs", "show", "extra_knob")
+    assert shown.exit_code == 0 and "knob_count" in shown.stdout
+    assert not any(m.startswith("gadget_defs_extra") for m in sys.modules)  # read, not imported
+
+
+# -- 8. a search-path entry naming an unset variable -------------------------------------------
+
+
+def test_a_definition_path_entry_with_an_unset_variable_is_named_and_skipped(tmp_path, monkeypatch):
+    defs = tmp_path / "defs"
+    defs.mkdir()
+    (defs / "extra_knob.jdef").write_text(
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<?org-vrjuggler-jccl-settings definition.version="3.1"?>\n'
+        '<definition xmlns="http://www.vrjuggler.org/jccl/xsd/3.1/definition" name="extra_knob">\n'
+        '  <definition_version version="1" label="Extra knob">\n'
+        "    <abstract>false</abstract><help>A knob.</help><parent/>\n"
+        "    <category>/Devices</category><upgrade_transform/>\n"
+        "  </definition_version>\n"
+        "</definition>\n"
+    )
+    # with ${NOPE} read as empty the entry would be exactly the directory above
+    monkeypatch.setenv("JCCL_DEFINITION_PATH", "${NOPE}" + str(defs))
+    monkeypatch.delenv("NOPE", raising=False)
+    config = write(tmp_path / "a.jconf", jconf('      <extra_knob name="K" version="1"/>\n'))
+    result = validate_paths([config], ValidateOptions(environ={}))
+    by_code = {d.code: d for d in result.diagnostics}
+    assert by_code["DEF022"].path == "$JCCL_DEFINITION_PATH"
+    assert "skipped" in by_code["DEF022"].message
+    assert "DEF023" not in by_code
+    assert "CFG010" in by_code  # the directory was not searched

@@ -70,20 +70,22 @@ def search_path_diagnostics(repo, given: Iterable[str] = ()) -> list[Diagnostic]
     for entry in repo.entries:
         if entry.origin == "bundled":
             continue
+        where = _where(entry.location) if entry.location else (entry.source,)
         for name in entry.undefined:
             found.append(
                 Diagnostic.make(
                     "DEF022",
-                    f"{entry.origin} entry {entry.raw!r} uses ${{{name}}}, which is not set",
-                    *(_where(entry.location)),
+                    f"{entry.origin} entry {entry.raw!r} uses ${{{name}}}, which is not set; "
+                    "the entry is skipped",
+                    *where,
                 )
             )
-        if not entry.exists:
+        if not entry.skipped and not entry.exists:
             found.append(
                 Diagnostic.make(
                     "DEF023",
                     f"{entry.origin} directory {entry.path} does not exist",
-                    *(_where(entry.location)),
+                    *where,
                 )
             )
     for shadow in repo.shadowed:

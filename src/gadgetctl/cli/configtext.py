@@ -39,7 +39,9 @@ def _property_lines(prop: ResolvedProperty, indent: str, width: int, style: _Sty
     if texts:
         all_default = all(v.source == DEFAULT for v in texts)
         parts = [
-            _value(v) + ("" if all_default or v.source != DEFAULT else style(_DIM, " (default)"))
+            _value(v)
+            + ("" if all_default or v.source != DEFAULT else style(_DIM, " (default)"))
+            + (style(_YELLOW, f" ({printable(v.note)})") if v.note else "")
             for v in texts
         ]
         joined = ", ".join(parts)

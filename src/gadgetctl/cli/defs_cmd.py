@@ -23,12 +23,14 @@ def register(app: typer.Typer) -> None:
 
 def _repository(definitions: list[Path], bundled: bool):
     from gadgetctl.errors import GadgetctlError
-    from gadgetctl.jccl.repository import default_repository
+    from gadgetctl.input.definitions import repository_for
 
     for directory in definitions:
         if not directory.is_dir():
             raise GadgetctlError(f"--definitions {directory}: no such directory")
-    return default_repository(definitions, bundled=bundled)
+    # the definitions driver plug-ins carry too (installed entry points, GADGETCTL_DRIVER_PATH),
+    # last, as `validate` and `config show` use them
+    return repository_for(definitions=definitions, bundled=bundled)
 
 
 def unknown_definition(repo, type_name: str, what: str = "definition"):
@@ -240,7 +242,7 @@ def path(
                     str(i + 1),
                     r["origin"],
                     r["path"],
-                    "yes" if r["exists"] else "no",
+                    "skipped" if r["skipped"] else "yes" if r["exists"] else "no",
                     str(r["files"]),
                     str(r["definitions"]),
                 ]
@@ -251,7 +253,8 @@ def path(
     for r in rows:
         for name in r["undefined_variables"]:
             emit(
-                f"warning: {r['origin']} entry {r['as_written']!r} uses ${{{name}}}, which is not set"
+                f"warning: {r['origin']} entry {r['as_written']!r} uses ${{{name}}}, which is not "
+                "set; the entry is skipped"
             )
     for s in shadowed:
         emit(

@@ -152,11 +152,12 @@ def _definition_path_findings(entries: list[SearchPathEntry]) -> list[Diagnostic
             found.append(
                 at(
                     "CFG003",
-                    f"definition directory {entry.raw!r} uses ${{{name}}}, which is not set",
+                    f"definition directory {entry.raw!r} uses ${{{name}}}, which is not set; "
+                    "the entry is skipped",
                     location,
                 )
             )
-        if not entry.exists:
+        if not entry.skipped and not entry.exists:
             found.append(
                 at(
                     "DEF023",

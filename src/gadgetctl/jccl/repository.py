@@ -81,7 +81,7 @@ class DefinitionRepository:
         if any(_same_directory(entry.path, e.path) for e in self.entries):
             return
         self.entries.append(entry)
-        if not entry.exists:
+        if entry.skipped or not entry.exists:
             return
         for path in sorted(entry.path.glob("*.jdef")):
             if not path.is_file():

@@ -10,9 +10,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from gadgetctl.jccl.access import read_float, read_int
 from gadgetctl.jccl.configuration import ConfigElement, Configuration, PropertyValue
 from gadgetctl.jccl.definitions import PropertyDefinition, ValueType
 from gadgetctl.jccl.typeindex import TypeIndex, TypeView
+from gadgetctl.jccl.valuecheck import is_number
 
 WRITTEN, DEFAULT = "written", "default"
 
@@ -24,6 +26,7 @@ class ResolvedValue:
     written: str | None = None  # the text as written, when it differs from value
     label: str | None = None  # the enumeration label of the value, if any
     element: ResolvedElement | None = None
+    note: str | None = None  # why the value differs from the text, when it is not a label
 
     def to_dict(self) -> dict[str, object]:
         data: dict[str, object] = {"source": self.source}
@@ -35,6 +38,8 @@ class ResolvedValue:
             data["written"] = self.written
         if self.label is not None:
             data["label"] = self.label
+        if self.note is not None:
+            data["note"] = self.note
         return data
 
 
@@ -96,8 +101,21 @@ def _text_value(prop: PropertyDefinition, text: str, source: str) -> ResolvedVal
     if prop.enumeration is not None:
         value = prop.enumeration.substitute(raw)
         label = raw if value != raw else prop.enumeration.label_for(value)
+    note = None
+    if source == WRITTEN and prop.valuetype in (ValueType.INTEGER, ValueType.FLOAT):
+        if not is_number(prop.valuetype, value):
+            # read as VR Juggler's run time reads it: the leading number, else 0
+            read = (
+                str(read_int(value))
+                if prop.valuetype is ValueType.INTEGER
+                else repr(read_float(value))
+            )
+            kind = "an integer" if prop.valuetype is ValueType.INTEGER else "a number"
+            shown = repr(value) if value else "the empty text"
+            note = f"{shown} does not parse as {kind}; VR Juggler reads {read}"
+            value = read
     written = text if source == WRITTEN and text != value else None
-    return ResolvedValue(value, source, written, label)
+    return ResolvedValue(value, source, written, label, note=note)
 
 
 class Resolver:

@@ -40,6 +40,22 @@ class SearchPathEntry:
     def exists(self) -> bool:
         return is_dir(self.path)
 
+    @property
+    def skipped(self) -> bool:
+        """An entry naming a variable that is not set is not searched at all (its
+        expansion with the variable left empty would be some other directory)."""
+        return bool(self.undefined)
+
+    @property
+    def source(self) -> str | None:
+        """Where the entry was written, for a finding about it: its file position, the
+        environment variable or the option."""
+        if self.location is not None:
+            return self.location.path
+        if self.origin in ("JCCL_DEFINITION_PATH", "VJ_BASE_DIR"):
+            return f"${self.origin}"
+        return self.origin if self.origin.startswith("--") else None
+
     def to_dict(self) -> dict[str, object]:
         return {
             "path": str(self.path),
@@ -49,6 +65,7 @@ class SearchPathEntry:
             "files": self.files,
             "definitions": self.contributed,
             "undefined_variables": list(self.undefined),
+            "skipped": self.skipped,
             "location": str(self.location) if self.location else None,
         }
 
