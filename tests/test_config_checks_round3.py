@@ -209,7 +209,6 @@ def test_config_show_gives_a_number_that_does_not_parse_as_it_is_read(tmp_path, 
 def test_defs_list_and_show_see_a_plugin_installed_through_its_entry_point(
     tmp_path, monkeypatch, cli
 ):
-    import json
     import sys
 
     site = tmp_path / "site"

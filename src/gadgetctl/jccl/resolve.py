@@ -102,18 +102,19 @@ def _text_value(prop: PropertyDefinition, text: str, source: str) -> ResolvedVal
         value = prop.enumeration.substitute(raw)
         label = raw if value != raw else prop.enumeration.label_for(value)
     note = None
-    if source == WRITTEN and prop.valuetype in (ValueType.INTEGER, ValueType.FLOAT):
-        if not is_number(prop.valuetype, value):
-            # read as VR Juggler's run time reads it: the leading number, else 0
-            read = (
-                str(read_int(value))
-                if prop.valuetype is ValueType.INTEGER
-                else repr(read_float(value))
-            )
-            kind = "an integer" if prop.valuetype is ValueType.INTEGER else "a number"
-            shown = repr(value) if value else "the empty text"
-            note = f"{shown} does not parse as {kind}; VR Juggler reads {read}"
-            value = read
+    if (
+        source == WRITTEN
+        and prop.valuetype in (ValueType.INTEGER, ValueType.FLOAT)
+        and not is_number(prop.valuetype, value)
+    ):
+        # read as VR Juggler's run time reads it: the leading number, else 0
+        read = (
+            str(read_int(value)) if prop.valuetype is ValueType.INTEGER else repr(read_float(value))
+        )
+        kind = "an integer" if prop.valuetype is ValueType.INTEGER else "a number"
+        shown = repr(value) if value else "the empty text"
+        note = f"{shown} does not parse as {kind}; VR Juggler reads {read}"
+        value = read
     written = text if source == WRITTEN and text != value else None
     return ResolvedValue(value, source, written, label, note=note)
 
