@@ -82,7 +82,8 @@ def device_xml(port: int) -> str:
         '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
         '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="b">'
         '<elements><input_manager name="IM" version="2"><driver>Optitrack_drv</driver>'
-        f'</input_manager><optitrack name="Bench" version="2"><port>{port}</port>{bodies}{markers}'
+        f'</input_manager><optitrack name="Bench" version="2"><port>{port}</port>'
+        f"<natnet_version>4.1</natnet_version>{bodies}{markers}"
         "</optitrack></elements></configuration>\n"
     )
 
@@ -188,7 +189,7 @@ def main() -> int:
     start = time.perf_counter()
     for _ in range(10):
         for p in packets:
-            decode_frame(p)
+            decode_frame(p, (4, 1))
     decoded = 1000 / (time.perf_counter() - start)
     plain = struct.Struct(f"<{len(packets[0]) // 4}i")
     start = time.perf_counter()

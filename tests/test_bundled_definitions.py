@@ -11,6 +11,7 @@ independently of the library that reads them.
 from __future__ import annotations
 
 import copy
+import dataclasses
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -177,6 +178,15 @@ def allowed_type_deviations() -> dict[tuple[str, int, str], Deviation]:
     }
 
 
+def added_properties(definition: str, version: int) -> list[str]:
+    """Properties gadgetctl adds after the upstream ones (rows with field added_property)."""
+    return [
+        d.prop
+        for d in deviations()
+        if d.field == "added_property" and d.definition == definition and d.version == str(version)
+    ]
+
+
 def kept_by_us(definition: str, version: int) -> set[str]:
     """Properties our upgrade keeps where the upstream one drops them (rows with ours = kept)."""
     return {
@@ -198,7 +208,7 @@ def test_deviation_table_is_well_formed():
     rows = deviations()
     assert rows, "no rows parsed from DEVIATIONS.md"
     for row in rows:
-        assert row.field in {"allowed_type", "upgrade_transform", "encoding"}, row
+        assert row.field in {"allowed_type", "upgrade_transform", "encoding", "added_property"}, row
         if row.field == "allowed_type":
             assert row.definition in bundled_paths(), row
             assert row.version.isdigit(), row
@@ -257,6 +267,10 @@ def test_interface_matches_upstream(name):
     seen = set()
     for number, their_version in theirs.versions.items():
         our_version = ours.versions[number]
+        added = added_properties(name, number)
+        own = len(our_version.props) - len(added)
+        assert [p.name for p in our_version.props[own:]] == added, "added properties come last"
+        our_version = dataclasses.replace(our_version, props=our_version.props[:own])
         assert version_fields(our_version) == version_fields(their_version), f"version {number}"
         for their_prop, our_prop in zip(their_version.props, our_version.props, strict=True):
             want, got = prop_fields(their_prop), prop_fields(our_prop)
@@ -311,7 +325,8 @@ def test_help_texts_are_our_own(name):
         assert version.help, f"v{number}: empty help"
         assert version.help != theirs.versions[number].help
         assert version.help not in all_upstream_helps(), f"v{number}: copied help"
-        for their_prop, our_prop in zip(theirs.versions[number].props, version.props, strict=True):
+        own = version.props[: len(version.props) - len(added_properties(name, number))]
+        for their_prop, our_prop in zip(theirs.versions[number].props, own, strict=True):
             where = f"v{number} {our_prop.name}"
             assert our_prop.help, f"{where}: empty help"
             assert our_prop.help != their_prop.help, where

@@ -141,7 +141,19 @@ def point_trackd(text: str, emu: Any, tmp: Path) -> str:
 
 CASES = [
     udp_sender("DTrack_drv", "DTrackEmulator", "DTrack", "receive_port", ("bad_datagrams",)),
-    udp_sender("OptiTrack_drv", "OptiTrackEmulator", "OptiTrack", "port", ("bad_datagrams",)),
+    Case(  # an emulated Motive: it also answers the connect request that asks its version
+        "OptiTrack_drv",
+        ("OptiTrack",),
+        ("bad_datagrams",),
+        lambda tmp: emulator_class("OptiTrack_drv", "OptiTrackEmulator")(
+            free_udp_port(), scenario="garbage", command_port=0
+        ),
+        lambda text, emu, tmp: set_property(
+            set_property(text, "port", str(emu.port)),
+            "command_port",
+            str(emu.command_address[1]),
+        ),
+    ),
     udp_sender("TUIO_drv", "TuioEmulator", "Touch Table", "port", ("bad_datagrams",)),
     Case(
         "ElexolEther24_drv",

@@ -185,7 +185,11 @@ def test_motion_star_accepts_a_client_on_the_printed_port(emulate):
     [
         ("LinuxJoydev_drv", ("--path", "{tmp}/js0"), "Press Ctrl-C"),
         ("DTrack_drv", ("--port", "{udp}"), "Press Ctrl-C"),
-        ("OptiTrack_drv", ("--port", "{udp}"), "Press Ctrl-C"),
+        (
+            "OptiTrack_drv",
+            ("--port", "{udp}", "--group", "", "--command-port", "0"),
+            "Press Ctrl-C",
+        ),
         ("TUIO_drv", ("--port", "{udp}"), "Press Ctrl-C"),
         ("ElexolEther24_drv", ("--port", "0"), "Press Ctrl-C"),
         ("PinchGlove_drv", ("--port", "{tmp}/pinch"), "<port>"),

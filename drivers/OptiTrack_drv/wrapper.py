@@ -1,18 +1,28 @@
 """The input-manager side of the OptiTrack driver: an ``optitrack`` element becomes a device
 whose position units are its embedded ``rigid_body`` elements (``body_index`` = NatNet
-rigid-body id), then its ``marker`` elements (``marker_index``: 1000 and up are the frame's
-unidentified markers in packet order, smaller values rigid-body markers by NatNet id), in
+rigid-body id, or a skeleton bone's id), then its ``marker`` elements (``marker_index``: 1000
++ k is marker k of marker set 0, as Gadgeteer reads it; smaller values NatNet marker ids), in
 configuration order. Matrices are in metres; rigid bodies carry the rotation of their
 quaternion, markers the identity rotation.
 
+Where it listens (Motive's defaults unless the element says otherwise): ``port`` (the data
+port; an element that does not set it gets Motive's 1511, the definition's default 1001 is
+VR Juggler's, for NatNet 2.0 and older servers), ``multicast_group`` (239.255.42.99; empty:
+none), ``command_port`` (1510), ``connection_type`` (multicast or unicast),
+``server_address`` (unicast: the server, 127.0.0.1 by default; multicast: where requests go,
+by default the frames' sender) and ``natnet_version`` (empty: the one the server names).
+These are gadgetctl's additions to the definition; VR Juggler's element has only ``port``.
+
 Every NatNet frame becomes one sample (upstream polled at 100 Hz and kept the newest frame
-only). Silence longer than :attr:`OptiTrackDevice.peer_timeout` raises from ``sample()``, so
-the input manager marks the device faulted and restarts it; a restart after such a loss
-succeeds only once frames arrive again.
+only). Silence longer than :attr:`OptiTrackDevice.peer_timeout`, or datagrams of which none
+decodes for as long, raise from ``sample()`` with the reason (for undecodable data, the first
+error), so the input manager marks the device faulted instead of running, and restarts it; a
+restart succeeds only once frames arrive and decode again.
 """
 
 from __future__ import annotations
 
+import socket
 from collections.abc import Sequence
 
 import numpy as np
@@ -21,9 +31,12 @@ from gadgetctl.input import DeviceConfigError, Position
 from gadgetctl.jccl.access import ElementAccess
 from gadgetctl.jccl.configuration import ConfigElement
 
+from .natnet import Version, parse_version
 from .standalone import (
-    DEFAULT_GROUP,
+    COMMAND_PORT,
+    DATA_PORT,
     DEFAULT_LIMITS,
+    MULTICAST_GROUP,
     NatNetDisconnected,
     NatNetFrame,
     NatNetReceiver,
@@ -37,8 +50,7 @@ class OptiTrackDevice(Position):
     ELEMENT_TYPE = "optitrack"
     sample_interval = 0.0  # sample() waits for datagrams itself
 
-    #: The NatNet multicast group joined (None: unicast only) and the interface it is joined on.
-    multicast_group: str | None = DEFAULT_GROUP
+    #: The interface the multicast group is joined on ("0.0.0.0": every interface).
     multicast_interface = "0.0.0.0"
     #: Seconds one sample() call waits for a datagram.
     receive_timeout = 0.1
@@ -50,7 +62,12 @@ class OptiTrackDevice(Position):
 
     def __init__(self) -> None:
         super().__init__()
-        self.port = 1001
+        self.port = DATA_PORT
+        self.multicast_group: str | None = MULTICAST_GROUP
+        self.command_port = COMMAND_PORT
+        self.unicast = False
+        self.server_address = ""
+        self.natnet_version: Version | None = None
         self.peer_timeout = 2.0
         self.body_ids: list[int] = []
         self.marker_ids: list[int] = []
@@ -61,9 +78,32 @@ class OptiTrackDevice(Position):
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)  # name, position filters
-        self.port = access.integer("port")
+        # VR Juggler's default port (1001) is for NatNet 2.0 and older servers: an element
+        # that does not set it listens where Motive sends (1511).
+        self.port = access.integer("port") if access.count("port") else DATA_PORT
         if not 0 <= self.port <= 65535:
             raise DeviceConfigError(f"port {self.port} is not a UDP port (0 to 65535)")
+        self.command_port = access.integer("command_port")
+        if not 1 <= self.command_port <= 65535:
+            raise DeviceConfigError(
+                f"command_port {self.command_port} is not a UDP port (1 to 65535)"
+            )
+        self.multicast_group = access.string("multicast_group") or None
+        if self.multicast_group is not None and not _is_multicast(self.multicast_group):
+            raise DeviceConfigError(
+                f"multicast_group {self.multicast_group!r} is not an IPv4 multicast address "
+                "(224.0.0.0 to 239.255.255.255)"
+            )
+        mode = access.string("connection_type").lower()
+        if mode not in ("multicast", "unicast"):
+            raise DeviceConfigError(f"connection_type {mode!r} is neither Multicast nor Unicast")
+        self.unicast = mode == "unicast"
+        self.server_address = access.string("server_address")
+        text = access.string("natnet_version")
+        try:
+            self.natnet_version = parse_version(text) if text else None
+        except ValueError as err:
+            raise DeviceConfigError(f"natnet_version: {err}") from None
         self.body_ids = [
             _child_integer(access, c, "body_index") for c in access.children("rigid_body")
         ]
@@ -79,8 +119,12 @@ class OptiTrackDevice(Position):
         if self._receiver is None:
             self._receiver = NatNetReceiver(
                 self.port,
-                group=self.multicast_group,
+                group=None if self.unicast else self.multicast_group,
                 interface=self.multicast_interface,
+                unicast=self.unicast,
+                server=self.server_address or None,
+                command_port=self.command_port,
+                version=self.natnet_version,
                 receive_timeout=self.receive_timeout,
                 peer_timeout=self.peer_timeout,
                 limits=self.limits,
@@ -146,6 +190,11 @@ class OptiTrackDevice(Position):
             "bad_records": r.bad_records,
             "other_messages": r.other_messages,
             "missed_frames": r.missed_frames,
+            "frame_jumps": r.frame_jumps,
+            "undecoded_frames": r.undecoded_frames,
+            "untracked_bodies": r.untracked_bodies,
+            "server_infos": r.server_infos,
+            "requests_sent": r.requests_sent,
             "join_failures": r.join_failures,
             "kernel_dropped": r.kernel_dropped,
         }
@@ -153,6 +202,14 @@ class OptiTrackDevice(Position):
     def transport_dropped(self) -> int:
         """Datagrams the kernel dropped before the receiver read them (a full socket buffer)."""
         return self._receiver.kernel_dropped if self._receiver is not None else 0
+
+
+def _is_multicast(address: str) -> bool:
+    try:
+        first = socket.inet_aton(address)[0]
+    except OSError:
+        return False
+    return address.count(".") == 3 and 224 <= first <= 239
 
 
 def _child_integer(access: ElementAccess, child: ConfigElement, prop: str) -> int:

@@ -671,13 +671,19 @@ def _joystick_seeds() -> list[bytes]:
 # -- OptiTrack (NatNet) ---------------------------------------------------------------------------
 
 
+_NATNET_VERSIONS = ((2, 0), (2, 5), (2, 7), (3, 0), (4, 1))
+
+
 def _natnet_seeds() -> list[bytes]:
     from OptiTrack_drv.emulator import FrameWriter, encode_frame
 
     return [
-        FrameWriter("motion", 3, 4).frame(5),
-        FrameWriter("buttons", 4, 0).frame(1),
-        encode_frame(1, [(1, (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0))], [(1.0, 2.0, 3.0)]),
+        FrameWriter("motion", 3, 4, version=(2, 0)).frame(5),
+        FrameWriter("buttons", 4, 0, version=(3, 0)).frame(1),
+        FrameWriter("motion", 2, 3, version=(4, 1)).frame(7),
+        encode_frame(
+            1, [(1, (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0))], [(1.0, 2.0, 3.0)], version=(2, 5)
+        ),
     ]
 
 
@@ -685,14 +691,16 @@ def _natnet_seeds() -> list[bytes]:
 def _natnet(data: bytes) -> None:
     from OptiTrack_drv.standalone import DEFAULT_LIMITS, NatNetReceiver, NatNetUnits
 
-    receiver = NatNetReceiver(0, group=None)
-    frame = receiver.decode(data)
-    assert receiver.frames + receiver.bad_datagrams + receiver.other_messages == 1
-    if frame is not None:
-        assert len(frame.bodies) <= DEFAULT_LIMITS.rigid_bodies
-        assert len(frame.markers) <= DEFAULT_LIMITS.markers
-        units = NatNetUnits([1, 2, 1 << 31 - 1], [1000, 1199, 5])
-        assert units.update(frame).shape == (6, 4, 4)
+    for version in _NATNET_VERSIONS:  # each datagram is one good frame or one bad datagram
+        receiver = NatNetReceiver(0, group=None, version=version)
+        frames = receiver.handle(data, ("127.0.0.1", 1510))
+        counted = receiver.frames + receiver.bad_datagrams + receiver.other_messages
+        assert counted + receiver.server_infos == 1
+        for frame in frames:
+            assert len(frame.bodies) <= DEFAULT_LIMITS.rigid_bodies
+            assert len(frame.markers) <= DEFAULT_LIMITS.markers
+            units = NatNetUnits([1, 2, 1 << 31 - 1], [1000, 1199, 5])
+            assert units.update(frame).shape == (6, 4, 4)
 
 
 # -- TUIO (OSC through python-osc) --------------------------------------------------------------

@@ -28,6 +28,8 @@ from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
+V20 = (2, 0)
+
 RATE = 200.0
 
 
@@ -39,8 +41,12 @@ build = managers_fixture(
 )
 
 
-def device(name: str, port: int, bodies: list[int], markers: list[int]) -> str:
-    parts = [f'<optitrack name="{name}" version="2"><port>{port}</port>']
+def device(name: str, port: int, bodies: list[int], markers: list[int], extra: str = "") -> str:
+    """An optitrack element on ``port``; ``extra``: more properties (the NatNet version is
+    4.1, the emulator's, unless ``extra`` names one)."""
+    if "natnet_version" not in extra:
+        extra += "<natnet_version>4.1</natnet_version>"
+    parts = [f'<optitrack name="{name}" version="2"><port>{port}</port>{extra}']
     for i, b in enumerate(bodies):
         parts.append(
             f'<rigid_body><optitrack_rigid_body name="{name} B{i}" version="1">'
@@ -79,19 +85,20 @@ def test_bodies_with_zero_components_and_markers_are_kept() -> None:
         [(5, (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)), (6, (1.0, 0.0, 2.0, 0, 0, 0, 1.0))],
         [(0.1, 0.2, 0.3), (0.4, 0.5, 0.6)],
         [("set", [(1.0, 1.0, 1.0)])],
-        body_markers=2,
+        version=V20,
     )
-    frame = decode_frame(packet)
+    frame = decode_frame(packet, V20)
     assert frame.number == 9 and set(frame.bodies) == {5, 6} and frame.bad_records == 0
     np.testing.assert_allclose(frame.markers, [[0.1, 0.2, 0.3], [0.4, 0.5, 0.6]], rtol=1e-6)
     assert set(frame.body_markers) == {500, 501, 600, 601}
-    units = NatNetUnits([6, 5, 77], [1001, 1000, 601])
+    units = NatNetUnits([6, 5, 77], [1000, 1001, 601])
     m = units.update(frame)
     np.testing.assert_allclose(m[0, :3, 3], [1.0, 0.0, 2.0])
     np.testing.assert_allclose(m[1], np.eye(4))  # body 5 at the origin: tracked, identity
     np.testing.assert_allclose(m[2], np.eye(4))  # body 77 never seen
-    np.testing.assert_allclose(m[3, :3, 3], [0.4, 0.5, 0.6], rtol=1e-6)
-    np.testing.assert_allclose(m[4, :3, 3], [0.1, 0.2, 0.3], rtol=1e-6)
+    # marker_index 1000 is marker 0 of marker set 0 (Gadgeteer), not an unidentified marker
+    np.testing.assert_allclose(m[3, :3, 3], [1.0, 1.0, 1.0], rtol=1e-6)
+    np.testing.assert_allclose(m[4], np.eye(4))  # set 0 has one marker only
     np.testing.assert_allclose(m[5, :3, 3], [1.01, 0.0, 2.0], rtol=1e-6)
 
 
@@ -108,14 +115,17 @@ def test_bodies_with_zero_components_and_markers_are_kept() -> None:
 )
 def test_counts_beyond_the_limits_are_bad_packets(payload: bytes) -> None:
     with pytest.raises(NatNetFormatError):
-        decode_frame(struct.pack("<HH", 7, len(payload)) + payload)
+        decode_frame(struct.pack("<HH", 7, len(payload)) + payload, V20)
 
 
 def test_a_body_without_a_rotation_is_a_bad_record() -> None:
     packet = encode_frame(
-        1, [(1, (1.0, 2.0, 3.0, 0, 0, 0, 0)), (2, (1.0, math.nan, 3.0, 0, 0, 0, 1))], []
+        1,
+        [(1, (1.0, 2.0, 3.0, 0, 0, 0, 0)), (2, (1.0, math.nan, 3.0, 0, 0, 0, 1))],
+        [],
+        version=V20,
     )
-    frame = decode_frame(packet)
+    frame = decode_frame(packet, V20)
     assert frame.bodies == {} and frame.bad_records == 2
 
 
@@ -137,7 +147,7 @@ def test_bodies_then_markers_in_metres_through_proxies(build) -> None:
     assert manager.proxy("B1").timestamp is not None
     np.testing.assert_allclose(
         manager.proxy("M2").translation, marker_position(0, 2, False), atol=1e-6
-    )
+    )  # marker 2 of marker set 0
     np.testing.assert_allclose(manager.proxy("M0").matrix[:3, :3], np.eye(3))
     # a quarter of a turn etc.: body index 2 is turned 30 degrees about z
     turned = manager.proxy("B3").matrix[:3, :3] @ [1, 0, 0]
@@ -201,7 +211,9 @@ def test_a_silent_server_faults_and_data_returns_within_two_seconds(build) -> No
 
 
 def test_multicast_through_loopback_reaches_the_receiver() -> None:
-    receiver = NatNetReceiver(0, group="224.0.0.1", interface="127.0.0.1", receive_timeout=0.05)
+    receiver = NatNetReceiver(
+        0, group="224.0.0.1", interface="127.0.0.1", receive_timeout=0.05, version=(4, 1)
+    )
     receiver.open()
     try:
         assert receiver.joined
@@ -232,7 +244,8 @@ def test_doctor_checks_the_port_and_the_multicast_group(tmp_path: Path) -> None:
     report = json.loads(result.stdout)
     checks = {c["target"]: c for d in report["devices"] for c in d["checks"]}
     assert checks[f"{port}/udp"]["status"] == "ok"
-    assert checks["224.0.0.1 (multicast)"]["status"] in ("ok", "problem")
+    # doctor joins only link-local groups; Motive's is named, not joined
+    assert checks["239.255.42.99 (multicast)"]["status"] == "unchecked"
 
 
 def test_validate_counts_bodies_and_markers_as_units(tmp_path: Path) -> None:

@@ -80,6 +80,13 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
         return [result.with_prop(transport.props[key])]
     if kind == "udp":
         port = int(_read(access, transport, "port", number=True) or 0)
+        unset = transport.prop("port_unset")  # the driver's port when the element sets none
+        if (
+            unset
+            and access.has(transport.props["port"])
+            and not access.count(transport.props["port"])
+        ):
+            port = int(unset)
         checks = [check_udp(port).with_prop(transport.props["port"])]
         if transport.prop("group"):  # a literal multicast address the driver joins
             checks.append(check_multicast(transport.props["group"]))
@@ -125,6 +132,13 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
     if kind == "tcp":
         host = str(_read(access, transport, "host"))
         port = int(_read(access, transport, "port", number=True) or 0)
+        unset = transport.prop("port_unset")  # the driver's port when the element sets none
+        if (
+            unset
+            and access.has(transport.props["port"])
+            and not access.count(transport.props["port"])
+        ):
+            port = int(unset)
         result = check_tcp(host, port, probe=settings.probe, timeout=settings.timeout)
         if result.code == "DRV104" and settings.emulator:
             result = _with_hint(

@@ -35,7 +35,7 @@ KNOWN_TRANSPORTS: dict[str, list[dict[str, str]]] = {
         {"kind": "udp", "port": "receive_port", "host": "server_name", "peer_port": "command_port"}
     ],
     "TUIO_drv": [{"kind": "udp", "port": "port"}],
-    "optitrack": [{"kind": "udp", "port": "port", "group": "224.0.0.1"}],
+    "optitrack": [{"kind": "udp", "port": "port", "port_unset": "1511", "group": "239.255.42.99"}],
     "motion_star": [{"kind": "tcp", "host": "address", "port": "server_port"}],
 }
 UPSTREAM = "upstream property names"

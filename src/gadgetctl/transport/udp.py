@@ -108,13 +108,18 @@ class DropCountingReceiver:
 
     def receive(self, size: int) -> bytes:
         """One datagram of at most ``size`` bytes; raises as ``socket.recv`` does."""
+        return self.receive_from(size)[0]
+
+    def receive_from(self, size: int) -> tuple[bytes, tuple[str, int]]:
+        """One datagram of at most ``size`` bytes and its sender's address; raises as
+        ``socket.recvfrom`` does."""
         sock = self._sock
         if sock is None:
             raise OSError("no socket attached")
         if self.method != "ancillary":
-            return sock.recv(size)
-        data, ancillary, _flags, _address = sock.recvmsg(size, _COUNTER_SPACE)
+            return sock.recvfrom(size)
+        data, ancillary, _flags, address = sock.recvmsg(size, _COUNTER_SPACE)
         for level, kind, payload in ancillary:
             if level == socket.SOL_SOCKET and kind == SO_RXQ_OVFL and len(payload) >= 4:
                 self._current = max(self._current, int.from_bytes(payload[:4], sys.byteorder))
-        return data
+        return data, address

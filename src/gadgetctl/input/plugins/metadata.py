@@ -31,7 +31,9 @@ _NAMES = (API_VERSION, PLUGIN_NAME, ELEMENT_TYPES, TRANSPORTS)
 TRANSPORT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "file": (("path",), ()),
     "serial": (("port",), ("baud",)),
-    "udp": (("port",), ("host", "peer_port", "group")),  # group: a literal multicast address
+    # group: a literal multicast address; port_unset: the literal port used when the element
+    # does not set the port property (a driver default that differs from the definition's)
+    "udp": (("port",), ("host", "peer_port", "group", "port_unset")),
     # only sends to host (a property; "host:port" or a fixed port); or to the board whose "mac"
     # answers discovery, when the "method" property says find_mac
     "udp-peer": (("host",), ("mac", "method")),
