@@ -23,7 +23,11 @@ fanning out to many clients. Both run `gadgetctl serve` as a separate process on
 5. Hostile (``--part hostile``, not part of ``all``): serve's memory while a client describes
    ever-new sender names, against its memory without it (issue 24: within 2x).
 
-Run: python bench/bench_vrpn.py [--seconds 5] [--part ingest|fanout|breakdown|flood|hostile] [--devices 100] [--clients 8]
+6. C sender (``--part csender``, part of ``all``): serve fanning out 4 tracker sensors at 1 kHz
+   to 8 raw clients, against a C program sending the same messages (``vrpn_csender.c``, built
+   with the system's compiler), each run twice alternately; target (issue 27): at most 2x.
+
+Run: python bench/bench_vrpn.py [--seconds 5] [--part ingest|fanout|breakdown|flood|hostile|csender] [--devices 100] [--clients 8]
 [--walking-clients]
 
 The fan-out clients keep what they receive with its receipt time and walk it after the run
@@ -612,6 +616,91 @@ def breakdown(
     )
 
 
+# -------------------------------------------------------------------- 6. against a C sender
+
+
+def sensors_config(sensors: int, rate: float) -> str:
+    paths = "".join("<position_path>circle</position_path>" for _ in range(sensors))
+    body = (
+        f'      <waveform_device name="Tracker0" version="1"><rate>{rate:g}</rate>'
+        f"<event_period>0.0</event_period>{paths}</waveform_device>\n"
+    )
+    return HEAD.format(body=body)
+
+
+def _readers_cpu(
+    port: int, pid: int, clients: int, seconds: float, rate: float
+) -> tuple[float, int]:
+    """Share of a core ``pid`` takes while ``clients`` raw readers read it, and the messages
+    each read (the least of them)."""
+    context = multiprocessing.get_context("fork")
+    results = context.Queue()
+    procs = [
+        context.Process(target=_client, args=(port, seconds, rate, results)) for _ in range(clients)
+    ]
+    for p in procs:
+        p.start()
+    time.sleep(0.5)
+    cpu0, wall0 = cpu_seconds(pid), time.perf_counter()
+    time.sleep(max(0.1, seconds - 1.0))
+    used, wall = cpu_seconds(pid) - cpu0, time.perf_counter() - wall0
+    outcomes = [results.get(timeout=seconds + 60) for _ in procs]
+    for p in procs:
+        p.join(30)
+    return used / wall * 100, min(o["messages"] for o in outcomes)
+
+
+def against_c(
+    report: Report, seconds: float, tmp: Path, clients: int = 8, sensors: int = 4
+) -> None:
+    """serve's CPU fanning out ``sensors`` tracker sensors at 1 kHz to ``clients`` raw
+    readers, against a C program sending the same messages (bench/vrpn_csender.c, built
+    here with the system's C compiler), measured in the same run, twice each alternately;
+    target (issue 27): at most 2x."""
+    import shutil
+
+    rate = 1000.0
+    compiler = shutil.which("cc") or shutil.which("gcc")
+    if compiler is None:
+        print("  no C compiler: the C sender cannot be built, nothing to compare")
+        return
+    binary = tmp / "vrpn_csender"
+    subprocess.run(
+        [compiler, "-O2", "-o", str(binary), str(Path(__file__).with_name("vrpn_csender.c"))],
+        check=True,
+    )
+    config = tmp / "sensors.jconf"
+    config.write_text(sensors_config(sensors, rate))
+    c_runs, serve_runs = [], []
+    for _ in range(2):
+        sender = subprocess.Popen(
+            [str(binary), str(clients), str(sensors), f"{rate:g}", f"{seconds + 30:g}"],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        try:
+            port = int(sender.stdout.readline())
+            c_runs.append(_readers_cpu(port, sender.pid, clients, seconds, rate)[0])
+        finally:
+            sender.kill()
+            sender.wait(10)
+        served = Served(config)
+        try:
+            serve_runs.append(
+                _readers_cpu(served.port, served.process.pid, clients, seconds, rate)[0]
+            )
+        finally:
+            served.stop()
+    c_cpu, serve_cpu = min(c_runs), min(serve_runs)
+    print(
+        f"  {sensors} sensors at {rate:g} Hz to {clients} TCP clients, {seconds:g} s, "
+        f"twice each (the lesser figure)"
+    )
+    report.figure("C sender: share of a core", c_cpu, "%")
+    report.figure("serve: share of a core", serve_cpu, "%")
+    report.figure("serve / C sender", serve_cpu / c_cpu, "x", target=2.0)
+
+
 # -------------------------------------------------------------------- 5. hostile memory
 
 
@@ -699,7 +788,7 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=5.0)
     parser.add_argument(
         "--part",
-        choices=("ingest", "fanout", "breakdown", "flood", "hostile", "all"),
+        choices=("ingest", "fanout", "breakdown", "flood", "hostile", "csender", "all"),
         default="all",
     )
     parser.add_argument(
@@ -735,6 +824,9 @@ def main() -> None:
         if args.part == "flood":
             print("serve fan-out, without and with a client flooding pings")
             flooded(report, args.seconds, Path(tmp), args.devices, args.clients)
+        if args.part in ("csender", "all"):
+            print("serve fan-out against a C sender of the same messages")
+            against_c(report, args.seconds, Path(tmp), args.clients)
         if args.part == "hostile":
             print("serve's memory with a hostile client")
             hostile_memory(report, args.seconds, Path(tmp))
