@@ -166,6 +166,7 @@ complete -c gadgetctl -n '__fish_seen_subcommand_from monitor' -l mouse -l no-mo
 complete -c gadgetctl -n '__fish_seen_subcommand_from monitor' -l keyboard -x -a '(__gadgetctl_candidates keyboards)' -d 'Live view: the keyboard_mouse_device that gets the keys and the mouse first (Tab gives them to the next one)'
 complete -c gadgetctl -n '__fish_seen_subcommand_from monitor' -l check -l no-check -d 'Check the configurations first and print their errors and warnings as validate does (--no-check skips it)'
 complete -c gadgetctl -n '__fish_seen_subcommand_from monitor' -l strict -d 'Do not start when the configuration checks find errors (exit status 1)'
+complete -c gadgetctl -n '__fish_seen_subcommand_from monitor' -l accept-loss -d 'Exit 0 even when a device lost data (datagrams the kernel dropped for a full receive buffer, samples over the per-frame cap); without it such loss ends the run with exit status 1 and a line saying what was lost'
 complete -c gadgetctl -n '__fish_seen_subcommand_from monitor' -l driver-path -r -F -d 'Also look for driver plug-ins in DIR (after the bundled drivers and GADGETCTL_DRIVER_PATH)'
 complete -c gadgetctl -n '__fish_seen_subcommand_from monitor' -l trust-driver-path -d 'Import plug-ins also from directories other users can write to (refused by default: DRV011)'
 complete -c gadgetctl -n '__fish_seen_subcommand_from monitor' -l definitions -s d -r -F -d 'Add a directory to the definition search path (after the bundled set, VJ_BASE_DIR and JCCL_DEFINITION_PATH)'

@@ -46,7 +46,7 @@ from typing import overload
 
 import numpy as np
 
-from gadgetctl.transport.udp import DropCountingReceiver
+from gadgetctl.transport.udp import DatagramLedger
 
 MM_TO_M = 0.001
 DEFAULT_RECEIVE_PORT = 5000
@@ -1034,13 +1034,12 @@ class DTrackStandalone:
         self.buffer_size = buffer_size
         self.receive_buffer = receive_buffer
         self.limits = limits
-        self.datagrams = 0  # datagrams received
-        self.bad_datagrams = 0  # datagrams that held no valid frame
         self.bad_lines = 0  # malformed lines skipped inside otherwise valid frames
         self.truncated_datagrams = 0  # larger than buffer_size
         self.missed_frames = 0  # gaps in the frame counter (datagrams lost on the way)
         self.last_frame: DTrackFrame | None = None
-        self._drops = DropCountingReceiver()
+        #: every datagram read, counted decoded or bad, and the kernel's drops
+        self.ledger = DatagramLedger()
         self._sock: socket.socket | None = None
         self._owns_socket = False
         self._last_rx = 0.0
@@ -1081,7 +1080,7 @@ class DTrackStandalone:
                 raise
             self._sock, self._owns_socket = sock, True
         self._sock.setblocking(False)
-        self._drops.attach(self._sock)
+        self.ledger.attach(self._sock)
         self._last_rx = time.monotonic()
         self._last_counter = None
         if self.remote_control:
@@ -1105,7 +1104,7 @@ class DTrackStandalone:
         except OSError:
             pass  # the server may be gone; closing must still work
         finally:
-            self._drops.detach()
+            self.ledger.detach()
             self._sock = None
             if self._owns_socket:
                 sock.close()
@@ -1144,7 +1143,7 @@ class DTrackStandalone:
         datagrams: list[bytes] = []
         truncated: list[bool] = []
         size = self.buffer_size
-        receive = self._drops.receive
+        receive = self.ledger.receive
         while limit is None or len(datagrams) < limit:
             try:
                 data = receive(size + 1)  # one byte more: a longer datagram did not fit
@@ -1156,13 +1155,13 @@ class DTrackStandalone:
             datagrams.append(data[:size] if cut else data)
             truncated.append(cut)
         got_any = bool(datagrams)
-        self._drops.refresh()
-        self.datagrams += len(datagrams)
+        self.ledger.drops.refresh()
         self.truncated_datagrams += sum(truncated)
         for frame in parse_frames(datagrams, truncated, limits=self.limits):
             if frame is None:
-                self.bad_datagrams += 1
+                self.ledger.bad("no valid DTrack line")
                 continue
+            self.ledger.decoded()
             self.bad_lines += frame.bad_lines
             self._count_missed(frame.frame)
             frames.append(frame)
@@ -1179,12 +1178,22 @@ class DTrackStandalone:
     def kernel_dropped(self) -> int:
         """Datagrams the kernel dropped for a full receive buffer (0 where the OS does not
         say; see ``kernel_drop_source``)."""
-        return self._drops.dropped
+        return self.ledger.drops.dropped
 
     @property
     def kernel_drop_source(self) -> str | None:
         """Where ``kernel_dropped`` comes from: "ancillary", "proc" or None (unknown)."""
-        return self._drops.method
+        return self.ledger.drops.method
+
+    @property
+    def datagrams(self) -> int:
+        """Datagrams received."""
+        return self.ledger.datagrams
+
+    @property
+    def bad_datagrams(self) -> int:
+        """Datagrams that held no valid frame."""
+        return self.ledger.bad_count
 
     def _count_missed(self, counter: int | None) -> None:
         """Frame counters skipped since the previous frame (a restarted counter is not a gap)."""

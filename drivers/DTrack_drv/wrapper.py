@@ -26,6 +26,7 @@ import numpy as np
 
 from gadgetctl.input import Analog, DeviceConfigError, Digital, Position
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.udp import DatagramLedger
 
 from .standalone import (
     DEFAULT_LIMITS,
@@ -129,7 +130,11 @@ class DTrackDevice(Position, Digital, Analog):
         try:
             frames = driver.sample_all(self.batch_limit)
             if not frames:
-                raise DTrackDisconnected(f"still no DTrack data on UDP port {driver.port}")
+                why = driver.ledger.undecodable()
+                raise DTrackDisconnected(
+                    f"still no DTrack data on UDP port {driver.port}"
+                    + (f" (undecodable: {why})" if why else "")
+                )
         except BaseException:
             self.stop_sampling()
             raise
@@ -185,20 +190,19 @@ class DTrackDevice(Position, Digital, Analog):
 
     @property
     def counters(self) -> dict[str, int]:
-        """What the receiver counted since the device was made, reconnections included."""
+        """What the receiver counted since the device was made, reconnections included:
+        its ledger's (:meth:`datagram_ledger`) and the DTrack-specific ones."""
         driver = self._driver
         if driver is None:
             return {}
         return {
-            "datagrams": driver.datagrams,
-            "bad_datagrams": driver.bad_datagrams,
+            **driver.ledger.counters(),
             "bad_lines": driver.bad_lines,
             "truncated_datagrams": driver.truncated_datagrams,
             "missed_frames": driver.missed_frames,
-            "kernel_dropped": driver.kernel_dropped,
         }
 
-    def transport_dropped(self) -> int:
-        """Datagrams the kernel dropped before the receiver read them (a full socket buffer)."""
+    def datagram_ledger(self) -> DatagramLedger | None:
+        """The receiver's account of its datagrams: decoded, bad, dropped by the kernel."""
         driver = self._driver
-        return driver.kernel_dropped if driver is not None else 0
+        return driver.ledger if driver is not None else None

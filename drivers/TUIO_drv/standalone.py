@@ -24,7 +24,7 @@ import time
 
 from pythonosc.osc_packet import OscPacket, ParseError
 
-from gadgetctl.transport.udp import DropCountingReceiver
+from gadgetctl.transport.udp import DatagramLedger
 
 CURSOR_ADDRESS = "/tuio/2Dcur"
 DEFAULT_PORT = 3333
@@ -150,9 +150,8 @@ class TuioReceiver:
         self.receive_timeout = receive_timeout
         self.peer_timeout = peer_timeout
         self.receive_buffer = receive_buffer
-        self.datagrams = 0
-        self.bad_datagrams = 0
-        self._drops = DropCountingReceiver()
+        #: every datagram read, counted decoded or bad, and the kernel's drops
+        self.ledger = DatagramLedger()
         self._sock: socket.socket | None = None
         self._last_data = time.monotonic()
 
@@ -166,8 +165,15 @@ class TuioReceiver:
 
     @property
     def kernel_dropped(self) -> int:
-        self._drops.refresh()
-        return self._drops.dropped
+        return self.ledger.kernel_dropped
+
+    @property
+    def datagrams(self) -> int:
+        return self.ledger.datagrams
+
+    @property
+    def bad_datagrams(self) -> int:
+        return self.ledger.bad_count
 
     def open(self) -> None:
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -179,23 +185,23 @@ class TuioReceiver:
             raise
         sock.setblocking(False)
         self._sock = sock
-        self._drops.attach(sock)
+        self.ledger.attach(sock)
         self._last_data = time.monotonic()
 
     def close(self) -> None:
         if self._sock is not None:
-            self._drops.detach()
+            self.ledger.detach()
             self._sock.close()
             self._sock = None
 
     def feed(self, data: bytes) -> bool:
         """Apply one datagram; whether it held TUIO cursor messages."""
-        self.datagrams += 1
         try:
             messages = decode(data)
-        except DECODE_ERRORS:
-            self.bad_datagrams += 1
+        except DECODE_ERRORS as err:
+            self.ledger.bad(f"not OSC: {err}")
             return False
+        self.ledger.decoded()
         touched = False
         for address, params in messages:
             touched |= self.slots.apply(address, params)
@@ -212,7 +218,7 @@ class TuioReceiver:
         ready, _, _ = select.select([sock], [], [], self.receive_timeout)
         while ready and len(states) < limit:
             try:
-                data = self._drops.receive(MAX_DATAGRAM)
+                data = self.ledger.receive(MAX_DATAGRAM)
             except BlockingIOError:
                 break
             self._last_data = time.monotonic()

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from gadgetctl.input import Analog, DeviceConfigError, Digital
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.udp import DatagramLedger
 
 from .standalone import TuioDisconnected, TuioReceiver
 
@@ -75,7 +76,11 @@ class TuioDevice(Digital, Analog):
         try:
             states = driver.sample_all(self.batch_limit)
             if not states:
-                raise TuioDisconnected(f"still no TUIO data on UDP port {driver.port}")
+                why = driver.ledger.undecodable()
+                raise TuioDisconnected(
+                    f"still no TUIO data on UDP port {driver.port}"
+                    + (f" (undecodable: {why})" if why else "")
+                )
         except BaseException:
             self.stop_sampling()
             raise
@@ -109,14 +114,13 @@ class TuioDevice(Digital, Analog):
             return {}
         s = r.slots
         return {
-            "datagrams": r.datagrams,
-            "bad_datagrams": r.bad_datagrams,
+            **r.ledger.counters(),
             "bad_records": s.bad_records,
             "unknown_sessions": s.unknown_sessions,
             "overflow_sessions": s.overflow_sessions,
             "other_messages": s.other_messages,
-            "kernel_dropped": r.kernel_dropped,
         }
 
-    def transport_dropped(self) -> int:
-        return self._receiver.kernel_dropped if self._receiver is not None else 0
+    def datagram_ledger(self) -> DatagramLedger | None:
+        """The receiver's account of its datagrams: decoded, bad, dropped by the kernel."""
+        return self._receiver.ledger if self._receiver is not None else None

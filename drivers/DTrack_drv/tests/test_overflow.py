@@ -1,5 +1,6 @@
 """Datagrams the kernel drops because the receive buffer is full are counted (the kernel's own
-count, SO_RXQ_OVFL) and shown with the other drops in the monitor's statistics."""
+count, SO_RXQ_OVFL), shown with the other drops in the monitor's statistics, and end a monitor
+run with exit status 1 unless loss is accepted."""
 
 from __future__ import annotations
 
@@ -10,10 +11,12 @@ import pytest
 from DTrack_drv.standalone import DTrackFrame, DTrackStandalone
 from DTrack_drv.wrapper import DTrackDevice
 
+from gadgetctl.cli.monitor_run import _evaluate
 from gadgetctl.input import InputManager, ManagerOptions
 from gadgetctl.input.testing import wait_until
 from gadgetctl.input.testing.configs import configuration
 from gadgetctl.monitor.session import MonitorSession
+from gadgetctl.wording import counted
 
 pytestmark = pytest.mark.timeout(60)
 EYE = "[1 0 0 0 1 0 0 0 1]"
@@ -85,5 +88,12 @@ def test_the_monitor_shows_kernel_drops_with_the_other_drops(tmp_path: Path, mon
         assert stats.dropped == device.counters["kernel_dropped"] > 0
         assert device.stats.dropped == stats.dropped
         assert session.final_stats()["DT"]["dropped"] == stats.dropped
+        # and the run ends with exit status 1 saying so, unless loss is accepted
+        _final, problems = _evaluate(session, accept_loss=False)
+        assert problems == [
+            f"DT: lost data: {counted(stats.dropped, 'datagram')} dropped by the kernel "
+            "(receive buffer full) (--accept-loss accepts loss)"
+        ]
+        assert _evaluate(session, accept_loss=True)[1] == []
     finally:
         manager.shutdown()

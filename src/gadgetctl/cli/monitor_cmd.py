@@ -110,6 +110,13 @@ KEYBOARD_OPTION = typer.Option(
 )
 
 
+ACCEPT_LOSS_OPTION = typer.Option(
+    False,
+    "--accept-loss",
+    help="Exit 0 even when a device lost data (datagrams the kernel dropped for a full receive buffer, samples over the per-frame cap); without it such loss ends the run with exit status 1 and a line saying what was lost.",
+)
+
+
 def register(app: typer.Typer) -> None:
     app.command(name="monitor")(monitor)
 
@@ -139,6 +146,7 @@ def monitor(
     keyboard: str | None = KEYBOARD_OPTION,
     check: bool = CHECK_OPTION,
     strict: bool = STRICT_OPTION,
+    accept_loss: bool = ACCEPT_LOSS_OPTION,
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
     trust_driver_path: bool = TRUST_OPTION,
     definitions: list[Path] = DEFINITIONS_OPTION,
@@ -155,8 +163,9 @@ def monitor(
     marker, PgUp/PgDn scroll, Tab gives the keys to the next keyboard_mouse_device; other
     keys and the mouse go to that one device, as VR Juggler's simulator window does.
 
-    Exit status: 0; 1 when a selected element ended pending, faulted or stupefied, or a
-    device faulted; 2 for usage errors (unreadable configuration, unknown name).
+    Exit status: 0; 1 when a selected element ended pending, faulted, undecodable or
+    stupefied, a device faulted, received data and decoded none of it, or lost data (unless
+    --accept-loss); 2 for usage errors (unreadable configuration, unknown name).
     """
     import tempfile
 
@@ -193,6 +202,7 @@ def monitor(
             bundled=bundled,
             pose=pose.value if pose else None,
             thresholds=event_thresholds(dead_band, pose_threshold, angle_threshold),
+            accept_loss=accept_loss,
         )
     raise typer.Exit(code)
 
@@ -312,6 +322,7 @@ def run_monitor(
     heading: str = "gadgetctl monitor",
     pose: str | None = None,
     thresholds=None,
+    accept_loss: bool = False,
 ) -> int:
     from gadgetctl.cli.monitor_run import RunOptions, check_record_path, choose_format, run
     from gadgetctl.input.manager import InputManager, ManagerOptions
@@ -362,5 +373,6 @@ def run_monitor(
             notes=notes,
             pose=pose,
             thresholds=thresholds,
+            accept_loss=accept_loss,
         ),
     )

@@ -42,6 +42,7 @@ STATE_STYLES = {
     "active": "green",
     "configured": "cyan",
     "faulted": "bold red",
+    "undecodable": "bold red",
     "reconnecting": "yellow",
     "pending": "yellow",
     "unknown type": "dim",

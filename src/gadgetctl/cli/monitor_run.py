@@ -43,6 +43,9 @@ class RunOptions:
     thresholds: Any = (
         None  # gadgetctl.monitor.events.Thresholds of --format events (None: defaults)
     )
+    #: Whether lost data (kernel drops, samples over the per-frame cap) leaves the exit
+    #: status 0: `monitor --accept-loss`; replay and demo have no transport to lose data in.
+    accept_loss: bool = True
 
 
 #: ``--record -``: the recording goes to standard output, the human output to stderr.
@@ -159,7 +162,7 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
             finally:
                 if feeder is not None:
                     feeder.stop()
-                outcome = _evaluate(session)
+                outcome = _evaluate(session, accept_loss=options.accept_loss)
                 try:
                     if broken_pipe:
                         _silence_stdout()
@@ -238,9 +241,10 @@ def _silence_stdout() -> None:
         os.close(devnull)
 
 
-def _evaluate(session: MonitorSession) -> tuple[dict, list[str]]:
+def _evaluate(session: MonitorSession, *, accept_loss: bool = True) -> tuple[dict, list[str]]:
     """The final statistics and the problems, read before the devices are stopped."""
     from gadgetctl.cli.monitor_text import problem_elements, status_text
+    from gadgetctl.monitor.loss import run_problems
 
     final = session.final_stats()
     snapshot = session.snapshot()
@@ -250,6 +254,11 @@ def _evaluate(session: MonitorSession) -> tuple[dict, list[str]]:
         for name, s in final.items()
         if s.get("faults") and s.get("state") == "running"
     ]
+    devices = session.manager.devices
+    problems += run_problems(
+        ((name, devices[name]) for name in session.watched if name in devices),
+        accept_loss=accept_loss,
+    )
     return final, problems
 
 

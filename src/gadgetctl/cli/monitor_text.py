@@ -20,7 +20,15 @@ from gadgetctl.wording import counted
 
 TOGGLES = {0: "off", 1: "on", 2: "toggle on", 3: "toggle off"}
 HAT = HAT_NAMES
-BAD_STATES = {"faulted", "reconnecting", "pending", "stupefied", "removed", "stopped"}
+BAD_STATES = {
+    "faulted",
+    "reconnecting",
+    "undecodable",
+    "pending",
+    "stupefied",
+    "removed",
+    "stopped",
+}
 
 
 def rate_text(rate: float | None) -> str:
@@ -169,6 +177,7 @@ COLUMNS = (
 THROUGHPUT = frozenset(
     {
         "datagrams",
+        "decoded",
         "packets",
         "frames",
         "records",

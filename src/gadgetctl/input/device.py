@@ -29,10 +29,12 @@ from gadgetctl.input.clock import now
 from gadgetctl.input.errors import describe
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.samples import DEFAULT_CAP, SampleStore
+from gadgetctl.safetext import printable
 
 if TYPE_CHECKING:
     from gadgetctl.input.events import EventSource
     from gadgetctl.jccl.access import ElementAccess
+    from gadgetctl.transport.udp import DatagramLedger
 
 
 class SamplingMode(StrEnum):
@@ -47,6 +49,9 @@ class DeviceState(StrEnum):
     FAULTED = "faulted"  # sample() raised; a restart is scheduled
     RECONNECTING = "reconnecting"  # start_sampling() is being retried after a fault
     STOPPED = "stopped"
+    #: Shown, never stored: a RUNNING device that receives data but decodes none of it
+    #: (:meth:`Input.shown_state`); ``state`` itself stays RUNNING.
+    UNDECODABLE = "undecodable"
 
 
 @dataclass(frozen=True, slots=True)
@@ -213,18 +218,49 @@ class Input:
         :attr:`FRAME_GROUP` can do ahead for ``devices`` so that the frames need not (the
         default: nothing)."""
 
+    def datagram_ledger(self) -> DatagramLedger | None:
+        """The :class:`~gadgetctl.transport.udp.DatagramLedger` of a device that receives UDP
+        datagrams (None for the others). From it the base class reports, for every such
+        driver alike: the kernel's drops (:meth:`transport_dropped`), ``datagrams``,
+        ``decoded``, ``bad_datagrams`` and ``kernel_dropped`` in :meth:`health`, and the
+        ``undecodable`` state (:meth:`shown_state`)."""
+        return None
+
     def transport_dropped(self) -> int:
         """What the transport lost before the driver could read it (a UDP socket's receive
-        buffer overflowing, counted by the kernel), added to the dropped samples. A driver that
-        can tell overrides this; the default is 0."""
-        return 0
+        buffer overflowing, counted by the kernel), added to the dropped samples. The
+        datagram ledger's count by default; a driver with another transport may override."""
+        ledger = self.datagram_ledger()
+        return ledger.kernel_dropped if ledger is not None else 0
+
+    def undecodable(self) -> str | None:
+        """Why the device receives data but decodes none of it; None when it decodes what it
+        gets (or gets nothing). The datagram ledger's verdict by default."""
+        ledger = self.datagram_ledger()
+        return ledger.undecodable() if ledger is not None else None
+
+    def shown_state(self) -> tuple[DeviceState, str | None]:
+        """The state to show and its reason: the fault's error while FAULTED or
+        RECONNECTING, UNDECODABLE (with the first decoding error) while RUNNING on data that
+        does not decode, else ``state`` without a reason."""
+        state = self.state
+        if state in (DeviceState.FAULTED, DeviceState.RECONNECTING):
+            return state, self.error
+        if state is DeviceState.RUNNING:
+            why = self.undecodable()
+            if why:
+                return DeviceState.UNDECODABLE, printable(why)
+        return state, None
 
     def health(self) -> dict[str, int | float | str]:
         """The driver's health, one API for every device: the counters its driver keeps
         (``counters``: bad packets or records, bytes skipped, resynchronisations, kernel
-        drops... as the driver names them), ``faults``, ``reconnects`` (restarts after a
-        fault), ``dropped`` (samples over the per-frame cap) and, after a fault,
-        ``last_fault`` (its reason) and ``last_fault_at`` (wall-clock time)."""
+        drops... as the driver names them; a datagram ledger's ``datagrams``, ``decoded``,
+        ``bad_datagrams`` and ``kernel_dropped``, and ``decode_error``, the first error of
+        the bad datagrams since the last good one), ``faults``, ``reconnects`` (restarts
+        after a fault), ``dropped`` (samples over the per-frame cap and the kernel's drops)
+        and, after a fault, ``last_fault`` (its reason) and ``last_fault_at`` (wall-clock
+        time)."""
         counters = getattr(self, "counters", None)
         found: dict[str, int | float | str] = {}
         if isinstance(counters, Mapping):
@@ -233,6 +269,11 @@ class Input:
                 for k, v in counters.items()
                 if isinstance(v, int | float) and not isinstance(v, bool)
             }
+        ledger = self.datagram_ledger()
+        if ledger is not None:
+            found.update(ledger.counters())
+            if ledger.first_error is not None:
+                found["decode_error"] = ledger.first_error
         found.update(faults=self.faults, reconnects=self.restarts, dropped=self.stats.dropped)
         if self.error:
             found["last_fault"] = self.error

@@ -963,18 +963,14 @@ class InputManager:
     @staticmethod
     def _device_status(name: str, entry: _DeviceEntry) -> ElementStatus:
         device = entry.device
-        reason = (
-            device.error
-            if device.state in (DeviceState.FAULTED, DeviceState.RECONNECTING)
-            else None
-        )
+        state, reason = device.shown_state()
         return ElementStatus(
             name,
             entry.element.type,
             ElementKind.DEVICE,
-            device.state.value,
+            state.value,
             reason,
-            "DRV042" if reason else None,
+            ("DRV045" if state is DeviceState.UNDECODABLE else "DRV042") if reason else None,
             device.stats,
         )
 

@@ -1224,10 +1224,7 @@ class MonitorSession:
         manager = self.manager
         device = manager.device(name)
         if device is not None:
-            state = device.state
-            reason = (
-                device.error if state in (DeviceState.FAULTED, DeviceState.RECONNECTING) else None
-            )
+            state, reason = device.shown_state()
             return DEVICE, device.element_type, state.value, reason
         proxy = manager.proxies.get(name)
         if proxy is not None:

@@ -123,3 +123,104 @@ class DropCountingReceiver:
             if level == socket.SOL_SOCKET and kind == SO_RXQ_OVFL and len(payload) >= 4:
                 self._current = max(self._current, int.from_bytes(payload[:4], sys.byteorder))
         return data, address
+
+
+#: Seconds of nothing but bad datagrams after which a receiver that decoded before is
+#: undecodable again (one that never decoded is undecodable from its first bad datagram).
+UNDECODABLE_AFTER = 1.0
+#: Characters of a decoding error kept (the text may quote what the peer sent).
+MAX_ERROR_TEXT = 200
+
+
+class DatagramLedger:
+    """One receiver's account of its datagrams: the kernel's drops, and each datagram read
+    counted once, as decoded or as bad.
+
+    A driver reads through :meth:`receive` (which counts ``datagrams``) and says what became
+    of each one: :meth:`decoded` (it was the protocol, whether or not it carried samples) or
+    :meth:`bad` with the reason (it was not). ``datagrams == decoded + bad`` once the driver
+    has judged what it read. :meth:`undecodable` tells a receiver that gets data but can
+    decode none of it from one that is fine, with the first error of the bad run.
+    """
+
+    def __init__(
+        self, *, proc_interval: float = 0.25, undecodable_after: float = UNDECODABLE_AFTER
+    ) -> None:
+        self.drops = DropCountingReceiver(proc_interval)
+        self.undecodable_after = undecodable_after
+        self.datagrams = 0
+        self.decoded_count = 0
+        self.bad_count = 0
+        #: The error of the first bad datagram since the last decoded one (None: no such run).
+        self.first_error: str | None = None
+        self._run = 0  # bad datagrams since the last decoded one
+        self._run_began = 0.0
+        self._run_last = 0.0
+
+    # -- the socket -----------------------------------------------------------------------
+
+    def attach(self, sock: socket.socket) -> None:
+        self.drops.attach(sock)
+
+    def detach(self) -> None:
+        self.drops.detach()
+
+    def receive(self, size: int) -> bytes:
+        """One datagram (counted) of at most ``size`` bytes; raises as ``socket.recv`` does."""
+        return self.receive_from(size)[0]
+
+    def receive_from(self, size: int) -> tuple[bytes, tuple[str, int]]:
+        """One datagram (counted) of at most ``size`` bytes and its sender's address; raises
+        as ``socket.recvfrom`` does."""
+        found = self.drops.receive_from(size)
+        self.datagrams += 1
+        return found
+
+    @property
+    def kernel_dropped(self) -> int:
+        """Datagrams the kernel dropped for a full receive buffer, over every socket."""
+        self.drops.refresh()
+        return self.drops.dropped
+
+    # -- what became of each datagram ---------------------------------------------------------
+
+    def decoded(self, count: int = 1) -> None:
+        """``count`` datagrams were well-formed (they may have carried nothing to sample)."""
+        if count > 0:
+            self.decoded_count += count
+            self._run = 0
+            self.first_error = None
+
+    def bad(self, error: str, count: int = 1) -> None:
+        """``count`` datagrams could not be decoded; ``error`` says why (the first of a run
+        of bad datagrams is kept, cut to :data:`MAX_ERROR_TEXT` characters)."""
+        if count <= 0:
+            return
+        moment = time.monotonic()
+        if self._run == 0:
+            self.first_error = error[:MAX_ERROR_TEXT]
+            self._run_began = moment
+        self._run += count
+        self._run_last = moment
+        self.bad_count += count
+
+    def undecodable(self) -> str | None:
+        """Why the receiver counts as undecodable: bad datagrams arrive and none decodes (none
+        ever, or none for ``undecodable_after`` seconds of bad ones); None when it is not."""
+        run, error = self._run, self.first_error
+        if not run:
+            return None
+        if self.decoded_count and self._run_last - self._run_began < self.undecodable_after:
+            return None
+        what = f"{run} bad datagram" + ("" if run == 1 else "s")
+        since = " since the last decoded one" if self.decoded_count else ", none decoded"
+        return f"{what}{since}; first: {error or '-'}"
+
+    def counters(self) -> dict[str, int]:
+        """``datagrams``, ``decoded``, ``bad_datagrams`` and ``kernel_dropped``."""
+        return {
+            "datagrams": self.datagrams,
+            "decoded": self.decoded_count,
+            "bad_datagrams": self.bad_count,
+            "kernel_dropped": self.kernel_dropped,
+        }

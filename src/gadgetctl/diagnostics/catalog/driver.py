@@ -350,6 +350,21 @@ CODES += [
         "Nothing to fix for gadgetctl. For VR Juggler, read the element from the device "
         "directly (gesture) or make sure the device configures (command, string).",
     ),
+    Code(
+        "DRV045",
+        C,
+        E,
+        "device receives data it cannot decode",
+        "The device runs and data arrives, but none of it decodes: every datagram since the "
+        "first (or for over a second since the last good one) was bad. The status shows "
+        "`undecodable` with the count and the first error instead of `running`, and "
+        "`gadgetctl monitor` ends with exit status 1. Wrong protocol version, wrong port (another "
+        "program's traffic) or a sender the driver does not understand.",
+        "undecodable: 518 bad datagrams, none decoded; first: rigid body marker count 973541338 "
+        "is outside 0..20",
+        "Check what sends to the device's port and which protocol version it speaks; the "
+        "first error says where decoding stopped.",
+    ),
 ]
 
 # -- connections (`gadgetctl doctor`) ---------------------------------------------------------
