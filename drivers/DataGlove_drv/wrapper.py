@@ -2,7 +2,9 @@
 
 Units, as the C++ driver fills them: analog 0..4 the thumb..pinky flexures (0 open .. 1
 bent), 5 pitch and 6 roll in degrees (0..180), 7 the gesture number (0..15, 16 for none),
-8 the capability byte (0 a right glove, 6 a left one). Analog proxies normalise with the
+8 the capability byte: a packet's 10th byte as the glove sends it (0 right or 6 left as VR
+Juggler documents it, 0x01 or 0x40 from wireless gloves, 0x55 from some wired ones), or for
+9-byte packets the hand the glove's ``G`` answer gave, 0 right or 6 left. Analog proxies normalise with the
 analog range (0..1, as the definition has no min/max), so pitch and roll read clamped; read
 them raw from the device, or through the glove.
 
@@ -10,8 +12,11 @@ Glove unit 0 (the definition's glove_device parent, which the C++ never filled):
 finger's three flexion joints bend by flexure x pi/2, abduction and the wrist row stay 0.
 
 Differences from the C++, on purpose: a packet counts when its checksum *matches* (the C++
-test was inverted, so it kept only corrupt packets); the capability byte must be 0 or 6;
-every packet read is added; a lost line raises so the input manager restarts the device.
+test was inverted, so it kept only corrupt packets); 9-byte packets and any 10th byte are
+accepted (an earlier gadgetctl insisted on 0 or 6 and read nothing from most real gloves);
+``A``, ``G``, ``D`` start a wired glove that streams only when asked (VRPN's start; the C++
+sends nothing); every packet read is added; a lost line raises so the input manager restarts
+the device. ``reply_timeout`` bounds each wait for the glove at the start.
 """
 
 from __future__ import annotations
@@ -45,6 +50,7 @@ class DataGloveDevice(Glove, Analog, CarriedCounters):
 
     sample_timeout = 0.1
     poll_interval = 0.01
+    reply_timeout = 2.0  # for each answer at the start (VRPN's)
 
     def __init__(self) -> None:
         super().__init__()
@@ -68,6 +74,7 @@ class DataGloveDevice(Glove, Analog, CarriedCounters):
             self.baud,
             sample_timeout=self.sample_timeout,
             poll_interval=self.poll_interval,
+            reply_timeout=self.reply_timeout,
         )
         glove.open()
         self.glove = glove

@@ -521,13 +521,15 @@ def _dataglove(data: bytes) -> None:
     got = []
     for start in range(0, len(data), 13):  # arbitrary chunks, as reads split the line
         got += scanner.feed(data[start : start + 13])
-        assert len(scanner.buffer) < PACKET_SIZE
+        assert len(scanner.buffer) <= PACKET_SIZE
     assert scanner.records == len(got) <= len(data) // PACKET_SIZE
-    assert scanner.skipped_bytes + PACKET_SIZE * len(got) + len(scanner.buffer) == len(data)
+    taken = len(data) - scanner.skipped_bytes - len(scanner.buffer)  # 9 or 10 bytes a packet
+    assert PACKET_SIZE * len(got) <= taken <= (PACKET_SIZE + 1) * len(got)
     assert scanner.bad_records <= scanner.skipped_bytes
     for sample in got:
         assert all(0.0 <= f <= 1.0 for f in sample.flexure) and 0 <= sample.pitch <= 180
-        assert 0 <= sample.gesture <= NO_GESTURE and sample.capability in (0, 6)
+        assert 0 <= sample.gesture <= NO_GESTURE and 0 <= sample.capability <= 0xFF
+        assert sample.capability != 0x80  # a header is never a packet's 10th byte
 
 
 # -- US Digital SEI encoders ----------------------------------------------------------------------

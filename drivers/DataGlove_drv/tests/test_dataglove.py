@@ -7,23 +7,25 @@ import math
 
 import numpy as np
 import pytest
-from DataGlove_drv.emulator import LEFT, DataGloveEmulator, encode_packet
+from DataGlove_drv.emulator import LEFT, RIGHT, DataGloveEmulator, encode_packet
 from DataGlove_drv.standalone import (
     NO_GESTURE,
     PACKET_SIZE,
     DataGlove,
+    DataGloveNoAnswer,
     PacketScanner,
     decode_packet,
     gesture,
 )
 
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import faults_then_resumes, frame_recorder, wait_until
+from gadgetctl.input.testing import faults_then_resumes, frame_recorder, gather, wait_until
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
 pytestmark = pytest.mark.timeout(30)
 
 FAST = {"sample_timeout": 0.02, "poll_interval": 0.005}
+TUNE = {**FAST, "reply_timeout": 2.0}
 
 
 def glove(name: str, port: str) -> str:
@@ -68,7 +70,7 @@ def expected(data: tuple[int, ...], capability: int = 0) -> tuple[float, ...]:
 
 
 emulator = emulator_fixture(DataGloveEmulator, rate=200.0)
-managers = managers_fixture("DataGlove_drv", tune={"data_glove": FAST})
+managers = managers_fixture("DataGlove_drv", tune={"data_glove": TUNE})
 
 
 def aligned(decoded: list[tuple[float, ...]], emu: DataGloveEmulator, capability: int = 0) -> None:
@@ -76,7 +78,7 @@ def aligned(decoded: list[tuple[float, ...]], emu: DataGloveEmulator, capability
     the driver could read on. Packets written before the driver opened the line are discarded
     by the open, unless still on their way through the pty (on a loaded machine more than one
     can be): the run starts at one of the first packets sent."""
-    sent = [emu.probe, *emu.sent]
+    sent = [emu.probe, *emu.sent] if emu.probe is not None else list(emu.sent)
     for first in range(min(len(sent), 8)):
         want = [expected(d, capability) for d in sent[first : first + len(decoded)]]
         if decoded == [pytest.approx(w) for w in want]:
@@ -98,7 +100,10 @@ def test_packets_decode_as_the_protocol_says() -> None:
     assert got.gesture == 5
     # the checksum must match (the C++ kept only packets where it did not)
     assert decode_packet(bytes([0x80]) + data + bytes([check ^ 1, 6])) is None
-    assert decode_packet(bytes([0x80]) + data + bytes([check, 3])) is None  # no such hand
+    # any 10th byte real gloves send is accepted, and 9-byte packets (the manual's)
+    for tenth in (0x00, 0x06, 0x01, 0x40, 0x55, 0x03):
+        assert decode_packet(bytes([0x80]) + data + bytes([check, tenth])).capability == tenth
+    assert decode_packet(bytes([0x80]) + data + bytes([check]), capability=6).hand == "left"
     assert gesture(0.9, 0.9, 0.9, 0.9) == 0 and gesture(0.1, 0.1, 0.1, 0.1) == 15
     assert gesture(0.9, 0.9, 0.1, 0.9) == NO_GESTURE  # ring open alone is no gesture
 
@@ -106,12 +111,29 @@ def test_packets_decode_as_the_protocol_says() -> None:
 def test_junk_runs_are_counted_once_and_the_buffer_stays_bounded() -> None:
     good = encode_packet((1, 2, 3, 4, 5, 6, 7))
     scanner = PacketScanner()
-    junk = bytes([0x80, 1, 2]) + bytes(range(0x70, 0x90)) + b"\x80" * 50
+    # (a run of 0x80 alone would be packets: seven 128s XOR to 128, a valid checksum)
+    junk = bytes([0x80, 1, 2]) + bytes(range(0x70, 0x90)) + b"\x80\x01\x02" * 17
     got = scanner.feed(junk[:20]) + scanner.feed(junk[20:] + good + good)
     assert len(got) == 2 and scanner.bad_records == 1
     assert scanner.skipped_bytes == len(junk)
-    scanner.feed(b"\x80" * 100_000)
-    assert len(scanner.buffer) < PACKET_SIZE and scanner.bad_records == 2
+    scanner.feed(b"\x80\x01\x02" * 33_000)
+    assert len(scanner.buffer) <= PACKET_SIZE and scanner.bad_records == 2
+
+
+def test_nine_and_ten_byte_packets_mix_and_the_last_waits_for_its_next_byte() -> None:
+    data = [(i, 2 * i, 3, 4, 5, 128, 128) for i in range(1, 7)]
+    stream = b"".join(
+        encode_packet(d, tenth)
+        for d, tenth in zip(data, (None, 0x55, None, 0x40, 0x01, None), strict=True)
+    )
+    scanner = PacketScanner(capability=6)
+    got = scanner.feed(stream)
+    assert [g.flexure[0] for g in got] == pytest.approx([i / 255 for i in range(1, 6)])
+    assert [g.capability for g in got] == [6, 0x55, 6, 0x40, 0x01]
+    assert scanner.buffer == bytearray(encode_packet(data[5], None))  # a 10th byte may come
+    last = scanner.feed(b"", quiet=True)  # the line went quiet: it was a 9-byte packet
+    assert len(last) == 1 and last[0].capability == 6
+    assert scanner.bad_records == 0 and scanner.skipped_bytes == 0
 
 
 # -- standalone over the pty ------------------------------------------------------------------
@@ -125,6 +147,40 @@ def test_standalone_reads_every_packet_in_order(emulator) -> None:
     aligned([s.analog for s in got], emu, capability=LEFT)
     assert all(s.hand == "left" for s in got)
     assert device.scanner.bad_records == 0
+
+
+@pytest.mark.parametrize(
+    ("model", "hand", "capability"),
+    [
+        ("classic", LEFT, 6),
+        ("wireless", RIGHT, 0x01),
+        ("wireless", LEFT, 0x40),
+        ("wired", LEFT, 6),  # 9-byte packets: the hand from the G answer
+        ("wired", RIGHT, 0),
+        ("wired-55", RIGHT, 0x55),
+    ],
+)
+def test_every_kind_of_glove_is_read(emulator, model, hand, capability) -> None:
+    emu = emulator("motion", model=model, hand=hand)
+    with DataGlove(emu.address, **FAST, reply_timeout=2.0) as device:
+        got = gather(device.poll, 20)
+    aligned([s.analog for s in got], emu, capability=capability)
+    assert device.scanner.bad_records == 0
+    if model.startswith("wired"):
+        assert b"".join(emu.commands) == b"AGD"  # init, information, stream
+        assert device.info is not None and device.info.right == (hand == RIGHT)
+        assert device.info.name == "5DT Data Glove 5" and device.info.pitch_roll
+    else:
+        assert device.info is None  # it streamed without being asked
+
+
+def test_a_wired_glove_that_never_answers_fails_to_start(tmp_path) -> None:
+    from gadgetctl.emulation.testing import FixtureLine
+
+    with FixtureLine() as line:
+        with pytest.raises(DataGloveNoAnswer, match="no answer"):
+            DataGlove(line.address, **FAST, reply_timeout=0.2).open()
+        assert bytes(line.received) == b"A"
 
 
 # -- in the input manager ---------------------------------------------------------------------
