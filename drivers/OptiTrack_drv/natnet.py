@@ -54,6 +54,8 @@ NAT_MESSAGESTRING = 8
 NAT_DISCONNECT = 9
 NAT_KEEPALIVE = 10
 NAT_UNRECOGNIZED_REQUEST = 100
+#: NatNet 3 additions: disconnect by timeout, echo request and response (clock sync), discovery.
+NAT_NEWER = (11, 12, 13, 14)
 #: NatNet messages a client may see that are not frames: counted, not decoded.
 OTHER_MESSAGES = frozenset(
     {
@@ -67,6 +69,7 @@ OTHER_MESSAGES = frozenset(
         NAT_DISCONNECT,
         NAT_KEEPALIVE,
         NAT_UNRECOGNIZED_REQUEST,
+        *NAT_NEWER,
     }
 )
 
