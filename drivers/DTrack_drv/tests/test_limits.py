@@ -104,10 +104,14 @@ CHILD = textwrap.dedent(
                 if n % 10 == 0:
                     tx.sendto(poison[n // 10 - 1].encode(), ("127.0.0.1", port))
                     frames_until(manager, lambda: device.counters["datagrams"] >= good + n // 10)
+        state, faults = manager.status("DT").state, device.faults
+        # exact counts once sampling stopped: the last poison is counted received before it
+        # is counted bad, and this thread may read between the two
+        manager.shutdown()
         latest = device.store.latest(DeviceKind.POSITION)
         result = {
-            "state": manager.status("DT").state,
-            "faults": device.faults,
+            "state": state,
+            "faults": faults,
             "positions": device.store.total(DeviceKind.POSITION),
             "units": len(latest.values),
             "last_x": float(latest.values[0][0][3]),

@@ -162,8 +162,12 @@ def test_sequence_numbers_follow_each_other_through_the_proxies(
         np.testing.assert_allclose(sample, poses_sent(emu, first + offset), atol=1e-9)
     # the proxies show the newest sample of the frame
     np.testing.assert_allclose(manager.proxy("Star 1").matrix, samples[-1][1])
+    # Exact totals only once sampling has stopped: the sampling thread counts a packet, then
+    # adds its sample, while this thread reads one count and then the other (a pause between
+    # the two reads under load let two more packets in: 34 counted before, 36 in the store).
+    manager.shutdown()
     assert device.sequence_gaps == 0
-    assert device.packets == device.store.total(DeviceKind.POSITION)
+    assert device.packets == device.store.total(DeviceKind.POSITION) >= len(samples)
 
 
 @pytest.mark.parametrize(
