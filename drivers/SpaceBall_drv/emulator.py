@@ -31,7 +31,7 @@ VERSION_BALL = (
     b"@1 Spaceball alive and well after a reset.",
     b"@2 Firmware version 4.10 created on 10-Oct-2002",
 )
-#: Axis values of the first motion record: bytes that a SpaceBall 4000 must escape.
+#: Axis values of the first motion record: bytes that a SpaceBall must escape.
 ESCAPE_AXES = (0x000D, 0x0011, 0x0013, 0x005E, 0x0D0D, -0x0D0D)
 AMPLITUDE = {
     "SpaceMouse": 450,
@@ -67,14 +67,18 @@ def encode_buttons(model: str, buttons: tuple[int, ...], left_handed: bool = Fal
     if is_mouse(model):
         return b"k" + bytes(nibble(bits >> s & 0xF) for s in (0, 4, 8)) + b"\r"
     if model == "SpaceBall 2003B":
-        return b"K" + bytes([0x40 | (bits >> 4 & 0x1F), 0x40 | (bits & 0x0F)]) + b"\r"
+        body = bytes([0x40 | (bits >> 4 & 0x1F), 0x40 | (bits & 0x0F)])
+        return b"K" + escape(model, body) + b"\r"
     first = 0x40 | (bits >> 7 & 0x1F) | (0x20 if left_handed else 0)
     second = 0x40 | (bits & 0x3F) | (bits >> 6 & 1) << 7
     return b"." + escape(model, bytes([first, second])) + b"\r"
 
 
 def escape(model: str, body: bytes) -> bytes:
-    if model != "SpaceBall 4000 FLX":
+    """A SpaceBall's record body as it goes on the wire: CR, XON, XOFF as ``^M``, ``^Q``,
+    ``^S`` and ``^`` as ``^^`` (every SpaceBall does it: VRPN ``vrpn_Spaceball.C`` and VR
+    Juggler's ``puck_device.cpp`` unescape for each model, the 2003B included)."""
+    if is_mouse(model):
         return body
     out = bytearray()
     for c in body:
@@ -87,24 +91,11 @@ def escape(model: str, body: bytes) -> bytes:
     return bytes(out)
 
 
-def _has_cr(value: int) -> bool:
-    return 0x0D in value.to_bytes(2, "big", signed=True)
-
-
-def cr_free(value: int) -> int:
-    """The nearest value at or above ``value`` whose bytes (either sign) hold no CR: the 2003B
-    has no escapes, so a real one cannot send such a value either."""
-    while _has_cr(value) or _has_cr(-value):
-        value += 1
-    return value
-
-
 def motion_axes(model: str, step: int) -> tuple[int, ...]:
-    if step == 0 and model == "SpaceBall 4000 FLX":
+    if step == 0 and not is_mouse(model):
         return ESCAPE_AXES
     amp = AMPLITUDE[model]
-    axes = tuple(round(amp * math.sin(step / 10 + axis)) for axis in range(6))
-    return tuple(cr_free(a) for a in axes) if model == "SpaceBall 2003B" else axes
+    return tuple(round(amp * math.sin(step / 10 + axis)) for axis in range(6))
 
 
 def button_pattern(step: int) -> tuple[int, ...]:
@@ -200,8 +191,7 @@ class SpaceBallEmulator(PtyDeviceEmulator):
             self.sent.append(("buttons", buttons))
         else:
             axes = motion_axes(self.model, step)
-            timer = cr_free(step & 0x3FFF) if self.model == "SpaceBall 2003B" else step
-            record = encode_axes(self.model, axes, timer=timer)
+            record = encode_axes(self.model, axes, timer=step)
             self.sent.append(("axes", axes))
         junk = garbage(self.model, step) if self.scenario == "garbage" else b""
         self.write(junk + record)

@@ -10,10 +10,15 @@ Both talk 9600 baud, 8 data bits, 2 stop bits, in records ended by a carriage re
 * SpaceBall 4000 FLX: binary records. ``D`` + 2 timer bytes + six big-endian signed 16-bit
   axes (z and roll sign-flipped so both dialects turn the same way); ``.`` + 2 bytes is
   buttons 1..12 and the left-handed flag; ``K`` + 6 bytes is the older button record with
-  the button bytes at 4 and 5. Control characters inside a record are escaped as ``^`` and
-  a letter (``^Q``, ``^S``, ``^M``), ``^^`` being ``^`` itself.
+  the button bytes at 4 and 5.
 * SpaceBall 2003B: the same analog record, ``K`` + 2 bytes for buttons 1..8 and the pick
-  button (9), and no escapes.
+  button (9).
+* Both SpaceBalls escape control characters inside a record as ``^`` and a letter (``^Q``,
+  ``^S``, ``^M`` for XON, XOFF, CR), ``^^`` being ``^`` itself. VRPN ``vrpn_Spaceball.C``
+  unescapes whatever the model, and so does VR Juggler's ``puck_device.cpp`` (its
+  ``processBuffer`` always calls ``checkControlChars``; the 2003B's flag that says otherwise is
+  never read); an earlier gadgetctl did not for the 2003B and dropped every record holding
+  one of those four bytes.
 
 Axes are ``tx, ty, tz, rx, ry, rz`` in raw counts; buttons are 0/1, button N at index N-1.
 Decoding is bounded: a record longer than any the protocol has, a nibble character the
@@ -43,7 +48,9 @@ BUTTONS = 12
 #: escaped (1 + 2 * 14), or a SpaceMouse version reply (text). Longer is junk.
 MAX_RECORD = 80
 
-#: Raw counts the C++ driver maps onto [0, 1] (it overrides the definition's 0..255).
+#: Raw counts the C++ driver maps onto [0, 1], whatever the element's min/max say
+#: (``PuckDevice::config``: setMin/setMax -500/500 for the SpaceMouse dialects, -2000/2000 for
+#: both SpaceBalls).
 AXIS_RANGE = {
     SPACEMOUSE: 500.0,
     SPACEMOUSE_PLUS: 500.0,
@@ -119,7 +126,7 @@ def decode_spacemouse(record: bytes) -> PuckSample | str | None:
 
 
 def unescape(record: bytes) -> bytes | None:
-    """Undo the SpaceBall 4000's escapes; None for an escape the protocol does not have.
+    """Undo a SpaceBall's escapes; None for an escape the protocol does not have.
 
     (The C++ driver masks any escaped character with 31, which turns ``^^`` into 0x1E.)"""
     if b"^" not in record:
@@ -151,11 +158,10 @@ def _axes_from_words(body: bytes) -> tuple[int, ...]:
 def decode_spaceball(record: bytes, model: str = SPACEBALL_4000) -> PuckSample | str | None:
     """A SpaceBall record without its CR (escapes still in): a sample, ``"reply"`` for a
     command echo, version or error line, or None when it is malformed."""
-    if model == SPACEBALL_4000:
-        plain = unescape(record)
-        if plain is None:
-            return None
-        record = plain
+    plain = unescape(record)  # every SpaceBall escapes (the 2003B too)
+    if plain is None:
+        return None
+    record = plain
     code, body = record[:1], record[1:]
     if code == b"D":
         return PuckSample(axes=_axes_from_words(body)) if len(body) == 14 else None

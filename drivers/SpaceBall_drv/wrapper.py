@@ -1,13 +1,21 @@
 """The input-manager side of the SpaceMouse / SpaceBall (element type ``puck_device``).
 
 Units: analog 0..5 are the axes tx, ty, tz, rx, ry, rz in raw counts; digital 0..11 are
-buttons 1..12. Differences from the C++ ``PuckDevice``, on purpose:
+buttons 1..12.
+
+Normalisation, as the C++ ``PuckDevice`` does it: the analog range is the model's, -500..500
+for the SpaceMouse dialects and -2000..2000 for the SpaceBall 4000 FLX and 2003B, **whatever
+the element's min/max say**. The definition's min/max defaults are 0 and 255, and VRJConfig
+writes them into every file it saves, so honouring min/max would read a centred axis as 0.0
+(and clamp every negative count); with the model's range a centred axis reads 0.5, a full
+push 0 or 1. (The Wanda driver treats its -34..34 the same way.) To change sensitivity, use
+the puck's own settings, not min/max.
+
+Differences from the C++ ``PuckDevice``, on purpose:
 
 * buttons are stored as 0/1 (the C++ stored the masked bit, 2048 for button 12);
 * analog values are stored raw and normalised by the proxies once (the C++ normalised
-  before adding, so proxies normalised twice); min/max written in the element are used,
-  otherwise the dialect's range the C++ set in code (±500 SpaceMouse, ±2000 SpaceBall)
-  rather than the definition's 0..255, which no puck reports;
+  before adding, so proxies normalised twice);
 * every record read is added (the C++ added one per sample() call), and a lost line raises
   so the input manager restarts the device.
 """
@@ -55,10 +63,7 @@ class PuckDevice(Analog, Digital, CarriedCounters):
         if baud != BAUD:
             raise DeviceConfigError(f"baud {baud}: the pucks talk {BAUD} bit/s only")
         span = AXIS_RANGE[self.model]
-        if not access.count("min"):
-            self.analog_min = -span
-        if not access.count("max"):
-            self.analog_max = span
+        self.analog_min, self.analog_max = -span, span  # min/max ignored, as in the C++
 
     def start_sampling(self) -> None:
         puck = SpaceBall(

@@ -78,9 +78,23 @@ def test_spaceball_records_decode_as_the_protocol_says() -> None:
     escaped = b"D^M^Q" + b"\x00^S" + b"\x00^^" + b"\x00" * 8
     assert decode_spaceball(escaped).axes[:2] == (0x0013, 0x005E)
     assert decode_spaceball(b"D^x" + b"\x00" * 13) is None
-    # the 2003B: K, 010 pick b8 b7 b6 b5, 0100 b4..b1; pick is button 9; no escapes
+    # the 2003B: K, 010 pick b8 b7 b6 b5, 0100 b4..b1; pick is button 9
     got = decode_spaceball(b"K" + bytes([0x51, 0x48]), "SpaceBall 2003B")
     assert got.buttons == (0, 0, 0, 1, 1, 0, 0, 0, 1, 0, 0, 0)
+
+
+def test_the_2003b_escapes_like_the_4000() -> None:
+    # VRPN and the C++ unescape for every model: a 2003B's D record holding CR, XON, XOFF or
+    # a caret arrives escaped, and so does a K record whose first byte is 0x5E ('^')
+    words = (0x0D00, 0x0011, 0x1300, 0x5E5E, -0x0D0D, 0)
+    escaped = b"D^M^Q" + b"".join(
+        {0x0D: b"^M", 0x11: b"^Q", 0x13: b"^S", 0x5E: b"^^"}.get(c, bytes([c]))
+        for c in b"".join(w.to_bytes(2, "big", signed=True) for w in words)
+    )
+    got = decode_spaceball(escaped, "SpaceBall 2003B")
+    assert got is not None and got.axes == (0x0D00, 0x0011, -0x1300, 0x5E5E, -0x0D0D, 0)
+    buttons = decode_spaceball(b"K^^" + bytes([0x40]), "SpaceBall 2003B")  # 0x5E: b5, b6, b7, b8
+    assert buttons is not None and buttons.buttons == (0, 0, 0, 0, 0, 1, 1, 1, 1, 0, 0, 0)
 
 
 def test_overlong_runs_and_junk_are_counted_and_skipped_whole() -> None:
@@ -111,8 +125,9 @@ def test_every_dialect_starts_and_decodes_what_the_puck_sends(emulator, model) -
     decoded = [("axes", s.axes) if s.axes is not None else ("buttons", s.buttons) for s in got]
     assert decoded == emu.sent[: len(decoded)]
     if model == "SpaceBall 4000 FLX":
-        assert decoded[0] == ("axes", ESCAPE_AXES)  # every escaped byte came through
         assert device.decoder.bad_records > 0
+    if model.startswith("SpaceBall"):
+        assert decoded[0] == ("axes", ESCAPE_AXES)  # every escaped byte came through
 
 
 # -- in the input manager ---------------------------------------------------------------------
@@ -142,6 +157,35 @@ def test_axes_are_raw_counts_normalised_by_the_dialect_range(emulator, managers)
     latest = device.store.latest(DeviceKind.ANALOG).values
     proxy = manager.proxy("Ball A0").data
     assert proxy == pytest.approx((min(max(latest[0], -2000), 2000) + 2000) / 4000)
+
+
+@pytest.mark.parametrize(
+    ("model", "span"),
+    [("SpaceMouse", 500), ("SpaceBall 4000 FLX", 2000), ("SpaceBall 2003B", 2000)],
+)
+def test_a_centred_axis_reads_half_whatever_min_and_max_say(emulator, managers, model, span):
+    # VRJConfig writes the definition's defaults, min 0 and max 255, into the files it saves;
+    # the C++ uses the model's range whatever they say, and so does this driver
+    emu = emulator("idle", model=model)
+    written = "<min>0.0</min><max>255.0</max></puck_device>"
+    manager = managers(puck("Puck", emu.address, model).replace("</puck_device>", written))
+    device = manager.device("Puck")
+    assert (device.analog_min, device.analog_max) == (-span, span)
+    assert wait_until(lambda: emu.streaming.is_set())
+    manager.update()
+    assert [manager.proxy(f"Puck A{u}").data for u in range(6)] == [0.5] * 6  # at rest
+    before = device.records
+    push = {"SpaceMouse": b"d" + b"H000" + b"HA<D" + b"H000" * 4 + b"\r"}.get(model)
+    if push is None:  # a SpaceBall: timer, then tx = span / 2 and ty = -span
+        words = (span // 2, -span, 0, 0, 0, 0)
+        push = b"D\x00\x00" + b"".join(w.to_bytes(2, "big", signed=True) for w in words) + b"\r"
+        expected = (0.75, 0.0)
+    else:  # tx 0x8000 - 32768 = 0, ty 0x81C4 - 32768 = 452
+        expected = (0.5, (452 + 500) / 1000)
+    emu.send_raw(push)
+    assert wait_until(lambda: device.records > before, step=manager.update)
+    got = (manager.proxy("Puck A0").data, manager.proxy("Puck A1").data)
+    assert got == pytest.approx(expected)
 
 
 def test_garbage_is_resynchronised_and_counted_without_a_fault(emulator, managers) -> None:
