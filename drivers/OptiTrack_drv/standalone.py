@@ -345,11 +345,19 @@ class NatNetReceiver:
                 f"no NatNet data on UDP port {self.port} for {self.peer_timeout:g} s"
             )
         if self._bad_since_good and moment - self._last_good > self.peer_timeout:
-            raise NatNetUndecodable(
-                f"NatNet data arrives on UDP port {self.port} but none decoded for "
-                f"{self.peer_timeout:g} s ({self._bad_since_good} bad): {self.first_error}"
-            )
+            raise NatNetUndecodable(self.undecodable_reason())
         return frames
+
+    def undecodable_reason(self) -> str | None:
+        """Why nothing decodes, while datagrams arrive and none decoded since the last good
+        frame (None otherwise)."""
+        if not self._bad_since_good:
+            return None
+        return (
+            f"NatNet data arrives on UDP port {self.port} but none decoded for "
+            f"{time.monotonic() - self._last_good:.1f} s ({self._bad_since_good} bad): "
+            f"{self.first_error}"
+        )
 
     def handle(self, data: bytes, address: tuple[str, int] | None = None) -> list[NatNetFrame]:
         """Count one datagram and act on it; the frames it yields (several when it is the

@@ -40,6 +40,7 @@ from .standalone import (
     NatNetDisconnected,
     NatNetFrame,
     NatNetReceiver,
+    NatNetUndecodable,
     NatNetUnits,
 )
 
@@ -148,6 +149,9 @@ class OptiTrackDevice(Position):
         try:
             frames = driver.sample_all(self.batch_limit)
             if not frames:
+                undecodable = driver.undecodable_reason()
+                if undecodable is not None:
+                    raise NatNetUndecodable(undecodable)
                 raise NatNetDisconnected(f"still no NatNet frames on UDP port {driver.port}")
         except BaseException:
             self.stop_sampling()

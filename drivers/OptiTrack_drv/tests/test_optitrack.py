@@ -5,12 +5,20 @@ bounded decoding, garbage, disconnection and return, multicast through loopback.
 from __future__ import annotations
 
 import math
+import socket
 import struct
+import time
 from pathlib import Path
 
 import numpy as np
 import pytest
-from OptiTrack_drv.emulator import OptiTrackEmulator, body_pose, encode_frame, marker_position
+from OptiTrack_drv.emulator import (
+    FrameWriter,
+    OptiTrackEmulator,
+    body_pose,
+    encode_frame,
+    marker_position,
+)
 from OptiTrack_drv.standalone import (
     DEFAULT_LIMITS,
     NatNetFormatError,
@@ -263,3 +271,110 @@ def test_validate_counts_bodies_and_markers_as_units(tmp_path: Path) -> None:
     result = run_gadgetctl("validate", str(path), timeout=60)
     assert result.returncode == 1
     assert "CFG034" in result.stdout and "'Beyond'" in result.stdout and "'Ok'" not in result.stdout
+
+
+# -- sessions with the server, versions, undecodable data, frame numbers --------------------------
+
+
+def test_a_unicast_session_with_an_emulated_motive(build) -> None:
+    port = free_udp_port()
+    with OptiTrackEmulator(
+        port, scenario="motion", rate=RATE, command_port=0, unicast=True, version=(3, 1)
+    ) as motive:
+        command_port = motive.command_address[1]
+        extra = (
+            "<connection_type>Unicast</connection_type><server_address>127.0.0.1</server_address>"
+            f"<command_port>{command_port}</command_port><natnet_version></natnet_version>"
+        )
+        manager = build(
+            device("OT", port, [2], [1001], extra=extra)
+            + proxy("position", "B", "OT", 0)
+            + proxy("position", "M", "OT", 1)
+        )
+        dev = manager.device("OT")
+        frames_until(manager, lambda: dev.store.total(DeviceKind.POSITION) >= 30)
+        # keep-alives follow the connect request while the session lasts
+        frames_until(manager, lambda: motive.keepalives >= 1, timeout=10.0)
+        assert motive.connects >= 1 and len(motive.clients) == 1
+    counters = dev.counters
+    assert counters["server_infos"] >= 1 and counters["bad_datagrams"] == 0
+    assert dev._receiver.version == (3, 1)  # from the server's information
+    turned = manager.proxy("B").matrix[:3, :3] @ [1, 0, 0]
+    assert abs(np.linalg.norm(turned) - 1) < 1e-9 and manager.proxy("B").timestamp is not None
+    np.testing.assert_allclose(manager.proxy("M").translation[0], 0.01, atol=1e-6)
+
+
+def test_a_device_whose_frames_never_decode_is_faulted_with_the_first_error(build) -> None:
+    # NatNet 3.0 frames read as 2.0 (the element says so): every one fails; upstream, and
+    # gadgetctl before, showed such a device as running
+    port = free_udp_port()
+    manager = build(
+        device("OT", port, [1], [], extra="<natnet_version>2.0</natnet_version>")
+        + proxy("position", "B", "OT", 0),
+        peer_timeout=0.5,
+    )
+    dev = manager.device("OT")
+    with OptiTrackEmulator(port, scenario="motion", rate=RATE, version=(3, 0)):
+        frames_until(manager, lambda: manager.status("OT").state != "running", timeout=10.0)
+        status = manager.status("OT")
+        assert dev.counters["bad_datagrams"] > 0 and dev.counters["frames"] == 0
+        assert "none decoded" in status.reason and "NatNet 2.0 frame:" in status.reason
+        # a restart while the data still cannot be decoded keeps saying why
+        first_at = dev.error_at
+        frames_until(manager, lambda: dev.error_at != first_at, timeout=10.0)
+        assert manager.status("OT").state != "running"
+        assert "NatNet 2.0 frame:" in manager.status("OT").reason
+    assert dev.store.total(DeviceKind.POSITION) == 0
+
+
+def test_hostile_frame_numbers_never_make_absurd_missed_frames() -> None:
+    import warnings
+
+    receiver = NatNetReceiver(0, group=None, version=V20)
+    numbers = [1, 2, 5, 2**31 - 1, -(2**31), -(2**31) + 3, 77, 77, 3, 3 + 10_000, 2**31 - 7]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for n in numbers:
+            frame = receiver.decode(
+                encode_frame(n, [(1, (1.0, 2.0, 3.0, 0, 0, 0, 1.0))], [], version=V20)
+            )
+            assert frame is not None and frame.number == n
+    # 2 -> 5: 2 missed; int32 wrap -2**31 -> -2**31+3: 2 missed; 3 -> 10003: 9999 missed
+    assert receiver.missed_frames == 2 + 2 + 9_999
+    # 2**31-1 -> -2**31 is the int32 wrap, a step of 1; jumps, counted once each:
+    # 5 -> 2**31-1, -2**31+3 -> 77, the repeated 77, 77 -> 3 (back), 10003 -> 2**31-7
+    assert receiver.frame_jumps == 5
+
+
+def test_without_an_answer_the_frames_are_reported_undecodable() -> None:
+    from OptiTrack_drv.standalone import NatNetUndecodable
+
+    receiver = NatNetReceiver(
+        0, group=None, command_port=free_udp_port(), receive_timeout=0.02, version_timeout=0.2
+    )
+    receiver.open()
+    try:
+        sender = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        packet = encode_frame(1, [(1, (1.0, 2.0, 3.0, 0, 0, 0, 1.0))], [])
+        with sender, pytest.raises(NatNetUndecodable, match="did not answer the connect request"):
+            deadline = time.monotonic() + 10
+            while time.monotonic() < deadline:
+                sender.sendto(packet, ("127.0.0.1", receiver.port))
+                receiver.sample_all()
+        assert receiver.requests_sent >= 1 and receiver.undecoded_frames >= 1
+        assert receiver.frames == 0
+    finally:
+        receiver.close()
+
+
+def test_a_configured_version_in_multicast_mode_sends_nothing() -> None:
+    receiver = NatNetReceiver(0, group=None, version=(4, 1), receive_timeout=0.02)
+    receiver.open()
+    try:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sender:
+            sender.sendto(FrameWriter("idle", 2, 2).frame(3), ("127.0.0.1", receiver.port))
+            frames: list = []
+            assert wait_until(lambda: bool(frames.extend(receiver.sample_all()) or frames), 5.0)
+        assert receiver.requests_sent == 0 and receiver.server is None
+    finally:
+        receiver.close()
