@@ -243,7 +243,8 @@ class FlockEmulator(PtyDeviceEmulator):
         if param == 0x01:
             return bytes((3, 67))
         if param == 0x03:
-            return bytes((0, 0 if self.scale_inches == 36 else 1))
+            # a word, low byte first (Ascension's EXAMINE VALUE): 0 36 inches, 1 72 inches
+            return bytes((0 if self.scale_inches == 36 else 1, 0))
         if param == 0x0A:
             return b"\x00"
         if param == 0x0F:

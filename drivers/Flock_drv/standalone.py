@@ -14,8 +14,8 @@ record has bit 7 set (the phasing bit), every other byte has it clear. A word is
 ``int16(MS << 9 | LS << 2) / 32768``, in [-1, 1). In group (FBB) mode each record ends with
 one more byte: the address of the bird that measured it.
 
-Scaling: position words times the full scale (36 or 72 inches, 144 with an extended range
-transmitter) in **feet**, as Gadgeteer reports it; angles times 180 degrees (azimuth about z,
+Scaling: position words times the full scale (36 or 72 inches as the POSITION SCALING reply's
+low byte says, 144 with an extended range transmitter) in **feet**, as Gadgeteer reports it; angles times 180 degrees (azimuth about z,
 elevation about y, roll about x); quaternion words as they are, (q0, q1, q2, q3) with q0 the
 scalar part of the conjugate rotation (the rotation is (w, x, y, z) = (q0, -q1, -q2, -q3)).
 
@@ -37,6 +37,9 @@ from gadgetctl.transport.records import ResyncScanner, ScannedDevice
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
 
 # -- commands and parameters ------------------------------------------------------------------
+
+#: Full scale in inches by the POSITION SCALING code (examine parameter 3).
+SCALE_CODES = {0: 36.0, 1: 72.0}
 
 EXAMINE, CHANGE = ord("O"), ord("P")
 HEMISPHERE, STREAM, STREAM_STOP = ord("L"), ord("@"), ord("?")
@@ -252,6 +255,22 @@ class BusUnit:
 # -- the device -----------------------------------------------------------------------------------
 
 
+def scale_from_reply(reply: bytes) -> float:
+    """The full scale (inches) from the 2-byte answer to ``O 0x03`` (POSITION SCALING).
+
+    Ascension's manuals (EXAMINE VALUE: "If the PARAMETERdata returned is a word then the
+    Least Significant byte (LSbyte) is received before the Most Significant byte"; POSITION
+    SCALING: "The most significant byte ... is always zero. If the least significant byte = 0,
+    the scale factor is 36 inches ... = 1, the full scale output is 72 inches"), and VRPN's
+    ``vrpn_Flock.C``, which reads examine words low byte first: the code is the **first**
+    byte. Fixed from VR Juggler's ``FlockStandalone.cpp``, which tests the second byte (the
+    MSB, always 0) and so reads every 72-inch Flock as 36 inches, halving its positions."""
+    code = reply[0]  # the LSB (VR Juggler's C++ reads reply[1], the MSB: a device mismatch)
+    if code not in SCALE_CODES or reply[1] != 0:
+        raise FlockProtocolError(f"position scaling reply {reply.hex(' ')} is not 36 or 72 inches")
+    return SCALE_CODES[code]
+
+
 class Flock(ScannedDevice):
     """A Flock of Birds on a serial line, streaming PosQuaternion (or PosAngles) records.
 
@@ -405,9 +424,7 @@ class Flock(ScannedDevice):
         if self.extended_range:
             self.scale_inches = 144.0
         else:
-            self.scale_inches = (
-                36.0 if self.examine(SCALING, address=self.sensors[0])[1] == 0 else 72.0
-            )
+            self.scale_inches = scale_from_reply(self.examine(SCALING, address=self.sensors[0]))
         self.scanner = RecordScanner(
             self.output_format,
             self.scale_inches / 12.0,
