@@ -1064,7 +1064,7 @@ _RECORD_KEYS = [
 @target("recording.reader", seeds=_recording_seeds, grammar=_recording_lines, examples=80)
 def _recording(data: bytes) -> None:
     from gadgetctl.monitor.recording import RecordingError, read_recording
-    from gadgetctl.monitor.records import MAX_UNITS
+    from gadgetctl.monitor.records import REPLAY_UNITS
     from gadgetctl.monitor.replaydevice import make_schedule, recorded_devices
     from gadgetctl.monitor.summary import summarize_recording
 
@@ -1074,7 +1074,7 @@ def _recording(data: bytes) -> None:
         recording = read_recording(path)
         schedule = make_schedule(recording.records, speed=1.0, loop=False, mapping=None)
         devices = recorded_devices(recording.header, schedule, {})
-        assert all(0 < n <= MAX_UNITS for d in devices.values() for n in d.units.values())
+        assert all(0 < n <= REPLAY_UNITS for d in devices.values() for n in d.units.values())
     except RecordingError:
         pass
 

@@ -230,6 +230,7 @@ def run_replay(
     from gadgetctl.input.manager import InputManager, ManagerOptions
     from gadgetctl.monitor import replaydevice
     from gadgetctl.monitor.recording import RecordingError
+    from gadgetctl.monitor.records import REPLAY_UNITS
     from gadgetctl.monitor.session import MonitorSession
 
     check_options(rate, duration, interval)
@@ -266,6 +267,13 @@ def run_replay(
     except ValueError as err:
         raise GadgetctlError(f"{recording}: {err}") from None
     notes = [f"{recording}: {problem}" for problem in source.problems if problem.severity != "info"]
+    if schedule.units_beyond:
+        notes.append(
+            f"{recording}: {schedule.units_beyond} "
+            f"sample{'' if schedule.units_beyond == 1 else 's'} of units beyond "
+            f"{REPLAY_UNITS - 1} skipped (a replay plays units 0 to {REPLAY_UNITS - 1} "
+            "of a device and kind)"
+        )
     notes += [
         f"--map: {warning}"
         for warning in schedule.mapping_warnings

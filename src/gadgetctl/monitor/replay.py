@@ -45,7 +45,8 @@ class ReplaySchedule:
     unscaled when as fast as possible), otherwise the recorded ones plus the loop offset.
     ``mapping`` renames devices; names that occur nowhere are listed in ``unused_mapping``.
     Frames, stats and end records are not replayed. Records due within ``tolerance`` seconds
-    are released together, to save sleeps.
+    are released together, to save sleeps. With ``max_units``, samples of units from
+    ``max_units`` on are left out and counted in ``units_beyond``.
     """
 
     def __init__(
@@ -60,6 +61,7 @@ class ReplaySchedule:
         tolerance: float = 0.001,
         clock: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], object] = time.sleep,
+        max_units: int | None = None,
     ) -> None:
         if math.isnan(speed) or speed < 0:
             raise ValueError(
@@ -74,7 +76,16 @@ class ReplaySchedule:
         self.rebase = rebase
         self.tolerance = max(0.0, tolerance)
         self._clock, self.sleep = clock, sleep
-        kept = [r for r in records if isinstance(r, (SampleRecord, MarkerRecord))]
+        kept: list[ReplayRecord] = []
+        self.units_beyond = 0  # samples of units from max_units on, left out
+        for r in records:
+            if isinstance(r, SampleRecord):
+                if max_units is not None and r.unit >= max_units:
+                    self.units_beyond += 1
+                    continue
+                kept.append(r)
+            elif isinstance(r, MarkerRecord):
+                kept.append(r)
         kept.sort(key=lambda r: r.timestamp)
         self._records = kept
         sample_stamps = [r.timestamp for r in kept if isinstance(r, SampleRecord)]

@@ -48,7 +48,7 @@ from gadgetctl.jccl.access import ElementAccess
 from gadgetctl.jccl.configuration import ConfigElement, Configuration, PropertyValue
 from gadgetctl.jccl.definitions import Location
 from gadgetctl.monitor.poses import matrix_from_pose
-from gadgetctl.monitor.records import MAX_UNITS, HeaderRecord, MarkerRecord, SampleRecord
+from gadgetctl.monitor.records import REPLAY_UNITS, HeaderRecord, MarkerRecord, SampleRecord
 from gadgetctl.monitor.replay import ReplaySchedule
 
 REPLAY_ELEMENT_TYPE = "replay_device"
@@ -133,6 +133,8 @@ class RecordedDevice:
     units: dict[str, int] = field(default_factory=dict)
     minimum: float | None = None
     maximum: float | None = None
+    #: kind -> unit count the header claims beyond REPLAY_UNITS (not replayed)
+    claimed_beyond: dict[str, int] = field(default_factory=dict)
 
 
 @dataclass
@@ -179,8 +181,14 @@ def recorded_devices(
         name = _mapped(mapping, original)
         declared = [k for k in described.get("kinds", []) if k in _REPLAYABLE_NAMES]
         units = dict(seen_units.get(original, {}))
-        for kind, count in (described.get("units") or {}).items():
-            if isinstance(count, int) and units.get(kind, 0) < count <= MAX_UNITS:
+        claimed = described.get("units")
+        beyond: dict[str, int] = {}
+        for kind, count in (claimed if isinstance(claimed, Mapping) else {}).items():
+            if not isinstance(count, int) or isinstance(count, bool):
+                continue
+            if count > REPLAY_UNITS:
+                beyond[str(kind)] = count
+            elif units.get(kind, 0) < count:
                 units[kind] = count
         device = RecordedDevice(
             name,
@@ -190,6 +198,7 @@ def recorded_devices(
                 set(declared) | (kinds & _REPLAYABLE_NAMES), key=[k.value for k in REPLAYABLE].index
             ),
             units,
+            claimed_beyond=beyond,
         )
         if isinstance(described.get("min"), (int, float)) and isinstance(
             described.get("max"), (int, float)
@@ -280,7 +289,12 @@ def plan_replay(
     if not devices:
         raise ReplayError(f"{path}: the recording holds no samples of any device to replay")
     where = Location(f"<replay of {path}>")
-    notes: list[str] = []
+    notes = [
+        f"the header claims {count} {kind} units of {device.recorded_name!r}; "
+        f"units from {REPLAY_UNITS} on are not replayed"
+        for device in devices.values()
+        for kind, count in device.claimed_beyond.items()
+    ]
     elements: list[ConfigElement] = []
     if configuration is not None:
         present = set()
@@ -470,4 +484,4 @@ def make_schedule(
     records: Iterable[object], *, speed: float, loop: bool, mapping: Mapping[str, str] | None
 ) -> ReplaySchedule:
     """A schedule stamping released samples on the input manager's clock."""
-    return ReplaySchedule(records, speed, loop, mapping=mapping, clock=now)
+    return ReplaySchedule(records, speed, loop, mapping=mapping, clock=now, max_units=REPLAY_UNITS)

@@ -21,7 +21,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from gadgetctl.monitor.recording import Recording, RecordingError, RecordingProblem
-from gadgetctl.monitor.records import MAX_UNITS, EndRecord, HeaderRecord, Record, SampleRecord
+from gadgetctl.monitor.records import REPLAY_UNITS, EndRecord, HeaderRecord, Record, SampleRecord
 
 MAGIC = b"vrpn: ver. "
 ANALOG_RANGE = (-1.0, 1.0)
@@ -129,7 +129,7 @@ def _scan(path: Path, routes: Routes) -> tuple[float | None, dict[str, dict[str,
                 if m.sender is None:
                     continue
                 report = m.report
-                if isinstance(report, TrackerPose) and report.sensor < MAX_UNITS:
+                if isinstance(report, TrackerPose) and report.sensor < REPLAY_UNITS:
                     kind, count = "position", report.sensor + 1
                 elif isinstance(report, ButtonChange):
                     kind, count = "digital", report.button + 1
@@ -173,7 +173,7 @@ def _samples(m, skipped: list[int], routes: Routes) -> list[SampleRecord]:
     )
     device = _route(routes, sender, kind)
     if isinstance(report, TrackerPose):
-        if report.sensor >= MAX_UNITS:
+        if report.sensor >= REPLAY_UNITS:
             skipped[0] += 1
             return []
         return [
@@ -233,7 +233,7 @@ def _records(reader, problems: list[RecordingProblem], routes: Routes) -> Iterat
             RecordingProblem(
                 reader.records,
                 "warning",
-                f"{skipped[0]} tracker reports of sensors beyond {MAX_UNITS - 1} skipped",
+                f"{skipped[0]} tracker reports of sensors beyond {REPLAY_UNITS - 1} skipped",
             )
         )
     if reader.bad_reports:
