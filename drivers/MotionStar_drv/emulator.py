@@ -9,7 +9,9 @@ Scenarios (poses are deterministic functions of the packet count):
 
 ``idle``        every sensor holds a fixed pose
 ``motion``      sensors move and turn smoothly
-``buttons``     fixed poses, the first button byte steps through presses/releases
+``buttons``     fixed poses, the first button byte steps through presses/releases; while
+                a button is held each sensor's record is followed by a feed-through
+                record (``0xE1``: format code 14, one word)
 ``garbage``     ``motion`` with junk, broken headers and cut-short packets in between
 ``disconnect``  ``disconnect_after`` data packets, then the connection is closed
 """
@@ -53,6 +55,9 @@ ERR_ILLEGAL_SETUP = 9
 DEFAULT_PORT = 6000
 
 WORDS = {0: 0, 1: 3, 2: 3, 3: 9, 4: 6, 5: 12, 7: 4, 8: 7}
+#: The data info byte of a feed-through record: format code 14, one word. An independent
+#: MotionStar driver built on Ascension's sample code met it while a wand button was held.
+FEED_THROUGH = 0xE1
 BUTTON_STEPS = (0x00, 0x01, 0x00, 0x02, 0x00, 0x04, 0x03, 0x00)
 SCENARIOS = ("idle", "motion", "buttons", "garbage", "disconnect")
 
@@ -475,6 +480,9 @@ class _Session:
             out += struct.pack(f">{len(words)}h", *words)
             if buttons:
                 out += bytes(buttons)
+                # while a wand button is held a chassis adds a feed-through record:
+                # format code 14, one word (0xE1)
+                out += bytes((device.address, FEED_THROUGH)) + struct.pack(">h", buttons[0])
             log[device.address] = (code, words, buttons)
         return bytes(out), log
 

@@ -13,6 +13,16 @@ degrees in the order Z, Y, X; matrix and quaternion words are fractions in
 [-1, 1). Each sample gives a 4x4 float64 matrix per sensor, translation in
 inches, rotation ``Rz @ Ry @ Rx``.
 
+The quaternion is used as sent, (w, x, y, z) = (q0, q1, q2, q3), as VR Juggler's
+C++ does. Ascension's manuals say the Bird extracts q0..q3 (q0 the scalar) from its
+MATRIX output with Shepperd's algorithm; that matrix M is the direction-cosine
+matrix from transmitter to sensor axes (M11 = cos E cos A, M12 = cos E sin A,
+M13 = -sin E), whose Shepperd quaternion is, in the usual active (Hamilton) reading,
+the rotation M transposed: the sensor's orientation, the same rotation as the angles
+give. So no conjugation is needed; an independent driver (VESS's
+``vsEthernetMotionStar``) conjugates because its own quaternion class rotates frames
+the other way round.
+
 Differences from the C++ driver, on purpose:
 
 * matrix and quaternion words are signed fractions ``word / 32768``; the C++
@@ -22,9 +32,15 @@ Differences from the C++ driver, on purpose:
 * the rotation of the matrix formats is taken from the matrix itself; the C++
   went through arcsines (losing the quadrant) and, for the plain matrix format,
   passed the X and Z angles in swapped order;
-* records are decoded by their own format code and mapped to units by their
-  FBB address; records that do not parse make the packet count as garbage and
-  the stream is re-synchronised on the next plausible header;
+* records are stepped over by their own word count, as the C++ does, and a record
+  whose format code is no data format (the feed-through record ``0xE1``, code 14
+  with one word, that a chassis sends while a wand button is held) is counted in
+  ``other_records`` and skipped (gadgetctl used to reject the whole packet, so
+  tracking vanished while the button was held); pose records are decoded by
+  their own format code (the C++ decodes every record by the format it set up,
+  which gives the same poses for the records a chassis set up that way sends)
+  and mapped to units by their FBB address; packets that do not add up count as
+  garbage and the stream is re-synchronised on the next plausible header;
 * re-synchronisation skips a whole run of junk at once (a scan for the
   protocol byte, not a header parse per byte), and takes only the message
   types it waits for: a reply-like header inside junk can no longer swallow
@@ -358,22 +374,41 @@ class MotionStarSample:
         return {bird.unit: bird.matrix for bird in self.birds}
 
 
+def record_header_plausible(address: int, info: int) -> bool:
+    """Whether an address byte and a data info byte can start a record: an FBB address
+    1..126, and a word count that fits the format code when the code is a data format.
+    Any other code (14 for feed-through data, 15 for a sampling error) is a record the
+    driver steps over by its word count."""
+    code, count = info >> 4, info & 0x0F
+    if not 1 <= address & 0x7F <= 126:
+        return False
+    return code not in FORMAT_WORDS or FORMAT_WORDS[DataFormat(code)] == count
+
+
+def carries_pose(format_code: int) -> bool:
+    """Whether records of this format code hold a pose (the data formats but NO_DATA); the
+    others (feed-through data, code 14; a sampling error, code 15) are stepped over."""
+    return format_code in FORMAT_WORDS and format_code != DataFormat.NO_DATA
+
+
 def parse_records(payload: bytes) -> list[Record] | None:
-    """Split a data packet payload into records; None if it does not parse exactly."""
+    """Split a data packet payload into records, stepping over each by its own word count
+    (and its button bytes), as VR Juggler's C++ does; None if it does not add up exactly.
+
+    A record whose format code is not a data format (a feed-through record ``0xE1``: code
+    14, one word, which a chassis sends while a wand button is held; an error record) is
+    kept for the caller to step over: it used to make the whole packet junk, so tracking
+    vanished while the button was held. Records may come in any address order (the C++
+    does not require one either)."""
     records: list[Record] = []
     offset = 0
-    last_address = 0
     while offset < len(payload):
         if offset + 2 > len(payload):
             return None
         address, info = payload[offset] & 0x7F, payload[offset + 1]
         has_buttons = bool(payload[offset] & 0x80)
         code, count = info >> 4, info & 0x0F
-        if address <= last_address:
-            return None  # FBB addresses are 1.. and the server sends them in order
-        if code != ERROR_FORMAT and (
-            code not in FORMAT_WORDS or FORMAT_WORDS[DataFormat(code)] != count
-        ):
+        if not record_header_plausible(address, info):
             return None
         end = offset + 2 + 2 * count
         buttons = None
@@ -388,7 +423,6 @@ def parse_records(payload: bytes) -> list[Record] | None:
         words = struct.unpack_from(f">{count}h", payload, offset + 2)
         records.append(Record(address, code, words, buttons))
         offset = end
-        last_address = address
     return records
 
 
@@ -472,13 +506,8 @@ MAX_RECORD = 2 + 2 * 15 + 2  # address, info, at most 15 words, buttons
 
 
 def record_start_plausible(address: int, info: int) -> bool:
-    """Whether two bytes can start a data record (an FBB address and a known format)."""
-    code, count = info >> 4, info & 0x0F
-    if not 1 <= address & 0x7F <= 126:
-        return False
-    return code == ERROR_FORMAT or (
-        code in FORMAT_WORDS and FORMAT_WORDS[DataFormat(code)] == count
-    )
+    """Whether two bytes can start a data record (see :func:`record_header_plausible`)."""
+    return record_header_plausible(address, info)
 
 
 Message = tuple[Header, bytes, "list[Record] | None"]
@@ -687,6 +716,8 @@ class MotionStar:
         self.sequence_resyncs = 0
         self.unknown_records = 0
         self.sensor_errors = 0
+        #: records stepped over that carry no pose (feed-through data, format code 14, ...)
+        self.other_records = 0
         self.last_error_code = 0
         self._given_sock = sock
         self._stream: _Stream | None = None
@@ -912,6 +943,9 @@ class MotionStar:
                 continue
             if record.format_code == ERROR_FORMAT:
                 self.sensor_errors += 1
+                continue
+            if not carries_pose(record.format_code):
+                self.other_records += 1  # feed-through data and the like: no pose in it
                 continue
             birds.append(decode_record(record, unit, float(self.full_scale or 0)))
         return MotionStarSample(

@@ -100,7 +100,9 @@ class MotionStarDevice(Position):
         self.sequence_gaps = 0  # data packets whose number did not follow the previous one
         self._next_sequence: int | None = None
         self._poses = np.zeros((0, 4, 4))
-        self.counts = CarriedCounts(("bad_packets", "skipped_bytes", "sensor_errors"))
+        self.counts = CarriedCounts(
+            ("bad_packets", "skipped_bytes", "sensor_errors", "other_records")
+        )
         self._told: set[str] = set()
         self._first: tuple[MotionStarSample, float] | None = None  # read by start_sampling
         self._last_data = 0.0  # monotonic time of the newest data packet
@@ -236,6 +238,7 @@ class MotionStarDevice(Position):
             "bad_packets": self.bad_packets,
             "skipped_bytes": self.skipped_bytes,
             "sensor_errors": self.sensor_errors,
+            "other_records": self.counts.get("other_records"),
             "sequence_gaps": self.sequence_gaps,
         }
 

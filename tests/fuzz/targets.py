@@ -230,12 +230,12 @@ def _motionstar_seeds() -> list[bytes]:
 def _motionstar(data: bytes) -> None:
     from MotionStar_drv.standalone import (
         BIRD_STATUS_SIZE,
-        ERROR_FORMAT,
         HEADER,
         BirdStatus,
         Header,
         MotionStarCommandError,
         SystemStatus,
+        carries_pose,
         decode_record,
         parse_records,
     )
@@ -247,7 +247,7 @@ def _motionstar(data: bytes) -> None:
     payload = data[HEADER.size : HEADER.size + header.length]
     records = parse_records(payload)
     for unit, record in enumerate(records or ()):
-        if record.format_code != ERROR_FORMAT:
+        if carries_pose(record.format_code):  # the rest is stepped over, as the driver does
             sample = decode_record(record, unit, float(header.milliseconds & 0xFFF))
             assert sample.matrix.shape == (4, 4)
     try:

@@ -187,8 +187,34 @@ def test_parse_records_reads_buttons_after_short_data() -> None:
         (2, (4, 5, 6), None),
     ]
     assert parse_records(first[:-1]) is None  # cut short
-    assert parse_records(second + first) is None  # addresses must ascend
+    assert parse_records(bytes([0x00, 0x13]) + bytes(6)) is None  # FBB addresses start at 1
     assert parse_records(bytes([0x01, 0x14]) + bytes(8)) is None  # word count != format
+
+
+def test_a_feed_through_record_is_stepped_over_not_the_whole_packet() -> None:
+    # 0xE1: format code 14, one data word, after the sensor's record (a wand button held);
+    # the C++ steps over every record by its word count
+    pose_record = bytes([0x81, 0x46]) + struct.pack(">6h", 100, 200, 300, 0, 0, 0) + b"\x01\x00"
+    feed_through = bytes([0x01, 0xE1]) + struct.pack(">h", 1)
+    second = bytes([0x02, 0x46]) + struct.pack(">6h", -100, 0, 50, 0, 0, 0)
+    records = parse_records(pose_record + feed_through + second)
+    assert records is not None
+    assert [(r.address, r.format_code, len(r.words)) for r in records] == [
+        (1, 4, 6),
+        (1, 14, 1),
+        (2, 4, 6),
+    ]
+
+
+def test_feed_through_records_leave_tracking_alone(emulator) -> None:
+    emu = emulator("buttons", birds=2)
+    with client(emu, data_format=4) as ms:
+        samples = take(ms, 2 * len(BUTTON_STEPS))
+        assert ms.other_records > 0  # the buttons were held at times: 0xE1 records came
+        assert ms.bad_packets == 0
+    assert all(len(s.birds) == 2 for s in samples)  # every packet kept both sensors
+    held = [s for s in samples if s.birds[0].buttons and s.birds[0].buttons[0]]
+    assert held, "no packet with a button held"
 
 
 def test_garbage_and_truncated_packets_are_counted(emulator) -> None:
