@@ -6,41 +6,103 @@ Devices at the same location share one connection. Units:
 
 * tracker sensors ``0 .. tracker_count-1`` are position units (4x4 matrices, metres, from
   VRPN's position and (x, y, z, w) quaternion); one position sample per tracker tick (the
-  reports of one server timestamp), carrying every sensor's newest pose;
+  reports of one server timestamp), carrying every sensor's newest pose. A tick is complete
+  when every sensor reported in it, when a report of another timestamp arrives, or after
+  :data:`TICK_HOLD` seconds: a tick split over two reads (two datagrams, two TCP segments)
+  is still one sample, so a sample never mixes sensors of two ticks;
 * buttons ``0 .. button_count-1`` are digital units; every change is a sample, so a press and
   release between two frames is never lost; a "States" message is one sample;
-* channels ``0 .. analog_count-1`` are analog units (raw; proxies normalise).
+* channels ``0 .. analog_count-1`` are analog units (raw; proxies normalise). A VRPN *dial*
+  named as the analog server is read as analog units too: unit ``d`` is dial ``d``'s
+  accumulated rotation in revolutions (the sum of its updates' deltas).
 
-Sensors, buttons and channels beyond the counts are counted (``beyond_count``) and ignored.
-Each sample carries the local receive time; the server's own time of the same message is
-kept beside it (``remote_times``), so that clock offset plus transport latency can be shown.
+Nothing is published before the server's first report of a kind (proxies read "no data
+yet" until then); sensors that have not reported yet in the first ticks are identity poses.
+Sensors, buttons, channels and dials beyond the counts are counted (``beyond_count``) and
+ignored. Text messages of the element's devices are counted (``text_messages``) and the
+newest few kept (:attr:`VrpnInput.texts`).
+
+Each sample carries its own VRPN message time, mapped onto the local wall clock
+(:class:`ServerClock`): the server's time plus the smallest ``received - sent`` seen, so the
+intervals between samples are the server's, not those of the reads. A message whose time is
+0 (a C++ ``vrpn_Button_Server`` sends it) takes its receive time. The server's time of each
+message is also kept beside its receive time (``remote_times``), so that clock offset plus
+transport latency can be shown.
+
+A read makes at most :data:`POSE_READ_BYTES` of position samples: with a large
+``tracker_count``, ticks beyond that within one read are merged into the read's last sample
+(counted as ``merged_ticks``), so neither memory nor the cost of a read grows with the
+number of small reports times the number of sensors.
 """
 
 from __future__ import annotations
 
 import time
-from collections import Counter
+from collections import Counter, deque
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from gadgetctl.transport.udp import DropCountingReceiver
 from gadgetctl.vrpn import VrpnClient, parse_device_name
 from gadgetctl.vrpn.codecs import (
     ANALOG_CHANNEL,
     BUTTON_CHANGE,
     BUTTON_STATES,
-    TRACKER_ACCELERATION,
+    DIAL_UPDATE,
+    TEXT_MESSAGE,
     TRACKER_POS_QUAT,
-    TRACKER_VELOCITY,
     AnalogChannels,
     ButtonChange,
     ButtonStates,
+    DialUpdate,
+    TextReport,
     TrackerPose,
 )
 from gadgetctl.vrpn.names import DeviceName, Location
 from gadgetctl.vrpn.probe import SYSTEM_SENDERS
 
-TRACKER_MOTION = frozenset({TRACKER_VELOCITY, TRACKER_ACCELERATION})
+#: Seconds an incomplete tracker tick waits for the rest of its sensors before it is
+#: published with what came (a server that reports a subset of its sensors per tick).
+TICK_HOLD = 0.02
+#: Bytes of position samples one read makes at most (see the module's notes).
+POSE_READ_BYTES = 4 << 20
+#: Bytes of one sensor's pose in a sample (a 4x4 float64 matrix).
+POSE_BYTES = 16 * 8
+#: Text messages kept (the newest).
+TEXTS_KEPT = 16
+#: A server time this far from the mapping (seconds) re-anchors it: the server's clock
+#: stepped, or the link stalled.
+CLOCK_RESYNC = 1.0
+
+
+class ServerClock:
+    """Maps one server's message times onto the local wall clock: ``sent + offset``, where the
+    offset is the smallest ``received - sent`` seen (clock difference plus the least
+    latency). A read's messages are all observed before any is mapped, so the newest message
+    of a burst maps to no later than its arrival and the earlier ones keep the server's
+    intervals before it."""
+
+    __slots__ = ("offset",)
+
+    def __init__(self) -> None:
+        self.offset: float | None = None
+
+    def observe(self, sent: float, received: float) -> None:
+        """One message's times (a ``sent`` of 0 or less says nothing)."""
+        if sent <= 0.0:
+            return
+        difference = received - sent
+        offset = self.offset
+        if offset is None or difference < offset or difference - offset > CLOCK_RESYNC:
+            self.offset = difference
+
+    def local(self, sent: float, received: float) -> float:
+        """The local time of a message sent at ``sent`` (its ``received`` when it has no
+        time: a C++ ``vrpn_Button_Server`` sends 0)."""
+        if sent <= 0.0 or self.offset is None:
+            return received
+        return sent + self.offset
 
 
 class VrpnUnavailable(ConnectionError):
@@ -79,8 +141,9 @@ def pose_matrix(
 
 @dataclass
 class Batch:
-    """Samples read by one :meth:`VrpnInput.read`: (receive time, values) per kind, receive
-    times as Unix seconds, and the server's time of each sample in ``remote_times``."""
+    """Samples read by one :meth:`VrpnInput.read`: (time, values) per kind, times as Unix
+    seconds (each message's own time, see :class:`ServerClock`), and the receive and server
+    times of each message in ``remote_times``."""
 
     positions: list[tuple[float, np.ndarray]] = field(default_factory=list)
     digital: list[tuple[float, tuple[int, ...]]] = field(default_factory=list)
@@ -114,6 +177,7 @@ class VrpnInput:
         retry_interval: float = 0.25,
         silence_timeout: float | None = 3.0,
         missing_after: float = 1.0,
+        udp_receive_buffer: int = 4 << 20,
     ) -> None:
         self.tracker = parse_device_name(tracker) if tracker and tracker_count > 0 else None
         self.button = parse_device_name(button) if button and button_count > 0 else None
@@ -126,10 +190,23 @@ class VrpnInput:
         self.retry_interval = retry_interval
         self.silence_timeout = silence_timeout
         self.missing_after = missing_after
+        self.udp_receive_buffer = udp_receive_buffer
         self.poses = np.tile(np.eye(4), (max(tracker_count, 0), 1, 1))
         self.buttons = [0] * max(button_count, 0)
         self.channels = [0.0] * max(analog_count, 0)
         self.counters: Counter[str] = Counter()
+        #: The newest text messages of the element's devices: (time, device, severity,
+        #: level, text).
+        self.texts: deque[tuple[float, str, int, int, str]] = deque(maxlen=TEXTS_KEPT)
+        #: Position samples one read makes at most (see :data:`POSE_READ_BYTES`).
+        self.pose_limit = max(1, POSE_READ_BYTES // max(1, POSE_BYTES * max(tracker_count, 0)))
+        self._clocks: dict[Location, ServerClock] = {}
+        self._receivers: dict[Location, DropCountingReceiver] = {}
+        # the tracker tick being gathered: its (sec, usec), local time, arrival, sensors seen
+        self._tick: tuple[int, int] | None = None
+        self._tick_time = 0.0
+        self._tick_arrival = 0.0
+        self._tick_sensors: set[int] = set()
         self._clients: dict[Location, VrpnClient] = {}
         self._connected_at: dict[Location, float] = {}
         self._checked: set[Location] = set()
@@ -152,10 +229,13 @@ class VrpnInput:
         for dev in self.devices:
             client = self._clients.get(dev.location)
             if client is None:
+                receiver = self._receivers.setdefault(dev.location, DropCountingReceiver())
                 client = self._clients[dev.location] = VrpnClient(
                     dev.location,
                     retry_interval=self.retry_interval,
                     silence_timeout=self.silence_timeout,
+                    udp_receiver=receiver,
+                    udp_receive_buffer=self.udp_receive_buffer,
                 )
             client.add_device(dev.device)
         self._deadline = time.monotonic() + timeout
@@ -173,9 +253,12 @@ class VrpnInput:
             self.counters.update(client.counts())
             client.close()
         self._clients.clear()
+        self._clocks.clear()
         self._connected_at.clear()
         self._checked.clear()
         self._heard.clear()
+        self._tick = None  # a tick cut by the connection's end is not published
+        self._tick_sensors.clear()
 
     def read(self, timeout: float = 0.1) -> Batch:
         """What arrived within ``timeout``; raises when a connection is lost or a device is
@@ -201,8 +284,20 @@ class VrpnInput:
                 if m.sender is not None:
                     self._heard.add((location, m.sender))
             self._check_announced(location, client)
-            self._take(messages, batch)
+            clock = self._clocks.setdefault(location, ServerClock())
+            self._take(messages, batch, clock)
+        if self._tick is not None and time.time() - self._tick_arrival >= TICK_HOLD:
+            self._end_tick(batch)  # the rest of its sensors did not come
         return batch
+
+    @property
+    def kernel_dropped(self) -> int:
+        """Datagrams the kernel dropped on the UDP channels (every connection so far)."""
+        total = 0
+        for receiver in self._receivers.values():
+            receiver.refresh()
+            total += receiver.dropped
+        return total
 
     def _check_announced(self, location: Location, client: VrpnClient) -> None:
         """Once per connection, ``missing_after`` seconds in: every device of this location
@@ -227,65 +322,90 @@ class VrpnInput:
         self._connected_at.pop(location)
         self._checked.add(location)  # checked once per connection
 
-    def _take(self, messages: list, batch: Batch) -> None:
-        tick: tuple[int, int] | None = None
-        tick_received = 0.0
+    def _end_tick(self, batch: Batch) -> None:
+        """Publish the tick gathered so far as one position sample."""
+        self._tick = None
+        self._tick_sensors.clear()
+        positions = batch.positions
+        if len(positions) >= self.pose_limit:
+            # the read's budget is spent: this tick replaces the read's last sample (its
+            # array reused, nothing allocated)
+            _, values = positions[-1]
+            np.copyto(values, self.poses)
+            positions[-1] = (self._tick_time, values)
+            self.counters["merged_ticks"] += 1
+        else:
+            positions.append((self._tick_time, self.poses.copy()))
+
+    def _take(self, messages: list, batch: Batch, clock: ServerClock | None = None) -> None:
+        """Turn one read's messages into samples (``clock``: the server's, see
+        :class:`ServerClock`; a new one when not given)."""
+        if clock is None:
+            clock = ServerClock()
         tracker = self.tracker.device if self.tracker is not None else None
         button = self.button.device if self.button is not None else None
         analog = self.analog.device if self.analog is not None else None
-
-        def end_tick() -> None:
-            batch.positions.append((tick_received, self.poses.copy()))
-
+        counters = self.counters
+        observe, local = clock.observe, clock.local
+        for m in messages:
+            observe(m.timestamp, m.received)
         for m in messages:
             report = m.report
-            if (
-                m.type == TRACKER_POS_QUAT
-                and m.sender == tracker
-                and isinstance(report, TrackerPose)
-            ):
-                if report.sensor >= self.tracker_count:
-                    self.counters["beyond_count"] += 1
-                    continue
-                if tick is not None and (m.sec, m.usec) != tick:
-                    end_tick()
-                tick, tick_received = (m.sec, m.usec), m.received
-                self.poses[report.sensor] = pose_rows(report.position, report.quat)
-                if not batch.remote_times or batch.remote_times[-1][1] != m.timestamp:
-                    batch.remote_times.append((m.received, m.timestamp))
+            sender = m.sender
+            if report is None or sender is None:
                 continue
-            if m.sender == tracker and m.type in TRACKER_MOTION:
-                continue  # velocity and acceleration of the same tick do not end it
-            if tick is not None:
-                end_tick()
-                tick = None
-            if m.sender == button and isinstance(report, ButtonChange) and m.type == BUTTON_CHANGE:
+            kind = m.type
+            if sender == tracker and kind == TRACKER_POS_QUAT and isinstance(report, TrackerPose):
+                sensor = report.sensor
+                if sensor >= self.tracker_count:
+                    counters["beyond_count"] += 1
+                    continue
+                stamp = (m.sec, m.usec)
+                if self._tick is not None and stamp != self._tick:
+                    self._end_tick(batch)
+                if self._tick is None:
+                    self._tick = stamp
+                    self._tick_arrival = m.received
+                    self._tick_time = local(m.timestamp, m.received)
+                    batch.remote_times.append((m.received, m.timestamp))
+                self.poses[sensor] = pose_rows(report.position, report.quat)
+                seen = self._tick_sensors
+                seen.add(sensor)
+                if len(seen) == self.tracker_count:
+                    self._end_tick(batch)  # every sensor reported: the tick is whole
+                continue
+            if kind == TEXT_MESSAGE and isinstance(report, TextReport):
+                if sender in (tracker, button, analog):
+                    counters["text_messages"] += 1
+                    self.texts.append(
+                        (local(m.timestamp, m.received), sender, *report)  # type: ignore[arg-type]
+                    )
+                continue
+            if sender == button and kind == BUTTON_CHANGE and isinstance(report, ButtonChange):
                 if report.button >= self.button_count:
-                    self.counters["beyond_count"] += 1
+                    counters["beyond_count"] += 1
                     continue
                 self.buttons[report.button] = report.state
-                batch.digital.append((m.received, tuple(self.buttons)))
-            elif (
-                m.sender == button and isinstance(report, ButtonStates) and m.type == BUTTON_STATES
-            ):
+                batch.digital.append((local(m.timestamp, m.received), tuple(self.buttons)))
+            elif sender == button and kind == BUTTON_STATES and isinstance(report, ButtonStates):
                 n = min(len(report.states), self.button_count)
                 self.buttons[:n] = report.states[:n]
-                batch.digital.append((m.received, tuple(self.buttons)))
-            elif (
-                m.sender == analog
-                and isinstance(report, AnalogChannels)
-                and m.type == ANALOG_CHANNEL
-            ):
+                batch.digital.append((local(m.timestamp, m.received), tuple(self.buttons)))
+            elif sender == analog and kind == ANALOG_CHANNEL and isinstance(report, AnalogChannels):
                 n = min(len(report.channels), self.analog_count)
                 if len(report.channels) > self.analog_count:
-                    self.counters["beyond_count"] += 1
+                    counters["beyond_count"] += 1
                 self.channels[:n] = report.channels[:n]
-                batch.analog.append((m.received, tuple(self.channels)))
+                batch.analog.append((local(m.timestamp, m.received), tuple(self.channels)))
+            elif sender == analog and kind == DIAL_UPDATE and isinstance(report, DialUpdate):
+                if not 0 <= report.dial < self.analog_count:
+                    counters["beyond_count"] += 1
+                    continue
+                self.channels[report.dial] += report.delta  # revolutions, accumulated
+                batch.analog.append((local(m.timestamp, m.received), tuple(self.channels)))
             else:
                 continue
             batch.remote_times.append((m.received, m.timestamp))
-        if tick is not None:
-            end_tick()
 
     def counts(self) -> Counter[str]:
         """Counters of this element's connections, reconnections included."""

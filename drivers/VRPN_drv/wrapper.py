@@ -6,9 +6,15 @@ A server that is down, goes away, or does not announce the named device makes ``
 raise, so the input manager shows the device faulted (with the reason) and restarts it with
 back-off (at most 1 s apart): samples resume within about a second of the server's return.
 
-Sample times are the local receive times. The server's own timestamps are kept in
+Sample times are each message's own VRPN time mapped onto the local clock (see
+:class:`~.standalone.ServerClock`). The server's own timestamps are also kept in
 :attr:`VrpnDevice.remote_clock`: the difference (local receive wall time minus server
 time) is the clock offset plus the transport latency.
+
+Nothing is published before the server's first report: proxies read "no data yet" until
+then. The kernel's count of the datagrams it dropped on the UDP channel (a full receive
+buffer) is the device's transport loss, shown with its other drops. With many sensors the
+sample buffer holds at most :data:`STORE_POSE_BYTES` of poses between two frames.
 """
 
 from __future__ import annotations
@@ -18,15 +24,30 @@ import time
 import numpy as np
 
 from gadgetctl.input import Analog, DeviceConfigError, Digital, Position
+from gadgetctl.input.samples import DEFAULT_CAP
 from gadgetctl.jccl.access import ElementAccess
 from gadgetctl.vrpn import VrpnNameError
+from gadgetctl.vrpn.codecs import MAX_SENSORS
 
-from .standalone import Batch, VrpnInput
+from .standalone import POSE_BYTES, Batch, VrpnInput
 
-#: Counts above these are configuration mistakes (VRPN's own limits: 256 buttons, 128 channels).
-MAX_SENSORS = 1024
+#: Counts above these are configuration mistakes (VRPN's own limits: 256 buttons, 128
+#: channels; sensors: gadgetctl's bound, :data:`gadgetctl.vrpn.codecs.MAX_SENSORS`).
 MAX_BUTTONS = 256
 MAX_CHANNELS = 128
+#: Bytes of position samples the device's buffer holds between two frames at most: with many
+#: sensors it keeps fewer samples than :data:`~gadgetctl.input.samples.DEFAULT_CAP` (the
+#: older ones are dropped and counted, as for any device whose frames fall behind).
+STORE_POSE_BYTES = 64 << 20
+#: The fewest samples the buffer keeps whatever the sensor count.
+MIN_CAP = 64
+
+
+def sample_cap(sensors: int) -> int:
+    """Samples per kind the device's buffer keeps for ``sensors`` tracker sensors."""
+    if sensors <= 0:
+        return DEFAULT_CAP
+    return max(MIN_CAP, min(DEFAULT_CAP, STORE_POSE_BYTES // (POSE_BYTES * sensors)))
 
 
 class RemoteClock:
@@ -76,6 +97,8 @@ class VrpnDevice(Position, Digital, Analog):
     #: A connection with nothing from the server for this long is lost (idle servers still
     #: answer the client's pings).
     silence_timeout = 3.0
+    #: Bytes asked of the kernel for the UDP channel's receive buffer.
+    receive_buffer = 4 << 20
 
     def __init__(self) -> None:
         super().__init__()
@@ -98,6 +121,7 @@ class VrpnDevice(Position, Digital, Analog):
                 raise DeviceConfigError(f"{kind}_count {count} is out of range (0 to {limit})")
             setattr(self, f"{kind}_server", server)
             setattr(self, f"{kind}_count", count)
+        self.store.cap = sample_cap(self.tracker_count)
         try:
             self._input = self._make_input()
         except VrpnNameError as exc:
@@ -114,6 +138,7 @@ class VrpnDevice(Position, Digital, Analog):
             self.analog_server,
             self.analog_count,
             silence_timeout=self.silence_timeout,
+            udp_receive_buffer=self.receive_buffer,
         )
 
     # -- sampling ---------------------------------------------------------------------------
@@ -125,14 +150,7 @@ class VrpnDevice(Position, Digital, Analog):
         # the restarts) rather than as an element that failed to start.
         self._input.open(self.connect_timeout, wait=self._started)
         self._started = True
-        # The first state: every unit present from the start (buttons released, analogs 0).
-        now = self.now()
-        if self.tracker_count:
-            self.add_position_sample(self._input.poses, now)
-        if self.button_count:
-            self.add_digital_sample(self._input.buttons, now)
-        if self.analog_count:
-            self.add_analog_sample(self._input.channels, now)
+        # Nothing is published until the server reports: no made-up first state.
 
     def sample(self) -> None:
         if self._input is None:
@@ -163,7 +181,15 @@ class VrpnDevice(Position, Digital, Analog):
 
     # -- diagnostics ------------------------------------------------------------------------
 
+    def transport_dropped(self) -> int:
+        """Datagrams the kernel dropped on the UDP channels (a full receive buffer)."""
+        return self._input.kernel_dropped if self._input is not None else 0
+
     @property
     def counters(self) -> dict[str, int]:
         """What the connections counted since the device was made, reconnections included."""
-        return dict(self._input.counts()) if self._input is not None else {}
+        if self._input is None:
+            return {}
+        found = dict(self._input.counts())
+        found["kernel_dropped"] = self._input.kernel_dropped
+        return found

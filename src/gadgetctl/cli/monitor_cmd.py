@@ -181,7 +181,11 @@ def monitor(
         check_before_running(configs, definitions=definitions, bundled=bundled, strict=strict)
     with tempfile.TemporaryDirectory(prefix="gadgetctl-vrpn-") as scratch:
         if watched:  # vrpn:Device@host: a vrpn element per device, laid out as the server shows
-            configs.append(write_configuration(watched, Path(scratch)))
+            configs.append(
+                write_configuration(
+                    watched, Path(scratch), note=lambda line: typer.echo(line, err=True)
+                )
+            )
         code = run_monitor(
             configs,
             selectors,

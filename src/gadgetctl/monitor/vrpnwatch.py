@@ -4,7 +4,10 @@ Each ``vrpn:Device@location`` argument becomes one ``vrpn`` element of a configu
 on the fly (element name ``Device@location``), read by the bundled ``VRPN_drv``. The server is
 asked first (:func:`gadgetctl.vrpn.probe.probe`) so that the element gets the layout the
 device's first reports show: as many position units as tracker sensors, digital units as
-buttons, analog units as channels (analog proxies are not involved, so values are raw).
+buttons, analog units as channels or dials (a dial's unit is its accumulated rotation in
+revolutions; analog proxies are not involved, so values are raw). Reports beyond the
+client's bounds (a sensor id past :data:`gadgetctl.vrpn.codecs.MAX_SENSORS`...) shape no
+layout: they are reported, once per device, and the watch runs with the rest.
 A server that does not answer, or does not announce the device, is a usage error that
 names what the server does announce.
 """
@@ -12,6 +15,7 @@ names what the server does announce.
 from __future__ import annotations
 
 from collections import defaultdict
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from xml.sax.saxutils import escape, quoteattr
@@ -33,6 +37,8 @@ class WatchedDevice:
     sensors: int
     buttons: int
     channels: int
+    #: What the first reports held beyond the client's bounds, as one line (or None).
+    stray: str | None = None
 
 
 def resolve(arguments: list[str], *, timeout: float = 2.0) -> list[WatchedDevice]:
@@ -71,13 +77,19 @@ def resolve(arguments: list[str], *, timeout: float = 2.0) -> list[WatchedDevice
                 f"{name.device!r}; it announces: {offered}"
             )
         layout = result.layouts[name.device]
+        stray = None
+        if layout.stray:
+            count = f"{layout.stray} report" + ("" if layout.stray == 1 else "s")
+            stray = f"vrpn:{text}: ignored {count} beyond the client's bounds, the first for {layout.first_stray}"
         if not layout.reports:
             raise GadgetctlError(
-                f"vrpn:{text}: the device sent no tracker, button or analog report "
+                f"vrpn:{text}: the device sent no tracker, button, analog or dial report "
                 f"within {timeout:g} s, so its layout is unknown"
+                + (f" ({stray.split(': ', 1)[1]})" if stray else "")
             )
+        channels = max(layout.channels, layout.dials)
         watched.append(
-            WatchedDevice(text, name.device, text, layout.sensors, layout.buttons, layout.channels)
+            WatchedDevice(text, name.device, text, layout.sensors, layout.buttons, channels, stray)
         )
     return watched
 
@@ -104,8 +116,20 @@ def configuration_text(devices: list[WatchedDevice]) -> str:
     return "\n".join(lines)
 
 
-def write_configuration(arguments: list[str], directory: Path, *, timeout: float = 2.0) -> Path:
-    """Probe, then write the configuration for ``arguments`` into ``directory``."""
+def write_configuration(
+    arguments: list[str],
+    directory: Path,
+    *,
+    timeout: float = 2.0,
+    note: Callable[[str], None] | None = None,
+) -> Path:
+    """Probe, then write the configuration for ``arguments`` into ``directory``; ``note``
+    hears a line per device whose first reports went beyond the client's bounds."""
     path = directory / "vrpn-watch.jconf"
-    path.write_text(configuration_text(resolve(arguments, timeout=timeout)), encoding="utf-8")
+    devices = resolve(arguments, timeout=timeout)
+    if note is not None:
+        for device in devices:
+            if device.stray:
+                note(device.stray)
+    path.write_text(configuration_text(devices), encoding="utf-8")
     return path

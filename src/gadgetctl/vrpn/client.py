@@ -23,6 +23,7 @@ import socket
 import time
 from collections import Counter
 from collections.abc import Iterable
+from typing import Protocol
 
 from .codecs import CLIENT_TYPES, PING, PONG, decode
 from .endpoint import ConnectionDropped, Endpoint, NameTable
@@ -46,6 +47,23 @@ CLOSED = "closed"
 #: Seconds a new connection waits for the server's descriptions before describing its own
 #: senders anyway.
 SETUP_WAIT = 0.5
+#: Bytes asked of the kernel for the UDP channel's receive buffer.
+UDP_RECEIVE_BUFFER = 4 << 20
+#: Datagrams read from the UDP channel per poll at most (the TCP side gets its turn between).
+UDP_READS_PER_POLL = 256
+
+
+class DatagramReceiver(Protocol):
+    """What reads the UDP channel when the caller wants more than ``recv`` (for instance the
+    kernel's count of the datagrams it dropped): attached to each new channel socket,
+    detached when the connection ends. ``decoded()``/``bad(reason)``, when it has them, hear
+    what became of each datagram."""
+
+    def attach(self, sock: socket.socket) -> None: ...
+
+    def detach(self) -> None: ...
+
+    def receive(self, size: int) -> bytes: ...
 
 
 class VrpnClient:
@@ -65,6 +83,8 @@ class VrpnClient:
         silence_timeout: float | None = None,
         out_limit: int = 1 << 20,
         decode_reports: bool = True,
+        udp_receiver: DatagramReceiver | None = None,
+        udp_receive_buffer: int = UDP_RECEIVE_BUFFER,
     ) -> None:
         self.location = parse_location(location) if isinstance(location, str) else location
         self.udp_channel = udp_channel and not self.location.tcp
@@ -75,6 +95,8 @@ class VrpnClient:
         self.silence_timeout = silence_timeout
         self.out_limit = out_limit
         self.decode_reports = decode_reports
+        self.udp_receiver = udp_receiver
+        self.udp_receive_buffer = udp_receive_buffer
         self.senders = NameTable()
         self.types = NameTable()
         for name in devices:
@@ -384,12 +406,14 @@ class VrpnClient:
         if self.udp_channel:
             udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
             try:
-                udp.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+                udp.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, self.udp_receive_buffer)
             except OSError:
                 pass
             udp.bind((self._local_ip, 0))
             udp.setblocking(False)
             self._udp_in = udp
+            if self.udp_receiver is not None:
+                self.udp_receiver.attach(udp)
             ep.queue(pack_udp_description(self._local_ip, udp.getsockname()[1]))
         for ident, name in self.types:
             ep.queue(pack_description(TYPE_DESCRIPTION, ident, name))
@@ -427,14 +451,25 @@ class VrpnClient:
     def _read_udp(self, ep: Endpoint, wall: float) -> list[Message]:
         assert self._udp_in is not None
         out: list[Message] = []
-        for _ in range(256):
+        receiver = self.udp_receiver
+        receive = receiver.receive if receiver is not None else self._udp_in.recv
+        decoded = getattr(receiver, "decoded", None)
+        bad = getattr(receiver, "bad", None)
+        counters = ep.counters
+        for _ in range(UDP_READS_PER_POLL):
             try:
-                data = self._udp_in.recv(MAX_DATAGRAM + 64)
+                data = receive(MAX_DATAGRAM + 64)
             except (BlockingIOError, InterruptedError):
                 break
             except OSError:
                 break
+            before = counters["bad_datagrams"]
             out.extend(self._handle(ep.read_datagram(data, wall)))
+            if counters["bad_datagrams"] != before:
+                if bad is not None:
+                    bad("a datagram that is not VRPN messages")
+            elif decoded is not None:
+                decoded()
         return out
 
     def _handle(self, messages: list[Message]) -> list[Message]:
@@ -464,6 +499,8 @@ class VrpnClient:
         self._schedule_retry()
 
     def _teardown(self) -> None:
+        if self.udp_receiver is not None and self._udp_in is not None:
+            self.udp_receiver.detach()
         ep, self._endpoint = self._endpoint, None
         if ep is not None:
             self.counters.update(ep.counters)

@@ -45,6 +45,12 @@ BASE_TYPES = (TEXT_MESSAGE, PING, PONG)
 MAX_BUTTONS = 256
 MAX_CHANNELS = 128
 MAX_TEXT = 1024
+#: Tracker sensors a gadgetctl client keeps: ids 0 to ``MAX_SENSORS - 1``. The C++ remote
+#: grows its per-sensor arrays to whatever id a server sends; a report beyond this limit is
+#: counted as stray and ignored, never allocated for.
+MAX_SENSORS = 1024
+#: Dials a gadgetctl client keeps (ids 0 to ``MAX_DIALS - 1``; C++ ``vrpn_DIAL_MAX``).
+MAX_DIALS = 128
 
 _POSE = struct.Struct(">ii3d4d")
 _MOTION = struct.Struct(">ii3d4dd")

@@ -6,6 +6,11 @@ the outgoing UDP channel when the peer announces one, and holds a bounded output
 message that does not fit is dropped and counted, so a peer that stops reading never blocks
 the side that sends.
 
+The translation tables hold at most one name per id, and ids run from 0 to
+``MAX_IDS - 1`` (2000, the C++ limit), so a peer that keeps describing new names under the
+same ids replaces names rather than adding them: each such renaming is counted
+(``renamed_senders``, ``renamed_types``) and never grows a table.
+
 Whatever the C++ side answers by dropping the connection (a refused cookie, a message too
 long, a malformed description, a system type at or below -2000) raises
 :class:`ConnectionDropped` with the reason.
@@ -111,11 +116,12 @@ class Endpoint:
         self.peer_version: str | None = None
         self.remote_senders: dict[int, str] = {}
         self.remote_types: dict[int, str] = {}
-        #: Sender names the peer described in its setup (before its first type description),
-        #: and those it described later: a C++ peer describes back every name *we* describe
-        #: that it did not have, so a later name is not necessarily one it really serves.
-        self.setup_senders: set[str] = set()
-        self.later_senders: set[str] = set()
+        #: Ids of the senders the peer described in its setup (before its first type
+        #: description), and of those it described later: a C++ peer describes back every
+        #: name *we* describe that it did not have, so a later name is not necessarily one it
+        #: really serves. Ids, not names: at most ``MAX_IDS`` each, whatever the peer sends.
+        self._setup_ids: set[int] = set()
+        self._later_ids: set[int] = set()
         self.udp: socket.socket | None = None  # outgoing unreliable channel, once announced
         self._udp_batch = bytearray()
         self._cookie = bytearray()
@@ -126,6 +132,18 @@ class Endpoint:
         self.counters: Counter[str] = Counter()
         #: ``codecs.decode`` to attach reports to user messages, or None.
         self.decode: Callable[[str, bytes], object] | None = None
+
+    @property
+    def setup_senders(self) -> set[str]:
+        """Names of the senders the peer described in its setup (their current names)."""
+        names = self.remote_senders
+        return {names[i] for i in self._setup_ids if i in names}
+
+    @property
+    def later_senders(self) -> set[str]:
+        """Names of the senders the peer described after its setup (their current names)."""
+        names = self.remote_senders
+        return {names[i] for i in self._later_ids if i in names}
 
     # -- reading ------------------------------------------------------------------------------
 
@@ -224,15 +242,21 @@ class Endpoint:
             except FramingError as exc:
                 self.counters["bad_descriptions"] += 1
                 raise ConnectionDropped(f"bad description: {exc}") from None
-            table = self.remote_senders if kind == SENDER_DESCRIPTION else self.remote_types
-            table[m.sender_id] = name
-            if kind == SENDER_DESCRIPTION:
-                (self.later_senders if self.remote_types else self.setup_senders).add(name)
+            sender = kind == SENDER_DESCRIPTION
+            table = self.remote_senders if sender else self.remote_types
+            before = table.get(m.sender_id)
+            if before is not None and before != name:
+                self.counters["renamed_senders" if sender else "renamed_types"] += 1
+            table[m.sender_id] = name  # one name per id: ids are bounded, so is the table
+            if sender:
+                (self._later_ids if self.remote_types else self._setup_ids).add(m.sender_id)
         elif kind == UDP_DESCRIPTION:
             self._open_udp(m)
         elif kind == DISCONNECT_MESSAGE:
             self.remote_senders.clear()
             self.remote_types.clear()
+            self._setup_ids.clear()
+            self._later_ids.clear()
         elif kind == LOG_DESCRIPTION:
             self.counters["log_requests_ignored"] += 1
         elif kind <= FATAL_SYSTEM_TYPE:

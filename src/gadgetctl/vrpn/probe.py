@@ -10,9 +10,13 @@ from dataclasses import dataclass, field
 
 from .client import VrpnClient
 from .codecs import (
+    MAX_DIALS,
+    MAX_SENSORS,
     AnalogChannels,
     ButtonChange,
     ButtonStates,
+    DialUpdate,
+    TextReport,
     TrackerAcceleration,
     TrackerPose,
     TrackerVelocity,
@@ -25,17 +29,33 @@ SYSTEM_SENDERS = frozenset({"VRPN Control", "vrpn_Forwarder_Brain"})
 
 @dataclass
 class Layout:
-    """What the reports of one device showed: 0 means "none seen"."""
+    """What the reports of one device showed: 0 means "none seen". Sensor and dial ids are
+    bounded (:data:`~.codecs.MAX_SENSORS`, :data:`~.codecs.MAX_DIALS`): a report beyond is
+    counted in ``stray`` (the first such id in ``first_stray``) and shapes no layout."""
 
     sensors: int = 0
     buttons: int = 0
     channels: int = 0
+    dials: int = 0
+    texts: int = 0
     reports: int = 0
+    stray: int = 0
+    first_stray: str | None = None
 
     def note(self, report: object) -> None:
         self.reports += 1
         if isinstance(report, (TrackerPose, TrackerVelocity, TrackerAcceleration)):
-            self.sensors = max(self.sensors, report.sensor + 1)
+            if report.sensor >= MAX_SENSORS:
+                self._stray(f"sensor {report.sensor} (sensors are 0 to {MAX_SENSORS - 1})")
+            else:
+                self.sensors = max(self.sensors, report.sensor + 1)
+        elif isinstance(report, DialUpdate):
+            if not 0 <= report.dial < MAX_DIALS:
+                self._stray(f"dial {report.dial} (dials are 0 to {MAX_DIALS - 1})")
+            else:
+                self.dials = max(self.dials, report.dial + 1)
+        elif isinstance(report, TextReport):
+            self.texts += 1
         elif isinstance(report, ButtonChange):
             self.buttons = max(self.buttons, report.button + 1)
         elif isinstance(report, ButtonStates):
@@ -44,6 +64,12 @@ class Layout:
             self.channels = max(self.channels, len(report.channels))
         else:
             self.reports -= 1
+
+    def _stray(self, what: str) -> None:
+        self.reports -= 1
+        self.stray += 1
+        if self.first_stray is None:
+            self.first_stray = what
 
 
 @dataclass

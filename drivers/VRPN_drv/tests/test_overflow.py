@@ -1,0 +1,110 @@
+"""VRPN_drv on its UDP channel: datagrams the kernel drops for a full receive buffer are
+counted exactly (the kernel's own count for that socket) and shown with the other drops in
+the monitor's statistics; and nothing is published before the server's first report."""
+
+from __future__ import annotations
+
+import socket
+import struct
+import threading
+from pathlib import Path
+
+import pytest
+from VRPN_drv.emulator import VrpnEmulator
+from VRPN_drv.wrapper import VrpnDevice
+
+from gadgetctl.input import DeviceKind, InputManager, ManagerOptions
+from gadgetctl.input.testing import frames_until, wait_until
+from gadgetctl.input.testing.configs import configuration, proxy
+from gadgetctl.monitor.session import MonitorSession
+from gadgetctl.transport.udp import proc_udp_drops
+from gadgetctl.vrpn import VrpnServer
+
+pytestmark = pytest.mark.timeout(60)
+
+
+def element(name: str, address: str, sensors: int) -> str:
+    return (
+        f'<vrpn name="{name}" version="3"><tracker_server>Tracker0@{address}</tracker_server>'
+        "<button_server></button_server><analog_server></analog_server>"
+        f"<tracker_count>{sensors}</tracker_count><button_count>0</button_count>"
+        "<analog_count>0</analog_count><min>-1.0</min><max>1.0</max></vrpn>\n"
+    )
+
+
+def flood(port: int, count: int) -> None:
+    """``count`` datagrams of 16 well-formed messages of a type nobody described (each read
+    one is counted as undescribed and ignored, as the C++ client does)."""
+    message = struct.pack(">IiiiiI", 24 + 64, 0, 0, 0, 1999, 0) + b"\0" * 64
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:
+        for _ in range(count):
+            tx.sendto(message * 16, ("127.0.0.1", port))
+
+
+def test_the_monitor_shows_exactly_what_the_kernel_dropped(tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.setattr(VrpnDevice, "receive_buffer", 1)  # the kernel's smallest buffer
+    with VrpnEmulator(0, scenario="motion", rate=100, sensors=1, buttons=0, channels=0) as emu:
+        config = tmp_path / "v.jconf"
+        config.write_text(configuration("VRPN_drv", element("V", emu.address, 1)))
+        options = ManagerOptions(retry_interval=None, entry_points=False)
+        manager, loaded = InputManager.from_files([config], options=options)
+        session = MonitorSession(manager, loaded)
+        try:
+            session.start()
+            device = manager.device("V")
+            frames_until(manager, lambda: device.store.total(DeviceKind.POSITION) > 3, timeout=15)
+            (client,) = device._input.clients.values()
+            channel = client._udp_in
+            assert channel is not None  # lob mode: poses come by UDP
+            port = channel.getsockname()[1]
+
+            def burst() -> None:
+                flood(port, 300)
+                session.step()
+
+            assert wait_until(lambda: device.counters["kernel_dropped"] > 0, 20.0, burst)
+
+            def settled() -> bool:
+                session.step()
+                return device.transport_dropped() == proc_udp_drops(channel)
+
+            assert wait_until(settled, timeout=10.0), (
+                device.transport_dropped(),
+                proc_udp_drops(channel),
+            )
+            kernel = proc_udp_drops(channel)
+            stats = session.device_stats("V")
+            assert stats is not None and device.store.dropped() == 0
+            assert stats.dropped == kernel > 0
+            assert session.final_stats()["V"]["dropped"] == kernel
+        finally:
+            manager.shutdown()
+
+
+def test_nothing_is_published_before_the_first_report(tmp_path: Path) -> None:
+    server = VrpnServer("127.0.0.1", 0)  # announces Tracker0, answers pings, reports nothing
+    server.register_sender("Tracker0")
+    server.start()
+    stop = threading.Event()
+    thread = threading.Thread(target=server.serve_forever, args=(stop, 0.02), daemon=True)
+    thread.start()
+    try:
+        config = tmp_path / "v.jconf"
+        body = element("V", f"127.0.0.1:{server.port}", 2) + proxy("position", "P", "V", 0)
+        config.write_text(configuration("VRPN_drv", body))
+        options = ManagerOptions(retry_interval=None, entry_points=False)
+        manager, loaded = InputManager.from_files([config], options=options)
+        manager.configure(loaded)
+        try:
+            device = manager.device("V")
+            frames_until(manager, lambda: device.counters.get("connects", 0) >= 1, timeout=10)
+            for _ in range(10):
+                manager.update()
+            assert device.store.total(DeviceKind.POSITION) == 0
+            assert device.store.latest(DeviceKind.POSITION) is None
+        finally:
+            manager.shutdown()
+    finally:
+        stop.set()
+        thread.join(5)
+        server.close()
