@@ -284,8 +284,8 @@ def test_an_existing_directory_needs_force(cli, tmp_path):
         (["3dMouse"], "is not a valid name"),
         (["PinchGlove"], "clashes with the standard definition pinch_glove"),
         (["DTrack"], "clashes with the bundled driver plug-in DTrack_drv"),
-        (["Wand", "--type", "keyboard"], "Invalid value for '--type'"),
-        (["Wand", "--transport", "usb"], "Invalid value for '--transport'"),
+        (["Wand", "--type", "keyboard"], "invalid value for '--type'"),
+        (["Wand", "--transport", "usb"], "invalid value for '--transport'"),
         (["Wand", "--vendor", "<b>"], "--vendor"),
     ],
 )

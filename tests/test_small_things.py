@@ -120,7 +120,7 @@ def test_emulator_rate_zero_is_one_clear_line(cli, rate):
     assert result.exit_code == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1, result.stderr
-    assert lines[0].startswith("gadgetctl emulate Flock_drv: error: argument --rate: ")
+    assert lines[0].startswith("gadgetctl: error: emulate Flock_drv: argument --rate: ")
     assert f"must be more than 0 per second, not '{rate}'" in lines[0]
 
 
@@ -128,8 +128,8 @@ def test_vrpn_emulator_rate_zero_is_one_clear_line(cli):
     result = cli("emulate", "VRPN_drv", "--rate", "0")
     assert result.exit_code == 2
     assert result.stderr.strip().splitlines() == [
-        "gadgetctl emulate VRPN_drv: error: --rate must be more than 0 and at most 100000 samples "
-        "per second, not 0 (gadgetctl emulate VRPN_drv --help shows the options)"
+        "gadgetctl: error: emulate VRPN_drv: --rate must be more than 0 and at most 100000 "
+        "samples per second, not 0 (see 'gadgetctl emulate VRPN_drv --help')"
     ]
 
 

@@ -46,7 +46,7 @@ from typing import overload
 
 import numpy as np
 
-from gadgetctl.transport.udp import DatagramLedger
+from gadgetctl.transport.udp import DatagramLedger, bind_udp
 
 MM_TO_M = 0.001
 DEFAULT_RECEIVE_PORT = 5000
@@ -1074,7 +1074,7 @@ class DTrackStandalone:
             try:
                 if self.receive_buffer:
                     sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, self.receive_buffer)
-                sock.bind((self.bind_address, self.receive_port))
+                bind_udp(sock, self.bind_address, self.receive_port)
             except BaseException:
                 sock.close()
                 raise

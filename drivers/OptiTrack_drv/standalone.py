@@ -45,7 +45,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gadgetctl.transport.udp import DropCountingReceiver
+from gadgetctl.transport.udp import DropCountingReceiver, bind_udp
 
 from .natnet import (
     DEFAULT_LIMITS as FRAME_LIMITS,
@@ -269,7 +269,7 @@ class NatNetReceiver:
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, self.receive_buffer)
             if self.group:  # several clients of one host share the multicast port (as the SDK)
                 sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-            sock.bind(("", self.requested_port))
+            bind_udp(sock, "", self.requested_port)
         except OSError:
             sock.close()
             raise

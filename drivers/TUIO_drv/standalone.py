@@ -24,7 +24,7 @@ import time
 
 from pythonosc.osc_packet import OscPacket, ParseError
 
-from gadgetctl.transport.udp import DatagramLedger
+from gadgetctl.transport.udp import DatagramLedger, bind_udp
 
 CURSOR_ADDRESS = "/tuio/2Dcur"
 DEFAULT_PORT = 3333
@@ -179,7 +179,7 @@ class TuioReceiver:
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, self.receive_buffer)
-            sock.bind(("", self.requested_port))
+            bind_udp(sock, "", self.requested_port)
         except OSError:
             sock.close()
             raise

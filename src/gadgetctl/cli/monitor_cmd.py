@@ -179,6 +179,7 @@ def monitor(
         from gadgetctl.cli.preflight import check_before_running
 
         check_before_running(configs, definitions=definitions, bundled=bundled, strict=strict)
+    title = " ".join([*(str(p) for p in configs), *watched])  # as typed, no scratch file
     with tempfile.TemporaryDirectory(prefix="gadgetctl-vrpn-") as scratch:
         if watched:  # vrpn:Device@host: a vrpn element per device, laid out as the server shows
             configs.append(
@@ -207,6 +208,7 @@ def monitor(
             pose=pose.value if pose else None,
             thresholds=event_thresholds(dead_band, pose_threshold, angle_threshold),
             accept_loss=accept_loss,
+            title=title,
         )
     raise typer.Exit(code)
 
@@ -327,6 +329,7 @@ def run_monitor(
     pose: str | None = None,
     thresholds=None,
     accept_loss: bool = False,
+    title: str | None = None,
 ) -> int:
     from gadgetctl.cli.monitor_run import RunOptions, check_record_path, choose_format, run
     from gadgetctl.input.manager import InputManager, ManagerOptions
@@ -357,7 +360,8 @@ def run_monitor(
         for d in configuration.diagnostics
         if d.severity.value == "warning"
     ]
-    title = " ".join(str(p) for p in configs)
+    if title is None:
+        title = " ".join(str(p) for p in configs)
     return run(
         session,
         RunOptions(

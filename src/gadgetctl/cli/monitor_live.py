@@ -11,6 +11,7 @@ PgUp and PgDn scroll.
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Iterable, Sequence
 
 from rich.cells import cell_len, set_cell_size
@@ -20,7 +21,7 @@ from rich.style import Style
 
 from gadgetctl.cli.monitor_text import (
     age_text,
-    glove_text,
+    glove_parts,
     health_text,
     ms_text,
     position_text,
@@ -53,8 +54,11 @@ STATE_STYLES = {
 HEADER_LINES = 3
 COMPACT = 2  # the compact layout shows segments of priority up to this
 DETAILED = 9  # the detailed layout: everything that fits
-NAME_WIDTH = 24
+NAME_WIDTH = 24  # the least width of the name column
+NAME_WIDTH_MAX = 44  # longer names are cut with "…" so that the columns stay in line
 TYPE_WIDTH = 28
+REASON_INDENT = "      "
+REASON_LINES = 3  # a reason longer than this many screen lines ends in "…"
 _SYSTEMS = {
     "standard": ColorSystem.STANDARD,
     "256": ColorSystem.EIGHT_BIT,
@@ -104,6 +108,15 @@ class Line(list):
                     break
                 keep.remove(i)
                 size -= cell_len(self[i][0])
+        # What the removals left room for comes back, the most important first: a glove's
+        # fingers give way to the type column, and return where the column left anyway.
+        allowed = [i for i, p in enumerate(self.priorities) if p <= most]
+        for i in sorted(set(allowed) - set(keep), key=lambda i: (self.priorities[i], i)):
+            extra = cell_len(self[i][0])
+            if size + extra <= width:
+                keep.append(i)
+                size += extra
+        keep.sort()
         fitted = Line()
         for i in keep:
             fitted.add(self[i][0], self[i][1], self.priorities[i])
@@ -202,6 +215,8 @@ class LiveView:
         self.message = ""
         self.total_lines = 0
         self.screen = Screen(console)
+        self.width = 200  # of the screen being rendered: reasons are wrapped to it
+        self.name_width = NAME_WIDTH  # the name column, wide enough for the longest name
         self._sparks: dict[int, tuple[float, str]] = {}
 
     # -- lifecycle ----------------------------------------------------------------------
@@ -230,9 +245,12 @@ class LiveView:
         """The screen's lines (at most ``height``)."""
         moment = now()
         session = self.session
+        self.width = width
         lines = self._header(moment)
         budget = max(1, height - HEADER_LINES - 1)
         names = session.selected
+        longest = max((cell_len(printable(name)) for name in names), default=0)
+        self.name_width = max(NAME_WIDTH, min(NAME_WIDTH_MAX, longest + 2))
         line_no = shown = 0
         index = len(names)
         for position, name in enumerate(names):
@@ -297,7 +315,7 @@ class LiveView:
     def _element_lines(self, view: ElementView) -> list[Line]:
         if view.element == "device":
             return self._device_lines(view)
-        line = Line().add("  ").add(f"{view.name:<{NAME_WIDTH - 2}}", "bold").add(" ")
+        line = Line().add("  ").add(self._name(view.name, self.name_width - 2), "bold").add(" ")
         if view.element == "alias":
             target = f"alias → {view.target or '?'}"
         elif view.element == "proxy":
@@ -306,25 +324,44 @@ class LiveView:
         else:
             target = view.type
         line.add(f"{target:<40} ", "dim", 3)
-        line.add(f"{view.state:<12}", STATE_STYLES.get(view.state, ""))
-        if view.reason:
-            line.add(f" {view.reason}", STATE_STYLES.get(view.state, ""), 1)
+        style = STATE_STYLES.get(view.state, "")
+        line.add(f"{view.state:<12}", style)
+        if view.blocked_by:
+            line.add(f" see {view.blocked_by}", style)
         if view.note:
             line.add(" (VR Juggler would leave it pending)", "dim", 4)
         for unit in view.values:
             line.add(" ")
             self._unit(line, unit, view.element)
+        if view.reason and not view.blocked_by:
+            return [line, *self._reason_lines(view.reason, style)]
         return [line]
+
+    @staticmethod
+    def _name(name: str, width: int) -> str:
+        """``name`` in a column of ``width`` cells: padded, or cut with "…" when longer."""
+        text = printable(name)
+        if cell_len(text) > width:
+            return set_cell_size(text, width - 1) + "…"
+        return set_cell_size(text, width)
+
+    def _reason_lines(self, reason: str, style: str) -> list[Line]:
+        """``reason`` under its element, wrapped to the screen (at most REASON_LINES lines):
+        why a device is pending, faulted or reconnecting shows at any width."""
+        room = max(20, self.width - len(REASON_INDENT))
+        wrapped = textwrap.wrap(printable(reason), room, break_on_hyphens=False) or [""]
+        if len(wrapped) > REASON_LINES:
+            wrapped = wrapped[:REASON_LINES]
+            wrapped[-1] = wrapped[-1][: room - 1] + "…"
+        return [Line().add(REASON_INDENT + part, style or "red") for part in wrapped]
 
     def _device_lines(self, view: ElementView) -> list[Line]:
         head = (
             Line()
-            .add(f"{view.name:<{NAME_WIDTH}}", "bold cyan")
+            .add(self._name(view.name, self.name_width), "bold cyan")
             .add(f" {view.type:<{TYPE_WIDTH}}", "dim", 3)
         )
         head.add(f" {view.state:<12}", STATE_STYLES.get(view.state, ""))
-        if view.reason:
-            head.add(f"{view.reason}  ", STATE_STYLES.get(view.state, "red"), 1)
         stats = view.stats
         if stats is not None:
             spf = stats.window_samples_per_frame  # over the window of the rate beside it
@@ -345,6 +382,8 @@ class LiveView:
             head.add(f"  p99 {ms_text(stats.p99_interval):>6} ms", "", 5)
             head.add(f"  max gap {ms_text(stats.max_gap):>6} ms", "", 5)
         lines = [head]
+        if view.reason:
+            lines.extend(self._reason_lines(view.reason, STATE_STYLES.get(view.state, "red")))
         digital = []
         for unit in view.values:
             if unit.kind == "digital":
@@ -400,10 +439,11 @@ class LiveView:
             line.add(translation)
             if rest:
                 rotation, _, quaternion = rest.partition("  q ")
-                line.add("  rot" + rotation, "", 2)
+                line.add("  rot" + rotation, "", 4)  # after the type, as docs/monitor.md says
                 if quaternion:
-                    line.add("  q " + quaternion, "", 4)
+                    line.add("  q " + quaternion, "", 5)
         elif kind == "glove":
-            line.add(glove_text(unit.value))
+            for index, finger in enumerate(glove_parts(unit.value)):  # left out whole, never cut
+                line.add(("" if index == 0 else " ") + finger, "", 0 if index == 0 else 4)
         else:
             line.add(unit_value_text(unit, element=element, length_unit=self.length_unit))

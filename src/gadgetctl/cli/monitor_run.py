@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shutil
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -148,7 +149,7 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
             except Terminated:
                 reason = "terminated"
             except BrokenPipeError:
-                if mode is not OutputFormat.events:
+                if mode not in (OutputFormat.events, OutputFormat.table):
                     raise
                 broken_pipe = True  # `--format events | head`: the reader has what it wanted
             except RecordingError as err:
@@ -243,12 +244,12 @@ def _silence_stdout() -> None:
 
 def _evaluate(session: MonitorSession, *, accept_loss: bool = True) -> tuple[dict, list[str]]:
     """The final statistics and the problems, read before the devices are stopped."""
-    from gadgetctl.cli.monitor_text import problem_elements, status_text
+    from gadgetctl.cli.monitor_text import problem_lines
     from gadgetctl.monitor.loss import run_problems
 
     final = session.final_stats()
     snapshot = session.snapshot()
-    problems = [f"{e.name}: {status_text(e)}" for e in problem_elements(snapshot)]
+    problems = problem_lines(snapshot)
     problems += [
         f"{name}: {counted(s['faults'], 'fault')}, last error: {s.get('error') or '-'}"
         for name, s in final.items()
@@ -276,7 +277,10 @@ def _finish(
     human = human or sys.stdout
     if mode is not OutputFormat.ndjson and (options.stats or mode is OutputFormat.live):
         # after the live view (which leaves the screen as it was) always, as demo does
-        human.write(frames_text(session) + stats_text(final))
+        width = None
+        if mode is OutputFormat.live and human.isatty():  # the statistics stay unwrapped
+            width = shutil.get_terminal_size().columns
+        human.write(frames_text(session) + stats_text(final, width))
     if mode is OutputFormat.live and options.record is not None:
         where = (
             "standard output"

@@ -86,11 +86,16 @@ def position_text(
     return text
 
 
-def glove_text(angles: Any) -> str:
+def glove_parts(angles: Any) -> list[str]:
+    """Each finger's joint angles in degrees: ``thumb 0/12/30/0``."""
     a = np.degrees(np.asarray(angles, dtype=np.float64).reshape(6, 4))
-    return " ".join(
+    return [
         f"{name} {'/'.join(f'{v:.0f}' for v in row)}" for name, row in zip(FINGERS, a, strict=True)
-    )
+    ]
+
+
+def glove_text(angles: Any) -> str:
+    return " ".join(glove_parts(angles))
 
 
 def unit_value_text(
@@ -362,8 +367,14 @@ def frames_text(session: Any) -> str:
     )
 
 
-def stats_text(stats: Mapping[str, Mapping[str, Any]]) -> str:
-    """The end-of-run statistics of each device (``MonitorSession.final_stats``)."""
+#: The columns of the statistics left out first when a terminal is too narrow for all.
+STATS_LEFT_OUT = ("P50 ms", "JITTER ms", "MAX GAP ms", "FAULTS", "P99 ms")
+
+
+def stats_text(stats: Mapping[str, Mapping[str, Any]], width: int | None = None) -> str:
+    """The end-of-run statistics of each device (``MonitorSession.final_stats``); with
+    ``width`` (a terminal's), columns are left out whole, as STATS_LEFT_OUT orders them, until
+    the table fits instead of wrapping, and a line says which."""
     if not stats:
         return "statistics: no device was monitored\n"
     rows = []
@@ -393,7 +404,20 @@ def stats_text(stats: Mapping[str, Mapping[str, Any]]) -> str:
                 f"over {counted(clock.get('samples') or 0, 'timestamp')}"
             )
     extra = "".join(line + "\n" for line in lines)
-    return "statistics:\n" + format_table(STATS_COLUMNS, rows, last_free=False) + "\n" + extra
+    header = list(STATS_COLUMNS)
+    table = format_table(header, rows, last_free=False)
+    left_out: list[str] = []
+    for column in STATS_LEFT_OUT:
+        if width is None or max(map(len, table.splitlines())) <= width:
+            break
+        index = header.index(column)
+        header.pop(index)
+        rows = [row[:index] + row[index + 1 :] for row in rows]
+        left_out.append(column)
+        table = format_table(header, rows, last_free=False)
+    if left_out:
+        table += f"\n(left out to fit {width} columns: {', '.join(left_out)})"
+    return "statistics:\n" + table + "\n" + extra
 
 
 def summary_text(summary: Any) -> str:
@@ -466,3 +490,29 @@ def _unit_summary_lines(unit: Any) -> list[str]:
 def problem_elements(snapshot: Snapshot) -> list[ElementView]:
     """Elements that end the run in a bad state (pending, faulted, stupefied...)."""
     return [e for e in snapshot.elements if e.state in BAD_STATES]
+
+
+def problem_lines(snapshot: Snapshot) -> list[str]:
+    """One line per cause: each element in a bad state with its reason, except the proxies
+    and aliases stupefied only because a device shown with its own reason is not running,
+    which that device's line counts."""
+    problems = problem_elements(snapshot)
+    shown = {e.name for e in problems}
+    followers: dict[str, int] = {}
+    alone: list[ElementView] = []
+    for element in problems:
+        device = element.blocked_by
+        if device is None or device not in shown:
+            alone.append(element)
+        else:
+            followers[device] = followers.get(device, 0) + 1
+    lines = []
+    for element in alone:
+        line = f"{element.name}: {status_text(element)}"
+        count = followers.get(element.name)
+        if count:
+            line += (
+                f" ({counted(count, 'proxy or alias', 'proxies and aliases')} reading it stupefied)"
+            )
+        lines.append(line)
+    return lines

@@ -73,10 +73,13 @@ SCENARIO_MEANINGS = {
 
 
 class EmulatorArgumentParser(argparse.ArgumentParser):
-    """Usage errors in one line (``gadgetctl emulate X: error: ...``), exit status 2."""
+    """Usage errors in one line in gadgetctl's style (``gadgetctl: error: emulate X: ...``),
+    exit status 2."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message} ({self.prog} --help shows the options)\n")
+        command = self.prog.removeprefix("gadgetctl ")
+        head = f"gadgetctl: error: {command}: " if command != self.prog else f"{self.prog}: error: "
+        self.exit(2, f"{head}{message} (see '{self.prog} --help')\n")
 
 
 def command_name(prog: str) -> str:

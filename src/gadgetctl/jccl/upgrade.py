@@ -430,6 +430,16 @@ class FileUpgrader:
                         self.visit(upgrader, node, self.spans[node])
 
     def visit(self, upgrader: ElementUpgrader, node: etree._Element, top: Span) -> None:
+        type_name = _local(node)
+        if not upgrader.repo.versions(type_name):
+            # nothing says whether it is up to date: never "all up to date" (validate: CFG010)
+            self.problem(
+                f"{type_name} {node.get('name')!r}: no definition of {type_name} on the search "
+                "path, so whether it is up to date cannot be checked",
+                node.sourceline,
+                code="CFG010",
+            )
+            return
         step = upgrader.needs(node)
         if step is None:
             renames = upgrader.renamed_properties(node)

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -120,12 +120,60 @@ class ChangeDetector:
                     self._sample(
                         events, name, device, memory, kind, sample.timestamp, sample.values
                     )
+        if session.selectors:  # proxies and aliases asked for by name: what they give
+            selected_devices = set()
+            for name in session.selected:
+                if manager.device(name) is not None:
+                    selected_devices.add(name)
+                    continue
+                proxy = manager.proxy(name)
+                if proxy is not None:
+                    memory = self._devices.setdefault(name, _DeviceMemory())
+                    self._proxy(events, name, proxy, memory, moment)
+            # a device only read through a selected proxy or alias: its status, not its data
+            read_only = {n for n in session.watched if manager.device(n) is not None}
+            read_only -= selected_devices
+            if read_only:
+                events[:] = [e for e in events if e.name not in read_only or e.kind == "status"]
         markers = session.markers
         for marker in markers[self._markers_seen :]:
             events.append(ChangeEvent(marker.timestamp, "-", "marker", value=marker.name))
         self._markers_seen = len(markers)
         events.sort(key=lambda event: event.timestamp)
         return events
+
+    def _proxy(
+        self,
+        events: list[ChangeEvent],
+        name: str,
+        proxy: Any,
+        memory: _DeviceMemory,
+        moment: float,
+    ) -> None:
+        """A selected proxy's or alias's changes, under its own name and without a unit: the
+        value it gives this frame (normalised, filtered, a button's state), as the
+        application reading it sees it; its state when it is stupefied or comes back."""
+        from gadgetctl.monitor.session import proxy_value
+
+        state = "stupefied" if proxy.stupefied else "active"
+        reason = proxy.reason if proxy.stupefied else None
+        if (state, reason) != (memory.state, memory.error):
+            if memory.state is not None or proxy.stupefied:
+                events.append(ChangeEvent(moment, name, "status", value=state, raw=reason))
+            memory.state, memory.error = state, reason
+        if proxy.stupefied:
+            return
+        kind = DeviceKind(proxy.KIND.value)
+        if kind is DeviceKind.KEYBOARD_MOUSE:
+            return  # its keys are the keyboard device's key events
+        value, raw = proxy_value(proxy)
+        if kind is DeviceKind.DIGITAL:
+            value = 1 if int(value) in (1, 2) else 0  # on or toggled on: pressed
+        found: list[ChangeEvent] = []
+        self._sample(found, name, None, memory, kind, moment, [value])
+        for event in found:
+            given = raw if raw is not None and kind is DeviceKind.ANALOG else event.raw
+            events.append(replace(event, unit=None, raw=given))
 
     def _status(
         self,

@@ -136,6 +136,9 @@ class ElementView:
     count: int = 0  # samples this frame (sampling instants)
     values: list[UnitView] = field(default_factory=list)
     health: dict[str, object] = field(default_factory=dict)  # a device's Input.health()
+    #: A stupefied proxy's or alias's device when that device is pending, faulted or
+    #: otherwise not running: the one cause, whose own line gives the reason.
+    blocked_by: str | None = None
 
 
 @dataclass(slots=True)
@@ -1348,6 +1351,10 @@ class MonitorSession:
                 view.target = manager.aliases.get(name)
             return view
         view.target = manager.aliases.get(name) if element == ALIAS else proxy.device_name
+        if proxy.stupefied and proxy.device_name:
+            device_state = self._status_of(proxy.device_name)[2]
+            if device_state not in ("running", "configured", "removed"):
+                view.blocked_by = proxy.device_name
         view.unit = proxy.unit if proxy.HAS_UNIT else None
         track = self._current_track(proxy.device_name)
         live = track is not None and track.device is proxy.device

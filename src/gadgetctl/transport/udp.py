@@ -45,6 +45,16 @@ def proc_udp_drops(sock: socket.socket, proc: Path = Path("/proc/net")) -> int |
     return None
 
 
+def bind_udp(sock: socket.socket, host: str, port: int) -> None:
+    """``sock.bind((host, port))``; an error names the port (and the address, unless it is
+    every interface): ``cannot bind UDP port 5000: Address already in use``."""
+    try:
+        sock.bind((host, port))
+    except OSError as err:
+        where = f"UDP port {port}" + (f" on {host}" if host not in ("", "0.0.0.0") else "")
+        raise OSError(err.errno, f"cannot bind {where}: {err.strerror or err}") from err
+
+
 class DropCountingReceiver:
     """Reads datagrams from a UDP socket and keeps the kernel's count of those it dropped.
 
