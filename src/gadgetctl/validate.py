@@ -180,6 +180,7 @@ def check_configurations(
         environ=options.environ,
         plugin_definitions=plugin_definition_finder(options.environ),
         plugin_names=plugin_name_finder(options.environ),
+        unloaded_types=unloaded_type_finder(options.environ),
     )
 
 
@@ -203,6 +204,19 @@ def plugin_name_finder(environ=None):
 
         search = driver_search_for(configuration=config, environ=environ)
         return {p.name for p in search.plugins() if p.shadowed_by is None}
+
+    return find
+
+
+def unloaded_type_finder(environ=None):
+    """A function giving, for a configuration, the element types whose driver plug-in its
+    input_manager elements never load, with the reason the input manager gives (DRV030)."""
+
+    def find(config) -> dict[str, str]:
+        from gadgetctl.input.definitions import driver_search_for
+        from gadgetctl.input.unloaded import unloaded_types
+
+        return unloaded_types(config, driver_search_for(configuration=config, environ=environ))
 
     return find
 

@@ -56,6 +56,7 @@ from gadgetctl.input.sampling import (
     ThreadRunner,
 )
 from gadgetctl.input.status import ACTIVE, PENDING, UNKNOWN_TYPE, ElementKind, ElementStatus
+from gadgetctl.input.unloaded import no_driver_reason, provider_hint
 from gadgetctl.jccl.access import ElementAccess
 from gadgetctl.jccl.activation import (
     DIFFERENCES,
@@ -577,10 +578,7 @@ class InputManager:
         loaded = {r.name for r in self.loader.results.values()}
         for info in providers:
             if info.name not in loaded:
-                hints.append(
-                    f"plug-in {info.name} ({info.source}) provides {token}: "
-                    f"add <driver>{info.name}</driver> to an input_manager element"
-                )
+                hints.append(provider_hint(token, info))
         definition = self.repo.get(token)
         detail = (
             " (an abstract base type, which cannot be a device)"
@@ -590,7 +588,7 @@ class InputManager:
         return PendingEntry(
             element,
             PendingKind.NO_DRIVER,
-            f"no loaded driver handles {token}{detail}",
+            f"{no_driver_reason(token)}{detail}",
             "; ".join(hints) or None,
         )
 

@@ -44,6 +44,8 @@ class Session:
     plugin_definitions: Callable[[Configuration], list[Path]] | None = None
     #: Names of the driver plug-ins a configuration can load (exact spelling).
     plugin_names: Callable[[Configuration], set[str]] | None = None
+    #: Element types whose driver plug-in the configuration never loads -> why (DRV030).
+    unloaded_types: Callable[[Configuration], dict[str, str]] | None = None
     _repos: dict[tuple[Path, ...], DefinitionRepository] = field(default_factory=dict)
     _checkers: dict[int, ElementChecker] = field(default_factory=dict)
 
@@ -122,7 +124,8 @@ def check_configuration(config: Configuration, session: Session, scope: Scope) -
     retain(reports)
     if notes:
         found += _suggestions(notes, config, session)
-    found += check_wiring(config, reports, checker.index, scope)
+    unloaded = session.unloaded_types(config) if session.unloaded_types is not None else {}
+    found += check_wiring(config, reports, checker.index, scope, unloaded)
     found += proxy_unit_problems(config.elements, repo)
     return found
 
@@ -221,6 +224,7 @@ def check_documents(
     environ: Mapping[str, str] | None = None,
     plugin_definitions: Callable[[Configuration], list[Path]] | None = None,
     plugin_names: Callable[[Configuration], set[str]] | None = None,
+    unloaded_types: Callable[[Configuration], dict[str, str]] | None = None,
 ) -> list[Diagnostic]:
     """Configuration-level findings for the configuration documents among ``documents``."""
     session = Session(
@@ -228,6 +232,7 @@ def check_documents(
         os.environ if environ is None else environ,
         plugin_definitions=plugin_definitions,
         plugin_names=plugin_names,
+        unloaded_types=unloaded_types,
     )
     given: list[Path] = []
     for doc in documents:

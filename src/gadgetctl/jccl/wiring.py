@@ -12,6 +12,7 @@ runs what VR Juggler leaves pending, the message says so.
 from __future__ import annotations
 
 from collections import defaultdict
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -66,8 +67,10 @@ class Wiring:
         reports: dict[int, ElementReport],
         index: TypeIndex,
         scope: Scope,
+        unloaded: Mapping[str, str] | None = None,
     ) -> None:
         self.config = config
+        self.unloaded = unloaded or {}
         self.reports = reports
         self.index = index
         self.scope = scope
@@ -120,8 +123,8 @@ class Wiring:
             refused = None
             if blocker is not None:
                 blocked[key] = blocker
-                if blocker[0] == UNHANDLED:
-                    refused = UNHANDLED
+                if blocker[0] == UNHANDLED or type_name in self.unloaded:
+                    refused = blocker[0]  # (no rule of activation knows of it: refused here)
             pointers = reports[key].pointers
             if not pointers:
                 add(_node((element.name, type_name, version, (), refused)))
@@ -335,6 +338,8 @@ class Wiring:
         found: tuple[str, Severity] | None
         if view is None or view.definition.abstract:
             found = UNHANDLED, Severity.ERROR  # reported as CFG010 / CFG011
+        elif element.type in self.unloaded:  # both run times: its driver is never loaded
+            found = self.unloaded[element.type], Severity.ERROR
         else:
             old = too_old(element.type, element.version, self.index.versions(element.type))
             if old is not None:
@@ -617,9 +622,15 @@ def _same_text(one: ConfigElement, other: ConfigElement) -> bool:
 
 
 def check_wiring(
-    config: Configuration, reports: dict[int, ElementReport], index: TypeIndex, scope: Scope
+    config: Configuration,
+    reports: dict[int, ElementReport],
+    index: TypeIndex,
+    scope: Scope,
+    unloaded: Mapping[str, str] | None = None,
 ) -> list[Diagnostic]:
-    wiring = Wiring(config, reports, index, scope)
+    """Pointers, duplicates and pending elements; ``unloaded``: element types whose driver
+    the configuration never loads, with why (gadgetctl.input.unloaded)."""
+    wiring = Wiring(config, reports, index, scope, unloaded)
     retain(wiring)
     return wiring.check()
 
