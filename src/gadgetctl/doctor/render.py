@@ -32,8 +32,14 @@ def _definitions(report: DoctorReport) -> list[str]:
 
 
 def _plugins(report: DoctorReport) -> list[str]:
+    """Every plug-in in the overview; for a configuration, those its devices use and those
+    that fail or are shadowed, the others counted in one line."""
     lines = [f"Driver plug-ins (looked in {report.driver_places}):"]
-    for plugin in report.plugins:
+    shown = report.plugins
+    if report.configurations or report.devices:
+        used = {device.driver for device in report.devices}
+        shown = [p for p in report.plugins if p.name in used or p.shadowed_by or not p.ok]
+    for plugin in shown:
         types = ", ".join(plugin.element_types) or "no declared element types"
         if plugin.shadowed_by:
             lines.append(
@@ -47,6 +53,12 @@ def _plugins(report: DoctorReport) -> list[str]:
             )
     if not report.plugins:
         lines.append("    none found")
+    others = len(report.plugins) - len(shown)
+    if others:
+        lines.append(
+            f"    {'ok':<8} {counted(others, 'other plug-in' if shown else 'plug-in')} found and "
+            "loading, unused by the configuration (`gadgetctl drivers list` lists them)"
+        )
     return lines
 
 

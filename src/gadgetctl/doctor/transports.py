@@ -11,7 +11,9 @@ from gadgetctl.input.plugins.discovery import PluginInfo
 
 _SERIAL = {"kind": "serial", "port": "port", "baud": "baud"}
 
-#: Upstream element types gadgetctl does not bundle a driver for, and their port properties.
+#: The port properties of upstream element types, used when no plug-in found declares
+#: TRANSPORTS for the type (cyber_glove has no gadgetctl driver; a third-party plug-in of a
+#: standard type may declare none).
 KNOWN_TRANSPORTS: dict[str, list[dict[str, str]]] = {
     **{
         token: [_SERIAL]

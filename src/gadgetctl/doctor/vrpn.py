@@ -8,6 +8,7 @@ from __future__ import annotations
 import socket
 
 from gadgetctl.doctor.model import PortCheck, Status
+from gadgetctl.wording import counted
 
 
 def check_vrpn_name(text: str, *, probe: bool, timeout: float) -> PortCheck:
@@ -52,7 +53,7 @@ def check_vrpn_name(text: str, *, probe: bool, timeout: float) -> PortCheck:
             "vrpn",
             target,
             Status.PROBLEM,
-            f"no VRPN server answers at {name.location}: {result.error}",
+            _no_answer(name.location, result.error),
             "DRV111",
             "start the VRPN server (vrpn_server, gadgetctl serve...) or fix the host and port",
         )
@@ -81,13 +82,25 @@ def check_vrpn_name(text: str, *, probe: bool, timeout: float) -> PortCheck:
         )
     layout = result.layouts[name.device]
     seen = [
-        f"{n} {what}"
+        counted(n, what)
         for n, what in (
-            (layout.sensors, "sensors"),
-            (layout.buttons, "buttons"),
-            (layout.channels, "channels"),
+            (layout.sensors, "sensor"),
+            (layout.buttons, "button"),
+            (layout.channels, "channel"),
         )
         if n
     ]
     shown = f" (reports show {', '.join(seen)})" if seen else ""
     return PortCheck("vrpn", target, Status.OK, f"the {version} announces {name.device}{shown}")
+
+
+def _no_answer(location: str, error: str | None) -> str:
+    """Why no VRPN server answered at ``location``, saying so once (the client's own error
+    often starts with the same words)."""
+    said = f"no VRPN server answers at {location}"
+    if not error:
+        return said
+    _, found, rest = error.partition(f"{location}: ")
+    if found and rest:  # "no VRPN server at HOST: ...", "cannot connect to HOST: ...": the cause
+        return f"{said}: {rest}"
+    return error if error.startswith("no VRPN server") else f"{said}: {error}"
