@@ -1,17 +1,31 @@
-"""The TUIO 1.x cursor protocol (``/tuio/2Dcur`` over OSC over UDP): touch slots from
-``alive``/``set`` messages, and a UDP receiver. OSC itself is decoded by ``python-osc``.
-Knows nothing of gadgetctl's input manager.
+"""The TUIO 1.1 cursor protocol (``/tuio/2Dcur`` over OSC over UDP): touch slots from
+``source``/``alive``/``set``/``fseq`` messages, and a UDP receiver. OSC is decoded by
+:mod:`.osc`, with bounds. Knows nothing of gadgetctl's input manager.
 
-``alive s1 s2 ...`` lists the sessions (fingers) down now: a new session takes the lowest free
-slot, a session no longer listed frees its slot. ``set s x y X Y m`` moves session ``s`` to
-x, y (0 to 1). ``fseq n`` ends a frame (ignored here). Other addresses are counted and ignored.
+A TUIO frame is a bundle: ``source NAME@ADDRESS`` (TUIO 1.1, optional) says who sends it,
+``alive s1 s2 ...`` lists the sessions (fingers) of that source down now, ``set s x y X Y m``
+moves session ``s`` to x, y (0 to 1), and ``fseq n`` ends the frame. The frame is applied at
+its ``fseq`` (or, without one, at the end of the datagram): a new session takes the lowest free
+slot, a session the source no longer lists frees its slot. Other addresses are counted and
+ignored.
+
+As the reference TuioClient (TUIO11_JAVA and TUIO11_CPP ``TuioClient``): a frame whose
+``fseq`` is positive and lower than the source's last one, by at most 100, is late (UDP
+reordered it) and dropped whole (``late_frames``); a larger step back is a restarted sender
+and is applied; ``fseq`` 0 or below is applied unordered. Unlike the reference, whose frame
+counter is one for all sources, every source keeps its own sessions and frame counter, so two
+sources on one port neither lift each other's fingers nor make each other's frames late. A
+bundle without ``source`` belongs to the source its sender last named (TUIO 1.0 senders: one
+source per sender address).
 
 Upstream fixes (Gadgeteer's ``TuioStandalone``): a ``set`` for a session never announced in
 ``alive`` is counted (``unknown_sessions``) and ignored, where upstream dereferenced a null
-pointer; a datagram that is a bare OSC message rather than a bundle is decoded like a bundle
-of one message, where upstream's bundle parser threw. A datagram that is not OSC at all is a
-counted bad datagram; a message with wrong argument types, or more sessions than
-``MAX_ALIVE``, is a counted bad record.
+pointer; a datagram that is a bare OSC message rather than a bundle is a frame of one message,
+where upstream's bundle parser threw. A datagram that is not OSC (:mod:`.osc`: bundles nested
+deeper than 8, sizes that do not fit, unknown type tags...) is a bad datagram, and so is one
+whose cursor messages are all malformed; a malformed message among good ones (wrong argument
+types, more sessions than ``MAX_ALIVE``) is a bad record. Sources beyond ``MAX_SOURCES`` are
+counted (``overflow_sources``) and ignored.
 """
 
 from __future__ import annotations
@@ -19,22 +33,24 @@ from __future__ import annotations
 import math
 import select
 import socket
-import struct
 import time
-
-from pythonosc.osc_packet import OscPacket, ParseError
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 
 from gadgetctl.transport.udp import DatagramLedger, bind_udp
+
+from .osc import OscError, OscMessage, decode_packet
 
 CURSOR_ADDRESS = "/tuio/2Dcur"
 DEFAULT_PORT = 3333
 #: Most sessions an ``alive`` message may list (a larger list is a bad record).
 MAX_ALIVE = 1024
+#: Most sources (named ones and sender addresses) one receiver keeps apart.
+MAX_SOURCES = 64
+#: A frame number this much lower than the last one is a restarted sender, not a late frame.
+LATE_WINDOW = 100
 MAX_DATAGRAM = 65_535
 _INT_LIMIT = 2**31
-
-#: What python-osc may raise on a datagram that is not OSC.
-DECODE_ERRORS = (ParseError, ValueError, IndexError, struct.error, UnicodeError, TypeError)
 
 
 class TuioDisconnected(ConnectionError):
@@ -53,71 +69,155 @@ def _coordinate(value: object) -> float | None:
     return None
 
 
+@dataclass
+class _Source:
+    """What one source has down: session -> slot, and its last frame number."""
+
+    slots: dict[int, int] = field(default_factory=dict)
+    last_fseq: int = -1
+
+
+@dataclass
+class _Frame:
+    """The messages of one source's frame, applied together at its ``fseq``."""
+
+    alive: list[int] | None = None
+    sets: list[tuple[int, float, float]] = field(default_factory=list)
+
+    @property
+    def empty(self) -> bool:
+        return self.alive is None and not self.sets
+
+
 class TouchSlots:
     """``points`` slots: ``down[i]`` is 1 while a session holds slot i, ``xy[i]`` its position.
     Counters: ``bad_records``, ``unknown_sessions``, ``overflow_sessions`` (more fingers than
-    slots), ``other_messages``."""
+    slots), ``other_messages``, ``late_frames``, ``overflow_sources``."""
 
     def __init__(self, points: int) -> None:
         self.points = points
         self.down = [0] * points
         self.xy = [[0.0, 0.0] for _ in range(points)]
-        self._slot: dict[int, int] = {}  # session -> slot
+        self.sources: dict[str, _Source] = {}
+        self._named: dict[str, str] = {}  # sender address -> the source it last named
         self.bad_records = 0
         self.unknown_sessions = 0
         self.overflow_sessions = 0
         self.other_messages = 0
+        self.late_frames = 0
+        self.overflow_sources = 0
 
-    def apply(self, address: str, params: list[object]) -> bool:
-        """Apply one OSC message; whether it was a TUIO cursor message."""
-        if address != CURSOR_ADDRESS:
-            self.other_messages += 1
-            return False
-        if not params or not isinstance(params[0], str):
-            self.bad_records += 1
-            return True
-        command = params[0]
-        if command == "alive":
-            self._alive(params[1:])
-        elif command == "set":
-            self._set(params[1:])
-        elif command != "fseq":
-            self.bad_records += 1
-        return True
+    @property
+    def sessions(self) -> int:
+        """Sessions holding a slot, over every source."""
+        return sum(len(s.slots) for s in self.sources.values())
 
-    def _alive(self, values: list[object]) -> None:
+    def apply(self, address: str, params: Sequence[object]) -> bool:
+        """One OSC message as a frame of its own; whether it was a good cursor message."""
+        return self.frame([OscMessage(address, tuple(params))])[0] > 0
+
+    def frame(self, messages: Sequence[OscMessage], sender: str = "") -> tuple[int, int, bool]:
+        """Apply the messages of one datagram from ``sender``: (good cursor messages, bad
+        ones, whether a frame with cursor data was applied)."""
+        source = self._named.get(sender, sender)
+        pending = _Frame()
+        good = bad = 0
+        applied = False
+        for message in messages:
+            if message.address != CURSOR_ADDRESS:
+                self.other_messages += 1
+                continue
+            args = message.arguments
+            command = args[0] if args and isinstance(args[0], str) else None
+            ok = True
+            if command == "source" and len(args) >= 2 and isinstance(args[1], str):
+                if not pending.empty:  # a frame without fseq ends where the next source begins
+                    applied |= self._commit(source, pending, None)
+                    pending = _Frame()
+                source = args[1]
+                self._remember(sender, source)
+            elif command == "fseq" and len(args) >= 2 and _session(args[1]) is not None:
+                applied |= self._commit(source, pending, _session(args[1]))
+                pending = _Frame()
+            elif command == "alive":
+                ok = self._alive(args[1:], pending)
+            elif command == "set":
+                ok = self._set(args[1:], pending)
+            else:
+                ok = False
+            good += ok
+            bad += not ok
+        if not pending.empty:  # no fseq after them: applied as a frame (a bare message)
+            applied |= self._commit(source, pending, None)
+        self.bad_records += bad
+        return good, bad, applied
+
+    def _alive(self, values: Sequence[object], pending: _Frame) -> bool:
         sessions = [_session(v) for v in values]
         if len(sessions) > MAX_ALIVE or None in sessions:
-            self.bad_records += 1
-            return
+            return False
+        pending.alive = sessions  # type: ignore[assignment]
+        return True
+
+    def _set(self, values: Sequence[object], pending: _Frame) -> bool:
+        if len(values) < 3:
+            return False
+        session, x, y = _session(values[0]), _coordinate(values[1]), _coordinate(values[2])
+        if session is None or x is None or y is None:
+            return False
+        pending.sets.append((session, x, y))
+        return True
+
+    def _remember(self, sender: str, source: str) -> None:
+        if sender in self._named or len(self._named) < MAX_SOURCES:
+            self._named[sender] = source
+
+    def _source(self, name: str) -> _Source | None:
+        state = self.sources.get(name)
+        if state is None:
+            if len(self.sources) >= MAX_SOURCES:
+                self.overflow_sources += 1
+                return None
+            state = self.sources[name] = _Source()
+        return state
+
+    def _commit(self, name: str, frame: _Frame, fseq: int | None) -> bool:
+        """Apply ``frame`` to source ``name`` unless it is late; whether cursor data changed
+        hands (a frame with alive or set messages was applied)."""
+        state = self._source(name)
+        if state is None:
+            return False
+        if fseq is not None and fseq > 0:
+            if fseq >= state.last_fseq or state.last_fseq - fseq > LATE_WINDOW:
+                state.last_fseq = fseq
+            else:
+                self.late_frames += 1
+                return False
+        if frame.alive is not None:
+            self._alive_now(state, frame.alive)
+        for session, x, y in frame.sets:
+            slot = state.slots.get(session)
+            if slot is None:  # upstream crashed here
+                self.unknown_sessions += 1
+                continue
+            self.xy[slot] = [x, y]
+        return not frame.empty
+
+    def _alive_now(self, state: _Source, sessions: list[int]) -> None:
         alive = set(sessions)
-        for session in [s for s in self._slot if s not in alive]:
-            slot = self._slot.pop(session)
+        for session in [s for s in state.slots if s not in alive]:
+            slot = state.slots.pop(session)
             self.down[slot] = 0
             self.xy[slot] = [0.0, 0.0]
         for session in sessions:
-            if session in self._slot:
+            if session in state.slots:
                 continue
             free = next((i for i in range(self.points) if not self.down[i]), None)
             if free is None:
                 self.overflow_sessions += 1
                 continue
-            self._slot[session] = free  # type: ignore[index]
+            state.slots[session] = free
             self.down[free] = 1
-
-    def _set(self, values: list[object]) -> None:
-        if len(values) < 3:
-            self.bad_records += 1
-            return
-        session, x, y = _session(values[0]), _coordinate(values[1]), _coordinate(values[2])
-        if session is None or x is None or y is None:
-            self.bad_records += 1
-            return
-        slot = self._slot.get(session)
-        if slot is None:  # upstream crashed here
-            self.unknown_sessions += 1
-            return
-        self.xy[slot] = [x, y]
 
     def digital(self) -> list[int]:
         return list(self.down)
@@ -126,15 +226,9 @@ class TouchSlots:
         return [v for pair in self.xy for v in pair]
 
 
-def decode(data: bytes) -> list[tuple[str, list[object]]]:
-    """The OSC messages of a datagram (a bundle, nested bundles or a bare message), in order;
-    raises one of :data:`DECODE_ERRORS` when it is not OSC."""
-    return [(t.message.address, list(t.message.params)) for t in OscPacket(data).messages]
-
-
 class TuioReceiver:
-    """Receives TUIO datagrams on UDP ``port`` (0: chosen by the OS) into ``slots``.
-    Counters: ``datagrams``, ``bad_datagrams``, ``kernel_dropped`` (and the slots')."""
+    """Receives TUIO datagrams on UDP ``port`` (0: chosen by the OS) into ``slots``. Its
+    ``ledger`` counts every datagram as decoded or bad, and the kernel's drops."""
 
     def __init__(
         self,
@@ -163,18 +257,6 @@ class TuioReceiver:
     def port(self) -> int:
         return self.requested_port if self._sock is None else self._sock.getsockname()[1]
 
-    @property
-    def kernel_dropped(self) -> int:
-        return self.ledger.kernel_dropped
-
-    @property
-    def datagrams(self) -> int:
-        return self.ledger.datagrams
-
-    @property
-    def bad_datagrams(self) -> int:
-        return self.ledger.bad_count
-
     def open(self) -> None:
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
@@ -194,35 +276,37 @@ class TuioReceiver:
             self._sock.close()
             self._sock = None
 
-    def feed(self, data: bytes) -> bool:
-        """Apply one datagram; whether it held TUIO cursor messages."""
+    def feed(self, data: bytes, sender: str = "") -> bool:
+        """Judge and apply one datagram from ``sender``; whether it applied a frame with
+        cursor data."""
         try:
-            messages = decode(data)
-        except DECODE_ERRORS as err:
+            packet = decode_packet(data)
+        except OscError as err:
             self.ledger.bad(f"not OSC: {err}")
             return False
-        self.ledger.decoded()
-        touched = False
-        for address, params in messages:
-            touched |= self.slots.apply(address, params)
-        return touched
+        good, bad, applied = self.slots.frame(packet.messages, sender)
+        if bad and not good:
+            self.ledger.bad(f"{bad} malformed {CURSOR_ADDRESS} message" + ("s" * (bad > 1)))
+        else:
+            self.ledger.decoded()
+        return applied
 
     def sample_all(self, limit: int = 100) -> list[tuple[list[int], list[float]]]:
-        """(digital, analog) after each datagram with cursor messages that arrives within
-        ``receive_timeout`` (at most ``limit``); raises :class:`TuioDisconnected` after
+        """(digital, analog) after each datagram that applied cursor data, of those arriving
+        within ``receive_timeout`` (at most ``limit`` datagrams read); raises :class:`TuioDisconnected` after
         ``peer_timeout`` seconds without a datagram."""
         sock = self._sock
         if sock is None:
             raise TuioDisconnected("the receiver is closed")
         states: list[tuple[list[int], list[float]]] = []
         ready, _, _ = select.select([sock], [], [], self.receive_timeout)
-        while ready and len(states) < limit:
+        for _ in range(limit if ready else 0):
             try:
-                data = self.ledger.receive(MAX_DATAGRAM)
+                data, address = self.ledger.receive_from(MAX_DATAGRAM)
             except BlockingIOError:
                 break
             self._last_data = time.monotonic()
-            if self.feed(data):
+            if self.feed(data, f"{address[0]}:{address[1]}"):
                 states.append((self.slots.digital(), self.slots.analog()))
         if not states and time.monotonic() - self._last_data > self.peer_timeout:
             raise TuioDisconnected(

@@ -4,7 +4,8 @@ finger takes the lowest free slot); analog units ``2i`` and ``2i + 1`` are its x
 (TUIO's 0 to 1; 0 once the finger leaves). Analog proxies normalise them with the element's
 ``min`` and ``max`` (0 and 1 by default; upstream forced 0 and 1).
 
-Every datagram with cursor messages becomes one sample of each kind. Silence longer than
+Every TUIO frame applied (a bundle with cursor data that is not late) becomes one sample of
+each kind. Silence longer than
 :attr:`TuioDevice.peer_timeout` raises from ``sample()``, so the input manager marks the
 device faulted and restarts it; a restart succeeds only once datagrams arrive again.
 """
@@ -119,6 +120,8 @@ class TuioDevice(Digital, Analog):
             "unknown_sessions": s.unknown_sessions,
             "overflow_sessions": s.overflow_sessions,
             "other_messages": s.other_messages,
+            "late_frames": s.late_frames,
+            "overflow_sources": s.overflow_sources,
         }
 
     def datagram_ledger(self) -> DatagramLedger | None:

@@ -705,16 +705,17 @@ def _natnet(data: bytes) -> None:
             assert units.update(frame).shape == (6, 4, 4)
 
 
-# -- TUIO (OSC through python-osc) --------------------------------------------------------------
+# -- TUIO (OSC through TUIO_drv.osc) ------------------------------------------------------------
 
 
 def _tuio_seeds() -> list[bytes]:
-    from TUIO_drv.emulator import frame_bundle, message
+    from TUIO_drv.emulator import frame_bundle, message, osc_bundle
 
     return [
         frame_bundle(3, 4, "motion"),
         frame_bundle(5, 3, "buttons"),
-        message("set", 1, 0.5, 0.5, 0.0, 0.0, 0.0).build().dgram,
+        message("set", 1, 0.5, 0.5, 0.0, 0.0, 0.0),
+        osc_bundle(osc_bundle(frame_bundle(7, 2, "motion", source=1))),
     ]
 
 
@@ -728,7 +729,9 @@ def _tuio(data: bytes) -> None:
         receiver.feed(datagram)
     slots = receiver.slots
     assert len(slots.digital()) == 4 and len(slots.analog()) == 8
-    assert set(slots.digital()) <= {0, 1} and len(slots._slot) <= 4
+    assert set(slots.digital()) <= {0, 1} and slots.sessions <= 4
+    ledger = receiver.ledger
+    assert ledger.decoded_count + ledger.bad_count == 3  # every datagram judged, once
 
 
 # -- Elexol Ether I/O 24 -------------------------------------------------------------------------

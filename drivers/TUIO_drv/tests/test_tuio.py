@@ -1,6 +1,6 @@
 """The TUIO driver against its loopback emulator: touch slots appearing and leaving, x and y
 through analog proxies, the upstream crashes fixed (unknown session, bare message), garbage,
-disconnection and return, and a clear DRV003 without python-osc."""
+disconnection and return; the plug-in needs no python-osc."""
 
 from __future__ import annotations
 
@@ -61,14 +61,16 @@ def test_unknown_sessions_and_bad_arguments_are_counted_not_fatal() -> None:
 
 def test_a_bare_message_is_decoded_like_a_bundle() -> None:
     receiver = TuioReceiver(0, 2)
-    assert receiver.feed(message("alive", 3).build().dgram)  # upstream threw on non-bundles
-    assert receiver.feed(frame_bundle(1, 2, "idle"))
+    assert receiver.feed(message("alive", 3))  # upstream threw on non-bundles
+    assert receiver.feed(frame_bundle(1, 2, "idle", source=None))  # the same (unnamed) source
     assert not receiver.feed(b"\x00\x01garbage")
-    assert receiver.bad_datagrams == 1 and receiver.slots.digital() == [1, 1]
+    assert receiver.ledger.bad_count == 1 and receiver.slots.digital() == [1, 1]
+    assert receiver.slots.sessions == 2  # session 3 lifted: the bundle's alive lists 1 and 2
     nested = OscMessageBuilder("/tuio/2Dcur")
     nested.add_arg("fseq")
     nested.add_arg(2)
-    assert receiver.feed(nested.build().dgram)
+    assert not receiver.feed(nested.build().dgram)  # a frame number alone: good, no cursor data
+    assert receiver.ledger.decoded_count == 3 and receiver.slots.bad_records == 0
 
 
 # -- through the input manager -------------------------------------------------------------------
@@ -144,25 +146,20 @@ def test_a_silent_source_faults_and_data_returns_within_two_seconds(build) -> No
     assert dev.restarts >= 1
 
 
-def test_without_python_osc_the_plugin_fails_with_one_line() -> None:
+def test_the_plugin_loads_without_python_osc() -> None:
     script = (
         "import sys; sys.modules['pythonosc'] = None; "
         "from gadgetctl.cli.main import main; sys.argv = ['gadgetctl'] + sys.argv[1:]; main()"
     )
-
-    def gadgetctl(*args: str) -> subprocess.CompletedProcess:
-        return subprocess.run(
-            [sys.executable, "-c", script, *args], capture_output=True, text=True, timeout=60
-        )
-
-    loaded = gadgetctl("drivers", "load", "TUIO_drv", "--format", "json")
-    assert loaded.returncode == 1 and "Traceback" not in loaded.stderr
+    loaded = subprocess.run(
+        [sys.executable, "-c", script, "drivers", "load", "TUIO_drv", "--format", "json"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert loaded.returncode == 0, loaded.stdout + loaded.stderr
     (plugin,) = json.loads(loaded.stdout)["plugins"]
-    (diagnostic,) = plugin["diagnostics"]
-    assert diagnostic["code"] == "DRV003" and "\n" not in diagnostic["message"]
-    assert "pip install python-osc" in diagnostic["message"]
-    listed = json.loads(gadgetctl("drivers", "list", "--format", "json").stdout)["plugins"]
-    assert "TUIO_drv" in {p["name"] for p in listed}  # still listed, from its metadata
+    assert not plugin["diagnostics"]
 
 
 def test_validate_knows_the_units_of_points(tmp_path: Path) -> None:
