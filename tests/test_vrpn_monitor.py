@@ -83,3 +83,29 @@ def test_no_server_and_bad_names_are_usage_errors(cli) -> None:
     assert f"cannot connect to tcp://127.0.0.1:{port}: Connection refused" in result.stderr
     bad = cli("monitor", "vrpn:Tracker0", "--duration", "0.2")
     assert bad.exit_code == 2 and "Device@host" in bad.stderr
+
+
+def _replay_capture(conn, _n: int) -> None:
+    """Send what the real VRPN C++ library sent (drivers/VRPN_drv/tests/conformance, see its
+    README), then keep the connection open until the client leaves."""
+    conn.sendall((REPO / "drivers/VRPN_drv/tests/conformance/vrpn0738_tcp.bin").read_bytes())
+    conn.settimeout(10)
+    while conn.recv(65536):
+        pass
+
+
+def test_watch_a_dial_of_the_real_vrpn_library(cli) -> None:
+    from vrpn_peers import RawServer
+
+    with RawServer(_replay_capture) as server:
+        name = f"Dial0@tcp://127.0.0.1:{server.port}"
+        result = cli("monitor", f"vrpn:{name}", "--duration", "0.5", "--format", "ndjson")
+    assert result.exit_code == 0, result.stderr
+    recs = records(result.stdout)
+    assert recs[0]["info"]["elements"][name]["units"] == {"analog": 3}
+    values = {}
+    for r in recs:
+        if r["type"] == "sample" and r["device"] == name and r["kind"] == "analog":
+            values[r["unit"]] = r.get("raw", r["value"])
+    # dial 0 turned by +0.05 and dial 2 by -0.125 revolutions, dial 1 not at all
+    assert values[0] == pytest.approx(0.05) and values[2] == pytest.approx(-0.125)
