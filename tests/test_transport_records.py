@@ -192,3 +192,30 @@ def test_carried_counters_give_a_wrapper_its_counters_over_every_connection() ->
         wrapper.counts.detach()
     assert (wrapper.records, wrapper.bad_records, wrapper.skipped_bytes) == (3, 1, 2)
     assert wrapper.counters == {"records": 3, "bad_records": 1, "skipped_bytes": 2}
+
+
+def test_complete_takes_optional_trailing_bytes_and_waits_for_the_byte_that_tells() -> None:
+    from dataclasses import dataclass
+
+    from gadgetctl.transport.records import ResyncScanner
+
+    @dataclass
+    class Trailing(ResyncScanner[bytes]):
+        """Records ``#xy``, optionally followed by one ``!``."""
+
+        HEAD = b"#"
+        SIZE = 3
+
+        def decode(self, record: bytes) -> bytes | None:
+            return record
+
+        def complete(self, record, buffer, end, quiet):
+            if end == len(buffer):
+                return (record, 0) if quiet else None
+            return (record + b"!", 1) if buffer[end : end + 1] == b"!" else (record, 0)
+
+    scanner = Trailing()
+    assert scanner.feed(b"#ab!#cd#ef") == [b"#ab!", b"#cd"]  # #ef: is a ! coming?
+    assert scanner.feed(b"!") == [b"#ef!"]
+    assert scanner.feed(b"#gh") == [] and scanner.feed(b"", quiet=True) == [b"#gh"]
+    assert scanner.records == 4 and scanner.skipped_bytes == 0

@@ -26,7 +26,7 @@ a fault, and the buffer never holds more than a packet.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from gadgetctl.transport.records import ResyncScanner, ScannedDevice
 from gadgetctl.transport.serialline import LineSettings, SerialLine, SerialLineLost
@@ -154,44 +154,21 @@ class PacketScanner(ResyncScanner[GloveSample]):
 
     HEAD = bytes([HEADER])
     SIZE = PACKET_SIZE
-    MAX_BUFFER = LONG_PACKET_SIZE
 
     capability: int = RIGHT
 
-    def feed(self, data: bytes, *, quiet: bool = False) -> list[GloveSample]:
-        """Add bytes; ``quiet`` says no more are coming now (a 9-byte packet at the end is
-        complete)."""
-        buf = self.buffer
-        buf += data
-        out: list[GloveSample] = []
-        pos = 0
-        while True:
-            head = buf.find(HEADER, pos)
-            if head < 0:
-                self.skip(len(buf) - pos)
-                pos = len(buf)
-                break
-            self.skip(head - pos)
-            pos = head
-            if len(buf) - pos < PACKET_SIZE:
-                break  # the rest is on its way
-            sample = decode_packet(bytes(buf[pos : pos + PACKET_SIZE]), self.capability)
-            if sample is None:
-                self.skip(1)  # a false header: look for the next
-                pos += 1
-                continue
-            if len(buf) - pos == PACKET_SIZE and not quiet:
-                break  # is a 10th byte coming?
-            if len(buf) - pos > PACKET_SIZE and buf[pos + PACKET_SIZE] != HEADER:
-                sample = decode_packet(bytes(buf[pos : pos + LONG_PACKET_SIZE]))
-                pos += LONG_PACKET_SIZE
-            else:
-                pos += PACKET_SIZE
-            out.append(sample)  # type: ignore[arg-type]
-            self.records += 1
-            self._in_junk = False
-        del buf[:pos]
-        return out
+    def decode(self, record: bytes) -> GloveSample | None:
+        return decode_packet(record, self.capability)
+
+    def complete(
+        self, record: GloveSample, buffer: bytearray, end: int, quiet: bool
+    ) -> tuple[GloveSample, int] | None:
+        """The byte after a 9-byte packet is its 10th unless it is the next header."""
+        if end == len(buffer):
+            return (record, 0) if quiet else None  # is a 10th byte coming?
+        if buffer[end] == HEADER:
+            return record, 0
+        return replace(record, capability=buffer[end]), 1
 
 
 @dataclass(frozen=True)

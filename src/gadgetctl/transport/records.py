@@ -57,10 +57,18 @@ class ResyncScanner(Generic[R]):
         """The record these bytes hold, or None when they are junk that looks like one."""
         raise NotImplementedError
 
+    def complete(self, record: R, buffer: bytearray, end: int, quiet: bool) -> tuple[R, int] | None:
+        """For a protocol whose records may carry optional trailing bytes: the record as
+        finished by what follows it at ``end``, and how many more bytes it takes; None to
+        wait for the bytes that tell (``quiet``: no more are coming now). By default a
+        record is complete as decoded."""
+        return record, 0
+
     # -- scanning -------------------------------------------------------------------------
 
-    def feed(self, data: bytes) -> list[R]:
-        """Add bytes; return every complete valid record they finish, in order."""
+    def feed(self, data: bytes, *, quiet: bool = False) -> list[R]:
+        """Add bytes; return every complete valid record they finish, in order. ``quiet``
+        says no more bytes are coming now (see :meth:`complete`)."""
         buf = self.buffer
         buf += data
         size = self.record_size()
@@ -86,10 +94,14 @@ class ResyncScanner(Generic[R]):
                 self.skip(1)  # not a head after all: look for the next one
                 pos += 1
                 continue
+            finished = self.complete(record, buf, pos + size, quiet)
+            if finished is None:
+                break  # what follows it says how it ends: wait for that
+            record, extra = finished
             out.append(record)
             self.records += 1
             self._in_junk = False
-            pos += size
+            pos += size + extra
         del buf[:pos]
         if self.MAX_BUFFER is not None and len(buf) > self.MAX_BUFFER:
             self.skip(len(buf))
