@@ -53,23 +53,18 @@ def record(address: int, code: int, words: tuple[int, ...], buttons: bytes = b""
 
 
 def manual_matrix(a: float, e: float, r: float) -> np.ndarray:
-    """The manual's M for azimuth, elevation, roll in degrees."""
-    a, e, r = (math.radians(v) for v in (a, e, r))
-    ca, sa, ce, se, cr, sr = (
-        math.cos(a),
-        math.sin(a),
-        math.cos(e),
-        math.sin(e),
-        math.cos(r),
-        math.sin(r),
-    )
-    return np.array(
-        [
-            [ce * ca, ce * sa, -se],
-            [-cr * sa + sr * se * ca, cr * ca + sr * se * sa, sr * ce],
-            [sr * sa + cr * se * ca, -sr * ca + cr * se * sa, cr * ce],
-        ]
-    )
+    """The manual's M for azimuth, elevation, roll in degrees: the frame rotations roll x
+    elevation x azimuth, whose product has the elements the manual lists (M11 = cos E cos A,
+    M12 = cos E sin A, M13 = -sin E, M21 = -cos R sin A + sin R sin E cos A, ...)."""
+
+    def frame(axis: int, degrees: float) -> np.ndarray:
+        c, s = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+        i, j = [k for k in range(3) if k != axis]
+        m = np.eye(3)
+        m[i, i], m[i, j], m[j, i], m[j, j] = c, s, -s, c
+        return m
+
+    return frame(0, r) @ frame(1, e).T @ frame(2, a)
 
 
 def shepperd(m: np.ndarray) -> tuple[float, float, float, float]:
