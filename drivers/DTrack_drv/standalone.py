@@ -578,7 +578,10 @@ class _FrameBuilder:
 
     def meatool6dmt2(self, line: _Line) -> None:
         found = []
-        for _ in range(self._n(line, "tool count")):
+        # The first number counts the calibrated tools, the second the tools that follow (ART's
+        # technical appendix B.2.7). Fixed: the first was read as the count of tool blocks.
+        self._n(line, "calibrated tool count")
+        for _ in range(self._n(line, "tool count", 1)):
             ident, quality, nbt, radius = line.block(4)
             n_buttons = _count(nbt, "button count", self.limits.buttons)
             loc = line.location()

@@ -108,7 +108,7 @@ def _dtrack_seeds() -> list[bytes]:
     eye = "[1 0 0 0 1 0 0 0 1]"
     seeds.append(
         f"fr 9\r\nts 1.5\r\n6dcal 4\r\n6di 1 [2 2 0.5][1000 0 0]{eye}\r\n"
-        f"6dmt 1 [0 0.8 5][0 0 10]{eye}\r\n6dmt2 1 [1 0.7 3 2.5][0 0 20]{eye}[6][1 2 3 4 5 6]\r\n"
+        f"6dmt 1 [0 0.8 5][0 0 10]{eye}\r\n6dmt2 1 1 [1 0.7 3 2.5][0 0 20]{eye}[6][1 2 3 4 5 6]\r\n"
         f"glcal 1\r\ngl 1 [0 1.0 0 1][0 0 0]{eye}[10 0 0]{eye}[5 30 20 15 10 25]\r\n".encode()
     )
     return seeds

@@ -167,7 +167,7 @@ def test_other_record_types(rx: DTrackStandalone) -> None:
         "ts 39596.024000\r\n6dcal 3\r\n"
         f"6di 1 [2 2 0.5][1000 0 0]{eye}\r\n"
         f"6dmt 1 [0 0.8 5][0 0 10]{eye}\r\n"
-        f"6dmt2 1 [1 0.7 3 2.5][0 0 20]{eye}[6][1 2 3 4 5 6]\r\n"
+        f"6dmt2 1 1 [1 0.7 3 2.5][0 0 20]{eye}[6][1 2 3 4 5 6]\r\n"
         "3d 2 [1 0.5][1 2 3] [2 0.6][-1000 0 500]\r\n"
         f"glcal 1\r\ngl 1 [0 1.0 0 1][0 0 0]{eye}[10 0 0]{eye}[5 30 20 15 10 25]\r\n"
         "xyz some future record\r\n",
