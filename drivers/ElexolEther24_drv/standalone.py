@@ -23,6 +23,8 @@ import socket
 import time
 from dataclasses import dataclass
 
+from gadgetctl.transport.udp import DatagramLedger
+
 BOARD_PORT = 2424
 PORTS = 3
 LINES = 8 * PORTS
@@ -134,7 +136,8 @@ def lines(values: list[int], inverts: list[int]) -> list[int]:
 
 class Ether24Board:
     """A board at ``host:port``. Counters: ``requests``, ``replies``, ``bad_replies``,
-    ``timeouts``."""
+    ``timeouts``; ``ledger`` counts every datagram read as decoded (a port reply) or bad, and
+    the kernel's drops."""
 
     def __init__(
         self,
@@ -149,9 +152,8 @@ class Ether24Board:
         self.reply_timeout = reply_timeout
         self.peer_timeout = peer_timeout
         self.requests = 0
-        self.replies = 0
-        self.bad_replies = 0
         self.timeouts = 0
+        self.ledger = DatagramLedger()
         self._sock: socket.socket | None = None
         self._last_reply = time.monotonic()
         self._values = [0] * PORTS
@@ -169,12 +171,24 @@ class Ether24Board:
             raise
         sock.setblocking(False)
         self._sock = sock
+        self.ledger.attach(sock)
         self._last_reply = time.monotonic()
 
     def close(self) -> None:
         if self._sock is not None:
+            self.ledger.detach()
             self._sock.close()
             self._sock = None
+
+    @property
+    def replies(self) -> int:
+        """Port replies received."""
+        return self.ledger.decoded_count
+
+    @property
+    def bad_replies(self) -> int:
+        """Datagrams from the board that were not a port reply."""
+        return self.ledger.bad_count
 
     def _send(self, data: bytes) -> None:
         if self._sock is None:
@@ -201,7 +215,7 @@ class Ether24Board:
             raise Ether24Disconnected("the connection to the board is closed")
         while True:  # drop replies that came too late for an earlier request
             try:
-                self._classify(sock.recv(64))
+                self._classify(self.ledger.receive(64))
             except (BlockingIOError, ConnectionRefusedError):
                 break
         for p in range(PORTS):
@@ -214,7 +228,7 @@ class Ether24Board:
             if left <= 0 or not select.select([sock], [], [], left)[0]:
                 break
             try:
-                data = sock.recv(64)
+                data = self.ledger.receive(64)
             except BlockingIOError:
                 continue
             except ConnectionRefusedError:
@@ -238,7 +252,7 @@ class Ether24Board:
         if len(data) == 2 and ord("A") <= data[0] < ord("A") + PORTS:
             port = data[0] - ord("A")
             self._values[port] = data[1]
-            self.replies += 1
+            self.ledger.decoded()
             return port
-        self.bad_replies += 1
+        self.ledger.bad(f"not a port reply: {len(data)} bytes, first {data[:2].hex() or '-'}")
         return None

@@ -22,6 +22,7 @@ import os
 
 from gadgetctl.input import DeviceConfigError, Digital
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.udp import DatagramLedger
 
 from .standalone import (
     BOARD_PORT,
@@ -166,6 +167,10 @@ class Ether24Device(Digital):
 
     def _add(self, values: list[int]) -> None:
         self.add_digital_sample(lines(values, [p.invert for p in self.ports]))
+
+    def datagram_ledger(self) -> DatagramLedger | None:
+        """The board connection's account of its datagrams: replies, bad ones, kernel drops."""
+        return self._board.ledger if self._board is not None else None
 
     @property
     def counters(self) -> dict[str, int]:

@@ -4,6 +4,7 @@ the board going silent and coming back, find_mac discovery (sent to loopback, ne
 
 from __future__ import annotations
 
+import socket
 from pathlib import Path
 
 import pytest
@@ -22,6 +23,7 @@ from gadgetctl.input.testing import frames_until
 from gadgetctl.input.testing.commands import run_gadgetctl
 from gadgetctl.input.testing.configs import configuration, pending_reasons, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
+from gadgetctl.input.testing.floods import bad_one_for_one
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -233,3 +235,25 @@ def test_doctor_names_the_mac_a_find_mac_board_is_found_by(tmp_path: Path) -> No
     ((check,),) = [dev["checks"] for dev in report["devices"]]
     assert check["target"] == "MAC 00:0A:BC:12:34:56" and check["status"] == "unchecked"
     assert check["property"] == "mac_address"
+
+
+def test_a_flood_of_malformed_replies_is_counted_bad_one_for_one(build) -> None:
+    """Issue 23 item 4: every datagram from the board is a reply or a counted bad one."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as fake:
+        fake.bind(("127.0.0.1", 0))
+        fake.settimeout(10.0)
+        host, port = fake.getsockname()
+        manager = build(board("IO", f"{host}:{port}"), peer_timeout=60.0)
+        _request, device_address = fake.recvfrom(64)  # the driver's first write
+
+        def from_the_board(payloads) -> None:
+            for payload in payloads:
+                fake.sendto(payload, device_address)
+
+        junk = [b"", b"Z\x01", b"A", b"A\x01\x02", b"\xff" * 40]
+        counters = bad_one_for_one(
+            manager, "IO", port, [junk[n % 5] for n in range(2000)], send=from_the_board
+        )
+    assert counters["bad_datagrams"] > 0 and counters["decoded"] == 0
+    status = manager.status("IO")
+    assert status.state == "undecodable" and "first: not a port reply" in status.reason

@@ -31,16 +31,21 @@ def bad_one_for_one(
     payloads: Sequence[bytes],
     *,
     timeout: float = 10.0,
+    send: Callable[[Sequence[bytes]], object] | None = None,
 ) -> dict[str, int]:
-    """Send ``payloads`` (none of them decodable) to the device ``name`` on ``port``, run
-    frames until its ledger has accounted for every one (read or dropped by the kernel), and
-    check that each read was counted bad and none decoded. Its ledger's counters after."""
+    """Send ``payloads`` (none of them decodable) to the device ``name`` on ``port`` (or with
+    ``send``, for a device that takes datagrams from one peer only), run frames until its
+    ledger has accounted for every one (read or dropped by the kernel), and check that each
+    read was counted bad and none decoded. Its ledger's counters after."""
     device = manager.device(name)
     assert device is not None, f"no device {name!r}"
     ledger = device.datagram_ledger()
     assert ledger is not None, f"{name} keeps no datagram ledger"
     before = ledger.counters()
-    send_datagrams(port, payloads)
+    if send is None:
+        send_datagrams(port, payloads)
+    else:
+        send(payloads)
 
     def accounted() -> bool:
         now = ledger.counters()
