@@ -86,8 +86,9 @@ def encode_record(
     if fmt == ord("Y"):
         words += [a / 180.0 for a in angles]
     else:
-        w, x, y, z = euler_quaternion(*angles)
-        words += [w, -x, -y, -z]  # the Flock sends the conjugate rotation
+        # the quaternion of the sensor's orientation, as the manual's Shepperd extraction
+        # from its MATRIX output gives it (no conjugate)
+        words += list(euler_quaternion(*angles))
     data = bytearray(b"".join(encode_word(v) for v in words))
     data[0] |= 0x80  # the phasing bit
     if address is not None:

@@ -17,7 +17,12 @@ one more byte: the address of the bird that measured it.
 Scaling: position words times the full scale (36 or 72 inches as the POSITION SCALING reply's
 low byte says, 144 with an extended range transmitter) in **feet**, as Gadgeteer reports it; angles times 180 degrees (azimuth about z,
 elevation about y, roll about x); quaternion words as they are, (q0, q1, q2, q3) with q0 the
-scalar part of the conjugate rotation (the rotation is (w, x, y, z) = (q0, -q1, -q2, -q3)).
+scalar part, used as sent: (w, x, y, z) = (q0, q1, q2, q3), the same rotation the angles give.
+Ascension's manuals compute the quaternion from the MATRIX output with Shepperd's method, and
+VRPN's ``vrpn_Flock.C`` takes it as sent ("According to the Flock manual, the Flock should
+report things in the same way other trackers do"; its inverting is an option, no longer the
+default). Fixed from VR Juggler's ``FlockStandalone.cpp``, which negates q1..q3 and so turns
+every sensor the wrong way round (as our MotionStar driver and VR Juggler's MotionStar do not).
 
 Only the standard library, pyserial (through :mod:`gadgetctl.transport.serialline`, which
 imports nothing else from gadgetctl) and numpy are used.
@@ -174,7 +179,8 @@ class BirdRecord:
         m = np.eye(4)
         if self.quaternion is not None:
             q0, q1, q2, q3 = self.quaternion
-            m[:3, :3] = quaternion_matrix(q0, -q1, -q2, -q3)
+            # as sent (VR Juggler's C++ conjugates here, against the manual: fixed)
+            m[:3, :3] = quaternion_matrix(q0, q1, q2, q3)
         elif self.angles is not None:
             m[:3, :3] = euler_matrix(*self.angles)
         m[:3, 3] = self.position

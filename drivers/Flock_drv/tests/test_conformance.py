@@ -15,19 +15,28 @@ Sources:
   word is two's complement, full scale 0x7FFF.
 * VRPN ``vrpn_Flock.C``: a word is ``((LS & 0x7F) << 1) + (MS << 8)``, shifted left once more,
   as a signed short; ``getMeasurementRate`` reads examine words low byte first
-  (``response[2] + (response[3] << 8)``).
+  (``response[2] + (response[3] << 8)``); the quaternion is taken as sent ("According to the
+  Flock manual, the Flock should report things in the same way other trackers do"; inverting
+  it is an option, no longer the default).
+* The manuals' MATRIX output M and the QUATERNION output extracted from it by Shepperd's
+  method (``gadgetctl.input.testing.ascension``): a POSITION/QUATERNION record of a pose must
+  turn the sensor as a POSITION/ANGLES record of the same pose does.
 """
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from Flock_drv.standalone import (
     POS_ANGLES,
+    POS_QUATERNION,
     FlockProtocolError,
     RecordScanner,
     decode_word,
     scale_from_reply,
 )
+
+from gadgetctl.input.testing.ascension import bird_matrix, shepperd_quaternion
 
 pytestmark = pytest.mark.timeout(10)
 
@@ -67,3 +76,24 @@ def test_a_72_inch_position_angles_record_in_the_manuals_layout() -> None:
     assert [p * 12.0 for p in got.position] == pytest.approx(inches)  # 36, -18, -72 inches
     assert got.angles == pytest.approx((90.0, -45.0, -180.0))
     assert got.address == 2 and scanner.bad_records == 0
+
+
+@pytest.mark.parametrize(
+    "angles", [(30.0, -20.0, 45.0), (170.0, 80.0, -170.0), (-90.0, 10.0, 0.0), (0.0, 0.0, 179.0)]
+)
+def test_the_quaternion_used_as_sent_turns_as_the_angles_do(angles) -> None:
+    q = shepperd_quaternion(bird_matrix(*angles))
+    position = (0x1000, -0x0800, 0x0400)
+    quaternion = b"".join(
+        manual_word(w, i == 0)
+        for i, w in enumerate((*position, *(max(-32768, min(32767, round(v * 32768))) for v in q)))
+    )
+    euler = b"".join(
+        manual_word(w, i == 0)
+        for i, w in enumerate((*position, *(round(a / 180 * 32768) for a in angles)))
+    )
+    (by_quaternion,) = RecordScanner(POS_QUATERNION, 3.0).feed(quaternion)
+    (by_angles,) = RecordScanner(POS_ANGLES, 3.0).feed(euler)
+    np.testing.assert_allclose(by_quaternion.matrix(), by_angles.matrix(), atol=2e-3)
+    # and the manual's M is that rotation transposed (its rows: the sensor's axes)
+    np.testing.assert_allclose(by_angles.matrix()[:3, :3], bird_matrix(*angles).T, atol=2e-3)

@@ -77,7 +77,7 @@ def test_group_mode_start_sequence_and_position_quaternion_records(emulator) -> 
     for record, (bird, position, angles) in zip(got, emu.sent[: len(got)], strict=True):
         assert record.address == bird + 1
         assert record.quaternion is not None
-        # position in feet (36-inch scale: 3 ft full scale), the quaternion's conjugate undone
+        # position in feet (36-inch scale: 3 ft full scale), the quaternion used as sent
         np.testing.assert_allclose(record.matrix(), expected_matrix(position, angles), atol=2e-3)
 
 

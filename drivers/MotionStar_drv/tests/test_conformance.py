@@ -26,7 +26,6 @@ with the quaternion used as sent: that is the convention checked here.
 
 from __future__ import annotations
 
-import math
 import struct
 
 import numpy as np
@@ -37,6 +36,8 @@ from MotionStar_drv.standalone import (
     decode_record,
     parse_records,
 )
+
+from gadgetctl.input.testing.ascension import bird_matrix, shepperd_quaternion
 
 pytestmark = pytest.mark.timeout(10)
 
@@ -50,40 +51,6 @@ def header(sequence: int, payload: bytes, kind: int = DATA_PACKET_MULTI) -> byte
 def record(address: int, code: int, words: tuple[int, ...], buttons: bytes = b"") -> bytes:
     head = bytes(((address | 0x80) if buttons else address, code << 4 | len(words)))
     return head + struct.pack(f">{len(words)}h", *words) + buttons
-
-
-def manual_matrix(a: float, e: float, r: float) -> np.ndarray:
-    """The manual's M for azimuth, elevation, roll in degrees: the frame rotations roll x
-    elevation x azimuth, whose product has the elements the manual lists (M11 = cos E cos A,
-    M12 = cos E sin A, M13 = -sin E, M21 = -cos R sin A + sin R sin E cos A, ...)."""
-
-    def frame(axis: int, degrees: float) -> np.ndarray:
-        c, s = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
-        i, j = [k for k in range(3) if k != axis]
-        m = np.eye(3)
-        m[i, i], m[i, j], m[j, i], m[j, j] = c, s, -s, c
-        return m
-
-    return frame(0, r) @ frame(1, e).T @ frame(2, a)
-
-
-def shepperd(m: np.ndarray) -> tuple[float, float, float, float]:
-    """q0..q3 from M, Shepperd's way (the largest of the four squares picks the branch)."""
-    tr = m[0, 0] + m[1, 1] + m[2, 2]
-    squares = [1 + tr, 1 + 2 * m[0, 0] - tr, 1 + 2 * m[1, 1] - tr, 1 + 2 * m[2, 2] - tr]
-    i = int(np.argmax(squares))
-    q = [0.0] * 4
-    q[i] = math.sqrt(squares[i]) / 2
-    d = 4 * q[i]
-    if i == 0:
-        q[1], q[2], q[3] = (m[1, 2] - m[2, 1]) / d, (m[2, 0] - m[0, 2]) / d, (m[0, 1] - m[1, 0]) / d
-    elif i == 1:
-        q[0], q[2], q[3] = (m[1, 2] - m[2, 1]) / d, (m[0, 1] + m[1, 0]) / d, (m[0, 2] + m[2, 0]) / d
-    elif i == 2:
-        q[0], q[1], q[3] = (m[2, 0] - m[0, 2]) / d, (m[0, 1] + m[1, 0]) / d, (m[1, 2] + m[2, 1]) / d
-    else:
-        q[0], q[1], q[2] = (m[0, 1] - m[1, 0]) / d, (m[0, 2] + m[2, 0]) / d, (m[1, 2] + m[2, 1]) / d
-    return tuple(q)  # type: ignore[return-value]
 
 
 def word(value: float, scale: float) -> int:
@@ -119,7 +86,7 @@ def test_a_packet_with_a_feed_through_record_decodes_every_pose() -> None:
     "angles", [(30.0, -20.0, 45.0), (170.0, 80.0, -170.0), (-90.0, 10.0, 0.0), (0.0, 0.0, 179.0)]
 )
 def test_the_quaternion_used_as_sent_turns_as_the_angles_do(angles) -> None:
-    q = shepperd(manual_matrix(*angles))
+    q = shepperd_quaternion(bird_matrix(*angles))
     quaternion = record(1, 7, tuple(word(v, 32768) for v in q))
     euler = record(1, 2, tuple(word(v, 32767 / 180) for v in angles))
     by_quaternion, by_angles = (
@@ -128,4 +95,4 @@ def test_the_quaternion_used_as_sent_turns_as_the_angles_do(angles) -> None:
     )
     np.testing.assert_allclose(by_quaternion, by_angles, atol=2e-4)
     # and the manual's M is that rotation transposed (rows: sensor axes in transmitter terms)
-    np.testing.assert_allclose(by_angles, manual_matrix(*angles).T, atol=2e-4)
+    np.testing.assert_allclose(by_angles, bird_matrix(*angles).T, atol=2e-4)
