@@ -156,3 +156,41 @@ def test_empty_recordings_and_invalid_speeds():
         ReplaySchedule(recording(), loop=True, max_loops=0)
     single = ReplaySchedule([SampleRecord("A", "analog", 0, 5.0, 0.0, 0)], loop=True)
     assert single.duration == 0.0 and single.period == 1.0
+
+
+# -- pauses (issue 24 item 11) -------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("stamps", "speed"),
+    [
+        ([0.5, 1e308], 1.0),  # gave NaN timestamps (an internal error)
+        ([0.5, 1.0, 1e9 + 1.0, 1e9 + 1.5], 1.0),  # slept 1e9 s
+        ([0.0, 1.7e9, 1.7e9 + 0.5], 2.0),  # a VRPN log whose first time is 0
+        ([-1e308, 1e308], 0.5),  # a step beyond any float
+    ],
+)
+def test_a_long_pause_is_shortened_to_the_longest_wait(stamps, speed):
+    from gadgetctl.monitor.replay import MAX_PAUSE
+
+    clock = FakeClock()
+    records = [SampleRecord("W", "analog", 0, t, 0.5, 1) for t in stamps]
+    schedule, out = replay(records, clock, speed=speed, loop=True, max_loops=2)
+    assert schedule.pauses_shortened == 1 and schedule.longest_pause >= 1e9
+    assert max(clock.sleeps) <= MAX_PAUSE + 1e-9  # replay seconds, whatever the speed
+    assert len(out) == 2 * len(stamps)
+    released = [r.timestamp for _, r in out]
+    assert all(math.isfinite(t) for t in released) and released == sorted(released)
+    assert clock.now - 500.0 <= 3 * MAX_PAUSE + 2.0  # two passes and the step between
+
+
+def test_pauses_up_to_the_longest_wait_keep_their_length():
+    from gadgetctl.monitor.replay import MAX_PAUSE
+
+    clock = FakeClock()
+    stamps = [0.0, MAX_PAUSE * 3, MAX_PAUSE * 3 + 1.0]  # 30 s recorded: 10 s at speed 3
+    schedule, out = replay(
+        [SampleRecord("W", "analog", 0, t, 0.5, 1) for t in stamps], clock, speed=3.0
+    )
+    assert schedule.pauses_shortened == 0
+    assert [when for when, _ in out] == pytest.approx([500.0, 510.0, 500.0 + 31 / 3])

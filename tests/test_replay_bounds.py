@@ -80,3 +80,39 @@ def test_a_vrpn_log_with_a_far_sensor_replays_the_near_ones(tmp_path, cli) -> No
     assert (
         len(stderr) == 1 and f"1 tracker reports of sensors beyond {REPLAY_UNITS - 1}" in stderr[0]
     )
+
+
+# -- timestamps and nesting (issue 24 item 11) -------------------------------------------------
+
+
+@pytest.mark.parametrize("second", [1e308, 1e9])
+def test_a_huge_pause_is_shortened_and_said(tmp_path, cli, second) -> None:
+    path = write_recording(tmp_path / "pause.ndjson", [sample(0, 0.5), sample(0, second)])
+    result = cli("replay", path, "--format", "ndjson", "--duration", "0.5")
+    assert result.exit_code == 0, result.stderr
+    notes = [line for line in result.stderr.splitlines() if "pause" in line]
+    assert len(notes) == 1 and "Traceback" not in result.stderr
+    assert "1 pause longer than 10 s of replay shortened to 10 s" in notes[0]
+
+
+def test_a_vrpn_log_starting_at_time_0_says_its_pause(tmp_path, cli) -> None:
+    path = tmp_path / "zero.vrpn"
+    with LogWriter(path) as log:
+        for i in range(5):
+            pose = codecs.encode_pose(0, (0.01 * i, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+            log.write("Tracker0", codecs.TRACKER_POS_QUAT, pose, 0.0 if i == 0 else 1.7e9 + i)
+    result = cli("replay", path, "--format", "ndjson", "--duration", "0.5")
+    assert result.exit_code == 0, result.stderr
+    assert "1 pause longer than 10 s of replay shortened to 10 s" in result.stderr
+
+
+def test_a_header_nested_beyond_json_is_not_a_recording(tmp_path, cli) -> None:
+    path = tmp_path / "deep.ndjson"
+    header = json.dumps(HEADER)[:-1] + ', "info": {"x": ' + "[" * 200_000 + "]" * 200_000 + "}}"
+    path.write_text(header + "\n" + json.dumps(sample(0, 1.0)) + "\n")
+    result = cli("replay", path, "--format", "ndjson")
+    assert result.exit_code == 2
+    assert result.stderr.strip().splitlines() == [
+        f"gadgetctl: error: {path}: not a gadgetctl recording "
+        "(the header nests deeper than JSON is read)"
+    ]

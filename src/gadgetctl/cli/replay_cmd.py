@@ -231,6 +231,7 @@ def run_replay(
     from gadgetctl.monitor import replaydevice
     from gadgetctl.monitor.recording import RecordingError
     from gadgetctl.monitor.records import REPLAY_UNITS
+    from gadgetctl.monitor.replay import MAX_PAUSE
     from gadgetctl.monitor.session import MonitorSession
 
     check_options(rate, duration, interval)
@@ -267,6 +268,13 @@ def run_replay(
     except ValueError as err:
         raise GadgetctlError(f"{recording}: {err}") from None
     notes = [f"{recording}: {problem}" for problem in source.problems if problem.severity != "info"]
+    if schedule.pauses_shortened:
+        count = schedule.pauses_shortened
+        notes.append(
+            f"{recording}: {count} pause{'' if count == 1 else 's'} longer than "
+            f"{MAX_PAUSE:g} s of replay shortened to {MAX_PAUSE:g} s "
+            f"(the longest: {schedule.longest_pause:.6g} s recorded)"
+        )
     if schedule.units_beyond:
         notes.append(
             f"{recording}: {schedule.units_beyond} "

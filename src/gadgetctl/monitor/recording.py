@@ -299,6 +299,8 @@ def _read_header(path: Path) -> HeaderRecord:
         raise _not_a_recording(path, "the file is empty")
     try:
         obj = json.loads(first.decode("utf-8"))
+    except RecursionError:
+        raise _not_a_recording(path, "the header nests deeper than JSON is read") from None
     except (UnicodeDecodeError, ValueError):
         if at_end and not first.endswith(b"\n") and first.startswith(b'{"v":'):
             raise RecordingError(
@@ -318,6 +320,8 @@ def _read_header(path: Path) -> HeaderRecord:
         )
     try:
         header = decode_record(obj)
+    except RecursionError:
+        raise _not_a_recording(path, "the header nests deeper than JSON is read") from None
     except RecordFormatError as exc:
         raise _not_a_recording(path, f"invalid header: {exc}") from None
     assert isinstance(header, HeaderRecord)

@@ -18,6 +18,10 @@ from gadgetctl.monitor.records import MarkerRecord, SampleRecord
 ReplayRecord = SampleRecord | MarkerRecord
 FAST_CHUNK = 1024
 DEFAULT_LOOP_STEP = 1.0
+#: The longest wait between two records of a replay, in replay seconds: a longer pause in
+#: the recording (a gap of days, a first timestamp of 0 among Unix times, 1e308) is
+#: shortened to this, and counted in ``ReplaySchedule.pauses_shortened``.
+MAX_PAUSE = 10.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,7 +50,11 @@ class ReplaySchedule:
     ``mapping`` renames devices; names that occur nowhere are listed in ``unused_mapping``.
     Frames, stats and end records are not replayed. Records due within ``tolerance`` seconds
     are released together, to save sleeps. With ``max_units``, samples of units from
-    ``max_units`` on are left out and counted in ``units_beyond``.
+    ``max_units`` on are left out and counted in ``units_beyond``. A pause between two
+    records that would take longer than ``max_pause`` seconds to replay (at any speed; as
+    fast as possible: ``max_pause`` recorded seconds) is shortened to that, so every wait
+    and every replayed timestamp stays finite and bounded; ``pauses_shortened`` counts them
+    and ``longest_pause`` is the longest one recorded.
     """
 
     def __init__(
@@ -62,6 +70,7 @@ class ReplaySchedule:
         clock: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], object] = time.sleep,
         max_units: int | None = None,
+        max_pause: float = MAX_PAUSE,
     ) -> None:
         if math.isnan(speed) or speed < 0:
             raise ValueError(
@@ -88,17 +97,40 @@ class ReplaySchedule:
                 kept.append(r)
         kept.sort(key=lambda r: r.timestamp)
         self._records = kept
-        sample_stamps = [r.timestamp for r in kept if isinstance(r, SampleRecord)]
-        stamps = sample_stamps or [r.timestamp for r in kept]
-        self.t0 = min(stamps) if stamps else 0.0
-        self.duration = (max(stamps) - self.t0) if stamps else 0.0
+        timeline = self._timeline(kept, max_pause * (speed if self.paced else 1.0))
+        sampled = [t for r, t in zip(kept, timeline, strict=True) if isinstance(r, SampleRecord)]
+        stamps = sampled or timeline
+        origin = stamps[0] if stamps else 0.0
+        self.t0 = next((r.timestamp for r in kept if isinstance(r, SampleRecord)), 0.0)
+        if not sampled and kept:
+            self.t0 = kept[0].timestamp
+        self.duration = (stamps[-1] - origin) if stamps else 0.0
         self.period = self.duration + _loop_step(stamps)
-        self._offsets = [r.timestamp - self.t0 for r in kept]
+        self._offsets = [t - origin for t in timeline]
         self.mapping = dict(mapping or {})
         names = sorted({r.device for r in kept if isinstance(r, SampleRecord)})
         self.unused_mapping = tuple(old for old in self.mapping if old not in names)
         self.devices = tuple(sorted({self.mapping.get(n, n) for n in names}))
         self.mapping_warnings = self._check_mapping(names)
+
+    def _timeline(self, kept: list[ReplayRecord], longest: float) -> list[float]:
+        """The records' times from the first one, each pause longer than ``longest`` (recorded
+        seconds) shortened to it (counted)."""
+        self.pauses_shortened = 0
+        self.longest_pause = 0.0
+        times: list[float] = []
+        elapsed, previous = 0.0, None
+        for record in kept:
+            if previous is not None:
+                step = record.timestamp - previous
+                if not step <= longest:  # NaN too
+                    self.pauses_shortened += 1
+                    self.longest_pause = max(self.longest_pause, step)
+                    step = longest
+                elapsed += step
+            times.append(elapsed)
+            previous = record.timestamp
+        return times
 
     def _check_mapping(self, names: list[str]) -> tuple[str, ...]:
         warnings = [f"{old!r} does not occur in the recording" for old in self.unused_mapping]
