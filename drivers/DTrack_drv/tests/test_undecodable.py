@@ -43,16 +43,22 @@ def test_a_flood_of_malformed_datagrams_is_counted_bad_one_for_one(build) -> Non
         frames_until(manager, lambda: manager.status("DT").state == "running")
 
 
-def test_monitor_exits_1_with_the_reason_when_a_tracker_decoded_nothing(tmp_path: Path) -> None:
+@pytest.mark.parametrize("view", ["table", "events"])
+def test_monitor_exits_1_with_the_reason_when_a_tracker_decoded_nothing(
+    tmp_path: Path, view: str
+) -> None:
     port = free_udp_port()
     config = tmp_path / "dt.jconf"
     config.write_text(configuration("DTrack_drv", tracker("DT", port)))
     with DatagramSender(port, malformed, interval=0.005) as sender:
-        done = run_gadgetctl("monitor", str(config), "--duration", "1.5", "--format", "table")
+        done = run_gadgetctl("monitor", str(config), "--duration", "1.5", "--format", view)
     assert sender.sent > 0
     assert done.returncode == 1, done.stderr[-2000:]
     problems = [line for line in done.stderr.splitlines() if "problem" in line]
     assert len(problems) == 1, done.stderr[-2000:]
     assert problems[0].startswith("gadgetctl: problem: DT: undecodable: ")
     assert "none decoded; first: no valid DTrack line" in problems[0]
-    assert "undecodable" in done.stdout  # the table's status column
+    if view == "table":
+        assert "  undecodable  " in done.stdout  # the status column
+    else:
+        assert "  DT  status  undecodable: " in done.stdout

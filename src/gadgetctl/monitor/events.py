@@ -183,8 +183,15 @@ class ChangeDetector:
         memory: _DeviceMemory,
         moment: float,
     ) -> None:
-        state = device.state.value if isinstance(device.state, DeviceState) else str(device.state)
-        error = device.error if state in ("faulted", "reconnecting") else None
+        shown = getattr(device, "shown_state", None)
+        if shown is not None:  # faulted with its error, undecodable with the first error
+            shown_state, error = shown()
+            state = shown_state.value
+        else:
+            state = (
+                device.state.value if isinstance(device.state, DeviceState) else str(device.state)
+            )
+            error = device.error if state in ("faulted", "reconnecting") else None
         faults = getattr(device, "faults", 0)
         first = memory.state is None
         missed = (
