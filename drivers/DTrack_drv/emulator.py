@@ -35,6 +35,7 @@ import numpy as np
 
 from gadgetctl.emulation import emulator_parser, run
 from gadgetctl.emulation.network import LOOPBACK, STANDARD_SCENARIOS, Peers, UdpFrameSender, ended
+from gadgetctl.transport.udp import bind_named
 
 SCENARIOS = STANDARD_SCENARIOS
 FLYSTICK_FORMATS = ("6df2", "6df")
@@ -293,7 +294,7 @@ class DTrackEmulator(UdpFrameSender):
     def open(self) -> None:
         if self.command_port is not None:
             self._command_sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-            self._command_sock.bind((LOOPBACK, self.command_port))
+            bind_named(self._command_sock, LOOPBACK, self.command_port)
 
     def close(self) -> None:
         if self._command_sock is not None:

@@ -24,6 +24,7 @@ import time
 
 from gadgetctl.emulation import Console, emulator_parser, run
 from gadgetctl.emulation.network import LOOPBACK, STANDARD_SCENARIOS, Peers, ended
+from gadgetctl.transport.udp import bind_named
 
 SCENARIOS = STANDARD_SCENARIOS
 IDLE_PATTERN = (0xA5, 0x0F, 0x81)
@@ -86,7 +87,7 @@ class Ether24Emulator:
         self._stop.clear()
         self.finished.clear()
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        sock.bind((LOOPBACK, self.port))
+        bind_named(sock, LOOPBACK, self.port)
         self.port = sock.getsockname()[1]
         self._sock = sock
         self._start = time.monotonic()

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from types import TracebackType
 
 from gadgetctl.emulation import Console, emulator_parser, run
+from gadgetctl.transport.udp import bind_named
 
 # The emulator keeps its own copy of the wire constants so that a mistake in the
 # driver cannot be mirrored here and go unnoticed by the tests.
@@ -255,7 +256,7 @@ class MotionStarEmulator:
             return self
         listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        listener.bind((self.host, self.port))
+        bind_named(listener, self.host, self.port)
         listener.listen(1)
         self.port = listener.getsockname()[1]
         self._listener = listener

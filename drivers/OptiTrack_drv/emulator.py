@@ -41,6 +41,7 @@ import threading
 
 from gadgetctl.emulation import emulator_parser, run
 from gadgetctl.emulation.network import LOOPBACK, STANDARD_SCENARIOS, UdpFrameSender, ended
+from gadgetctl.transport.udp import bind_named
 
 SCENARIOS = STANDARD_SCENARIOS
 NAT_CONNECT = 0
@@ -356,7 +357,7 @@ class OptiTrackEmulator(UdpFrameSender):
         if self.command_port is not None:
             sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
             try:
-                sock.bind((LOOPBACK, self.command_port))
+                bind_named(sock, LOOPBACK, self.command_port)
             except OSError:
                 sock.close()
                 raise

@@ -16,6 +16,7 @@ PLUGIN_NAME = "SdlJoystick_drv"
 ELEMENT_TYPES = {"sdl_joystick": ("digital", "analog", "hat", "rumble")}
 # "sdl": a joystick index into SDL's list of the joysticks it sees (doctor lists them).
 TRANSPORTS = {"sdl_joystick": {"kind": "sdl", "index": "device"}}
+REQUIRES = {"sdl2": "pip install PySDL2 pysdl2-dll (or gadgetctl[sdl])"}
 
 try:  # checked here, so a missing binding fails the load in one line (DRV003)
     with warnings.catch_warnings():

@@ -201,7 +201,10 @@ def _unknown_plugins(names: list[str], search):
 
 
 def _problems(info, api_version: int) -> list[str]:
+    from gadgetctl.input.plugins.metadata import missing_requirements
+
     problems = list(info.metadata.problems)
+    problems += [f"not loadable: {need}" for need in missing_requirements(info.metadata)]
     declared = info.metadata.api_version
     if declared is not None and declared != api_version:
         problems.insert(

@@ -75,6 +75,11 @@ def _run(emulator: Emulator, argv: list[str]) -> int:
     from gadgetctl.errors import GadgetctlError
     from gadgetctl.input.errors import describe
     from gadgetctl.input.plugins.emulators import load_emulator
+    from gadgetctl.input.plugins.metadata import missing_requirements
+
+    missing = missing_requirements(emulator.plugin.metadata)
+    if missing:
+        raise GadgetctlError(f"emulate {emulator.plugin.name}: {'; '.join(missing)}")
 
     try:
         module = load_emulator(emulator)
@@ -91,6 +96,8 @@ def _run(emulator: Emulator, argv: list[str]) -> int:
         return 0
     except SystemExit as exit_:  # argparse: --help, usage errors
         code = exit_.code
+    except OSError as err:  # its port, link or FIFO: named in one line, a tool error
+        raise GadgetctlError(f"emulate {emulator.plugin.name}: {describe(err)}") from None
     except Exception as err:
         typer.echo(
             f"gadgetctl: error: the {emulator.plugin.name} emulator failed: {describe(err)}",

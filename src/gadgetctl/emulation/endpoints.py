@@ -24,7 +24,7 @@ import threading
 import tty
 from pathlib import Path
 
-from gadgetctl.emulation.beacon import Beacon
+from gadgetctl.emulation.beacon import Beacon, is_held
 
 
 def _identity(path: Path) -> tuple[int, int] | None:
@@ -63,6 +63,13 @@ class PseudoTerminal:
         if self.link is not None and os.path.lexists(self.link) and not self.link.is_symlink():
             raise FileExistsError(
                 errno.EEXIST, "exists and is not a symlink; not replacing it", str(self.link)
+            )
+        if self.link is not None and is_held(self.link):  # not a leftover: a live emulator's
+            raise FileExistsError(
+                errno.EEXIST,
+                "is the link of another emulator that is running; stop it or give this one "
+                "another --port",
+                str(self.link),
             )
         self.master, self.slave = os.openpty()
         tty.setraw(self.slave)  # no echo, no line editing, bytes pass untouched
@@ -142,6 +149,13 @@ class Fifo:
             return self
         if os.path.lexists(self.path) and not stat.S_ISFIFO(os.lstat(self.path).st_mode):
             raise FileExistsError(errno.EEXIST, "exists and is not a FIFO", str(self.path))
+        if is_held(self.path):  # not a leftover: a live emulator's
+            raise FileExistsError(
+                errno.EEXIST,
+                "is the FIFO of another emulator that is running; stop it or give this one "
+                "another path",
+                str(self.path),
+            )
         if not os.path.lexists(self.path):
             os.mkfifo(self.path)
         self._own()

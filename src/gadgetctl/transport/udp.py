@@ -48,10 +48,18 @@ def proc_udp_drops(sock: socket.socket, proc: Path = Path("/proc/net")) -> int |
 def bind_udp(sock: socket.socket, host: str, port: int) -> None:
     """``sock.bind((host, port))``; an error names the port (and the address, unless it is
     every interface): ``cannot bind UDP port 5000: Address already in use``."""
+    bind_named(sock, host, port)
+
+
+def bind_named(sock: socket.socket, host: str, port: int) -> None:
+    """``sock.bind((host, port))`` for a TCP or UDP socket; an error names the protocol, the
+    port and the address (unless it is every interface): ``cannot bind TCP port 6000 on
+    127.0.0.1: Address already in use``."""
     try:
         sock.bind((host, port))
     except OSError as err:
-        where = f"UDP port {port}" + (f" on {host}" if host not in ("", "0.0.0.0") else "")
+        kind = "TCP" if sock.type == socket.SOCK_STREAM else "UDP"
+        where = f"{kind} port {port}" + (f" on {host}" if host not in ("", "0.0.0.0") else "")
         raise OSError(err.errno, f"cannot bind {where}: {err.strerror or err}") from err
 
 

@@ -24,6 +24,11 @@ from gadgetctl.suggest import close_names
 EMULATOR_FILE = "emulator.py"
 _MODULE_PREFIX = "_gadgetctl_emulator_"
 _UNSAFE = re.compile(r"\W")
+_SENTENCE = re.compile(r"(.+?[.!?])(?:\s|$)")
+_MARKUP = re.compile(r"(?::\w+:)?`{1,2}([^`]+)`{1,2}")
+_DEVELOPER_NOTE = re.compile(
+    r",? (?:independent of gadgetctl's input manager )?\([^()]*\)(?=\.$)|, independent of gadgetctl's input manager(?=\.$)"
+)
 
 
 class EmulatorLookupError(LookupError):
@@ -39,12 +44,21 @@ class Emulator:
 
     @property
     def summary(self) -> str:
-        """First line of the emulator's docstring (read without importing it)."""
+        """The first sentence of the emulator's docstring, whole however many lines it takes
+        (read without importing it), without reST markup and without a closing note on how
+        the emulator is built (", independent of gadgetctl's input manager (...)")."""
         try:
             doc = ast.get_docstring(ast.parse(self.path.read_text(encoding="utf-8")))
         except (OSError, UnicodeDecodeError, SyntaxError, ValueError):
             return ""
-        return doc.strip().splitlines()[0] if doc else ""
+        if not doc:
+            return ""
+        paragraph = " ".join(doc.strip().split("\n\n")[0].split())
+        paragraph = _MARKUP.sub(r"\1", paragraph)  # ``x`` and :mod:`x` read as x
+        sentence = _SENTENCE.match(paragraph)
+        text = sentence.group(1) if sentence else paragraph
+        # what only a developer needs (how the emulator is built) is left to --help
+        return _DEVELOPER_NOTE.sub("", text)
 
     def to_dict(self) -> dict[str, object]:
         return {

@@ -24,8 +24,11 @@ API_VERSION = "GADGETCTL_API_VERSION"
 PLUGIN_NAME = "PLUGIN_NAME"
 ELEMENT_TYPES = "ELEMENT_TYPES"
 TRANSPORTS = "TRANSPORTS"
+#: Python modules a plug-in needs that gadgetctl does not install by default, each with what
+#: to install: ``REQUIRES = {"pythonosc": "pip install 'gadgetctl[tuio]'"}``.
+REQUIRES = "REQUIRES"
 REGISTER = "register"
-_NAMES = (API_VERSION, PLUGIN_NAME, ELEMENT_TYPES, TRANSPORTS)
+_NAMES = (API_VERSION, PLUGIN_NAME, ELEMENT_TYPES, TRANSPORTS, REQUIRES)
 
 #: Transport kind -> (required keys, optional keys); values are property names.
 TRANSPORT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
@@ -50,6 +53,7 @@ class PluginMetadata:
     plugin_name: str | None = None
     element_types: dict[str, tuple[DeviceKind, ...]] = field(default_factory=dict)
     transports: dict[str, list[dict[str, str]]] = field(default_factory=dict)
+    requires: dict[str, str] = field(default_factory=dict)  # module -> what to install
     has_register: bool = False
     summary: str = ""
     problems: list[str] = field(default_factory=list)
@@ -63,6 +67,7 @@ class PluginMetadata:
                 t: [k.value for k in kinds] for t, kinds in self.element_types.items()
             },
             "transports": {t: [dict(d) for d in specs] for t, specs in self.transports.items()},
+            "requires": dict(self.requires),
             "has_register": self.has_register,
             "summary": self.summary,
             "problems": list(self.problems),
@@ -136,6 +141,13 @@ def parse_metadata(source: str, filename: str = "<plugin>") -> PluginMetadata:
             _read_element_types(value, meta)
         elif name == TRANSPORTS:
             _read_transports(value, meta)
+        elif name == REQUIRES:
+            if isinstance(value, dict) and all(
+                isinstance(k, str) and isinstance(v, str) for k, v in value.items()
+            ):
+                meta.requires = dict(value)
+            else:
+                meta.problems.append(f"{REQUIRES} must be a dict of module name -> what to install")
     if API_VERSION not in values:
         meta.problems.append(f"no {API_VERSION} assignment")
     if not meta.has_register:
@@ -199,3 +211,19 @@ def read_metadata(path: Path) -> PluginMetadata:
         meta.problems.append(f"cannot read {path.name}: {getattr(err, 'strerror', None) or err}")
         return meta
     return parse_metadata(source, str(path))
+
+
+def missing_requirements(meta: PluginMetadata) -> list[str]:
+    """What a plug-in needs and this Python lacks, one line each (``needs the Python module
+    pythonosc: pip install 'gadgetctl[tuio]'``), found without importing anything."""
+    import importlib.util
+
+    missing = []
+    for module, install in meta.requires.items():
+        try:
+            found = importlib.util.find_spec(module) is not None
+        except (ImportError, ValueError):
+            found = False
+        if not found:
+            missing.append(f"needs the Python module {module}: {install}")
+    return missing
