@@ -229,3 +229,16 @@ def test_lost_line_faults_then_samples_within_two_seconds(tmp_path, emulator, ma
         lambda: len(analog),
         step=frame,
     )
+
+
+def test_a_wired_glove_streams_to_the_manager_once_started(emulator, managers) -> None:
+    # a wired glove sends nothing until asked (A, G, D), and then 9-byte packets
+    emu = emulator("buttons", rate=100.0, model="wired", hand=LEFT)
+    manager = managers(glove("Glove", emu.address))
+    frame, analog = frame_recorder(manager, "Glove", DeviceKind.ANALOG)
+    assert wait_until(lambda: len(analog) > 12, step=frame)
+    assert b"".join(emu.commands) == b"AGD"
+    aligned(analog, emu, capability=LEFT)  # 9-byte packets: the hand the G answer gave
+    assert {a[7] for a in analog} >= {0.0, 15.0}
+    device = manager.device("Glove")
+    assert device.bad_records == 0 and device.faults == 0
