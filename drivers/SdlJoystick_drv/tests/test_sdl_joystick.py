@@ -210,6 +210,24 @@ def test_rumble_reaches_the_joystick_and_stops_after_its_duration(build) -> None
         assert wait_until(lambda: emu.rumbles[-1] == (0, 16384), timeout=10.0)
 
 
+def test_rumble_takes_any_duration_and_refuses_nan(build) -> None:
+    """An endless duration rumbles as long as SDL takes (it raised OverflowError); a NaN
+    strength or duration is refused without reaching SDL (issue 24 item 14)."""
+    with SdlJoystickEmulator(scenario="idle", axes=1, buttons=1, hats=0) as emu:
+        manager = build(joystick("Pad", emu.index))
+        pad = manager.device("Pad")
+        frames_until(manager, lambda: pad.has_rumble, timeout=10.0)
+        nan = float("nan")
+        for low, high, duration in ((nan, 0.5, 1.0), (0.5, nan, 1.0), (0.5, 0.5, nan)):
+            assert not pad.rumble(low, high, duration)
+        assert emu.rumbles == []
+        assert pad.rumble(0.5, 0.5, float("inf"))
+        assert pad.rumble(0.25, 0.25, 1e300)
+        assert pad.rumble(0.25, 0.25, -float("inf"))  # no duration: the motors stop
+        assert wait_until(lambda: len(emu.rumbles) >= 3, timeout=10.0)
+        assert emu.rumbles[:3] == [(32768, 32768), (16384, 16384), (0, 0)]
+
+
 def test_a_joystick_without_motors_does_not_rumble(build) -> None:
     with SdlJoystickEmulator(scenario="idle", axes=1, buttons=1, hats=0, rumble=False) as emu:
         rumble = '<rumble_proxy name="R" version="1"><device>Pad</device></rumble_proxy>\n'

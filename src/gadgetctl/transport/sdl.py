@@ -20,6 +20,7 @@ Imports nothing else from gadgetctl, so a driver's standalone half may use it.
 from __future__ import annotations
 
 import ctypes
+import math
 import queue
 import threading
 import time
@@ -155,13 +156,17 @@ class OpenJoystick:
             return taken
 
     def rumble(self, low: float, high: float, duration: float) -> bool:
-        """Rumble the low- and high-frequency motors (0 to 1) for ``duration`` seconds;
-        False when the joystick has no rumble or SDL refused."""
+        """Rumble the low- and high-frequency motors (0 to 1) for ``duration`` seconds
+        (``math.inf``, or longer than SDL takes: as long as SDL takes; 0 or less, or strengths
+        0, stop the motors: SDL would read 0 ms as no end); False when the joystick has no
+        rumble, SDL refused, or a strength or the duration is NaN."""
         if not self.has_rumble or self._lost is not None or self._closed:
             return False
-        lo = round(max(0.0, min(1.0, low)) * 0xFFFF)
-        hi = round(max(0.0, min(1.0, high)) * 0xFFFF)
-        ms = max(0, min(0xFFFFFFFF, round(duration * 1000.0)))
+        if math.isnan(low) or math.isnan(high) or math.isnan(duration):
+            return False
+        ms = round(min(float(0xFFFFFFFF), duration * 1000.0)) if duration > 0.0 else 0
+        lo = round(max(0.0, min(1.0, low)) * 0xFFFF) if ms else 0
+        hi = round(max(0.0, min(1.0, high)) * 0xFFFF) if ms else 0
         return self.hub.call(self._rumble_on_hub, lo, hi, ms) == 0
 
     def close(self) -> None:
