@@ -212,11 +212,25 @@ def unloaded_type_finder(environ=None):
     """A function giving, for a configuration, the element types whose driver plug-in its
     input_manager elements never load, with the reason the input manager gives (DRV030)."""
 
+    searches: dict[tuple, object] = {}  # one search per set of driver places, not per file
+
     def find(config) -> dict[str, str]:
-        from gadgetctl.input.definitions import driver_search_for
+        from gadgetctl.input.definitions import DRIVER_PROPERTIES, driver_search_for
+        from gadgetctl.input.kinds import INPUT_MANAGER
         from gadgetctl.input.unloaded import unloaded_types
 
-        return unloaded_types(config, driver_search_for(configuration=config, environ=environ))
+        places = tuple(
+            (prop, value.text, str(Path(element.file).parent))
+            for element in config.elements
+            if element.type == INPUT_MANAGER
+            for prop, _ in DRIVER_PROPERTIES
+            for value in element.values(prop)
+            if value.stripped
+        )
+        search = searches.get(places)
+        if search is None:
+            search = searches[places] = driver_search_for(configuration=config, environ=environ)
+        return unloaded_types(config, search)
 
     return find
 
