@@ -217,6 +217,7 @@ class LiveView:
         self.screen = Screen(console)
         self.width = 200  # of the screen being rendered: reasons are wrapped to it
         self.name_width = NAME_WIDTH  # the name column, wide enough for the longest name
+        self._names: tuple[str, ...] = ()  # the selection name_width was measured for
         self._sparks: dict[int, tuple[float, str]] = {}
 
     # -- lifecycle ----------------------------------------------------------------------
@@ -249,8 +250,11 @@ class LiveView:
         lines = self._header(moment)
         budget = max(1, height - HEADER_LINES - 1)
         names = session.selected
-        longest = max((cell_len(printable(name)) for name in names), default=0)
-        self.name_width = max(NAME_WIDTH, min(NAME_WIDTH_MAX, longest + 2))
+        key = tuple(names)
+        if key != self._names:  # measured again only when the selection changes
+            self._names = key
+            longest = max((cell_len(printable(name)) for name in names), default=0)
+            self.name_width = max(NAME_WIDTH, min(NAME_WIDTH_MAX, longest + 2))
         line_no = shown = 0
         index = len(names)
         for position, name in enumerate(names):
