@@ -4,8 +4,6 @@ another; samples of every kind the driver provides arrive through the example's 
 
 from __future__ import annotations
 
-import contextlib
-import fcntl
 import json
 import os
 import re
@@ -13,11 +11,11 @@ import selectors
 import signal
 import subprocess
 import sys
-import tempfile
 import time
-from pathlib import Path
 
 import pytest
+
+from gadgetctl.input.testing.configs import fixed_addresses
 
 from conftest import REPO
 
@@ -45,18 +43,7 @@ DRIVERS = [
     ("Wanda_drv", {"digital", "analog"}, r"<port>"),
 ]
 # The examples use fixed addresses (/tmp/gadgetctl-pinch, TCP 6000, ...): two test runs on
-# one machine would take them from each other, so runs take turns here.
-LOCK = Path(tempfile.gettempdir()) / "gadgetctl-quickstart-tests.lock"
-
-
-@contextlib.contextmanager
-def default_addresses():
-    with open(LOCK, "a") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
+# one machine would take them from each other, so runs take turns (fixed_addresses).
 
 
 def wait_for_output(proc: subprocess.Popen, pattern: str, timeout: float = 30.0) -> str:
@@ -91,7 +78,7 @@ def gadgetctl(*args: str, **kwargs) -> subprocess.Popen:
 @pytest.mark.timeout(120)
 @pytest.mark.parametrize(("driver", "kinds", "ready"), DRIVERS, ids=[d for d, _, _ in DRIVERS])
 def test_emulate_then_monitor_the_example(driver, kinds, ready):
-    with default_addresses():
+    with fixed_addresses():
         emulator = gadgetctl("emulate", driver)
         try:
             said = wait_for_output(emulator, ready)

@@ -24,32 +24,28 @@ every other test on fixed addresses (the quick-start lock).
 
 from __future__ import annotations
 
-import contextlib
-import fcntl
 import math
 import socket
 import struct
-import tempfile
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 from OptiTrack_drv.natnet import NatNetFormatError, decode_frame, decode_server_info
 from OptiTrack_drv.standalone import NatNetReceiver, quaternion_matrix
+from OptiTrack_drv.tests.elements import optitrack_element
 
 from gadgetctl.input import DeviceKind
 from gadgetctl.input.testing import frames_until
-from gadgetctl.input.testing.configs import proxy
+from gadgetctl.input.testing.configs import fixed_addresses, proxy
 from gadgetctl.input.testing.fixtures import managers_fixture
 
 pytestmark = pytest.mark.timeout(60)
 
 CAPTURE = Path(__file__).parent / "captures" / "motive-2.1-natnet-3.0.pcapng"
 MOTIVE_GROUP, DATA_PORT, COMMAND_PORT = "239.255.42.99", 1511, 1510
-#: The lock every test on fixed addresses takes (tests/test_driver_quickstart.py's).
-LOCK = Path(tempfile.gettempdir()) / "gadgetctl-quickstart-tests.lock"
 VERSIONS = [(2, 0), (2, 5), (2, 7), (3, 0), (3, 1), (4, 0), (4, 1)]
 
 
@@ -307,17 +303,6 @@ def test_a_frame_read_as_another_version_is_bad_or_the_same(version) -> None:
 # -- over multicast at Motive's defaults ----------------------------------------------------------
 
 
-@contextlib.contextmanager
-def motive_ports() -> Iterator[None]:
-    """Hold the fixed-address lock (other runs of these tests, the quick-start test)."""
-    with open(LOCK, "a") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
-
-
 class StandIn:
     """A stand-in Motive on loopback: answers connect requests on 127.0.0.1:1510 with
     ``info`` and multicasts ``frame(n)`` to 239.255.42.99:1511 through 127.0.0.1 (TTL 0) every
@@ -379,30 +364,14 @@ class StandIn:
 build = managers_fixture("Optitrack_drv", name="build", ready=True)  # no tuning at all
 
 
-def bare_element(bodies: list[int], markers: list[int]) -> str:
-    """An optitrack element that sets no property of its own: Motive's defaults apply."""
-    parts = ['<optitrack name="OT" version="2">']
-    for i, b in enumerate(bodies):
-        parts.append(
-            f'<rigid_body><optitrack_rigid_body name="B{i}" version="1">'
-            f"<body_index>{b}</body_index></optitrack_rigid_body></rigid_body>"
-        )
-    for i, m in enumerate(markers):
-        parts.append(
-            f'<marker><optitrack_marker name="M{i}" version="1">'
-            f"<marker_index>{m}</marker_index></optitrack_marker></marker>"
-        )
-    return "".join(parts) + "</optitrack>\n"
-
-
 @pytest.mark.parametrize("version", VERSIONS, ids=[f"{a}.{b}" for a, b in VERSIONS])
 def test_sdk_frames_over_multicast_at_motive_defaults_with_no_option_given(build, version):
     bone = (4 << 16) | 2
     units = ["B3", "B7", "B12", "Bone", "M1000", "M1002", "L77"]
-    body = bare_element([3, 7, 12, bone], [1000, 1002, 77])
+    body = optitrack_element("OT", [3, 7, 12, bone], [1000, 1002, 77])  # no property
     for unit, name in enumerate(units):
         body += proxy("position", name, "OT", unit)
-    with motive_ports():
+    with fixed_addresses():
         manager = build(body)
         device = manager.device("OT")
         last = {}
@@ -442,8 +411,8 @@ def test_real_motive_frames_over_multicast_at_motive_defaults(build) -> None:
     datagrams = capture_datagrams()
     frames = [d[4] for d in datagrams if d[4][:2] == b"\x07\x00"]
     info = next(d[4] for d in datagrams if d[4][:2] == b"\x01\x00")
-    body = bare_element([2], []) + proxy("position", "Body", "OT", 0)
-    with motive_ports():
+    body = optitrack_element("OT", [2], []) + proxy("position", "Body", "OT", 0)
+    with fixed_addresses():
         manager = build(body)
         device = manager.device("OT")
         with StandIn(info, lambda n: frames[n - 1] if n <= len(frames) else None, 1 / 240):

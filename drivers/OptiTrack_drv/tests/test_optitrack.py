@@ -27,6 +27,7 @@ from OptiTrack_drv.standalone import (
     decode_frame,
     quaternion_matrix,
 )
+from OptiTrack_drv.tests.elements import optitrack_element
 
 from gadgetctl.input import DeviceKind
 from gadgetctl.input.testing import frames_until, wait_until
@@ -54,18 +55,7 @@ def device(name: str, port: int, bodies: list[int], markers: list[int], extra: s
     4.1, the emulator's, unless ``extra`` names one)."""
     if "natnet_version" not in extra:
         extra += "<natnet_version>4.1</natnet_version>"
-    parts = [f'<optitrack name="{name}" version="2"><port>{port}</port>{extra}']
-    for i, b in enumerate(bodies):
-        parts.append(
-            f'<rigid_body><optitrack_rigid_body name="{name} B{i}" version="1">'
-            f"<body_index>{b}</body_index></optitrack_rigid_body></rigid_body>"
-        )
-    for i, m in enumerate(markers):
-        parts.append(
-            f'<marker><optitrack_marker name="{name} M{i}" version="1">'
-            f"<marker_index>{m}</marker_index></optitrack_marker></marker>"
-        )
-    return "".join(parts) + "</optitrack>\n"
+    return optitrack_element(name, bodies, markers, f"<port>{port}</port>{extra}")
 
 
 def expected_body(index: int, frame: int = 0, moving: bool = False) -> np.ndarray:

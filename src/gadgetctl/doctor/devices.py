@@ -64,6 +64,16 @@ def check_transport(
         ]
 
 
+def _port(access: ElementAccess, transport: Transport) -> int:
+    """The port the driver uses: the element's, or ``port_unset`` (the driver's own default,
+    where it differs from the definition's) when the element does not set it."""
+    unset = transport.prop("port_unset")
+    prop = transport.props["port"]
+    if unset and access.has(prop) and not access.count(prop):
+        return int(unset)
+    return int(_read(access, transport, "port", number=True) or 0)
+
+
 def _check(access: ElementAccess, transport: Transport, settings: CheckSettings) -> list[PortCheck]:
     kind = transport.kind
     if kind in ("file", "serial"):
@@ -79,14 +89,7 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
             )
         return [result.with_prop(transport.props[key])]
     if kind == "udp":
-        port = int(_read(access, transport, "port", number=True) or 0)
-        unset = transport.prop("port_unset")  # the driver's port when the element sets none
-        if (
-            unset
-            and access.has(transport.props["port"])
-            and not access.count(transport.props["port"])
-        ):
-            port = int(unset)
+        port = _port(access, transport)
         checks = [check_udp(port).with_prop(transport.props["port"])]
         if transport.prop("group"):  # a literal multicast address the driver joins
             checks.append(check_multicast(transport.props["group"]))
@@ -131,14 +134,7 @@ def _check(access: ElementAccess, transport: Transport, settings: CheckSettings)
         ]
     if kind == "tcp":
         host = str(_read(access, transport, "host"))
-        port = int(_read(access, transport, "port", number=True) or 0)
-        unset = transport.prop("port_unset")  # the driver's port when the element sets none
-        if (
-            unset
-            and access.has(transport.props["port"])
-            and not access.count(transport.props["port"])
-        ):
-            port = int(unset)
+        port = _port(access, transport)
         result = check_tcp(host, port, probe=settings.probe, timeout=settings.timeout)
         if result.code == "DRV104" and settings.emulator:
             result = _with_hint(

@@ -9,8 +9,11 @@ line on them.
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import socket
-from collections.abc import Callable, Mapping
+import tempfile
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -80,6 +83,22 @@ def rewritten(source: Path, directory: Path, *changes: tuple[str, str]) -> Path:
     path = directory / source.name
     path.write_text(text, encoding="utf-8")
     return path
+
+
+#: The lock of the tests that use fixed addresses (an example's default port, Motive's UDP
+#: 1510 and 1511, /tmp/gadgetctl-pinch): two test runs on one machine take turns there.
+FIXED_ADDRESSES_LOCK = Path(tempfile.gettempdir()) / "gadgetctl-quickstart-tests.lock"
+
+
+@contextlib.contextmanager
+def fixed_addresses() -> Iterator[None]:
+    """Hold :data:`FIXED_ADDRESSES_LOCK` (waiting for the test run that holds it)."""
+    with open(FIXED_ADDRESSES_LOCK, "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
 
 
 def free_udp_port() -> int:
