@@ -40,10 +40,11 @@ from __future__ import annotations
 import time
 from collections import Counter, deque
 from dataclasses import dataclass, field
+from itertools import pairwise
 
 import numpy as np
 
-from gadgetctl.transport.udp import DropCountingReceiver
+from gadgetctl.transport.udp import DatagramLedger
 from gadgetctl.vrpn import VrpnClient, parse_device_name
 from gadgetctl.vrpn.codecs import (
     ANALOG_CHANNEL,
@@ -61,6 +62,7 @@ from gadgetctl.vrpn.codecs import (
 )
 from gadgetctl.vrpn.names import DeviceName, Location
 from gadgetctl.vrpn.probe import SYSTEM_SENDERS
+from gadgetctl.vrpn.wire import Block
 
 #: Seconds an incomplete tracker tick waits for the rest of its sensors before it is
 #: published with what came (a server that reports a subset of its sensors per tick).
@@ -132,6 +134,56 @@ def pose_rows(
     ]
 
 
+#: A whole tracker pose message: the header, then the Pos_Quat payload.
+POSE_MESSAGE = np.dtype(
+    [
+        ("length", ">u4"),
+        ("sec", ">i4"),
+        ("usec", ">i4"),
+        ("sender", ">i4"),
+        ("type", ">i4"),
+        ("sequence", ">u4"),
+        ("sensor", ">i4"),
+        ("filler", ">i4"),
+        ("position", ">f8", (3,)),
+        ("quat", ">f8", (4,)),
+    ]
+)
+
+
+def pose_records(block: Block) -> np.ndarray:
+    """The pose messages of ``block`` as :data:`POSE_MESSAGE` records, read in one go."""
+    offsets = block.offsets
+    size = POSE_MESSAGE.itemsize
+    first, count = offsets[0], len(offsets)
+    if offsets[-1] - first == (count - 1) * size:  # back to back: no gathering
+        return np.frombuffer(block.data, POSE_MESSAGE, count=count, offset=first)
+    raw = np.frombuffer(block.data, np.uint8)
+    rows = raw[np.asarray(offsets)[:, None] + np.arange(size)]
+    return rows.view(POSE_MESSAGE)[:, 0]
+
+
+def pose_matrices(position: np.ndarray, quat: np.ndarray) -> np.ndarray:
+    """The 4x4 matrices of positions (n, 3) and (x, y, z, w) quaternions (n, 4), as
+    :func:`pose_rows` makes them one by one."""
+    x, y, z, w = (quat[:, i].astype(np.float64) for i in range(4))
+    norm = x * x + y * y + z * z + w * w
+    s = np.divide(2.0, norm, out=np.zeros_like(norm), where=norm > 0.0)
+    out = np.zeros((len(norm), 4, 4))
+    out[:, 0, 0] = 1.0 - s * (y * y + z * z)
+    out[:, 0, 1] = s * (x * y - z * w)
+    out[:, 0, 2] = s * (x * z + y * w)
+    out[:, 1, 0] = s * (x * y + z * w)
+    out[:, 1, 1] = 1.0 - s * (x * x + z * z)
+    out[:, 1, 2] = s * (y * z - x * w)
+    out[:, 2, 0] = s * (x * z - y * w)
+    out[:, 2, 1] = s * (y * z + x * w)
+    out[:, 2, 2] = 1.0 - s * (x * x + y * y)
+    out[:, :3, 3] = position
+    out[:, 3, 3] = 1.0
+    return out
+
+
 def pose_matrix(
     position: tuple[float, float, float], quat: tuple[float, float, float, float]
 ) -> np.ndarray:
@@ -201,12 +253,15 @@ class VrpnInput:
         #: Position samples one read makes at most (see :data:`POSE_READ_BYTES`).
         self.pose_limit = max(1, POSE_READ_BYTES // max(1, POSE_BYTES * max(tracker_count, 0)))
         self._clocks: dict[Location, ServerClock] = {}
-        self._receivers: dict[Location, DropCountingReceiver] = {}
+        #: Per server location, the account of its UDP channel's datagrams (every
+        #: connection so far): read, decoded or bad, and dropped by the kernel.
+        self.ledgers: dict[Location, DatagramLedger] = {}
         # the tracker tick being gathered: its (sec, usec), local time, arrival, sensors seen
-        self._tick: tuple[int, int] | None = None
+        self._tick: int | None = None  # seconds * 1e6 + microseconds
         self._tick_time = 0.0
         self._tick_arrival = 0.0
-        self._tick_sensors: set[int] = set()
+        self._tick_seen = np.zeros(max(tracker_count, 0), dtype=bool)
+        self._tick_count = 0  # sensors seen in the tick
         self._clients: dict[Location, VrpnClient] = {}
         self._connected_at: dict[Location, float] = {}
         self._checked: set[Location] = set()
@@ -229,13 +284,14 @@ class VrpnInput:
         for dev in self.devices:
             client = self._clients.get(dev.location)
             if client is None:
-                receiver = self._receivers.setdefault(dev.location, DropCountingReceiver())
+                receiver = self.ledgers.setdefault(dev.location, DatagramLedger())
                 client = self._clients[dev.location] = VrpnClient(
                     dev.location,
                     retry_interval=self.retry_interval,
                     silence_timeout=self.silence_timeout,
                     udp_receiver=receiver,
                     udp_receive_buffer=self.udp_receive_buffer,
+                    bulk=self._bulk(dev.location),
                 )
             client.add_device(dev.device)
         self._deadline = time.monotonic() + timeout
@@ -258,7 +314,8 @@ class VrpnInput:
         self._checked.clear()
         self._heard.clear()
         self._tick = None  # a tick cut by the connection's end is not published
-        self._tick_sensors.clear()
+        self._tick_seen[:] = False
+        self._tick_count = 0
 
     def read(self, timeout: float = 0.1) -> Batch:
         """What arrived within ``timeout``; raises when a connection is lost or a device is
@@ -280,24 +337,33 @@ class VrpnInput:
                 continue
             if client.connects == 1 and location not in self._checked:
                 self._connected_at.setdefault(location, time.monotonic())
+            blocks = client.take_blocks()
             for m in messages:
                 if m.sender is not None:
                     self._heard.add((location, m.sender))
+            for block in blocks:
+                self._heard.add((location, block.sender))
             self._check_announced(location, client)
             clock = self._clocks.setdefault(location, ServerClock())
             self._take(messages, batch, clock)
+            for block in blocks:
+                self._take_block(block, batch, clock)
         if self._tick is not None and time.time() - self._tick_arrival >= TICK_HOLD:
             self._end_tick(batch)  # the rest of its sensors did not come
         return batch
 
+    def _bulk(self, location: Location) -> list[tuple[str, str]]:
+        """The (sender, type) pairs the client at ``location`` leaves framed for
+        :meth:`_take_block`: the tracker's poses."""
+        tracker = self.tracker
+        if tracker is None or tracker.location != location:
+            return []
+        return [(tracker.device, TRACKER_POS_QUAT)]
+
     @property
     def kernel_dropped(self) -> int:
         """Datagrams the kernel dropped on the UDP channels (every connection so far)."""
-        total = 0
-        for receiver in self._receivers.values():
-            receiver.refresh()
-            total += receiver.dropped
-        return total
+        return sum(ledger.kernel_dropped for ledger in self.ledgers.values())
 
     def _check_announced(self, location: Location, client: VrpnClient) -> None:
         """Once per connection, ``missing_after`` seconds in: every device of this location
@@ -325,7 +391,8 @@ class VrpnInput:
     def _end_tick(self, batch: Batch) -> None:
         """Publish the tick gathered so far as one position sample."""
         self._tick = None
-        self._tick_sensors.clear()
+        self._tick_seen[:] = False
+        self._tick_count = 0
         positions = batch.positions
         if len(positions) >= self.pose_limit:
             # the read's budget is spent: this tick replaces the read's last sample (its
@@ -336,6 +403,52 @@ class VrpnInput:
             self.counters["merged_ticks"] += 1
         else:
             positions.append((self._tick_time, self.poses.copy()))
+
+    def _take_block(self, block: Block, batch: Batch, clock: ServerClock) -> None:
+        """A read's tracker poses (framed by the client, see :class:`~gadgetctl.vrpn.wire.
+        Block`), unpacked at once: the same samples as :meth:`_take` makes of them one by
+        one."""
+        records = pose_records(block)
+        received = block.received
+        sec = records["sec"].astype(np.int64)
+        usec = records["usec"].astype(np.int64)
+        times = sec + usec * 1e-6
+        timed = times[sec > 0]
+        if len(timed):
+            clock.observe(float(timed.max()), received)
+        sensors = records["sensor"].astype(np.int64)
+        inside = sensors < self.tracker_count
+        if not inside.all():
+            self.counters["beyond_count"] += int(np.count_nonzero(~inside))
+            records, sensors, sec, usec, times = (
+                records[inside],
+                sensors[inside],
+                sec[inside],
+                usec[inside],
+                times[inside],
+            )
+        if not len(records):
+            return
+        matrices = pose_matrices(records["position"], records["quat"])
+        keys = sec * 1_000_000 + usec
+        starts = [0, *(np.flatnonzero(keys[1:] != keys[:-1]) + 1).tolist(), len(keys)]
+        poses, seen, count = self.poses, self._tick_seen, self.tracker_count
+        for first, last in pairwise(starts):
+            key = int(keys[first])
+            if self._tick is not None and key != self._tick:
+                self._end_tick(batch)
+            if self._tick is None:
+                self._tick = key
+                self._tick_arrival = received
+                sent = float(times[first])
+                self._tick_time = clock.local(sent, received)
+                batch.remote_times.append((received, sent))
+            these = sensors[first:last]
+            poses[these] = matrices[first:last]
+            seen[these] = True
+            self._tick_count = int(np.count_nonzero(seen))
+            if self._tick_count == count:
+                self._end_tick(batch)  # every sensor reported: the tick is whole
 
     def _take(self, messages: list, batch: Batch, clock: ServerClock | None = None) -> None:
         """Turn one read's messages into samples (``clock``: the server's, see
@@ -360,7 +473,7 @@ class VrpnInput:
                 if sensor >= self.tracker_count:
                     counters["beyond_count"] += 1
                     continue
-                stamp = (m.sec, m.usec)
+                stamp = m.sec * 1_000_000 + m.usec
                 if self._tick is not None and stamp != self._tick:
                     self._end_tick(batch)
                 if self._tick is None:
@@ -369,10 +482,11 @@ class VrpnInput:
                     self._tick_time = local(m.timestamp, m.received)
                     batch.remote_times.append((m.received, m.timestamp))
                 self.poses[sensor] = pose_rows(report.position, report.quat)
-                seen = self._tick_sensors
-                seen.add(sensor)
-                if len(seen) == self.tracker_count:
-                    self._end_tick(batch)  # every sensor reported: the tick is whole
+                if not self._tick_seen[sensor]:
+                    self._tick_seen[sensor] = True
+                    self._tick_count += 1
+                    if self._tick_count == self.tracker_count:
+                        self._end_tick(batch)  # every sensor reported: the tick is whole
                 continue
             if kind == TEXT_MESSAGE and isinstance(report, TextReport):
                 if sender in (tracker, button, analog):

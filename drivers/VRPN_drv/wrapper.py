@@ -26,6 +26,7 @@ import numpy as np
 from gadgetctl.input import Analog, DeviceConfigError, Digital, Position
 from gadgetctl.input.samples import DEFAULT_CAP
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.transport.udp import DatagramLedger
 from gadgetctl.vrpn import VrpnNameError
 from gadgetctl.vrpn.codecs import MAX_SENSORS
 
@@ -181,6 +182,15 @@ class VrpnDevice(Position, Digital, Analog):
 
     # -- diagnostics ------------------------------------------------------------------------
 
+    def datagram_ledger(self) -> DatagramLedger | None:
+        """The account of the UDP channel's datagrams (lob mode) of the element's first
+        server: read, decoded or bad, dropped by the kernel (:meth:`transport_dropped`
+        sums the kernel's drops of every server)."""
+        if self._input is None or not self._input.devices:
+            return None
+        location = self._input.devices[0].location
+        return self._input.ledgers.get(location)
+
     def transport_dropped(self) -> int:
         """Datagrams the kernel dropped on the UDP channels (a full receive buffer)."""
         return self._input.kernel_dropped if self._input is not None else 0
@@ -188,8 +198,4 @@ class VrpnDevice(Position, Digital, Analog):
     @property
     def counters(self) -> dict[str, int]:
         """What the connections counted since the device was made, reconnections included."""
-        if self._input is None:
-            return {}
-        found = dict(self._input.counts())
-        found["kernel_dropped"] = self._input.kernel_dropped
-        return found
+        return dict(self._input.counts()) if self._input is not None else {}

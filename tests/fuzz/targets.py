@@ -1195,7 +1195,7 @@ def _vrpn_log(data: bytes) -> None:
 @target("vrpn.driver", seeds=_vrpn_seeds, examples=60, driver="VRPN_drv")
 def _vrpn_driver(data: bytes) -> None:
     """What VRPN_drv makes of a server's messages (names and reports as its client gives them)."""
-    from VRPN_drv.standalone import Batch, VrpnInput
+    from VRPN_drv.standalone import Batch, ServerClock, VrpnInput
 
     from gadgetctl.vrpn import codecs, wire
 
@@ -1221,6 +1221,24 @@ def _vrpn_driver(data: bytes) -> None:
     device = VrpnInput("Tracker0@localhost", 2, "Tracker0@localhost", 4, "Tracker0@localhost", 3)
     batch = Batch()
     device._take(messages, batch)
+    # the same poses framed in blocks and unpacked at once, as the client leaves them
+    bulk = {
+        (sender_id, type_id): (("Tracker0", codecs.TRACKER_POS_QUAT), wire.HEADER_SIZE + 64)
+        for sender_id, sender in senders.items()
+        for type_id, type_name in types.items()
+        if sender == "Tracker0" and type_name == codecs.TRACKER_POS_QUAT
+    }
+    if bulk:
+        try:
+            _pos, _rest, found = wire.split_messages(
+                body, 0, len(body), 0.0, dict(list(bulk.items())[:64])
+            )
+        except wire.FramingError:
+            found = {}
+        for (sender, type_name), offsets in found.items():
+            device._take_block(
+                wire.Block(body, offsets, sender, type_name, 0.0), batch, ServerClock()
+            )
     assert all(pose.shape == (2, 4, 4) for _, pose in batch.positions)
     assert all(len(values) == 4 for _, values in batch.digital)
     assert all(len(values) == 3 for _, values in batch.analog)

@@ -4,9 +4,11 @@ the monitor's statistics; and nothing is published before the server's first rep
 
 from __future__ import annotations
 
+import contextlib
 import socket
 import struct
 import threading
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -16,6 +18,7 @@ from VRPN_drv.wrapper import VrpnDevice
 from gadgetctl.input import DeviceKind, InputManager, ManagerOptions
 from gadgetctl.input.testing import frames_until, wait_until
 from gadgetctl.input.testing.configs import configuration, proxy
+from gadgetctl.input.testing.floods import bad_one_for_one
 from gadgetctl.monitor.session import MonitorSession
 from gadgetctl.transport.udp import proc_udp_drops
 from gadgetctl.vrpn import VrpnServer
@@ -62,11 +65,16 @@ def test_the_monitor_shows_exactly_what_the_kernel_dropped(tmp_path: Path, monke
                 flood(port, 300)
                 session.step()
 
-            assert wait_until(lambda: device.counters["kernel_dropped"] > 0, 20.0, burst)
+            assert wait_until(lambda: device.health()["kernel_dropped"] > 0, 20.0, burst)
 
-            def settled() -> bool:
+            def settled() -> bool:  # every datagram read judged, every drop learnt
                 session.step()
-                return device.transport_dropped() == proc_udp_drops(channel)
+                health = device.health()
+                judged = health["decoded"] + health["bad_datagrams"]
+                return (
+                    device.transport_dropped() == proc_udp_drops(channel)
+                    and health["datagrams"] == judged
+                )
 
             assert wait_until(settled, timeout=10.0), (
                 device.transport_dropped(),
@@ -77,18 +85,57 @@ def test_the_monitor_shows_exactly_what_the_kernel_dropped(tmp_path: Path, monke
             assert stats is not None and device.store.dropped() == 0
             assert stats.dropped == kernel > 0
             assert session.final_stats()["V"]["dropped"] == kernel
+            # every datagram read was whole VRPN messages: counted as decoded, none bad
+            health = device.health()
+            assert health["decoded"] > 0 and health["bad_datagrams"] == 0
         finally:
             manager.shutdown()
 
 
-def test_nothing_is_published_before_the_first_report(tmp_path: Path) -> None:
-    server = VrpnServer("127.0.0.1", 0)  # announces Tracker0, answers pings, reports nothing
+@contextlib.contextmanager
+def silent_server() -> Iterator[VrpnServer]:
+    """A VRPN server announcing Tracker0 and answering pings, reporting nothing."""
+    server = VrpnServer("127.0.0.1", 0)
     server.register_sender("Tracker0")
     server.start()
     stop = threading.Event()
     thread = threading.Thread(target=server.serve_forever, args=(stop, 0.02), daemon=True)
     thread.start()
     try:
+        yield server
+    finally:
+        stop.set()
+        thread.join(5)
+        server.close()
+
+
+def test_malformed_datagrams_are_counted_bad_one_for_one(tmp_path: Path) -> None:
+    with silent_server() as server:  # nothing else on the UDP channel
+        config = tmp_path / "v.jconf"
+        config.write_text(configuration("VRPN_drv", element("V", f"127.0.0.1:{server.port}", 1)))
+        options = ManagerOptions(retry_interval=None, entry_points=False)
+        manager, loaded = InputManager.from_files([config], options=options)
+        manager.configure(loaded)
+        try:
+            device = manager.device("V")
+
+            def channel_open() -> bool:
+                clients = device._input.clients if device._input is not None else {}
+                return any(c._udp_in is not None for c in clients.values())
+
+            frames_until(manager, channel_open, timeout=15)
+            (client,) = device._input.clients.values()
+            port = client._udp_in.getsockname()[1]
+            junk = [b"\x00\x00\x00\x05" + bytes(range(n % 200)) for n in range(200)]
+            after = bad_one_for_one(manager, "V", port, junk)
+            assert after["bad_datagrams"] == 200 - after["kernel_dropped"]
+            assert manager.status("V").state == "undecodable"  # data comes, none decodes
+        finally:
+            manager.shutdown()
+
+
+def test_nothing_is_published_before_the_first_report(tmp_path: Path) -> None:
+    with silent_server() as server:
         config = tmp_path / "v.jconf"
         body = element("V", f"127.0.0.1:{server.port}", 2) + proxy("position", "P", "V", 0)
         config.write_text(configuration("VRPN_drv", body))
@@ -104,7 +151,3 @@ def test_nothing_is_published_before_the_first_report(tmp_path: Path) -> None:
             assert device.store.latest(DeviceKind.POSITION) is None
         finally:
             manager.shutdown()
-    finally:
-        stop.set()
-        thread.join(5)
-        server.close()

@@ -4,6 +4,7 @@ report, the cost of many sensors is bounded, dials read as analog units, text is
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from VRPN_drv.standalone import (
     POSE_BYTES,
@@ -125,3 +126,64 @@ def test_pose_matrix_is_the_identity_for_no_rotation() -> None:
     assert (
         pose_matrix((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)) == pose_matrix((0, 0, 0), (0, 0, 0, 2))
     ).all()
+
+
+def _stream_through(bulk: bool, stream: bytes, sensors: int) -> tuple[Batch, VrpnInput]:
+    """``stream`` (after the cookie) read by an endpoint, as messages or with the tracker's
+    poses left framed in blocks, into a fresh element."""
+    import socket
+
+    from gadgetctl.vrpn.endpoint import Endpoint
+    from gadgetctl.vrpn.wire import make_cookie
+
+    with socket.create_server(("127.0.0.1", 0)) as listener:
+        writer = socket.create_connection(listener.getsockname(), timeout=5)
+        reader, _ = listener.accept()
+    with writer:
+        endpoint = Endpoint(reader)
+        endpoint.decode = codecs.decode
+        writer.sendall(make_cookie() + stream)
+        writer.shutdown(socket.SHUT_WR)
+        reader.setblocking(True)
+        device = VrpnInput(f"Tracker0@{HOST}", sensors)
+        batch, clock = Batch(), ServerClock()
+        pairs = frozenset({("Tracker0", codecs.TRACKER_POS_QUAT)})
+        try:
+            while True:
+                if bulk:
+                    messages, blocks = endpoint.read_bulk(2000.0, pairs)
+                else:
+                    messages, blocks = endpoint.read(2000.0), []
+                device._take(messages, batch, clock)
+                for block in blocks:
+                    device._take_block(block, batch, clock)
+        except ConnectionError:
+            pass
+        finally:
+            endpoint.close()
+    device._end_tick(batch)
+    return batch, device
+
+
+def test_a_whole_read_unpacked_at_once_makes_the_same_samples() -> None:
+    from gadgetctl.vrpn.wire import pack_description, pack_message
+
+    stream = pack_description(-1, 0, "Tracker0") + pack_description(-1, 1, "Button0")
+    stream += pack_description(-2, 0, codecs.TRACKER_POS_QUAT)
+    stream += pack_description(-2, 1, codecs.BUTTON_CHANGE)
+    quats = [(0.0, 0.0, 0.0, 1.0), (0.0, 0.0, 0.0, 0.0), (1.0, 2.0, 3.0, 4.0), (0.0, 0.6, 0.0, 0.8)]
+    for tick in range(40):
+        stamp = 1700000000 + tick * 0.001
+        for sensor in (0, 1, 2, 5) if tick % 7 else (2, 0):  # some ticks incomplete
+            payload = codecs.encode_pose(sensor, (tick, sensor, -1.5), quats[(tick + sensor) % 4])
+            stream += pack_message(0, 0, payload, stamp)
+        if tick % 5 == 0:
+            stream += pack_message(1, 1, codecs.encode_button_change(1, tick % 2), stamp)
+    one_by_one, device_a = _stream_through(False, stream, 3)
+    at_once, device_b = _stream_through(True, stream, 3)
+    assert len(at_once.positions) == len(one_by_one.positions) > 30
+    for (ta, va), (tb, vb) in zip(one_by_one.positions, at_once.positions, strict=True):
+        assert ta == pytest.approx(tb, abs=1e-6)
+        np.testing.assert_allclose(va, vb, atol=1e-12)
+    assert at_once.digital == one_by_one.digital
+    assert device_a.counters["beyond_count"] == device_b.counters["beyond_count"] > 0

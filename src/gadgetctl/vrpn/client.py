@@ -32,6 +32,7 @@ from .wire import (
     MAX_DATAGRAM,
     SENDER_DESCRIPTION,
     TYPE_DESCRIPTION,
+    Block,
     Message,
     lob_request,
     pack_description,
@@ -85,6 +86,7 @@ class VrpnClient:
         decode_reports: bool = True,
         udp_receiver: DatagramReceiver | None = None,
         udp_receive_buffer: int = UDP_RECEIVE_BUFFER,
+        bulk: Iterable[tuple[str, str]] = (),
     ) -> None:
         self.location = parse_location(location) if isinstance(location, str) else location
         self.udp_channel = udp_channel and not self.location.tcp
@@ -97,6 +99,10 @@ class VrpnClient:
         self.decode_reports = decode_reports
         self.udp_receiver = udp_receiver
         self.udp_receive_buffer = udp_receive_buffer
+        #: (sender, type) name pairs whose messages :meth:`poll` leaves framed, in blocks
+        #: (:meth:`take_blocks`), for a caller that unpacks a whole read at once.
+        self.bulk = frozenset(bulk)
+        self._blocks: list[Block] = []
         self.senders = NameTable()
         self.types = NameTable()
         for name in devices:
@@ -204,15 +210,21 @@ class VrpnClient:
         return True
 
     def poll(self, timeout: float = 0.0) -> list[Message]:
-        """Do the I/O due; the messages that arrive within ``timeout`` (returns at the first)."""
+        """Do the I/O due; the messages that arrive within ``timeout`` (returns at the first,
+        or at the first block of :attr:`bulk` messages)."""
         if self._held:
             held, self._held = self._held, []
             return held
         deadline = time.monotonic() + timeout
         while True:
             out = self._poll_once(max(0.0, deadline - time.monotonic()))
-            if out or time.monotonic() >= deadline or self.state == CLOSED:
+            if out or self._blocks or time.monotonic() >= deadline or self.state == CLOSED:
                 return out
+
+    def take_blocks(self) -> list[Block]:
+        """The blocks of :attr:`bulk` messages read since the last call, oldest first."""
+        blocks, self._blocks = self._blocks, []
+        return blocks
 
     def close(self) -> None:
         self._teardown()
@@ -265,7 +277,12 @@ class VrpnClient:
                 if self._udp_in is not None and self._udp_in in r:
                     out.extend(self._read_udp(ep, wall))
                 if ep in r:
-                    out.extend(self._handle(ep.read(wall)))
+                    if self.bulk:
+                        messages, blocks = ep.read_bulk(wall, self.bulk)
+                        out.extend(self._handle(messages))
+                        self._blocks += blocks
+                    else:
+                        out.extend(self._handle(ep.read(wall)))
                     if ep.opened and self.state == HANDSHAKE:
                         self._opened(ep)
                 if self.state == CONNECTED and not self._senders_described:
@@ -276,7 +293,7 @@ class VrpnClient:
             self._drop(exc.reason)
         except OSError as exc:  # anything else the sockets refuse ends this connection only
             self._drop(f"socket error: {exc.strerror or exc}")
-        if out:
+        if out or self._blocks:
             self._last_rx = time.monotonic()
         return out
 
@@ -449,28 +466,29 @@ class VrpnClient:
         self._last_ping = time.monotonic()
 
     def _read_udp(self, ep: Endpoint, wall: float) -> list[Message]:
+        """Every datagram waiting (at most :data:`UDP_READS_PER_POLL`), taken as one read."""
         assert self._udp_in is not None
-        out: list[Message] = []
         receiver = self.udp_receiver
         receive = receiver.receive if receiver is not None else self._udp_in.recv
-        decoded = getattr(receiver, "decoded", None)
-        bad = getattr(receiver, "bad", None)
-        counters = ep.counters
+        datagrams: list[bytes] = []
         for _ in range(UDP_READS_PER_POLL):
             try:
-                data = receive(MAX_DATAGRAM + 64)
+                datagrams.append(receive(MAX_DATAGRAM + 64))
             except (BlockingIOError, InterruptedError):
                 break
             except OSError:
                 break
-            before = counters["bad_datagrams"]
-            out.extend(self._handle(ep.read_datagram(data, wall)))
-            if counters["bad_datagrams"] != before:
-                if bad is not None:
-                    bad("a datagram that is not VRPN messages")
-            elif decoded is not None:
-                decoded()
-        return out
+        if not datagrams:
+            return []
+        messages, blocks, refused = ep.read_datagrams(datagrams, wall, self.bulk)
+        self._blocks += blocks
+        decoded = getattr(receiver, "decoded", None)
+        bad = getattr(receiver, "bad", None)
+        if bad is not None and refused:
+            bad("a datagram that is not whole VRPN messages", len(refused))
+        if decoded is not None and len(datagrams) > len(refused):
+            decoded(len(datagrams) - len(refused))
+        return self._handle(messages)
 
     def _handle(self, messages: list[Message]) -> list[Message]:
         """Count the pongs (the reports were decoded by the endpoint)."""

@@ -261,6 +261,14 @@ _DECODERS = {
     PONG: lambda p: Pong(),
 }
 
+#: Payload lengths the C++ remote insists on (any other drops the connection).
+STRICT_LENGTHS = {
+    TRACKER_POS_QUAT: _POSE.size,
+    TRACKER_VELOCITY: _MOTION.size,
+    TRACKER_ACCELERATION: _MOTION.size,
+    BUTTON_CHANGE: 8,
+}
+
 #: Type names :func:`decode` understands.
 DECODED_TYPES = frozenset(_DECODERS)
 #: Every type name a client describes to a server (the device families it reads).

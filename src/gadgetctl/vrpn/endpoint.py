@@ -21,18 +21,22 @@ from __future__ import annotations
 import socket
 from collections import Counter
 from collections.abc import Callable, Iterator
+from typing import NoReturn
 
-from .codecs import CodecError, StrictLengthError
+from .codecs import STRICT_LENGTHS, CodecError, StrictLengthError
 from .wire import (
     COOKIE_SIZE,
     DISCONNECT_MESSAGE,
     FATAL_SYSTEM_TYPE,
+    HEADER_SIZE,
     LOG_DESCRIPTION,
     MAX_DATAGRAM,
     MAX_IDS,
     SENDER_DESCRIPTION,
     TYPE_DESCRIPTION,
     UDP_DESCRIPTION,
+    Block,
+    BulkIds,
     CookieError,
     FramingError,
     Message,
@@ -43,9 +47,13 @@ from .wire import (
     decode_udp_description,
     make_cookie,
     pack_description,
+    split_messages,
 )
 
 RECV_CHUNK = 256 * 1024
+#: (sender id, type id) pairs :meth:`Endpoint.bulk_ids` sets apart at most (a peer may give
+#: one name to many ids; messages of the pairs beyond are taken one by one).
+MAX_BULK_IDS = 64
 
 
 class ConnectionDropped(ConnectionError):
@@ -122,6 +130,8 @@ class Endpoint:
         #: really serves. Ids, not names: at most ``MAX_IDS`` each, whatever the peer sends.
         self._setup_ids: set[int] = set()
         self._later_ids: set[int] = set()
+        self._tables_version = 0  # changes with every description (see bulk_ids)
+        self._bulk_cache: tuple[int, frozenset[tuple[str, str]], BulkIds] | None = None
         self.udp: socket.socket | None = None  # outgoing unreliable channel, once announced
         self._udp_batch = bytearray()
         self._cookie = bytearray()
@@ -153,10 +163,111 @@ class Endpoint:
     def read(self, received: float, size: int = RECV_CHUNK) -> list[Message]:
         """Read what the socket has, at most ``size`` bytes (counted in ``bytes_read``); the
         peer's user messages, ids translated to names."""
+        data = self._receive(size)
+        if not data:
+            return []
+        try:
+            messages = self._decoder.feed(data, received)
+        except FramingError as exc:
+            self._framing_error(exc)
+        return self.translate(messages)
+
+    def read_bulk(
+        self, received: float, bulk: frozenset[tuple[str, str]], size: int = RECV_CHUNK
+    ) -> tuple[list[Message], list[Block]]:
+        """As :meth:`read`, but the messages of the (sender, type) name pairs in ``bulk``
+        (tracker reports) come back framed, not unpacked: a :class:`~.wire.Block` per pair
+        per read, checked as the C++ remote checks them (exact length, sensor not negative;
+        the others go the usual way, and fail there)."""
+        data = self._receive(size)
+        if not data:
+            return [], []
+        ids = self.bulk_ids(bulk)
+        try:
+            messages, found, whole = self._decoder.feed_split(data, received, ids)
+        except FramingError as exc:
+            self._framing_error(exc)
+        return self._blocks(messages, found, whole, received)
+
+    def read_datagrams(
+        self, datagrams: list[bytes], received: float, bulk: frozenset[tuple[str, str]]
+    ) -> tuple[list[Message], list[Block], list[int]]:
+        """The messages of datagrams that came on this connection's UDP channel, split as
+        :meth:`read_bulk` does, and the indices of the datagrams refused (not whole
+        messages: counted as ``bad_datagrams``)."""
+        ids = self.bulk_ids(bulk)
+        data = b"".join(datagrams)
+        messages: list[Message] = []
+        found: dict[tuple[str, str], list[int]] = {}
+        refused: list[int] = []
+        start = 0
+        for index, datagram in enumerate(datagrams):
+            end = start + len(datagram)
+            try:
+                pos, some, more = split_messages(data, start, end, received, ids)
+                if pos != end:
+                    raise FramingError("a datagram that is not whole messages")
+            except FramingError:
+                refused.append(index)
+            else:
+                messages += some
+                for key, offsets in more.items():
+                    found.setdefault(key, []).extend(offsets)
+            start = end
+        self.counters["bad_datagrams"] += len(refused)
+        out, blocks = self._blocks(messages, found, data, received, udp=True)
+        return out, blocks, refused
+
+    def bulk_ids(self, bulk: frozenset[tuple[str, str]]) -> BulkIds:
+        """The peer's (sender id, type id) pairs of the name pairs in ``bulk`` (worked out
+        again only when a description changed the tables)."""
+        if not bulk:
+            return {}
+        cached = self._bulk_cache
+        if cached is not None and cached[0] == self._tables_version and cached[1] == bulk:
+            return cached[2]
+        sender_names = {sender for sender, _ in bulk}
+        type_names = {name for _, name in bulk if name in STRICT_LENGTHS}
+        senders = [(i, n) for i, n in self.remote_senders.items() if n in sender_names]
+        types = [(i, n) for i, n in self.remote_types.items() if n in type_names]
+        ids: BulkIds = {}
+        for sender_id, sender in senders:
+            for type_id, type_name in types:
+                if len(ids) >= MAX_BULK_IDS:
+                    break  # a peer naming many ids alike: the rest go the usual way
+                if (sender, type_name) in bulk:
+                    length = HEADER_SIZE + STRICT_LENGTHS[type_name]
+                    ids[sender_id, type_id] = ((sender, type_name), length)
+        self._bulk_cache = (self._tables_version, bulk, ids)
+        return ids
+
+    def _blocks(
+        self,
+        messages: list[Message],
+        found: dict[tuple[str, str], list[int]],
+        data: bytes,
+        received: float,
+        *,
+        udp: bool = False,
+    ) -> tuple[list[Message], list[Block]]:
+        blocks = [
+            Block(data, offsets, sender, type_name, received)
+            for (sender, type_name), offsets in found.items()
+        ]
+        self.counters["messages"] += sum(len(b.offsets) for b in blocks)
+        return self.translate(messages, udp), blocks
+
+    def _framing_error(self, exc: FramingError) -> NoReturn:
+        self.counters["oversized" if "too long" in str(exc) else "bad_frames"] += 1
+        raise ConnectionDropped(str(exc)) from None
+
+    def _receive(self, size: int) -> bytes:
+        """What the socket has, at most ``size`` bytes, after the peer's cookie (b"" when
+        nothing is)."""
         try:
             data = self.sock.recv(size)
         except (BlockingIOError, InterruptedError):
-            return []
+            return b""
         except OSError as exc:
             raise ConnectionDropped(f"connection error: {exc.strerror or exc}") from None
         if not data:
@@ -167,21 +278,14 @@ class Endpoint:
             self._cookie += data[:need]
             data = data[need:]
             if len(self._cookie) < COOKIE_SIZE:
-                return []
+                return b""
             try:
                 self.peer_version = check_cookie(bytes(self._cookie))
             except CookieError as exc:
                 self.counters["bad_cookies"] += 1
                 raise ConnectionDropped(f"cookie refused: {exc}") from None
             self.opened = True
-            if not data:
-                return []
-        try:
-            messages = self._decoder.feed(data, received)
-        except FramingError as exc:
-            self.counters["oversized" if "too long" in str(exc) else "bad_frames"] += 1
-            raise ConnectionDropped(str(exc)) from None
-        return self.translate(messages)
+        return data
 
     def read_datagram(self, data: bytes, received: float) -> list[Message]:
         """The user messages of a datagram that came on this connection's UDP channel."""
@@ -231,6 +335,7 @@ class Endpoint:
 
     def _system(self, m: Message) -> None:
         kind = m.type_id
+        self._tables_version += 1
         if kind in (SENDER_DESCRIPTION, TYPE_DESCRIPTION):
             if not 0 <= m.sender_id < MAX_IDS:
                 self.counters["bad_descriptions"] += 1

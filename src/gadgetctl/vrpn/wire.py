@@ -120,6 +120,68 @@ def check_header(length: int) -> int:
     return body
 
 
+class Block(NamedTuple):
+    """Messages of one sender and type left framed, not unpacked: each starts (its header)
+    at one of ``offsets`` in ``data``; ``sender`` and ``type`` are their names. A consumer
+    unpacks a whole read's worth at once (numpy, say) for far less per message."""
+
+    data: bytes
+    offsets: list[int]
+    sender: str
+    type: str
+    received: float
+
+
+#: What :func:`split_messages` sets apart: (sender id, type id) -> ((sender name, type name),
+#: the exact message length such a message must have).
+BulkIds = dict[tuple[int, int], tuple[tuple[str, str], int]]
+_INT32 = struct.Struct(">i")
+
+
+def split_messages(
+    data: bytes | bytearray, pos: int, end: int, received: float, bulk: BulkIds
+) -> tuple[int, list[Message], dict[tuple[str, str], list[int]]]:
+    """Frame the whole messages of ``data[pos:end]``: the offset after the last one, the
+    messages (payloads copied), and the offsets of those whose (sender, type) ids are in
+    ``bulk``, per (sender, type) names. Bulk types are tracker reports (the payload starts
+    with the sensor): one of another length or with a negative sensor is left a message, for
+    the receiver's own checks. From the first system message on, every message is a message
+    (the names it describes apply to what follows). Raises :class:`FramingError` on a bad
+    header."""
+    unpack = _HEADER.unpack_from
+    sensor_of = _INT32.unpack_from
+    new = tuple.__new__
+    out: list[Message] = []
+    found: dict[tuple[str, str], list[int]] = {}
+    while end - pos >= HEADER_SIZE:
+        length, sec, usec, sender, type_id, _seq = unpack(data, pos)
+        body = (length - HEADER_SIZE + ALIGN - 1) & ~(ALIGN - 1)  # check_header, inlined
+        if length < HEADER_SIZE or body > MAX_PADDED_PAYLOAD:
+            check_header(length)  # raises
+        if end - pos - HEADER_SIZE < body:
+            break
+        wanted = bulk.get((sender, type_id)) if bulk else None
+        if (
+            wanted is not None
+            and length == wanted[1]
+            and sensor_of(data, pos + HEADER_SIZE)[0] >= 0
+        ):
+            offsets = found.get(wanted[0])
+            if offsets is None:
+                offsets = found[wanted[0]] = []
+            offsets.append(pos)
+        else:
+            if type_id < 0:
+                bulk = {}  # the descriptions to come change what the ids mean
+            start = pos + HEADER_SIZE
+            payload = bytes(data[start : start + length - HEADER_SIZE])
+            out.append(
+                new(Message, (type_id, sender, sec, usec, payload, None, None, received, None))
+            )
+        pos += HEADER_SIZE + body
+    return pos, out, found
+
+
 class StreamDecoder:
     """Splits a TCP byte stream into messages; holds at most one unfinished message."""
 
@@ -131,6 +193,25 @@ class StreamDecoder:
     @property
     def pending(self) -> int:
         return len(self._buf)
+
+    def feed_split(
+        self, data: bytes, received: float, bulk: BulkIds
+    ) -> tuple[list[Message], dict[tuple[str, str], list[int]], bytes]:
+        """As :meth:`feed`, with the messages of ``bulk`` left framed (see
+        :func:`split_messages`): the messages, the bulk offsets per (sender, type) names,
+        and the bytes those offsets point into."""
+        buf = self._buf
+        if buf:
+            buf += data
+            whole = bytes(buf)
+        else:
+            whole = data
+        pos, out, found = split_messages(whole, 0, len(whole), received, bulk)
+        if pos < len(whole):
+            self._buf = bytearray(whole[pos:])
+        else:
+            self._buf = bytearray()
+        return out, found, whole
 
     def feed(self, data: bytes, received: float = 0.0) -> list[Message]:
         """Messages completed by ``data``; raises :class:`FramingError` on a bad header."""
