@@ -12,15 +12,19 @@ loopback, reaches it too) and reads every NatNet message arriving there.
   server names in its server information (message 1), its reply to a connect request
   (message 0) sent to the command port: of the configured server, or else of the host the
   first frame came from. Frames that arrive before the reply are held (at most
-  ``limits.pending_frames``), then decoded; without a reply within ``version_timeout`` they
-  are counted as ``undecoded_frames`` and the receiver reports that it cannot decode.
+  ``receiver_limits.pending_frames``), then decoded; without a reply within
+  ``version_timeout`` they are ``undecoded_frames`` and bad datagrams, and the requests go on.
 * Unicast: the receiver sends the connect request to the server's command port from its data
   socket (so the frames reach it whether the server answers the requester or the data
   port), repeats it until the server answers, then sends a keep-alive every
   ``keepalive_interval`` seconds.
 
-Counters: ``datagrams``, ``frames``, ``bad_datagrams`` (not NatNet, malformed, beyond the
-limits, or not of the version), ``bad_records`` (a body or marker whose numbers cannot be a
+Every datagram read is counted once in the :class:`DatagramLedger` (``ledger``), as
+decoded (a frame, the server information, another NatNet message) or bad with its reason;
+the ledger also keeps the kernel's drops and says when the receiver is undecodable (data
+arrives, none decodes), with the first error. Counters: ``datagrams``, ``frames``,
+``bad_datagrams`` (not NatNet, malformed, beyond the limits, or not of the version),
+``bad_records`` (a body or marker whose numbers cannot be a
 pose), ``other_messages``, ``server_infos``, ``requests_sent``, ``undecoded_frames``,
 ``untracked_bodies`` (bodies the server flagged as not tracked), ``missed_frames`` (gaps in
 the frame numbers of at most ``MAX_FRAME_GAP``), ``frame_jumps`` (a frame number that goes
@@ -45,7 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gadgetctl.transport.udp import DropCountingReceiver, bind_udp
+from gadgetctl.transport.udp import DatagramLedger, bind_udp
 
 from .natnet import (
     DEFAULT_LIMITS as FRAME_LIMITS,
@@ -221,9 +225,9 @@ class NatNetReceiver:
         self.limits = limits
         self.receiver_limits = receiver_limits
         self.server_info: ServerInfo | None = None
-        self.datagrams = 0
+        #: Every datagram read, counted once as decoded or bad; the kernel's drops.
+        self.ledger = DatagramLedger()
         self.frames = 0
-        self.bad_datagrams = 0
         self.bad_records = 0
         self.other_messages = 0
         self.server_infos = 0
@@ -235,12 +239,9 @@ class NatNetReceiver:
         self.join_failures = 0
         self.joined = False
         self.first_error: str | None = None
-        self._drops = DropCountingReceiver()
         self._sock: socket.socket | None = None
         self._last_number: int | None = None
         self._last_data = time.monotonic()
-        self._last_good = time.monotonic()
-        self._bad_since_good = 0
         self._pending: collections.deque[bytes] = collections.deque()
         self._pending_since: float | None = None
         self._last_request = -math.inf
@@ -260,8 +261,15 @@ class NatNetReceiver:
 
     @property
     def kernel_dropped(self) -> int:
-        self._drops.refresh()
-        return self._drops.dropped
+        return self.ledger.kernel_dropped
+
+    @property
+    def datagrams(self) -> int:
+        return self.ledger.datagrams
+
+    @property
+    def bad_datagrams(self) -> int:
+        return self.ledger.bad_count
 
     def open(self) -> None:
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -281,16 +289,15 @@ class NatNetReceiver:
                 self.join_failures += 1
         sock.setblocking(False)
         self._sock = sock
-        self._drops.attach(sock)
+        self.ledger.attach(sock)
         moment = time.monotonic()
-        self._last_data = self._last_good = moment
-        self._bad_since_good = 0
+        self._last_data = moment
         self._last_request = self._last_keepalive = -math.inf
         self._maintain(moment)
 
     def close(self) -> None:
         if self._sock is not None:
-            self._drops.detach()
+            self.ledger.detach()
             self._sock.close()
             self._sock = None
 
@@ -320,8 +327,8 @@ class NatNetReceiver:
 
     def sample_all(self, limit: int = 100) -> list[NatNetFrame]:
         """The frames that arrive within ``receive_timeout`` (at most ``limit``); raises
-        :class:`NatNetDisconnected` after ``peer_timeout`` seconds without a datagram and
-        :class:`NatNetUndecodable` when datagrams arrive but none decoded for as long."""
+        :class:`NatNetDisconnected` after ``peer_timeout`` seconds without a datagram. Data
+        that arrives but does not decode is the ledger's to report (:meth:`undecodable_reason`)."""
         sock = self._sock
         if sock is None:
             raise NatNetDisconnected("the receiver is closed")
@@ -329,35 +336,24 @@ class NatNetReceiver:
         ready, _, _ = select.select([sock], [], [], self.receive_timeout)
         while ready and len(frames) < limit:
             try:
-                data, address = self._drops.receive_from(MAX_DATAGRAM)
+                data, address = self.ledger.receive_from(MAX_DATAGRAM)
             except BlockingIOError:
                 break
             self._last_data = time.monotonic()
-            self.datagrams += 1
             frames.extend(self.handle(data, address))
         moment = time.monotonic()
         self._maintain(moment)
-        if frames:
-            return frames
         self._check_pending(moment)
-        if moment - self._last_data > self.peer_timeout:
+        if not frames and moment - self._last_data > self.peer_timeout:
             raise NatNetDisconnected(
                 f"no NatNet data on UDP port {self.port} for {self.peer_timeout:g} s"
             )
-        if self._bad_since_good and moment - self._last_good > self.peer_timeout:
-            raise NatNetUndecodable(self.undecodable_reason())
         return frames
 
     def undecodable_reason(self) -> str | None:
-        """Why nothing decodes, while datagrams arrive and none decoded since the last good
-        frame (None otherwise)."""
-        if not self._bad_since_good:
-            return None
-        return (
-            f"NatNet data arrives on UDP port {self.port} but none decoded for "
-            f"{time.monotonic() - self._last_good:.1f} s ({self._bad_since_good} bad): "
-            f"{self.first_error}"
-        )
+        """Why nothing decodes while datagrams arrive (the ledger's verdict, with the first
+        error of the bad run); None when the receiver decodes what it gets."""
+        return self.ledger.undecodable()
 
     def handle(self, data: bytes, address: tuple[str, int] | None = None) -> list[NatNetFrame]:
         """Count one datagram and act on it; the frames it yields (several when it is the
@@ -373,6 +369,7 @@ class NatNetReceiver:
             if len(self._pending) >= self.receiver_limits.pending_frames:
                 self._pending.popleft()
                 self.undecoded_frames += 1
+                self.ledger.bad("more frames than are held while the NatNet version is unknown")
             self._pending.append(data)
             return []
         if ident == NAT_FRAMEOFDATA:
@@ -384,9 +381,11 @@ class NatNetReceiver:
             except NatNetFormatError as err:
                 self._bad(str(err))
                 return []
+            self.ledger.decoded()
             return self._use(info)
         if ident in OTHER_MESSAGES and size_ok:
             self.other_messages += 1
+            self.ledger.decoded()
             return []
         self._bad(
             "datagram shorter than a NatNet header"
@@ -412,17 +411,21 @@ class NatNetReceiver:
         return frames
 
     def _check_pending(self, moment: float) -> None:
+        """Frames held longer than ``version_timeout`` for want of a NatNet version are bad
+        (``undecoded_frames``); the connect requests go on, so a late answer still helps."""
         if self._pending_since is None or moment - self._pending_since < self.version_timeout:
             return
-        self.undecoded_frames += len(self._pending)
+        held = len(self._pending)
+        self.undecoded_frames += held
         self._pending.clear()
         self._pending_since = None
         where = f"{self.server}:{self.command_port}" if self.server else "the server"
-        raise NatNetUndecodable(
-            f"NatNet frames arrive on UDP port {self.port} but their NatNet version is "
-            f"unknown: {where} did not answer the connect request within "
+        reason = (
+            f"NatNet version unknown: {where} did not answer the connect request within "
             f"{self.version_timeout:g} s (set natnet_version)"
         )
+        self._note_error(reason)
+        self.ledger.bad(reason, held)
 
     def decode(self, data: bytes) -> NatNetFrame | None:
         """Decode one frame-of-data datagram with the current version (2.5 while none is
@@ -434,11 +437,10 @@ class NatNetReceiver:
             self._bad(f"NatNet {version} frame: {err}")
             return None
         self.frames += 1
+        self.ledger.decoded()
         self.bad_records += frame.bad_records
         self.untracked_bodies += frame.untracked
         self._count_gap(frame.number)
-        self._last_good = time.monotonic()
-        self._bad_since_good = 0
         return frame
 
     def _count_gap(self, number: int) -> None:
@@ -457,8 +459,7 @@ class NatNetReceiver:
             self.frame_jumps += 1
 
     def _bad(self, reason: str) -> None:
-        self.bad_datagrams += 1
-        self._bad_since_good += 1
+        self.ledger.bad(reason)
         self._note_error(reason)
 
     def _note_error(self, reason: str) -> None:

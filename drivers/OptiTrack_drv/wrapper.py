@@ -14,10 +14,10 @@ by default the frames' sender) and ``natnet_version`` (empty: the one the server
 These are gadgetctl's additions to the definition; VR Juggler's element has only ``port``.
 
 Every NatNet frame becomes one sample (upstream polled at 100 Hz and kept the newest frame
-only). Silence longer than :attr:`OptiTrackDevice.peer_timeout`, or datagrams of which none
-decodes for as long, raise from ``sample()`` with the reason (for undecodable data, the first
-error), so the input manager marks the device faulted instead of running, and restarts it; a
-restart succeeds only once frames arrive and decode again.
+only). Datagrams that arrive but do not decode show the device ``undecodable`` with the first
+error (its datagram ledger), never ``running``. Silence longer than
+:attr:`OptiTrackDevice.peer_timeout` raises from ``sample()``, so the input manager marks the
+device faulted and restarts it; a restart succeeds only once frames arrive and decode again.
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ import numpy as np
 from gadgetctl.input import DeviceConfigError, Position
 from gadgetctl.jccl.access import ElementAccess
 from gadgetctl.jccl.configuration import ConfigElement
+from gadgetctl.transport.udp import DatagramLedger
 
 from .natnet import Version, parse_version
 from .standalone import (
@@ -203,9 +204,9 @@ class OptiTrackDevice(Position):
             "kernel_dropped": r.kernel_dropped,
         }
 
-    def transport_dropped(self) -> int:
-        """Datagrams the kernel dropped before the receiver read them (a full socket buffer)."""
-        return self._receiver.kernel_dropped if self._receiver is not None else 0
+    def datagram_ledger(self) -> DatagramLedger | None:
+        """The receiver's account of its datagrams (kernel drops, decoded, bad)."""
+        return self._receiver.ledger if self._receiver is not None else None
 
 
 def _is_multicast(address: str) -> bool:
