@@ -120,3 +120,26 @@ def test_the_run_problems_name_loss_unless_accepted_and_never_accept_decoding_no
     )
     assert len(run_problems([("Q", quiet), ("J", junk)])) == 2
     assert run_problems([("J", junk)], accept_loss=True) == [decoded_nothing("J", junk)]
+
+
+class Scanner(Digital):
+    """A serial device whose driver counts as the record scanners do."""
+
+    ELEMENT_TYPE = "test_scanner"
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.counters = {"records": 0, "bad_records": 0, "skipped_bytes": 0}
+
+
+def test_a_serial_device_that_reads_only_junk_shows_undecodable_until_a_record_decodes() -> None:
+    device = Scanner()
+    device.state = DeviceState.RUNNING
+    assert device.shown_state() == (DeviceState.RUNNING, None)  # nothing read yet
+    device.counters.update(bad_records=3, skipped_bytes=57)
+    assert device.shown_state() == (
+        DeviceState.UNDECODABLE,
+        "57 bytes of junk skipped (3 runs), no record decoded",
+    )
+    device.counters["records"] = 1
+    assert device.shown_state() == (DeviceState.RUNNING, None)

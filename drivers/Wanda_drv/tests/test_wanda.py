@@ -9,9 +9,17 @@ import pytest
 from Wanda_drv.emulator import GARBAGE_CHUNKS, WandaEmulator, encode_packet
 from Wanda_drv.standalone import PacketScanner, Wanda, WandaDisconnected, decode_packet
 
+from gadgetctl.emulation.testing import FixtureLine
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import gather, hangs_up, reads_past_garbage, resumes_within, wait_until
+from gadgetctl.input.testing import (
+    frames_until,
+    gather,
+    hangs_up,
+    reads_past_garbage,
+    resumes_within,
+    wait_until,
+)
 from gadgetctl.input.testing.commands import monitor_ndjson, run_gadgetctl, samples_of
 from gadgetctl.input.testing.configs import corpus_copy
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
@@ -215,3 +223,13 @@ def test_gadgetctl_monitor_reads_the_corpus_example(tmp_path, emulator) -> None:
         assert "DRV001" not in text and "PENDING" not in text and "stays pending" not in text, text
         if command == ["config", "pending"]:
             assert "0 pending" in text
+
+
+def test_a_line_of_nothing_but_junk_shows_the_wanda_undecodable(managers) -> None:
+    """Issue 23 item 4: bytes a 7-bit serial mouse never sends (bit 7 set) are junk; while
+    nothing else comes the device is undecodable, not running, and says how much it skipped."""
+    with FixtureLine() as line:
+        manager = managers(f'<wanda name="W" version="1"><port>{line.address}</port></wanda>\n')
+        line.feed(bytes(range(0x80, 0x100)))
+        frames_until(manager, lambda: manager.status("W").state == "undecodable")
+        assert manager.status("W").reason == "128 bytes of junk skipped (1 run), no record decoded"

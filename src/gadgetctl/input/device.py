@@ -30,6 +30,7 @@ from gadgetctl.input.errors import describe
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.samples import DEFAULT_CAP, SampleStore
 from gadgetctl.safetext import printable
+from gadgetctl.wording import counted
 
 if TYPE_CHECKING:
     from gadgetctl.input.events import EventSource
@@ -235,9 +236,19 @@ class Input:
 
     def undecodable(self) -> str | None:
         """Why the device receives data but decodes none of it; None when it decodes what it
-        gets (or gets nothing). The datagram ledger's verdict by default."""
+        gets (or gets nothing). The datagram ledger's verdict; for a driver without one whose
+        ``counters`` follow the record scanners' names (``records``, ``bad_records``,
+        ``skipped_bytes``), bytes of junk read while no record has decoded yet."""
         ledger = self.datagram_ledger()
-        return ledger.undecodable() if ledger is not None else None
+        if ledger is not None:
+            return ledger.undecodable()
+        counters = getattr(self, "counters", None)
+        if not isinstance(counters, Mapping) or counters.get("records") != 0:
+            return None
+        junk, bad = counters.get("skipped_bytes") or 0, counters.get("bad_records") or 0
+        if not junk:  # a byte stream's junk (a shared-memory segment's bad header is not)
+            return None
+        return f"{junk} bytes of junk skipped ({counted(bad, 'run')}), no record decoded"
 
     def shown_state(self) -> tuple[DeviceState, str | None]:
         """The state to show and its reason: the fault's error while FAULTED or

@@ -356,7 +356,8 @@ CODES += [
         E,
         "device receives data it cannot decode",
         "The device runs and data arrives, but none of it decodes: every datagram since the "
-        "first (or for over a second since the last good one) was bad. The status shows "
+        "first (or for over a second since the last good one) was bad, or a serial driver "
+        "read only junk and no record yet. The status shows "
         "`undecodable` with the count and the first error instead of `running`, and "
         "`gadgetctl monitor` ends with exit status 1. Wrong protocol version, wrong port (another "
         "program's traffic) or a sender the driver does not understand.",
