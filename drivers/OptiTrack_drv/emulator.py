@@ -523,7 +523,10 @@ def main(argv: list[str] | None = None) -> int:
         command = emulator.command_address
         if command is not None:
             print(f"Answering connect requests on {command[0]}:{command[1]}")
-        print(f"Point the optitrack element at it: <port>{args.port}</port>")
+        if args.unicast:
+            print("Point the optitrack element at it: <connection_type>Unicast</connection_type>")
+        else:
+            print(f"Point the optitrack element at it: <port>{args.port}</port>")
         print("Press Ctrl-C to stop.", flush=True)
 
     return run(emulator, duration=args.duration, announce=announce, check=ended(emulator))

@@ -315,14 +315,26 @@ class _FrameDecoder:
                 reader.take(_ASSET_MARKER.size * reader.count(limits.markers, "asset marker"))
         if version >= (2, 3):
             size = 20 + (2 if version >= (2, 6) else 0) + (4 if version >= (3, 0) else 0)
-            for _ in range(reader.count(limits.labeled_markers, "labeled marker", section=True)):
-                start = reader.take(size)
-                ident = _I32.unpack_from(data, start)[0]
-                xyz = struct.unpack_from("<3f", data, start + 4)
-                if all(map(math.isfinite, xyz)):
-                    frame.labeled_markers[ident] = xyz
-                else:
-                    frame.bad_records += 1
+            n = reader.count(limits.labeled_markers, "labeled marker", section=True)
+            records = np.frombuffer(
+                data,
+                dtype=np.dtype(
+                    {
+                        "names": ["id", "xyz"],
+                        "formats": ["<i4", ("<f4", 3)],
+                        "offsets": [0, 4],
+                        "itemsize": size,
+                    }
+                ),
+                count=n,
+                offset=reader.take(size * n),
+            )
+            xyz = records["xyz"].astype(np.float64)
+            finite = np.isfinite(xyz).all(axis=1)
+            frame.bad_records += int(n - finite.sum())
+            frame.labeled_markers.update(
+                zip(records["id"][finite].tolist(), map(tuple, xyz[finite].tolist()), strict=True)
+            )
         if version >= (2, 9):
             self.channels(reader, "force plate")
         if version >= (2, 11):
