@@ -46,7 +46,7 @@ from typing import overload
 
 import numpy as np
 
-from gadgetctl.transport.udp import DatagramLedger, bind_udp
+from gadgetctl.transport.udp import DatagramLedger, LedgeredReceiver, bind_udp
 
 MM_TO_M = 0.001
 DEFAULT_RECEIVE_PORT = 5000
@@ -995,7 +995,7 @@ def _fast_line(builder: _FrameBuilder, words: list[str], tail: str, batch: _Batc
 # -- the receiver -----------------------------------------------------------------------------
 
 
-class DTrackStandalone:
+class DTrackStandalone(LedgeredReceiver):
     """Receives DTrack datagrams on a UDP port and optionally starts and stops the tracker.
 
     ``receive_port`` is a port number (bound on ``bind_address``; 0 lets the OS choose, see
@@ -1178,25 +1178,9 @@ class DTrackStandalone:
         return frames
 
     @property
-    def kernel_dropped(self) -> int:
-        """Datagrams the kernel dropped for a full receive buffer (0 where the OS does not
-        say; see ``kernel_drop_source``)."""
-        return self.ledger.drops.dropped
-
-    @property
     def kernel_drop_source(self) -> str | None:
         """Where ``kernel_dropped`` comes from: "ancillary", "proc" or None (unknown)."""
         return self.ledger.drops.method
-
-    @property
-    def datagrams(self) -> int:
-        """Datagrams received."""
-        return self.ledger.datagrams
-
-    @property
-    def bad_datagrams(self) -> int:
-        """Datagrams that held no valid frame."""
-        return self.ledger.bad_count
 
     def _count_missed(self, counter: int | None) -> None:
         """Frame counters skipped since the previous frame (a restarted counter is not a gap)."""

@@ -49,7 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gadgetctl.transport.udp import DatagramLedger, bind_udp
+from gadgetctl.transport.udp import DatagramLedger, LedgeredReceiver, bind_udp
 
 from .natnet import (
     DEFAULT_LIMITS as FRAME_LIMITS,
@@ -182,7 +182,7 @@ class NatNetUnits:
         return self.matrices
 
 
-class NatNetReceiver:
+class NatNetReceiver(LedgeredReceiver):
     """Receives NatNet messages on UDP ``port`` (0: chosen by the OS).
 
     ``group``: the multicast group joined (None or "": none), on ``interface`` ("0.0.0.0":
@@ -258,18 +258,6 @@ class NatNetReceiver:
         if self._sock is None:
             return self.requested_port
         return self._sock.getsockname()[1]
-
-    @property
-    def kernel_dropped(self) -> int:
-        return self.ledger.kernel_dropped
-
-    @property
-    def datagrams(self) -> int:
-        return self.ledger.datagrams
-
-    @property
-    def bad_datagrams(self) -> int:
-        return self.ledger.bad_count
 
     def open(self) -> None:
         sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)

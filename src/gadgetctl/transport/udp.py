@@ -242,3 +242,26 @@ class DatagramLedger:
             "bad_datagrams": self.bad_count,
             "kernel_dropped": self.kernel_dropped,
         }
+
+
+class LedgeredReceiver:
+    """For a receiver that keeps a ``ledger``: its ``datagrams``, ``bad_datagrams`` and
+    ``kernel_dropped`` read from it."""
+
+    ledger: DatagramLedger
+
+    @property
+    def datagrams(self) -> int:
+        """Datagrams read."""
+        return self.ledger.datagrams
+
+    @property
+    def bad_datagrams(self) -> int:
+        """Datagrams that did not decode."""
+        return self.ledger.bad_count
+
+    @property
+    def kernel_dropped(self) -> int:
+        """Datagrams the kernel dropped for a full receive buffer (0 where the OS does not
+        say)."""
+        return self.ledger.kernel_dropped
