@@ -16,7 +16,8 @@ and is applied; ``fseq`` 0 or below is applied unordered. Unlike the reference, 
 counter is one for all sources, every source keeps its own sessions and frame counter, so two
 sources on one port neither lift each other's fingers nor make each other's frames late. A
 bundle without ``source`` belongs to the source its sender last named (TUIO 1.0 senders: one
-source per sender address).
+source per sender address). A source that sends no frame for ``SOURCE_TIMEOUT`` seconds is
+gone: its fingers lift (``forgotten_sources``).
 
 Upstream fixes (Gadgeteer's ``TuioStandalone``): a ``set`` for a session never announced in
 ``alive`` is counted (``unknown_sessions``) and ignored, where upstream dereferenced a null
@@ -49,6 +50,10 @@ MAX_ALIVE = 1024
 MAX_SOURCES = 64
 #: A frame number this much lower than the last one is a restarted sender, not a late frame.
 LATE_WINDOW = 100
+#: Seconds without a frame after which a source is gone: its fingers lift and it is forgotten
+#: (TUIO senders repeat their frames while nothing moves; a sender restarted from another
+#: port is another source).
+SOURCE_TIMEOUT = 3.0
 MAX_DATAGRAM = 65_535
 _INT_LIMIT = 2**31
 
@@ -75,6 +80,7 @@ class _Source:
 
     slots: dict[int, int] = field(default_factory=dict)
     last_fseq: int = -1
+    seen: float = 0.0  # time.monotonic() of its last frame
 
 
 @dataclass
@@ -92,7 +98,8 @@ class _Frame:
 class TouchSlots:
     """``points`` slots: ``down[i]`` is 1 while a session holds slot i, ``xy[i]`` its position.
     Counters: ``bad_records``, ``unknown_sessions``, ``overflow_sessions`` (more fingers than
-    slots), ``other_messages``, ``late_frames``, ``overflow_sources``."""
+    slots), ``other_messages``, ``late_frames``, ``overflow_sources``, ``forgotten_sources``
+    (silent for ``SOURCE_TIMEOUT`` seconds: their fingers lifted)."""
 
     def __init__(self, points: int) -> None:
         self.points = points
@@ -106,6 +113,9 @@ class TouchSlots:
         self.other_messages = 0
         self.late_frames = 0
         self.overflow_sources = 0
+        self.forgotten_sources = 0
+        self._now = 0.0
+        self._pruned_at = -SOURCE_TIMEOUT
 
     @property
     def sessions(self) -> int:
@@ -116,9 +126,14 @@ class TouchSlots:
         """One OSC message as a frame of its own; whether it was a good cursor message."""
         return self.frame([OscMessage(address, tuple(params))])[0] > 0
 
-    def frame(self, messages: Sequence[OscMessage], sender: str = "") -> tuple[int, int, bool]:
-        """Apply the messages of one datagram from ``sender``: (good cursor messages, bad
-        ones, whether a frame with cursor data was applied)."""
+    def frame(
+        self, messages: Sequence[OscMessage], sender: str = "", now: float | None = None
+    ) -> tuple[int, int, bool]:
+        """Apply the messages of one datagram from ``sender`` arriving at ``now``
+        (``time.monotonic()``; default: now): (good cursor messages, bad ones, whether a frame
+        with cursor data was applied). Sources silent for ``SOURCE_TIMEOUT`` go first."""
+        self._now = time.monotonic() if now is None else now
+        self._forget_silent_sources()
         source = self._named.get(sender, sender)
         pending = _Frame()
         good = bad = 0
@@ -179,7 +194,20 @@ class TouchSlots:
                 self.overflow_sources += 1
                 return None
             state = self.sources[name] = _Source()
+        state.seen = self._now
         return state
+
+    def _forget_silent_sources(self) -> None:
+        if self._now - self._pruned_at < SOURCE_TIMEOUT / 4:
+            return
+        self._pruned_at = self._now
+        for name in [n for n, s in self.sources.items() if self._now - s.seen > SOURCE_TIMEOUT]:
+            for slot in self.sources.pop(name).slots.values():
+                self.down[slot] = 0
+                self.xy[slot] = [0.0, 0.0]
+            self.forgotten_sources += 1
+        for sender in [k for k, v in self._named.items() if v not in self.sources]:
+            del self._named[sender]
 
     def _commit(self, name: str, frame: _Frame, fseq: int | None) -> bool:
         """Apply ``frame`` to source ``name`` unless it is late; whether cursor data changed

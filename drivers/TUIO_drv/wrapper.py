@@ -122,6 +122,7 @@ class TuioDevice(Digital, Analog):
             "other_messages": s.other_messages,
             "late_frames": s.late_frames,
             "overflow_sources": s.overflow_sources,
+            "forgotten_sources": s.forgotten_sources,
         }
 
     def datagram_ledger(self) -> DatagramLedger | None:

@@ -12,7 +12,8 @@ from pathlib import Path
 import pytest
 from pythonosc.osc_message_builder import OscMessageBuilder
 from TUIO_drv.emulator import TuioEmulator, cursor_position, frame_bundle, message
-from TUIO_drv.standalone import MAX_ALIVE, TouchSlots, TuioReceiver
+from TUIO_drv.osc import OscMessage
+from TUIO_drv.standalone import MAX_ALIVE, SOURCE_TIMEOUT, TouchSlots, TuioReceiver
 
 from gadgetctl.input import DeviceKind, DigitalState
 from gadgetctl.input.testing import frames_until
@@ -173,3 +174,16 @@ def test_validate_knows_the_units_of_points(tmp_path: Path) -> None:
     assert result.returncode == 1 and result.stdout.count("CFG034") == 2
     assert "'D2'" in result.stdout and "'A4'" in result.stdout
     assert "'D1'" not in result.stdout and "'A3'" not in result.stdout
+
+
+def test_a_source_silent_for_the_timeout_is_forgotten_and_its_fingers_lift() -> None:
+    """A TUIO 1.0 sender restarted from another port is another source: the old one's fingers
+    must not stay down for ever."""
+    slots = TouchSlots(2)
+    alive = [OscMessage("/tuio/2Dcur", ("alive", 1))]
+    slots.frame(alive, "127.0.0.1:5000", now=100.0)
+    slots.frame(alive, "127.0.0.1:5001", now=100.0 + SOURCE_TIMEOUT)  # the restarted sender
+    assert slots.digital() == [1, 1] and slots.forgotten_sources == 0
+    slots.frame(alive, "127.0.0.1:5001", now=100.0 + 2 * SOURCE_TIMEOUT)
+    assert slots.digital() == [0, 1] and slots.forgotten_sources == 1
+    assert set(slots.sources) == {"127.0.0.1:5001"}
