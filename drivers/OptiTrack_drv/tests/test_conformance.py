@@ -385,7 +385,9 @@ def test_sdk_frames_over_multicast_at_motive_defaults_with_no_option_given(build
             counters = device.counters
             number = last["n"]
         assert motive.connects >= 1 and counters["server_infos"] >= 1
-        assert counters["bad_datagrams"] == 0 and counters["frames"] >= 20
+        # bad only if frames overflowed the hold while waiting for the reply (a slow machine)
+        assert counters["bad_datagrams"] == counters["undecoded_frames"]
+        assert counters["frames"] >= 20
     # the proxies hold the pose of the newest frame read (a recent one: motion is visible)
     read = manager.proxy("B3").matrix
     candidates = [Scene(n).bodies[0][1] for n in range(1, number + 1)]
@@ -427,7 +429,7 @@ def test_real_motive_frames_over_multicast_at_motive_defaults(build) -> None:
                 timeout=30,
             )
         counters = device.counters
-    assert counters["bad_datagrams"] == 0 and counters["frames"] > 0
+    assert counters["bad_datagrams"] == counters["undecoded_frames"] and counters["frames"] > 0
     assert counters["frames"] + counters["undecoded_frames"] + counters["kernel_dropped"] == 518
     # every decoded frame is a sample; once all are in the store, a frame makes the newest
     # one current
