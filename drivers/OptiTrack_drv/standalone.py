@@ -280,6 +280,7 @@ class NatNetReceiver(LedgeredReceiver):
         self.ledger.attach(sock)
         moment = time.monotonic()
         self._last_data = moment
+        self.server_info = None  # a new session: unicast connects again (a version stays)
         self._last_request = self._last_keepalive = -math.inf
         self._maintain(moment)
 

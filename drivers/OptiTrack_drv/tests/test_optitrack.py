@@ -293,6 +293,28 @@ def test_a_unicast_session_with_an_emulated_motive(build) -> None:
     np.testing.assert_allclose(manager.proxy("M").translation[0], 0.01, atol=1e-6)
 
 
+def test_a_unicast_receiver_connects_again_after_a_reconnection() -> None:
+    with OptiTrackEmulator(
+        free_udp_port(), scenario="idle", rate=RATE, command_port=0, unicast=True
+    ) as motive:
+        receiver = NatNetReceiver(
+            0,
+            group=None,
+            unicast=True,
+            command_port=motive.command_address[1],
+            receive_timeout=0.02,
+        )
+        for _session in range(2):  # a restart after a loss is a new session for the server
+            before = motive.connects
+            receiver.open()
+            try:
+                assert wait_until(lambda: bool(receiver.sample_all()), 5.0)
+            finally:
+                receiver.close()
+            assert motive.connects > before and receiver.version == (4, 1)
+        assert receiver.frames >= 2 and receiver.bad_datagrams == 0
+
+
 def test_a_device_whose_frames_never_decode_shows_undecodable_with_the_first_error(build) -> None:
     # NatNet 3.0 frames read as 2.0 (the element says so): every one fails; upstream, and
     # gadgetctl before, showed such a device as running
