@@ -16,8 +16,8 @@ and is applied; ``fseq`` 0 or below is applied unordered. Unlike the reference, 
 counter is one for all sources, every source keeps its own sessions and frame counter, so two
 sources on one port neither lift each other's fingers nor make each other's frames late. A
 bundle without ``source`` belongs to the source its sender last named (TUIO 1.0 senders: one
-source per sender address). A source that sends no frame for ``SOURCE_TIMEOUT`` seconds is
-gone: its fingers lift (``forgotten_sources``).
+source per sender address). A source that sends no frame for ``SOURCE_TIMEOUT`` seconds
+while others send ``SOURCE_FRAMES`` frames is gone: its fingers lift (``forgotten_sources``).
 
 Upstream fixes (Gadgeteer's ``TuioStandalone``): a ``set`` for a session never announced in
 ``alive`` is counted (``unknown_sessions``) and ignored, where upstream dereferenced a null
@@ -50,10 +50,12 @@ MAX_ALIVE = 1024
 MAX_SOURCES = 64
 #: A frame number this much lower than the last one is a restarted sender, not a late frame.
 LATE_WINDOW = 100
-#: Seconds without a frame after which a source is gone: its fingers lift and it is forgotten
-#: (TUIO senders repeat their frames while nothing moves; a sender restarted from another
-#: port is another source).
+#: A source is gone once it sent no frame for this many seconds while the other sources sent
+#: ``SOURCE_FRAMES`` frames: its fingers lift and it is forgotten (TUIO senders repeat their
+#: frames while nothing moves; a sender restarted from another port is another source). The
+#: count keeps a reader that stalled, then reads a backlog, from forgetting everyone.
 SOURCE_TIMEOUT = 3.0
+SOURCE_FRAMES = 30
 MAX_DATAGRAM = 65_535
 _INT_LIMIT = 2**31
 
@@ -81,6 +83,7 @@ class _Source:
     slots: dict[int, int] = field(default_factory=dict)
     last_fseq: int = -1
     seen: float = 0.0  # time.monotonic() of its last frame
+    seen_frame: int = 0  # the receiver's frame count at its last frame
 
 
 @dataclass
@@ -115,6 +118,7 @@ class TouchSlots:
         self.overflow_sources = 0
         self.forgotten_sources = 0
         self._now = 0.0
+        self._frames = 0  # frames committed, over every source
         self._pruned_at = -SOURCE_TIMEOUT
 
     @property
@@ -194,14 +198,20 @@ class TouchSlots:
                 self.overflow_sources += 1
                 return None
             state = self.sources[name] = _Source()
-        state.seen = self._now
+        self._frames += 1
+        state.seen, state.seen_frame = self._now, self._frames
         return state
 
     def _forget_silent_sources(self) -> None:
         if self._now - self._pruned_at < SOURCE_TIMEOUT / 4:
             return
         self._pruned_at = self._now
-        for name in [n for n, s in self.sources.items() if self._now - s.seen > SOURCE_TIMEOUT]:
+        gone = [
+            name
+            for name, s in self.sources.items()
+            if self._now - s.seen > SOURCE_TIMEOUT and self._frames - s.seen_frame > SOURCE_FRAMES
+        ]
+        for name in gone:
             for slot in self.sources.pop(name).slots.values():
                 self.down[slot] = 0
                 self.xy[slot] = [0.0, 0.0]

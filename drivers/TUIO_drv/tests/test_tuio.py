@@ -13,7 +13,7 @@ import pytest
 from pythonosc.osc_message_builder import OscMessageBuilder
 from TUIO_drv.emulator import TuioEmulator, cursor_position, frame_bundle, message
 from TUIO_drv.osc import OscMessage
-from TUIO_drv.standalone import MAX_ALIVE, SOURCE_TIMEOUT, TouchSlots, TuioReceiver
+from TUIO_drv.standalone import MAX_ALIVE, SOURCE_FRAMES, TouchSlots, TuioReceiver
 
 from gadgetctl.input import DeviceKind, DigitalState
 from gadgetctl.input.testing import frames_until
@@ -178,12 +178,17 @@ def test_validate_knows_the_units_of_points(tmp_path: Path) -> None:
 
 def test_a_source_silent_for_the_timeout_is_forgotten_and_its_fingers_lift() -> None:
     """A TUIO 1.0 sender restarted from another port is another source: the old one's fingers
-    must not stay down for ever."""
-    slots = TouchSlots(2)
+    must not stay down for ever; a reader that stalls and then reads its backlog forgets no
+    one that is still sending."""
+    slots = TouchSlots(3)
     alive = [OscMessage("/tuio/2Dcur", ("alive", 1))]
     slots.frame(alive, "127.0.0.1:5000", now=100.0)
-    slots.frame(alive, "127.0.0.1:5001", now=100.0 + SOURCE_TIMEOUT)  # the restarted sender
-    assert slots.digital() == [1, 1] and slots.forgotten_sources == 0
-    slots.frame(alive, "127.0.0.1:5001", now=100.0 + 2 * SOURCE_TIMEOUT)
-    assert slots.digital() == [0, 1] and slots.forgotten_sources == 1
-    assert set(slots.sources) == {"127.0.0.1:5001"}
+    slots.frame(alive, "127.0.0.1:5002", now=100.0)
+    for n in range(SOURCE_FRAMES):  # 30 frames of the restarted sender, within the timeout
+        slots.frame(alive, "127.0.0.1:5001", now=100.0 + n * 0.01)
+    assert slots.digital() == [1, 1, 1] and slots.forgotten_sources == 0
+    # a reader stall of 10 s, then its backlog: 5000 (silent 10 s, 31 frames of others since)
+    # is gone; 5001 was silent as long but only one frame came since: its frames are queued
+    slots.frame(alive, "127.0.0.1:5002", now=110.0)
+    assert slots.forgotten_sources == 1 and slots.digital() == [0, 1, 1]
+    assert set(slots.sources) == {"127.0.0.1:5001", "127.0.0.1:5002"}
