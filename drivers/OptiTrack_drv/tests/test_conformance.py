@@ -258,7 +258,10 @@ def expected_matrix(pose: tuple[float, ...]) -> np.ndarray:
     return m
 
 
-@pytest.mark.parametrize("version", VERSIONS, ids=[f"{a}.{b}" for a, b in VERSIONS])
+EVERY_LAYOUT = sorted({(1, 0), (2, 1), (2, 3), (2, 6), (2, 9), (2, 11), *VERSIONS})
+
+
+@pytest.mark.parametrize("version", EVERY_LAYOUT, ids=[f"{a}.{b}" for a, b in EVERY_LAYOUT])
 def test_sdk_layout_frames_decode_to_the_right_ids_and_poses(version) -> None:
     scene = Scene(30)
     frame = decode_frame(SdkPacker(*version).frame(30, scene), version)
@@ -278,7 +281,7 @@ def test_sdk_layout_frames_decode_to_the_right_ids_and_poses(version) -> None:
     if version >= (2, 3):
         assert sorted(frame.labeled_markers) == [77, (3 << 16) | 1]
         np.testing.assert_allclose(frame.labeled_markers[77], (9.0, 8.0, 7.0), atol=1e-6)
-    if version < (3, 0):  # rigid-body marker lists
+    if (2, 0) <= version < (3, 0):  # rigid-body marker lists with their ids
         np.testing.assert_allclose(frame.body_markers[301], (1.5, 1.2, -0.3), atol=1e-6)
 
 
