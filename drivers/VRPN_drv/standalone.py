@@ -163,22 +163,38 @@ def pose_records(block: Block) -> np.ndarray:
     return rows.view(POSE_MESSAGE)[:, 0]
 
 
+# Rotation matrix entries as sums of quaternion products: entry (row, column) of the
+# rotation is [row==column] + s * sum(sign * q[i] * q[j]) over the pairs listed (x, y, z, w
+# = 0, 1, 2, 3), s = 2 / |q|^2, as :func:`pose_rows` writes them out.
+_PRODUCTS = np.zeros((16, 9))
+for _entry, _terms in enumerate(
+    (
+        ((1, 1, -1), (2, 2, -1)),
+        ((0, 1, 1), (2, 3, -1)),
+        ((0, 2, 1), (1, 3, 1)),
+        ((0, 1, 1), (2, 3, 1)),
+        ((0, 0, -1), (2, 2, -1)),
+        ((1, 2, 1), (0, 3, -1)),
+        ((0, 2, 1), (1, 3, -1)),
+        ((1, 2, 1), (0, 3, 1)),
+        ((0, 0, -1), (1, 1, -1)),
+    )
+):
+    for _i, _j, _sign in _terms:
+        _PRODUCTS[4 * _i + _j, _entry] = _sign
+_IDENTITY3 = np.eye(3).reshape(9)
+
+
 def pose_matrices(position: np.ndarray, quat: np.ndarray) -> np.ndarray:
     """The 4x4 matrices of positions (n, 3) and (x, y, z, w) quaternions (n, 4), as
-    :func:`pose_rows` makes them one by one."""
-    x, y, z, w = (quat[:, i].astype(np.float64) for i in range(4))
-    norm = x * x + y * y + z * z + w * w
-    s = np.divide(2.0, norm, out=np.zeros_like(norm), where=norm > 0.0)
-    out = np.zeros((len(norm), 4, 4))
-    out[:, 0, 0] = 1.0 - s * (y * y + z * z)
-    out[:, 0, 1] = s * (x * y - z * w)
-    out[:, 0, 2] = s * (x * z + y * w)
-    out[:, 1, 0] = s * (x * y + z * w)
-    out[:, 1, 1] = 1.0 - s * (x * x + z * z)
-    out[:, 1, 2] = s * (y * z - x * w)
-    out[:, 2, 0] = s * (x * z - y * w)
-    out[:, 2, 1] = s * (y * z + x * w)
-    out[:, 2, 2] = 1.0 - s * (x * x + y * y)
+    :func:`pose_rows` makes them one by one (a zero quaternion is no rotation)."""
+    q = np.asarray(quat, dtype=np.float64)
+    n = len(q)
+    norm = np.einsum("ij,ij->i", q, q)
+    s = np.divide(2.0, norm, out=np.zeros(n), where=norm > 0.0)
+    products = (q[:, :, None] * q[:, None, :]).reshape(n, 16)
+    out = np.zeros((n, 4, 4))
+    out[:, :3, :3] = (_IDENTITY3 + s[:, None] * (products @ _PRODUCTS)).reshape(n, 3, 3)
     out[:, :3, 3] = position
     out[:, 3, 3] = 1.0
     return out

@@ -100,6 +100,12 @@ class VrpnDevice(Position, Digital, Analog):
     silence_timeout = 3.0
     #: Bytes asked of the kernel for the UDP channel's receive buffer.
     receive_buffer = 4 << 20
+    #: Seconds between two reads at least: what arrives meanwhile waits in the sockets and
+    #: is taken in one read (a read costs about as much as fifty reports, so at 32 sensors
+    #: and 1 kHz a read per tick or two would cost more than the reports). Sample times are
+    #: the messages' own, so only the delivery is later, by at most this (half a frame at
+    #: 60 Hz).
+    read_interval = 0.008
 
     def __init__(self) -> None:
         super().__init__()
@@ -159,9 +165,13 @@ class VrpnDevice(Position, Digital, Analog):
         if not self._input.devices:
             time.sleep(self.receive_timeout)
             return
+        began = time.monotonic()
         batch = self._input.read(self.receive_timeout)
         if batch:
             self._add(batch)
+        rest = self.read_interval - (time.monotonic() - began)
+        if rest > 0:
+            time.sleep(rest)
 
     def stop_sampling(self) -> None:
         if self._input is not None:

@@ -136,6 +136,16 @@ class Block(NamedTuple):
 #: the exact message length such a message must have).
 BulkIds = dict[tuple[int, int], tuple[tuple[str, str], int]]
 _INT32 = struct.Struct(">i")
+_RUN_STRUCTS: dict[int, struct.Struct] = {}
+
+
+def _run_struct(length: int) -> struct.Struct:
+    """A whole message of ``length`` bytes: the header and the first payload word (a
+    tracker report's sensor), the rest skipped."""
+    found = _RUN_STRUCTS.get(length)
+    if found is None:
+        found = _RUN_STRUCTS[length] = struct.Struct(f">IiiiiIi{length - HEADER_SIZE - 4}x")
+    return found
 
 
 def split_messages(
@@ -169,7 +179,26 @@ def split_messages(
             offsets = found.get(wanted[0])
             if offsets is None:
                 offsets = found[wanted[0]] = []
-            offsets.append(pos)
+            if length % ALIGN:  # padded: no run of back-to-back messages of this length
+                offsets.append(pos)
+                pos += HEADER_SIZE + body
+                continue
+            # a run of reports of this sender and type (a tracker tick), read at once
+            run = _run_struct(length)
+            stop = pos + (end - pos) // length * length
+            count = 0
+            for fields in run.iter_unpack(memoryview(data)[pos:stop]):
+                if (
+                    fields[0] != length
+                    or fields[3] != sender
+                    or fields[4] != type_id
+                    or fields[6] < 0
+                ):
+                    break
+                count += 1
+            offsets.extend(range(pos, pos + count * length, length))
+            pos += count * length
+            continue
         else:
             if type_id < 0:
                 bulk = {}  # the descriptions to come change what the ids mean
