@@ -36,20 +36,21 @@ function __gadgetctl_positionals_below --argument-names max depth
 end
 
 complete -c gadgetctl -f
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a completion -d 'Print the completion script for bash, zsh or fish.'
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a config -d 'Inspect configurations (.jconf): resolved values and wiring.'
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a defs -d 'Inspect the definition repository: list, show, tree and search path.'
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a demo -d 'Monitor the bundled waveform example (examples/waveform.jconf) for a few seconds: the'
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a doctor -d 'Explain why no data arrive: which definitions and driver plug-ins are found and'
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a drivers -d 'Driver plug-ins: list what can be found, load and check them.'
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a emulate -d 'Run the device emulator a driver plug-in ships, and print where to point a'
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a explain -d 'Describe a diagnostic code, with an example and how to fix it.'
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a monitor -d 'Run the input manager on CONFIG files and show every device, proxy and alias live:'
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a replay -d 'Feed a recording back through a replay driver into the input manager, so proxies,'
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a scaffold -d 'Generate new things: a driver plug-in that works on the first run.'
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a serve -d 'Run the input manager on CONFIG files and serve every device, proxy and alias over'
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a upgrade -d 'Bring elements up to date with their definitions (the definitions'\'' upgrade transforms,'
-complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain monitor replay scaffold serve upgrade validate' -a validate -d 'Check JCCL definition (.jdef) and configuration (.jconf) files.'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a completion -d 'Print the completion script for bash, zsh or fish.'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a config -d 'Inspect configurations (.jconf): resolved values and wiring.'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a defs -d 'Inspect the definition repository: list, show, tree and search path.'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a demo -d 'Monitor the bundled waveform example (examples/waveform.jconf) for a few seconds: the'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a doctor -d 'Explain why no data arrive: which definitions and driver plug-ins are found and'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a drivers -d 'Driver plug-ins: list what can be found, load and check them.'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a emulate -d 'Run the device emulator a driver plug-in ships, and print where to point a'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a explain -d 'Describe a diagnostic code, with an example and how to fix it.'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a lsp -d 'Run the JCCL language server (standard input/output).'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a monitor -d 'Run the input manager on CONFIG files and show every device, proxy and alias live:'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a replay -d 'Feed a recording back through a replay driver into the input manager, so proxies,'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a scaffold -d 'Generate new things: a driver plug-in that works on the first run.'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a serve -d 'Run the input manager on CONFIG files and serve every device, proxy and alias over'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a upgrade -d 'Bring elements up to date with their definitions (the definitions'\'' upgrade transforms,'
+complete -c gadgetctl -n 'not __fish_seen_subcommand_from completion config defs demo doctor drivers emulate explain lsp monitor replay scaffold serve upgrade validate' -a validate -d 'Check JCCL definition (.jdef) and configuration (.jconf) files.'
 complete -c gadgetctl -n __fish_use_subcommand -l version -s V -d 'Print the version and exit'
 complete -c gadgetctl -n __fish_use_subcommand -l help -s h -d 'Show help and exit'
 complete -c gadgetctl -n '__fish_seen_subcommand_from completion' -F
@@ -146,6 +147,11 @@ complete -c gadgetctl -n '__fish_seen_subcommand_from explain ; and __gadgetctl_
 complete -c gadgetctl -n '__fish_seen_subcommand_from explain ; and not __gadgetctl_positionals_below 1 1 --format -f' -F
 complete -c gadgetctl -n '__fish_seen_subcommand_from explain' -l format -s f -x -a 'text json' -d 'Output format'
 complete -c gadgetctl -n '__fish_seen_subcommand_from explain' -l help -s h -d 'Show help and exit'
+complete -c gadgetctl -n '__fish_seen_subcommand_from lsp' -F
+complete -c gadgetctl -n '__fish_seen_subcommand_from lsp' -l tcp -r -F -d 'Listen on 127.0.0.1:PORT instead of standard input/output'
+complete -c gadgetctl -n '__fish_seen_subcommand_from lsp' -l definitions -s d -r -F -d 'Add a directory to the definition search path (after the bundled set, VJ_BASE_DIR and JCCL_DEFINITION_PATH)'
+complete -c gadgetctl -n '__fish_seen_subcommand_from lsp' -l bundled -l no-bundled -d 'Use gadgetctl'\''s bundled standard definitions'
+complete -c gadgetctl -n '__fish_seen_subcommand_from lsp' -l help -s h -d 'Show help and exit'
 complete -c gadgetctl -n '__fish_seen_subcommand_from monitor' -a '(__gadgetctl_candidates inputs)'
 complete -c gadgetctl -n '__fish_seen_subcommand_from monitor' -F
 complete -c gadgetctl -n '__fish_seen_subcommand_from monitor' -l rate -r -F -d 'Frames per second (the view refreshes once per frame)'

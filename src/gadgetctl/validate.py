@@ -11,11 +11,15 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gadgetctl.diagnostics import Diagnostic, sort_key
 from gadgetctl.errors import GadgetctlError
 from gadgetctl.files import expand_paths
 from gadgetctl.jccl.xmlload import DEFAULT_MAX_SIZE, FileKind, XmlDocument, load_file
+
+if TYPE_CHECKING:
+    from gadgetctl.jccl.repository import DefinitionRepository
 
 LEVELS = ("xml", "schema", "definitions", "full")
 
@@ -28,6 +32,10 @@ class ValidateOptions:
     definition_dirs: list[Path] = field(default_factory=list)
     together: bool = False
     environ: Mapping[str, str] | None = None  # for ${VAR} in paths; os.environ when None
+    #: The definitions of the search path (bundled, VJ_BASE_DIR, JCCL_DEFINITION_PATH,
+    #: definition_dirs), when the caller already has them: the language server keeps them
+    #: between checks instead of reading every .jdef again for each edit.
+    repository: DefinitionRepository | None = None
 
 
 @dataclass
@@ -153,7 +161,9 @@ def _validate_paths(
         )
         if d and d.name
     ]
-    base = default_repository(options.definition_dirs, bundled=options.bundled)
+    base = options.repository
+    if base is None:
+        base = default_repository(options.definition_dirs, bundled=options.bundled)
     repo = base.overlay(definitions)
     result.diagnostics.extend(search_path_diagnostics(base, result.files))
     for definition in definitions:

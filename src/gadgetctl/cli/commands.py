@@ -13,6 +13,7 @@ COMMAND_MODULES = (
     "gadgetctl.cli.defs_cmd",
     "gadgetctl.cli.config_cmd",
     "gadgetctl.cli.upgrade_cmd",
+    "gadgetctl.cli.lsp_cmd",
     "gadgetctl.cli.drivers_cmd",
     "gadgetctl.cli.monitor_cmd",
     "gadgetctl.cli.replay_cmd",

@@ -26,7 +26,7 @@ from gadgetctl.jccl.configuration import (
     TagLocation,
 )
 from gadgetctl.jccl.definitions import Location
-from gadgetctl.jccl.xmlload import DEFAULT_MAX_SIZE, XmlDocument, load_file
+from gadgetctl.jccl.xmlload import DEFAULT_MAX_SIZE, XmlDocument, has_unsaved, load_file
 
 
 def _local(node) -> str | None:
@@ -257,11 +257,16 @@ class ConfigurationLoader:
             return None
         candidate = Path(name).expanduser()
         if candidate.is_absolute():
-            return candidate if is_file(candidate) else None
+            return candidate if _exists(candidate) else None
         for base in (directory, Path.cwd()):
-            if is_file(base / candidate):
+            if _exists(base / candidate):
                 return base / candidate
         return None
+
+
+def _exists(path: Path) -> bool:
+    """A file, or an editor's unsaved buffer standing for one (:func:`unsaved_texts`)."""
+    return is_file(path) or has_unsaved(path)
 
 
 def _display(path: Path) -> str:

@@ -9,14 +9,24 @@ a :class:`~gadgetctl.diagnostics.Diagnostic` with a line and column.
 from __future__ import annotations
 
 import codecs
+import os
 import re
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 from enum import StrEnum
 from pathlib import Path
 
 from lxml import etree
 
-from gadgetctl.boundedread import DEFAULT_MAX_SIZE, FileTooLarge, NotRegularFile, read_limited
+from gadgetctl.boundedread import (
+    DEFAULT_MAX_SIZE,
+    FileTooLarge,
+    NotRegularFile,
+    read_limited,
+    too_large_message,
+)
 from gadgetctl.diagnostics import Diagnostic
 
 _DECLARED_ENCODING = re.compile(rb"^<\?xml[^>]*?encoding\s*=\s*[\"']([A-Za-z][A-Za-z0-9._-]*)[\"']")
@@ -319,12 +329,61 @@ def parse_bytes(data: bytes, path: str, kind: FileKind = FileKind.UNKNOWN) -> Xm
     return doc
 
 
+#: Texts that stand for files during one check (an editor's unsaved buffers), by real path.
+_UNSAVED: ContextVar[dict[str, str] | None] = ContextVar("gadgetctl_unsaved", default=None)
+
+
+@contextmanager
+def unsaved_texts(texts: Mapping[Path, str]) -> Iterator[None]:
+    """Within the block (in this thread or task), :func:`load_file` reads each of these paths'
+    text instead of the file, and :func:`has_unsaved` says it exists: the language server
+    checks what the editor shows, through the same loading and checks as ``validate``."""
+    token = _UNSAVED.set({os.path.realpath(path): text for path, text in texts.items()})
+    try:
+        yield
+    finally:
+        _UNSAVED.reset(token)
+
+
+def unsaved_text(path: str | os.PathLike[str]) -> str | None:
+    """The text standing for ``path`` in the current :func:`unsaved_texts` block, if any."""
+    texts = _UNSAVED.get()
+    if not texts:
+        return None
+    return texts.get(os.path.realpath(path))
+
+
+def has_unsaved(path: str | os.PathLike[str]) -> bool:
+    return unsaved_text(path) is not None
+
+
+def _unsaved_bytes(text: str) -> bytes:
+    """The bytes a saved buffer would have: in the encoding its declaration names, where
+    Python has that text codec (characters it cannot hold become character references)."""
+    head = text[:200].encode("utf-8", errors="replace")
+    encoding = declared_encoding(head)
+    if encoding.lower().replace("_", "-") in ("utf-16", "utf-32") or not text_codec(encoding):
+        encoding = "utf-8"
+    return text.encode(encoding, errors="xmlcharrefreplace")
+
+
 def load_file(
     path: Path, *, max_size: int = DEFAULT_MAX_SIZE, display: str | None = None
 ) -> XmlDocument:
     """Read (at most ``max_size`` bytes) and parse one file. A file above the limit or not a
-    regular file is a diagnostic; other I/O errors propagate as :class:`OSError`."""
+    regular file is a diagnostic; other I/O errors propagate as :class:`OSError`. Inside
+    :func:`unsaved_texts` a path given there is read from its text instead."""
     shown = display or str(path)
+    unsaved = unsaved_text(path)
+    if unsaved is not None:
+        data = _unsaved_bytes(unsaved)
+        if len(data) > max_size:
+            doc = XmlDocument(path=shown, kind=guess_kind(path))
+            doc.diagnostics.append(
+                Diagnostic.make("XML004", too_large_message(max_size, len(data)), shown)
+            )
+            return doc
+        return parse_bytes(data, shown, guess_kind(path))
     try:
         data = read_limited(path, max_size)
     except (FileTooLarge, NotRegularFile) as err:

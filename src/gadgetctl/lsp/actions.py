@@ -1,0 +1,214 @@
+"""Code actions: the fixes validate's findings name, as edits in the file's own spelling.
+
+Each fix comes from what the check that found the problem knows: the close names it
+suggests (:func:`gadgetctl.suggest.close_names` over the same candidates: the element's
+properties, the enumeration's labels, the known types), the enumeration's label of another
+case, the pointers a type must set, and `gadgetctl upgrade` (which rewrites only what
+changes) for outdated elements and file formats.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from gadgetctl.lsp.analysis import Model
+from gadgetctl.lsp.elements import place_of, property_of, required_properties, view_of
+from gadgetctl.lsp.syntax import TAG, context_at, local, open_stack, text_range
+from gadgetctl.suggest import close_names
+
+UPGRADE_CODES = frozenset({"CFG012", "CFG021", "XML010", "XML011", "XML012"})
+MAX_FIXES = 5
+
+
+@dataclass
+class Action:
+    title: str
+    code: str  # the finding it fixes
+    edits: dict[Path, list[tuple[int, int, str]]] = field(default_factory=dict)
+    preferred: bool = False
+
+
+@dataclass(frozen=True)
+class Problem:
+    """A finding as the editor sent it back: its code and range (offsets)."""
+
+    code: str
+    start: int
+    end: int
+
+
+def actions(model: Model, text: str, problems: list[Problem]) -> list[Action]:
+    found: list[Action] = []
+    upgrade_offered = False
+    for problem in problems:
+        code = problem.code
+        if code in ("CFG020", "CFG010"):
+            found += _rename_tag(model, text, problem)
+        elif code in ("CFG026", "CFG027", "CFG028"):
+            found += _fix_value(model, text, problem)
+        elif code == "CFG033":
+            found += _add_required(model, text, problem)
+        if code in UPGRADE_CODES and not upgrade_offered:
+            upgrade = _upgrade(model, text, code)
+            if upgrade is not None:
+                found.append(upgrade)
+                upgrade_offered = True
+    return found
+
+
+def _tag_name_at(text: str, start: int) -> tuple[str, int, int] | None:
+    match = re.compile(r"<([A-Za-z_][\w.:-]*)").match(text, start)
+    if match is None:
+        return None
+    return local(match.group(1)), match.end(1) - len(local(match.group(1))), match.end(1)
+
+
+def _end_tag(text: str, start: int, name: str) -> tuple[int, int] | None:
+    """The name range of the end tag closing the start tag at ``start`` (None if empty)."""
+    open_end = text.find(">", start)
+    if open_end < 0 or text[open_end - 1] == "/":
+        return None
+    depth = 0
+    for match in TAG.finditer(text, open_end + 1):
+        closing, tag, _, empty = match.groups()
+        if local(tag) != name or empty:
+            continue
+        if not closing:
+            depth += 1
+        elif depth == 0:
+            return match.end(2) - len(name), match.end(2)
+        else:
+            depth -= 1
+    return None
+
+
+def _rename_tag(model: Model, text: str, problem: Problem) -> list[Action]:
+    found = _tag_name_at(text, problem.start)
+    if found is None:
+        return []
+    name, name_start, name_end = found
+    if problem.code == "CFG020":
+        place = place_of(open_stack(text, problem.start))
+        if place is None or place.element is None:
+            return []
+        view = view_of(model.index, place.element)
+        if view is None:
+            return []
+        candidates = close_names(name, list(view.properties), cutoff=0.6)
+    else:
+        names = [d.name for d in model.repo.all_newest() if not d.abstract]
+        candidates = close_names(name, names, cutoff=0.6)
+    end = _end_tag(text, problem.start, name)
+    result = []
+    for i, candidate in enumerate(candidates[:MAX_FIXES]):
+        edits = [(name_start, name_end, candidate)]
+        if end is not None:
+            edits.append((*end, candidate))
+        result.append(
+            Action(
+                f"Did you mean {candidate}?", problem.code, {model.path: edits}, preferred=i == 0
+            )
+        )
+    return result
+
+
+def _fix_value(model: Model, text: str, problem: Problem) -> list[Action]:
+    tag = _tag_name_at(text, problem.start)
+    if tag is None:
+        return []
+    place = place_of(open_stack(text, problem.start))
+    if place is None or place.element is None:
+        return []
+    prop = property_of(model.index, place.element, tag[0])
+    tag_end = text.find(">", problem.start)
+    if prop is None or tag_end < 0 or text[tag_end - 1] == "/":
+        return []
+    start, end = text_range(text, tag_end + 1)
+    value = text[start:end]
+    replacements: list[str] = []
+    if problem.code == "CFG026":
+        if value.lower() in ("true", "false"):
+            replacements = [value.lower()]
+    elif prop.enumeration is not None:
+        if problem.code == "CFG027":
+            near = prop.enumeration.case_insensitive_label(value)
+            replacements = [near.label] if near is not None else []
+        else:
+            labels = [c.label for c in prop.enumeration.choices]
+            replacements = close_names(value, labels, cutoff=0.6)
+    return [
+        Action(f"Write {r!r}", problem.code, {model.path: [(start, end, r)]}, preferred=i == 0)
+        for i, r in enumerate(replacements[:MAX_FIXES])
+    ]
+
+
+def _add_required(model: Model, text: str, problem: Problem) -> list[Action]:
+    tag = _tag_name_at(text, problem.start)
+    if tag is None:
+        return []
+    ctx = context_at(text, problem.start)
+    place = place_of(ctx.stack)
+    if place is None or (place.element is not None and place.prop is None):
+        return []  # (the finding is on an empty property tag: nothing to add)
+    tag_end = text.find(">", problem.start)
+    if tag_end < 0 or text[tag_end - 1] == "/":
+        return []
+    element = open_stack(text, tag_end + 1)[-1]
+    view = view_of(model.index, element)
+    if view is None:
+        return []
+    end = _end_tag(text, problem.start, tag[0])
+    body = text[tag_end + 1 : end[0] if end else tag_end + 1]
+    present = {local(m.group(2)) for m in TAG.finditer(body) if not m.group(1)}
+    missing = [p for p in required_properties(model.index, view) if p not in present]
+    line_start = text.rfind("\n", 0, problem.start) + 1
+    own = text[line_start : problem.start]
+    own = own if not own.strip() else ""
+    child = re.search(r"\n([ \t]*)<", body)
+    indent = child.group(1) if child else own + "   "
+    actions = []
+    for prop in missing:
+        insert = f"\n{indent}<{prop}></{prop}>"
+        actions.append(
+            Action(
+                f"Add the required property {prop}",
+                problem.code,
+                {model.path: [(tag_end + 1, tag_end + 1, insert)]},
+                preferred=True,
+            )
+        )
+    return actions
+
+
+def _upgrade(model: Model, text: str, code: str) -> Action | None:
+    from gadgetctl.jccl.upgrade import upgrade_bytes
+
+    data = text.encode("utf-8")
+    result = upgrade_bytes(model.path, data, model.repo, environ=model.environ)
+    if result.failed or not result.changed or result.upgraded is None:
+        return None
+    try:
+        new = result.upgraded.decode("utf-8")
+    except UnicodeDecodeError:
+        return None
+    start, old_end, new_end = _changed(text, new)
+    return Action(
+        "Upgrade the file (gadgetctl upgrade)",
+        code,
+        {model.path: [(start, old_end, new[start:new_end])]},
+    )
+
+
+def _changed(old: str, new: str) -> tuple[int, int, int]:
+    """The one region that differs: (start, its end in old, its end in new)."""
+    limit = min(len(old), len(new))
+    start = 0
+    while start < limit and old[start] == new[start]:
+        start += 1
+    old_end, new_end = len(old), len(new)
+    while old_end > start and new_end > start and old[old_end - 1] == new[new_end - 1]:
+        old_end -= 1
+        new_end -= 1
+    return start, old_end, new_end

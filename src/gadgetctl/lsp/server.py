@@ -1,0 +1,182 @@
+"""The language server on pygls: the protocol's side of :mod:`gadgetctl.lsp`.
+
+Documents are checked in one worker thread, ``DEBOUNCE`` seconds after the last edit of
+each (a burst of keystrokes is one check); a change re-checks the document and the open
+configurations that loaded it, nothing else. Requests (completion, hover, navigation,
+code actions) are answered on the protocol's thread from the cached model. A handler that
+fails answers nothing (logged to the client), and the next request is served as usual.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+from lsprotocol import types
+from pygls.lsp.server import LanguageServer
+from pygls.uris import from_fs_path
+
+from gadgetctl.lsp.analysis import Engine, EngineOptions
+from gadgetctl.lsp.findings import SEVERITIES, findings
+from gadgetctl.lsp.text import LineIndex
+from gadgetctl.lsp.uris import is_jccl as _jccl
+from gadgetctl.lsp.uris import path_of as _path
+
+DEBOUNCE = 0.03  # seconds of quiet after an edit before the document is checked
+NAME = "gadgetctl"
+log = logging.getLogger("gadgetctl.lsp")
+
+
+class JcclServer(LanguageServer):
+    def __init__(self, options: EngineOptions | None = None) -> None:
+        from gadgetctl import __version__
+
+        super().__init__(NAME, __version__)
+        self.engine = Engine(options)
+        self.uris: dict[Path, str] = {}  # open documents' URIs as the client spells them
+        self.findings: dict[Path, list] = {}  # the last findings published for each document
+        self._pending: dict[Path, asyncio.TimerHandle] = {}
+        self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="gadgetctl-check")
+
+    # -- positions ----------------------------------------------------------------------
+
+    @property
+    def utf16(self) -> bool:
+        return self.workspace.position_encoding != types.PositionEncodingKind.Utf32
+
+    def lines(self, text: str) -> LineIndex:
+        return LineIndex(text, utf16=self.utf16)
+
+    def range_of(self, index: LineIndex, start: int, end: int) -> types.Range:
+        a, b = index.position(start), index.position(end)
+        return types.Range(types.Position(*a), types.Position(*b))
+
+    def uri_of(self, path: Path) -> str:
+        return self.uris.get(path) or from_fs_path(str(path)) or path.as_uri()
+
+    # -- checking -----------------------------------------------------------------------
+
+    def schedule(self, paths: list[Path], delay: float = DEBOUNCE) -> None:
+        loop = asyncio.get_running_loop()
+        for path in paths:
+            handle = self._pending.pop(path, None)
+            if handle is not None:
+                handle.cancel()
+            self._pending[path] = loop.call_later(
+                delay, lambda p=path: asyncio.ensure_future(self.check(p))
+            )
+
+    async def check(self, path: Path) -> None:
+        self._pending.pop(path, None)
+        if path not in self.engine.texts:
+            return
+        loop = asyncio.get_running_loop()
+        try:
+            diagnostics = await loop.run_in_executor(self._worker, self.engine.diagnose, path)
+        except Exception as err:  # never the server's end: say it, publish nothing new
+            log.exception("checking %s failed", path)
+            self.window_log_message(
+                types.LogMessageParams(types.MessageType.Error, f"checking {path} failed: {err!r}")
+            )
+            return
+        text = self.engine.texts.get(path)
+        if text is None or path in self._pending:
+            return  # closed, or changed again: a newer check comes
+        self.findings[path] = diagnostics
+        self.publish(path, text, diagnostics)
+
+    def publish(self, path: Path, text: str, diagnostics) -> None:
+        index = self.lines(text)
+        uri = self.uri_of(path)
+        shown = []
+        for finding in findings(diagnostics, index):
+            d = finding.diagnostic
+            where = types.Location(uri, self.range_of(index, finding.start, finding.end))
+            related = []
+            if d.hint:
+                related.append(types.DiagnosticRelatedInformation(where, f"hint: {d.hint}"))
+            related.append(
+                types.DiagnosticRelatedInformation(where, f"`{finding.explain}` describes {d.code}")
+            )
+            shown.append(
+                types.Diagnostic(
+                    range=where.range,
+                    message=d.message,
+                    severity=types.DiagnosticSeverity(SEVERITIES[d.severity]),
+                    code=d.code,
+                    source=NAME,
+                    related_information=related,
+                    data={"hint": d.hint, "explain": finding.explain},
+                )
+            )
+        self.text_document_publish_diagnostics(
+            types.PublishDiagnosticsParams(uri=uri, diagnostics=shown)
+        )
+
+
+def create_server(options: EngineOptions | None = None) -> JcclServer:
+    server = JcclServer(options)
+
+    @server.feature(types.TEXT_DOCUMENT_DID_OPEN)
+    def did_open(ls: JcclServer, params: types.DidOpenTextDocumentParams) -> None:
+        path = _path(params.text_document.uri)
+        if not _jccl(path):
+            return
+        ls.uris[path] = params.text_document.uri
+        if not ls.engine.set_text(path, params.text_document.text):
+            ls.window_log_message(
+                types.LogMessageParams(
+                    types.MessageType.Warning, f"too many open documents; {path} is not checked"
+                )
+            )
+            return
+        ls.schedule(ls.engine.affected(path), delay=0)
+
+    @server.feature(types.TEXT_DOCUMENT_DID_CHANGE)
+    def did_change(ls: JcclServer, params: types.DidChangeTextDocumentParams) -> None:
+        path = _path(params.text_document.uri)
+        if not _jccl(path) or path not in ls.engine.texts:
+            return
+        document = ls.workspace.get_text_document(params.text_document.uri)
+        ls.engine.set_text(path, document.source)
+        ls.schedule(ls.engine.affected(path))
+
+    @server.feature(types.TEXT_DOCUMENT_DID_SAVE)
+    def did_save(ls: JcclServer, params: types.DidSaveTextDocumentParams) -> None:
+        path = _path(params.text_document.uri)
+        if not _jccl(path):
+            return
+        ls.engine.saved(path)
+        ls.schedule(ls.engine.affected(path))
+
+    @server.feature(types.TEXT_DOCUMENT_DID_CLOSE)
+    def did_close(ls: JcclServer, params: types.DidCloseTextDocumentParams) -> None:
+        path = _path(params.text_document.uri)
+        if not _jccl(path):
+            return
+        affected = [p for p in ls.engine.affected(path) if p != path]
+        ls.engine.close(path)
+        handle = ls._pending.pop(path, None)
+        if handle is not None:
+            handle.cancel()
+        ls.text_document_publish_diagnostics(
+            types.PublishDiagnosticsParams(uri=params.text_document.uri, diagnostics=[])
+        )
+        ls.uris.pop(path, None)
+        ls.findings.pop(path, None)
+        ls.schedule(affected)  # who included it now reads the file on disk
+
+    from gadgetctl.lsp import handlers
+
+    handlers.register(server)
+    return server
+
+
+def serve(*, tcp_port: int | None = None, options: EngineOptions | None = None) -> None:
+    server = create_server(options)
+    if tcp_port is None:
+        server.start_io()
+    else:
+        server.start_tcp("127.0.0.1", tcp_port)

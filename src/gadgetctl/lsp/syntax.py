@@ -1,0 +1,142 @@
+"""A forgiving reading of a JCCL document's tags around a position, for text being typed.
+
+lxml cannot parse a half-typed file, and completion is asked for exactly then. This scan
+finds start and end tags with one regular expression (comments blanked out first), keeps
+the stack of elements open at the position, and says what the position is in: a tag name
+being typed, an attribute value, or the text of an element. Work is bounded by the text
+before the position (and ``MAX_DEPTH`` open elements).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+TAG = re.compile(
+    r"<(/?)([A-Za-z_][\w.:-]*)((?:[^<>\"']|\"[^\"<]*\"|'[^'<]*')*?)(/?)>",
+)
+ATTRIBUTE = re.compile(r"([\w.:-]+)\s*=\s*(?:\"([^\"]*)\"|'([^']*)')")
+_COMMENT = re.compile(r"<!--.*?(?:-->|\Z)|<!\[CDATA\[.*?(?:\]\]>|\Z)|<\?.*?(?:\?>|\Z)", re.S)
+_OPEN_VALUE = re.compile(r"([\w.:-]+)\s*=\s*([\"'])([^\"']*)\Z")
+_NAME_SO_FAR = re.compile(r"[\w.:-]*\Z")
+MAX_DEPTH = 256
+
+
+class Where(StrEnum):
+    TAG = "tag"  # typing a start tag's name: <prefix|
+    CLOSING = "closing"  # </prefix|
+    ATTRIBUTE = "attribute"  # inside a start tag, between attributes
+    VALUE = "value"  # inside an attribute value: name="prefix|
+    TEXT = "text"  # in an element's text
+
+
+@dataclass
+class Tag:
+    name: str  # local name (any prefix dropped)
+    start: int  # offset of "<"
+    end: int  # offset just after ">"
+    attributes: dict[str, str] = field(default_factory=dict)
+
+    def get(self, attribute: str) -> str | None:
+        return self.attributes.get(attribute)
+
+
+@dataclass
+class Context:
+    where: Where
+    stack: list[Tag]  # elements open at the position, outermost first
+    prefix: str  # what is typed of the word being completed
+    start: int  # where that word starts (the completion replaces start..position)
+    attribute: str | None = None  # VALUE: which attribute
+    tag: Tag | None = None  # ATTRIBUTE, VALUE: the tag being written
+
+    @property
+    def parent(self) -> Tag | None:
+        return self.stack[-1] if self.stack else None
+
+    def names(self) -> list[str]:
+        return [t.name for t in self.stack]
+
+
+def local(name: str) -> str:
+    return name.rpartition(":")[2]
+
+
+def attributes(text: str) -> dict[str, str]:
+    return {
+        m.group(1): m.group(2) if m.group(2) is not None else m.group(3)
+        for m in ATTRIBUTE.finditer(text)
+    }
+
+
+def blank_comments(text: str) -> str:
+    """``text`` with comments, CDATA and processing instructions replaced by spaces (offsets kept)."""
+    if "<!" not in text and "<?" not in text:
+        return text
+    return _COMMENT.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), text)
+
+
+def open_stack(text: str, end: int) -> list[Tag]:
+    """The elements open at ``end`` (an end tag closes up to the nearest open tag of its name)."""
+    stack: list[Tag] = []
+    for match in TAG.finditer(text, 0, end):
+        closing, name, attrs, empty = match.groups()
+        name = local(name)
+        if closing:
+            for i in range(len(stack) - 1, -1, -1):
+                if stack[i].name == name:
+                    del stack[i:]
+                    break
+        elif not empty and len(stack) < MAX_DEPTH:
+            stack.append(Tag(name, match.start(), match.end(), attributes(attrs)))
+    return stack
+
+
+def context_at(text: str, offset: int) -> Context:
+    offset = max(0, min(offset, len(text)))
+    clean = blank_comments(text[:offset])
+    lt = clean.rfind("<")
+    gt = clean.rfind(">")
+    if lt > gt:
+        segment = clean[lt + 1 :]
+        stack = open_stack(clean, lt)
+        if segment.startswith("/"):
+            return Context(Where.CLOSING, stack, segment[1:], lt + 2)
+        if _NAME_SO_FAR.fullmatch(segment):
+            return Context(Where.TAG, stack, segment, lt + 1)
+        name = re.match(r"[\w.:-]*", segment).group(0)
+        tag = Tag(local(name), lt, offset, attributes(segment))
+        value = _OPEN_VALUE.search(segment)
+        if value is not None:
+            typed = value.group(3)
+            return Context(Where.VALUE, stack, typed, offset - len(typed), value.group(1), tag)
+        word = re.search(r"[\w.:-]*\Z", segment).group(0)
+        return Context(Where.ATTRIBUTE, stack, word, offset - len(word), tag=tag)
+    stack = open_stack(clean, offset)
+    typed = clean[gt + 1 :] if gt >= 0 else clean
+    stripped = typed.lstrip()
+    return Context(Where.TEXT, stack, stripped, offset - len(stripped))
+
+
+def text_range(text: str, tag_end: int) -> tuple[int, int]:
+    """The trimmed text after a start tag ending at ``tag_end``, up to the next ``<``."""
+    stop = text.find("<", tag_end)
+    stop = len(text) if stop < 0 else stop
+    start = tag_end
+    while start < stop and text[start].isspace():
+        start += 1
+    while stop > start and text[stop - 1].isspace():
+        stop -= 1
+    return start, stop
+
+
+def tag_at(text: str, offset: int) -> tuple[str, int, int] | None:
+    """The name of the start or end tag whose name holds ``offset``, with its range."""
+    lt = text.rfind("<", max(0, offset - 512), offset + 1)
+    if lt < 0:
+        return None
+    match = re.compile(r"</?([A-Za-z_][\w.:-]*)").match(text, lt)
+    if match is None or not (match.start(1) <= offset <= match.end(1)):
+        return None
+    return local(match.group(1)), match.start(1), match.end(1)
