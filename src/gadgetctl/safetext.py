@@ -34,3 +34,16 @@ def printable(text: str) -> str:
     if not _UNSAFE.search(text):
         return text
     return _UNSAFE.sub(_escape, text)
+
+
+#: The largest magnitude written in fixed notation by :func:`fixed`: beyond it a number is
+#: written with an exponent (a coordinate of 1e308 would take 309 digits), so a number's
+#: text stays within about 15 characters, whatever a device or file sends.
+FIXED_LIMIT = 1e9
+
+
+def fixed(value: float, digits: int = 3, sign: bool = False) -> str:
+    """``value`` with ``digits`` decimals (a ``+`` for positive ones with ``sign``), with an
+    exponent from :data:`FIXED_LIMIT` on; ``nan`` and ``inf`` as Python writes them."""
+    spec = f"{'+' if sign else ''}.{digits}{'e' if abs(value) >= FIXED_LIMIT else 'f'}"
+    return format(value, spec)

@@ -32,7 +32,7 @@ from gadgetctl.input.clock import now
 from gadgetctl.monitor.events import number_text
 from gadgetctl.monitor.session import ElementView, MonitorSession, UnitView
 from gadgetctl.monitor.sparkline import sparkline
-from gadgetctl.safetext import printable
+from gadgetctl.safetext import fixed, printable
 
 BAR_WIDTH = 16
 SPARK_WIDTH = 20
@@ -429,7 +429,7 @@ class LiveView:
         kind = unit.kind
         if kind == "analog":
             value = float(unit.value)
-            line.add(bar(value), "blue", 3).add(f" {value:6.3f}")
+            line.add(bar(value), "blue", 3).add(f" {fixed(value, 3):>6}")
             if unit.raw is not None:
                 line.add(f" raw {number_text(unit.raw):<9}", "dim", 2)
             if unit.history:

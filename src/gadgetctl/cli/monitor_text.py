@@ -15,7 +15,7 @@ from gadgetctl.monitor.events import FINGERS, HAT_NAMES, UNIT_SYMBOLS, number_te
 from gadgetctl.monitor.session import ElementView, MonitorSession, Snapshot, UnitView
 from gadgetctl.monitor.stats import DeviceSnapshot
 from gadgetctl.monitor.units import euler_xyz_degrees, from_meters, quaternion_wxyz
-from gadgetctl.safetext import printable
+from gadgetctl.safetext import fixed, printable
 from gadgetctl.wording import counted
 
 TOGGLES = {0: "off", 1: "on", 2: "toggle on", 3: "toggle off"}
@@ -61,7 +61,7 @@ def age_text(seconds: float | None) -> str:
 
 
 def number(value: float, digits: int = 3) -> str:
-    return f"{value:.{digits}f}" if math.isfinite(value) else str(value)
+    return fixed(value, digits) if math.isfinite(value) else str(value)
 
 
 def position_text(
@@ -74,7 +74,7 @@ def position_text(
     m = np.asarray(matrix, dtype=np.float64).reshape(4, 4)
     x, y, z = (float(from_meters(v, length_unit)) for v in m[:3, 3])
     symbol = UNIT_SYMBOLS.get(length_unit, length_unit)
-    text = f"x {x:+.3f} y {y:+.3f} z {z:+.3f} {symbol}"
+    text = f"x {fixed(x, 3, True)} y {fixed(y, 3, True)} z {fixed(z, 3, True)} {symbol}"
     try:
         rx, ry, rz = euler_xyz_degrees(m)
         text += f"  rot {rx:+6.1f} {ry:+6.1f} {rz:+6.1f}°"
@@ -88,9 +88,10 @@ def position_text(
 
 def glove_parts(angles: Any) -> list[str]:
     """Each finger's joint angles in degrees: ``thumb 0/12/30/0``."""
-    a = np.degrees(np.asarray(angles, dtype=np.float64).reshape(6, 4))
+    with np.errstate(all="ignore"):  # a hostile angle is inf, not a warning on stderr
+        a = np.degrees(np.asarray(angles, dtype=np.float64).reshape(6, 4))
     return [
-        f"{name} {'/'.join(f'{v:.0f}' for v in row)}" for name, row in zip(FINGERS, a, strict=True)
+        f"{name} {'/'.join(fixed(v, 0) for v in row)}" for name, row in zip(FINGERS, a, strict=True)
     ]
 
 
@@ -470,7 +471,7 @@ def _unit_summary_lines(unit: Any) -> list[str]:
         ):
             name = "xyz"[axis]
             spark = f"  {sparks[name]}" if sparks.get(name) else ""
-            lines.append(f"      {name} {lo:+.3f}..{hi:+.3f} m{spark}")
+            lines.append(f"      {name} {fixed(lo, 3, True)}..{fixed(hi, 3, True)} m{spark}")
         if unit.rotation_min is not None and unit.rotation_max is not None:
             turns = " ".join(
                 f"{'xyz'[i]} {lo:+.1f}..{hi:+.1f}"

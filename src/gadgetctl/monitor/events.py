@@ -38,7 +38,7 @@ from gadgetctl.monitor.poses import (
     quaternions_wxyz,
 )
 from gadgetctl.monitor.units import from_meters
-from gadgetctl.safetext import printable
+from gadgetctl.safetext import fixed, printable
 
 if TYPE_CHECKING:
     from gadgetctl.monitor.session import MonitorSession
@@ -404,9 +404,9 @@ def pose_text(matrix: Any, pose: str = EULER, length_unit: str = "meters") -> st
     ``q W X Y Z`` (quaternion) or the matrix's 16 values row by row (``m ...``)."""
     m = np.asarray(matrix, dtype=np.float64).reshape(4, 4)
     if pose == MATRIX:
-        return "m " + " ".join(f"{v:+.4f}" for v in m.ravel().tolist())
-    x, y, z = (float(from_meters(v, length_unit)) for v in m[:3, 3])
-    text = f"x {x:+.4f} y {y:+.4f} z {z:+.4f} {UNIT_SYMBOLS.get(length_unit, length_unit)}"
+        return "m " + " ".join(fixed(v, 4, True) for v in m.ravel().tolist())
+    x, y, z = (fixed(float(from_meters(v, length_unit)), 4, True) for v in m[:3, 3])
+    text = f"x {x} y {y} z {z} {UNIT_SYMBOLS.get(length_unit, length_unit)}"
     if pose == QUATERNION:
         w, qx, qy, qz = quaternions_wxyz(m[None])[0].tolist()
         return text + f"  q {w:+.4f} {qx:+.4f} {qy:+.4f} {qz:+.4f}"
@@ -419,13 +419,14 @@ def _value_text(event: ChangeEvent, pose: str, length_unit: str) -> str:
     if kind == "digital":
         return "pressed" if value else "released"
     if kind == "analog":
-        return f"{value:.4f} raw {number_text(event.raw)}"
+        return f"{fixed(value, 4)} raw {number_text(event.raw)}"
     if kind == "position":
         return pose_text(value, pose, length_unit)
     if kind == "glove":
-        angles = np.degrees(np.asarray(value, dtype=np.float64)).reshape(-1, 4)
+        with np.errstate(all="ignore"):  # a hostile angle is inf, not a warning on stderr
+            angles = np.degrees(np.asarray(value, dtype=np.float64)).reshape(-1, 4)
         return " ".join(
-            f"{finger} {'/'.join(f'{a:.0f}' for a in row)}"
+            f"{finger} {'/'.join(fixed(a, 0) for a in row)}"
             for finger, row in zip(FINGERS, angles.tolist(), strict=False)
         )
     if kind == "hat":

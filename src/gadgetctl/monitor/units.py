@@ -45,8 +45,10 @@ def length_factor(unit: str) -> float:
 
 
 def from_meters(value: float | np.ndarray, unit: str) -> float | np.ndarray:
-    """``value`` (meters; a number or an array) in ``unit``."""
-    return value * length_factor(unit)
+    """``value`` (meters; a number or an array) in ``unit`` (beyond any float: inf, without
+    numpy's overflow warning on stderr)."""
+    with np.errstate(over="ignore"):
+        return value * length_factor(unit)
 
 
 def to_meters(value: float | np.ndarray, unit: str) -> float | np.ndarray:
