@@ -175,3 +175,94 @@ def test_scaffold_on_a_full_disk_leaves_nothing_and_a_rerun_works(cli, small_fs)
     assert result.exit_code == 0, result.stderr
     assert (small_fs.path / "AcmeWand_drv" / "standalone.py").is_file()
     assert _leftovers(small_fs.path) == [] and _leftovers(small_fs.path / "AcmeWand_drv") == []
+
+
+# -- temporaries of a killed run (issue 24 item 16) ------------------------------------------------
+
+KILLED_WRITER = """
+import os, signal, sys
+from pathlib import Path
+from gadgetctl.safewrite import replace_file
+
+path = Path(sys.argv[1])
+os.rename = lambda *a, **k: os.kill(os.getpid(), signal.SIGKILL)  # killed mid-write
+replace_file(path, b"half-done\\n", expected=path.read_bytes(), backup=True)
+"""
+
+
+def _killed_write(path: Path) -> list[Path]:
+    """Run a write of ``path`` killed by SIGKILL after its temporaries were complete; what it
+    left, aged past the staleness delay."""
+    import signal
+    import sys
+    import time
+
+    child = subprocess.run(
+        [sys.executable, "-c", KILLED_WRITER, str(path)], capture_output=True, timeout=60
+    )
+    assert child.returncode == -signal.SIGKILL, child.stderr
+    left = [path.parent / name for name in _leftovers(path.parent)]
+    old = time.time() - 3600
+    for leftover in left:
+        os.utime(leftover, (old, old))
+    return left
+
+
+@pytest.mark.parametrize("changed", [True, False])
+def test_the_next_run_removes_what_a_killed_write_left(cli, old_file, changed):
+    original = old_file.read_bytes()
+    if not changed:  # already up to date: the next run writes nothing, and still cleans
+        assert cli("upgrade", "--in-place", "--no-backup", old_file).exit_code == 0
+        original = old_file.read_bytes()
+    assert len(_killed_write(old_file)) == 2  # the new content and the backup
+    assert old_file.read_bytes() == original
+    result = cli("upgrade", "--in-place", old_file)
+    assert result.exit_code == 0, result.stderr
+    assert _leftovers(old_file.parent) == []
+    assert result.stderr.splitlines() == [
+        f"gadgetctl: note: {old_file}: removed 2 temporary files an interrupted earlier run "
+        "left beside it"
+    ]
+
+
+def test_only_provably_abandoned_temporaries_are_removed(old_file, tmp_path):
+    import sys
+    import time
+
+    from gadgetctl.safewrite import STALE_AFTER, remove_stale_temporaries
+
+    def temporary(name: str, age: float = 3600.0) -> Path:
+        path = tmp_path / name
+        path.write_text("x")
+        os.utime(path, (time.time() - age, time.time() - age))
+        return path
+
+    ours = temporary(".tracker.jconf.abcd1234.gadgetctl.tmp")
+    fresh = temporary(".tracker.jconf.fresh123.gadgetctl.tmp", age=STALE_AFTER / 2)
+    foreign = temporary(".tracker.jconf.other123.gadgetctl.tmp")
+    os.chown(foreign, 65534, 65534)  # another user's
+    unlike = temporary(".tracker.jconf.abcd1234.tmp")  # not our naming (an older gadgetctl's)
+    link = tmp_path / ".tracker.jconf.link1234.gadgetctl.tmp"
+    link.symlink_to(ours)
+    held = temporary(".tracker.jconf.held1234.gadgetctl.tmp")
+    holder = subprocess.Popen(  # a writer alive: it holds the lock
+        [
+            sys.executable,
+            "-c",
+            "import fcntl, os, sys; fd = os.open(sys.argv[1], os.O_RDONLY); "
+            "fcntl.flock(fd, fcntl.LOCK_EX); print('locked', flush=True); sys.stdin.read()",
+            str(held),
+        ],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert holder.stdout.readline() == "locked\n"
+        assert remove_stale_temporaries(old_file) == [ours]
+        for kept in (fresh, foreign, unlike, held):
+            assert kept.exists(), kept
+        assert link.is_symlink()
+    finally:
+        holder.communicate("", timeout=30)  # the writer ends: its lock goes with it
+    assert remove_stale_temporaries(old_file) == [held]

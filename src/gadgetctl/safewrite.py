@@ -13,16 +13,24 @@ following a symbolic link (``--record``). The rules:
 * when the file no longer holds what was read at the start, nothing is written
   (:class:`FileChangedError`, exit status 1);
 * every OS error (read-only file system, full disk, permissions) becomes one
-  :class:`WriteError` line, and no temporary file is left behind.
+  :class:`WriteError` line, and no temporary file is left behind;
+* a process killed outright (SIGKILL, a power cut) cannot remove its temporary files, so each
+  is named ``.NAME.XXXXXXXX.gadgetctl.tmp`` and locked (``flock``) by its writer until it is
+  renamed or removed: the kernel drops the lock with the process. The next write of the same
+  file (and every file ``upgrade --in-place`` reads) removes the ones beside it that are
+  provably abandoned (:func:`remove_stale_temporaries`): of that naming, regular, owned by
+  the same user, unchanged for :data:`STALE_AFTER` seconds, and lockable.
 """
 
 from __future__ import annotations
 
 import contextlib
 import errno
+import fcntl
 import os
 import stat
 import tempfile
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -45,11 +53,20 @@ class Replaced:
     path: Path  # as the user named it
     target: Path  # the file actually written: ``path`` with symbolic links resolved
     backup: Path | None
+    #: abandoned temporary files of earlier, killed writes removed first
+    removed: tuple[Path, ...] = ()
 
     @property
     def via_link(self) -> bool:
         """Whether ``path`` itself is a symbolic link (links among its directories do not count)."""
         return os.path.islink(self.path)
+
+
+#: How a temporary file of :func:`replace_file` ends (after ``.NAME.`` and random letters).
+TEMPORARY_SUFFIX = ".gadgetctl.tmp"
+#: Seconds a temporary file must be unchanged before another run may call it abandoned (its
+#: writer locks it at once, so this only covers the moment between creating and locking).
+STALE_AFTER = 60.0
 
 
 def current_umask() -> int:
@@ -62,29 +79,98 @@ def _why(err: OSError) -> str:
     return err.strerror or str(err)
 
 
+class _Temporary:
+    """A temporary file being written, locked by this process until :meth:`close`."""
+
+    def __init__(self, path: Path, fd: int) -> None:
+        self.path, self.fd = path, fd
+
+    def close(self, remove: bool) -> None:
+        """Release the lock (after removing the file, with ``remove``)."""
+        if remove:
+            with contextlib.suppress(OSError):
+                self.path.unlink()
+        with contextlib.suppress(OSError):
+            os.close(self.fd)
+
+
 def _write_temporary(
     directory: Path, prefix: str, data: bytes, like: os.stat_result | None
-) -> Path:
+) -> _Temporary:
     """A complete, synced temporary file in ``directory`` holding ``data``, with the owner,
-    group and mode of ``like`` (or the default mode of a new file)."""
+    group and mode of ``like`` (or the default mode of a new file), locked until closed."""
     handle, name = tempfile.mkstemp(
-        prefix=prefix, suffix=".tmp", dir=directory
+        prefix=prefix, suffix=TEMPORARY_SUFFIX, dir=directory
     )  # O_EXCL: never a link
-    temporary = Path(name)
+    temporary = _Temporary(Path(name), handle)
     try:
-        with os.fdopen(handle, "wb") as out:
+        fcntl.flock(handle, fcntl.LOCK_EX)  # held while it lives: see remove_stale_temporaries
+        with os.fdopen(handle, "wb", closefd=False) as out:
             out.write(data)
             out.flush()
             if like is not None:
-                _keep_owner(out.fileno(), like)
-                os.fchmod(out.fileno(), stat.S_IMODE(like.st_mode))
+                _keep_owner(handle, like)
+                os.fchmod(handle, stat.S_IMODE(like.st_mode))
             else:
-                os.fchmod(out.fileno(), 0o666 & ~current_umask())
-            os.fsync(out.fileno())
+                os.fchmod(handle, 0o666 & ~current_umask())
+            os.fsync(handle)
     except BaseException:
-        temporary.unlink(missing_ok=True)
+        temporary.close(remove=True)
         raise
     return temporary
+
+
+def _abandoned(path: Path, now: float) -> bool:
+    """Whether ``path`` (named as our temporaries are) is one whose writer is gone: a regular
+    file of this user, unchanged for STALE_AFTER seconds, that no process holds locked."""
+    flags = os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    try:
+        fd = os.open(path, flags)
+    except OSError:
+        return False
+    try:
+        found = os.fstat(fd)
+        if (
+            not stat.S_ISREG(found.st_mode)
+            or found.st_uid != os.geteuid()
+            or now - found.st_mtime < STALE_AFTER
+        ):
+            return False
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            return False  # its writer is alive
+        current = os.lstat(path)  # still the file opened, not a new one of the same name
+        return (current.st_ino, current.st_dev) == (found.st_ino, found.st_dev)
+    except OSError:
+        return False
+    finally:
+        os.close(fd)
+
+
+def remove_stale_temporaries(path: Path) -> list[Path]:
+    """Remove the abandoned temporary files of earlier writes of ``path`` (its target, when
+    it is a symbolic link) and of its backup; the ones removed. Never raises."""
+    target = Path(os.path.realpath(path))
+    prefix = f".{target.name}."
+    removed: list[Path] = []
+    now = time.time()
+    try:
+        with os.scandir(target.parent) as entries:
+            names = [
+                e.name
+                for e in entries
+                if e.name.startswith(prefix) and e.name.endswith(TEMPORARY_SUFFIX)
+            ]
+    except OSError:
+        return removed
+    for name in names:
+        candidate = target.parent / name
+        if _abandoned(candidate, now):
+            with contextlib.suppress(FileNotFoundError):
+                candidate.unlink()
+                removed.append(candidate)
+    return removed
 
 
 def _keep_owner(fd: int, like: os.stat_result) -> None:
@@ -133,7 +219,8 @@ def replace_file(
     path = Path(path)
     target = Path(os.path.realpath(path))
     shown = f"{path} (-> {target})" if os.path.islink(path) else str(path)
-    temporaries: list[Path] = []
+    removed = tuple(remove_stale_temporaries(target))
+    temporaries: list[_Temporary] = []
     try:
         try:
             before: os.stat_result | None = os.stat(target)
@@ -164,18 +251,17 @@ def replace_file(
         if saved is not None:
             # rename never follows a link at its destination: an old FILE.bak that is a
             # symbolic link is replaced, not written through
-            os.rename(temporaries[0], saved)
-            temporaries.pop(0)
-        os.replace(temporaries[-1], target)
-        temporaries.clear()
+            os.rename(temporaries[0].path, saved)
+            temporaries.pop(0).close(remove=False)
+        os.replace(temporaries[-1].path, target)
+        temporaries.pop().close(remove=False)
         _sync_directory(target.parent)
-        return Replaced(path, target, saved)
+        return Replaced(path, target, saved, removed)
     except OSError as err:
         raise WriteError(f"{shown}: cannot write: {_why(err)}; nothing written") from None
     finally:
         for temporary in temporaries:
-            with contextlib.suppress(OSError):
-                temporary.unlink()
+            temporary.close(remove=True)
 
 
 def create_new(path: Path, *, overwrite: bool = False) -> int:

@@ -106,7 +106,10 @@ def upgrade(
         from gadgetctl.safewrite import replace_file
 
         result = results[0]
-        replace_file(output, result.upgraded if result.upgraded is not None else result.original)
+        done = replace_file(
+            output, result.upgraded if result.upgraded is not None else result.original
+        )
+        _say_removed(str(output), done.removed)
     elif not (check or diff):
         result = results[0]
         sys.stdout.buffer.write(result.upgraded if result.upgraded is not None else result.original)
@@ -192,14 +195,24 @@ def _diff(results) -> None:
     sys.stdout.flush()
 
 
+def _say_removed(display: str, removed) -> None:
+    """One line for the temporary files a killed earlier run left beside a file."""
+    if removed:
+        sys.stderr.write(
+            f"gadgetctl: note: {display}: removed {counted(len(removed), 'temporary file')} "
+            "an interrupted earlier run left beside it\n"
+        )
+
+
 def _write_in_place(results, backup: bool) -> None:
     """Rewrite each changed file (its target, when it is a symbolic link), refusing one that
     changed since it was read; the others are still written."""
-    from gadgetctl.safewrite import FileChangedError, replace_file
+    from gadgetctl.safewrite import FileChangedError, remove_stale_temporaries, replace_file
 
     refused = None
     for r in results:
         if not r.changed:
+            _say_removed(r.display, remove_stale_temporaries(r.path))
             continue
         try:
             done = replace_file(r.path, r.upgraded, expected=r.original, backup=backup)
@@ -207,6 +220,7 @@ def _write_in_place(results, backup: bool) -> None:
             sys.stderr.write(f"gadgetctl: {err}\n")
             refused = err
             continue
+        _say_removed(r.display, done.removed)
         what = (
             f"{done.target} (through the symbolic link {r.display})" if done.via_link else r.display
         )
