@@ -400,10 +400,12 @@ def decode_server_info(data: bytes) -> ServerInfo:
 
 
 def connect_request(version: Version | None = None) -> bytes:
-    """A connect request (message 0), as the SDK's Python client sends it: a sender block
-    named "Ping", then the NatNet version asked for (the newest read when none is given; a
-    server that cannot change its stream ignores it)."""
-    major, minor = version or NEWEST_VERSION
+    """A connect request (message 0), laid out as the SDK's Python client sends it: a sender
+    block named "Ping", then the NatNet stream version asked for. With no ``version`` it asks
+    for none (zeros), leaving the stream as the server is set up (the SDK sample always
+    asks for 4.1); the reply names the version. A server that cannot change its stream
+    ignores the request's version."""
+    major, minor = version or (0, 0)
     body = bytearray(270)
     body[0:4] = b"Ping"
     body[265:269] = bytes((major, minor, 0, 0))

@@ -386,3 +386,16 @@ def test_a_configured_version_in_multicast_mode_sends_nothing() -> None:
         assert receiver.requests_sent == 0 and receiver.server is None
     finally:
         receiver.close()
+
+
+def test_the_connect_request_asks_for_the_configured_version_or_none() -> None:
+    from OptiTrack_drv.natnet import connect_request, keep_alive
+
+    request = connect_request()
+    # SDK layout: id 0, 271 payload bytes, a sender block named "Ping", the stream version
+    # asked for at payload bytes 265..268, a final NUL
+    assert struct.unpack_from("<HH", request) == (0, 271) and len(request) == 4 + 271
+    assert request[4:8] == b"Ping" and request[-1] == 0
+    assert request[4 + 265 : 4 + 269] == bytes(4)  # none: the server's own setting
+    assert connect_request((3, 0))[4 + 265 : 4 + 269] == bytes((3, 0, 0, 0))
+    assert keep_alive() == struct.pack("<HH", 10, 0) + b"\0"
