@@ -131,12 +131,14 @@ class ServeService:
         return server.port
 
     def _flush(self, session: MonitorSession, moment: float) -> None:
-        # a full pass (accept, read, write), not only a flush: when frames fall behind, the
-        # frame loop has no waits left, and clients must still be accepted and heard
-        self.outlet.end_frame()
-        self.server.poll(0.0)
-        if session.has_slack():  # after the frame's writes: rows the coming frames will need
+        self.outlet.end_frame()  # the frame's writes
+        if session.has_slack():
+            # rows the coming frames will need; the wait before the next frame then polls
             self.outlet.prepare()
+        else:
+            # a full pass (accept, read, write), not only a flush: when frames fall behind,
+            # the frame loop has no waits left, and clients must still be accepted and heard
+            self.server.poll(0.0)
 
     def _wait(self, delay: float) -> None:
         """The frame loop's sleep: the server's I/O until the next frame is due."""
