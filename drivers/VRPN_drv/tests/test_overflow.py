@@ -12,7 +12,6 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from VRPN_drv.emulator import VrpnEmulator
 from VRPN_drv.wrapper import VrpnDevice
 
 from gadgetctl.input import DeviceKind, InputManager, ManagerOptions
@@ -35,6 +34,12 @@ def element(name: str, address: str, sensors: int) -> str:
     )
 
 
+def udp_channel(device: VrpnDevice) -> socket.socket | None:
+    """The device's UDP channel socket (lob mode), once its connection has one."""
+    clients = device._input.clients if device._input is not None else {}
+    return next((c._udp_in for c in clients.values() if c._udp_in is not None), None)
+
+
 def flood(port: int, count: int) -> None:
     """``count`` datagrams of 16 well-formed messages of a type nobody described (each read
     one is counted as undescribed and ignored, as the C++ client does)."""
@@ -42,54 +47,6 @@ def flood(port: int, count: int) -> None:
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:
         for _ in range(count):
             tx.sendto(message * 16, ("127.0.0.1", port))
-
-
-def test_the_monitor_shows_exactly_what_the_kernel_dropped(tmp_path: Path, monkeypatch) -> None:
-    monkeypatch.setattr(VrpnDevice, "receive_buffer", 1)  # the kernel's smallest buffer
-    with VrpnEmulator(0, scenario="motion", rate=100, sensors=1, buttons=0, channels=0) as emu:
-        config = tmp_path / "v.jconf"
-        config.write_text(configuration("VRPN_drv", element("V", emu.address, 1)))
-        options = ManagerOptions(retry_interval=None, entry_points=False)
-        manager, loaded = InputManager.from_files([config], options=options)
-        session = MonitorSession(manager, loaded)
-        try:
-            session.start()
-            device = manager.device("V")
-            frames_until(manager, lambda: device.store.total(DeviceKind.POSITION) > 3, timeout=15)
-            (client,) = device._input.clients.values()
-            channel = client._udp_in
-            assert channel is not None  # lob mode: poses come by UDP
-            port = channel.getsockname()[1]
-
-            def burst() -> None:
-                flood(port, 300)
-                session.step()
-
-            assert wait_until(lambda: device.health()["kernel_dropped"] > 0, 20.0, burst)
-
-            def settled() -> bool:  # every datagram read judged, every drop learnt
-                session.step()
-                health = device.health()
-                judged = health["decoded"] + health["bad_datagrams"]
-                return (
-                    device.transport_dropped() == proc_udp_drops(channel)
-                    and health["datagrams"] == judged
-                )
-
-            assert wait_until(settled, timeout=10.0), (
-                device.transport_dropped(),
-                proc_udp_drops(channel),
-            )
-            kernel = proc_udp_drops(channel)
-            stats = session.device_stats("V")
-            assert stats is not None and device.store.dropped() == 0
-            assert stats.dropped == kernel > 0
-            assert session.final_stats()["V"]["dropped"] == kernel
-            # every datagram read was whole VRPN messages: counted as decoded, none bad
-            health = device.health()
-            assert health["decoded"] > 0 and health["bad_datagrams"] == 0
-        finally:
-            manager.shutdown()
 
 
 @contextlib.contextmanager
@@ -109,6 +66,59 @@ def silent_server() -> Iterator[VrpnServer]:
         server.close()
 
 
+def test_the_monitor_shows_exactly_what_the_kernel_dropped(tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.setattr(VrpnDevice, "receive_buffer", 1)  # the kernel's smallest buffer
+    with silent_server() as server:  # nothing on the UDP channel but the flood
+        config = tmp_path / "v.jconf"
+        config.write_text(configuration("VRPN_drv", element("V", f"127.0.0.1:{server.port}", 1)))
+        options = ManagerOptions(retry_interval=None, entry_points=False)
+        manager, loaded = InputManager.from_files([config], options=options)
+        session = MonitorSession(manager, loaded)
+        try:
+            session.start()
+            device = manager.device("V")
+            frames_until(manager, lambda: udp_channel(device) is not None, timeout=15)
+            channel = udp_channel(device)
+            port = channel.getsockname()[1]
+
+            sent = 0
+
+            def burst() -> None:
+                nonlocal sent
+                flood(port, 300)
+                sent += 300
+                session.step()
+
+            assert wait_until(lambda: device.health()["kernel_dropped"] > 0, 20.0, burst)
+
+            def settled() -> bool:  # every datagram read judged, every drop learnt
+                session.step()
+                health = device.health()
+                judged = health["decoded"] + health["bad_datagrams"]
+                return (
+                    device.transport_dropped() == proc_udp_drops(channel)
+                    and health["datagrams"] == judged
+                    and health["datagrams"] + health["kernel_dropped"] == sent
+                )
+
+            assert wait_until(settled, timeout=10.0), (
+                device.health(),
+                proc_udp_drops(channel),
+                sent,
+            )
+            kernel = proc_udp_drops(channel)
+            stats = session.device_stats("V")
+            assert stats is not None and device.store.dropped() == 0
+            assert stats.dropped == kernel > 0
+            assert session.final_stats()["V"]["dropped"] == kernel
+            # every datagram read was whole VRPN messages: counted as decoded, none bad
+            health = device.health()
+            assert health["decoded"] == health["datagrams"] > 0 and health["bad_datagrams"] == 0
+            assert health["datagrams"] + kernel == sent  # each one read or dropped
+        finally:
+            manager.shutdown()
+
+
 def test_malformed_datagrams_are_counted_bad_one_for_one(tmp_path: Path) -> None:
     with silent_server() as server:  # nothing else on the UDP channel
         config = tmp_path / "v.jconf"
@@ -119,13 +129,8 @@ def test_malformed_datagrams_are_counted_bad_one_for_one(tmp_path: Path) -> None
         try:
             device = manager.device("V")
 
-            def channel_open() -> bool:
-                clients = device._input.clients if device._input is not None else {}
-                return any(c._udp_in is not None for c in clients.values())
-
-            frames_until(manager, channel_open, timeout=15)
-            (client,) = device._input.clients.values()
-            port = client._udp_in.getsockname()[1]
+            frames_until(manager, lambda: udp_channel(device) is not None, timeout=15)
+            port = udp_channel(device).getsockname()[1]
             junk = [b"\x00\x00\x00\x05" + bytes(range(n % 200)) for n in range(200)]
             after = bad_one_for_one(manager, "V", port, junk)
             assert after["bad_datagrams"] == 200 - after["kernel_dropped"]
