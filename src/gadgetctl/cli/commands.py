@@ -18,6 +18,7 @@ COMMAND_MODULES = (
     "gadgetctl.cli.monitor_cmd",
     "gadgetctl.cli.replay_cmd",
     "gadgetctl.cli.serve_cmd",
+    "gadgetctl.cli.view_cmd",
     "gadgetctl.cli.emulate_cmd",
     "gadgetctl.cli.doctor_cmd",
     "gadgetctl.cli.scaffold_cmd",

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
 from enum import StrEnum
 from pathlib import Path
 
@@ -167,9 +169,7 @@ def monitor(
     stupefied, a device faulted, received data and decoded none of it, or lost data (unless
     --accept-loss); 2 for usage errors (unreadable configuration, unknown name).
     """
-    import tempfile
-
-    from gadgetctl.monitor.vrpnwatch import is_vrpn_argument, write_configuration
+    from gadgetctl.monitor.vrpnwatch import is_vrpn_argument
 
     watched = [a for a in arguments if is_vrpn_argument(a)]
     configs, selectors = split_arguments(
@@ -180,13 +180,7 @@ def monitor(
 
         check_before_running(configs, definitions=definitions, bundled=bundled, strict=strict)
     title = " ".join([*(str(p) for p in configs), *watched])  # as typed, no scratch file
-    with tempfile.TemporaryDirectory(prefix="gadgetctl-vrpn-") as scratch:
-        if watched:  # vrpn:Device@host: a vrpn element per device, laid out as the server shows
-            configs.append(
-                write_configuration(
-                    watched, Path(scratch), note=lambda line: typer.echo(line, err=True)
-                )
-            )
+    with watched_devices(configs, watched) as configs:
         code = run_monitor(
             configs,
             selectors,
@@ -211,6 +205,21 @@ def monitor(
             title=title,
         )
     raise typer.Exit(code)
+
+
+@contextlib.contextmanager
+def watched_devices(configs: list[Path], watched: list[str]) -> Iterator[list[Path]]:
+    """``configs`` plus, for ``vrpn:Device@host`` arguments, a scratch configuration with a
+    vrpn element per device, laid out as the server shows it (removed afterwards)."""
+    import tempfile
+
+    from gadgetctl.monitor.vrpnwatch import write_configuration
+
+    with tempfile.TemporaryDirectory(prefix="gadgetctl-vrpn-") as scratch:
+        if watched:
+            note = lambda line: typer.echo(line, err=True)  # noqa: E731
+            configs = [*configs, write_configuration(watched, Path(scratch), note=note)]
+        yield configs
 
 
 def split_arguments(

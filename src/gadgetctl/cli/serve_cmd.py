@@ -13,6 +13,20 @@ from gadgetctl.cli.monitor_cmd import CHECK_OPTION, STRICT_OPTION
 from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION, DataFormat, emit
 from gadgetctl.wording import counted
 
+#: --bind and --allow, shared with `gadgetctl view`.
+BIND_OPTION = typer.Option(
+    "127.0.0.1",
+    "--bind",
+    metavar="ADDR",
+    help="IPv4 address to listen on: 127.0.0.1 (this machine only), 0.0.0.0 (every interface) or one NIC's address.",
+)
+ALLOW_OPTION = typer.Option(
+    [],
+    "--allow",
+    metavar="CIDR",
+    help="Accept clients only from this network or address (192.168.1.0/24). Repeatable; default: everyone who reaches --bind.",
+)
+
 
 def register(app: typer.Typer) -> None:
     app.command(name="serve")(serve)
@@ -36,24 +50,14 @@ def serve(
         metavar="OLD=NEW",
         help="Serve the element OLD as the VRPN device NEW. Repeatable.",
     ),
-    bind: str = typer.Option(
-        "127.0.0.1",
-        "--bind",
-        metavar="ADDR",
-        help="IPv4 address to listen on: 127.0.0.1 (this machine only), 0.0.0.0 (every interface) or one NIC's address.",
-    ),
+    bind: str = BIND_OPTION,
     port: int = typer.Option(
         3883,
         "--port",
         metavar="PORT",
         help="TCP and UDP port (VRPN's default 3883; 0: chosen by the system and printed).",
     ),
-    allow: list[str] = typer.Option(
-        [],
-        "--allow",
-        metavar="CIDR",
-        help="Accept clients only from this network or address (192.168.1.0/24). Repeatable; default: everyone who reaches --bind.",
-    ),
+    allow: list[str] = ALLOW_OPTION,
     duration: float | None = typer.Option(
         None,
         "--duration",

@@ -84,6 +84,11 @@ class FilterChain:
             right = right @ r
         return left, right
 
+    @property
+    def folded(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(left, right) with ``apply(M) == left @ M @ right``; None when a scale is 0."""
+        return self._folded
+
     def apply(self, matrices: np.ndarray) -> np.ndarray:
         """Filter one matrix (4, 4) or a batch (..., 4, 4)."""
         if not self.filters:

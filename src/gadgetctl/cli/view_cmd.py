@@ -1,0 +1,190 @@
+"""`gadgetctl view CONFIG... [NAME...]`: a live 3D view of tracked poses in a web page."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import typer
+
+from gadgetctl.cli.drivers_cmd import DRIVER_PATH_OPTION, TRUST_OPTION
+from gadgetctl.cli.monitor_cmd import CHECK_OPTION, STRICT_OPTION
+from gadgetctl.cli.options import BUNDLED_OPTION, DEFINITIONS_OPTION
+from gadgetctl.cli.serve_cmd import ALLOW_OPTION, BIND_OPTION
+
+DEFAULT_PORT = 8080
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="view")(view)
+
+
+def view(
+    arguments: list[str] = typer.Argument(
+        ...,
+        metavar="CONFIG... [NAME...]",
+        show_default=False,
+        help="Configuration files (existing files ending in .jconf) and VRPN devices (vrpn:Device@host), then names or glob patterns of the devices, proxies and aliases to show (default: all), as for monitor.",
+    ),
+    bind: str = BIND_OPTION,
+    port: int = typer.Option(
+        DEFAULT_PORT,
+        "--port",
+        metavar="PORT",
+        help="TCP port of the page (0: chosen by the system).",
+    ),
+    allow: list[str] = ALLOW_OPTION,
+    open_browser: bool = typer.Option(
+        False, "--open", help="Open the page in the default web browser."
+    ),
+    rate: float = typer.Option(
+        60.0, "--rate", metavar="HZ", help="Frames per second: how often the page is updated."
+    ),
+    duration: float | None = typer.Option(
+        None,
+        "--duration",
+        metavar="SECONDS",
+        help="Stop after this many seconds (default: until Ctrl-C or SIGTERM).",
+    ),
+    driver_paths: list[Path] = DRIVER_PATH_OPTION,
+    trust_driver_path: bool = TRUST_OPTION,
+    definitions: list[Path] = DEFINITIONS_OPTION,
+    bundled: bool = BUNDLED_OPTION,
+    check: bool = CHECK_OPTION,
+    strict: bool = STRICT_OPTION,
+) -> None:
+    """Serve a web page with a live 3D view of the configuration: its display surfaces, every
+    positional proxy and alias with a fading trail coloured by health (pending, stupefied and
+    faulted ones with their reason), each user's head with both eyes and the line of sight,
+    the raw tracker frames before the position filters, and the digital and analog units.
+
+    Arguments are those of monitor. The page needs no network beyond this server; it is bound
+    to 127.0.0.1 unless --bind says otherwise (it has no authentication: limit clients with
+    --allow). Exit status: 0 when stopped (Ctrl-C, SIGTERM, --duration); 2 on usage errors
+    (viser not installed, unreadable configuration, unknown name, port taken).
+    """
+    from gadgetctl.errors import GadgetctlError
+    from gadgetctl.view import viser_missing
+
+    missing = viser_missing()
+    if missing:
+        raise GadgetctlError(missing)
+    from gadgetctl.cli.monitor_cmd import check_options, split_arguments
+    from gadgetctl.monitor.vrpnwatch import is_vrpn_argument
+    from gadgetctl.serve.address import check_bind, check_port, parse_allow
+
+    address = check_bind(bind)
+    check_port(port)
+    networks = parse_allow(allow)
+    check_options(rate, duration, 1.0)
+    watched = [a for a in arguments if is_vrpn_argument(a)]
+    configs, selectors = split_arguments(
+        [a for a in arguments if not is_vrpn_argument(a)], require_config=not watched
+    )
+    if check:
+        from gadgetctl.cli.preflight import check_before_running
+
+        check_before_running(configs, definitions=definitions, bundled=bundled, strict=strict)
+    from gadgetctl.cli.monitor_cmd import watched_devices
+
+    title = " ".join([*(Path(p).name for p in configs), *watched])
+    with watched_devices(configs, watched) as configs:
+        code = run_view(
+            configs,
+            selectors,
+            bind=address,
+            port=port,
+            allow=networks,
+            open_browser=open_browser,
+            rate=rate,
+            duration=duration,
+            driver_paths=driver_paths,
+            definitions=definitions,
+            bundled=bundled,
+            title=f"gadgetctl view {title}",
+        )
+    raise typer.Exit(code)
+
+
+def run_view(
+    configs: list[Path],
+    selectors: list[str],
+    *,
+    bind: str,
+    port: int,
+    allow,
+    open_browser: bool,
+    rate: float,
+    duration: float | None,
+    driver_paths: list[Path],
+    definitions: list[Path],
+    bundled: bool,
+    title: str,
+) -> int:
+    from gadgetctl.cli.monitor_cmd import fatal_load_errors
+    from gadgetctl.errors import GadgetctlError
+    from gadgetctl.input.manager import InputManager, ManagerOptions
+    from gadgetctl.monitor.recording import Terminated, raise_on_stop_signals
+    from gadgetctl.monitor.session import MonitorSession
+    from gadgetctl.serve.address import is_loopback
+    from gadgetctl.view.server import ViewServer
+
+    options = ManagerOptions(driver_dirs=list(driver_paths or ()))
+    manager, configuration = InputManager.from_files(
+        configs, definitions=list(definitions or ()), bundled=bundled, options=options
+    )
+    fatal_load_errors(configuration)
+    session = MonitorSession(
+        manager,
+        configuration,
+        selectors=selectors,
+        rate=rate,
+        info={"config": [str(p) for p in configs]},
+    )
+    server = None
+    try:
+        session.start()
+        try:
+            server = ViewServer(
+                session,
+                configuration,
+                host=bind,
+                port=port,
+                title=title,
+                allow=allow,
+                on_refused=lambda a: print(
+                    f"gadgetctl view: refused a client from {a} (not in --allow)",
+                    file=sys.stderr,
+                    flush=True,
+                ),
+            )
+        except OSError as err:
+            raise GadgetctlError(
+                f"cannot serve the page on {bind}:{port}: {err.strerror or err}"
+            ) from None
+        if port and server.port != port:
+            raise GadgetctlError(f"cannot serve the page on {bind}:{port}: the port is taken")
+        print(f"gadgetctl view: {server.url} (Ctrl-C stops)", flush=True)
+        if not is_loopback(bind):
+            allowed = ", ".join(str(n) for n in allow) or "everyone who can reach it"
+            print(
+                f"gadgetctl: warning: the page has no authentication: clients from {allowed} "
+                f"see every device on {bind}:{server.port}"
+                + ("" if allow else " (limit them with --allow CIDR)"),
+                file=sys.stderr,
+                flush=True,
+            )
+        if open_browser:
+            import webbrowser
+
+            webbrowser.open(server.url)
+        try:
+            with raise_on_stop_signals():
+                server.run(duration=duration)
+        except (KeyboardInterrupt, Terminated):
+            pass
+    finally:
+        if server is not None:
+            server.stop()
+        manager.shutdown()
+    return 0
