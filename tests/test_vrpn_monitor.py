@@ -109,3 +109,35 @@ def test_watch_a_dial_of_the_real_vrpn_library(cli) -> None:
             values[r["unit"]] = r.get("raw", r["value"])
     # dial 0 turned by +0.05 and dial 2 by -0.125 revolutions, dial 1 not at all
     assert values[0] == pytest.approx(0.05) and values[2] == pytest.approx(-0.125)
+
+
+def _replay_capture_repeating_its_text(conn, _n: int) -> None:
+    """The real library's capture (see :func:`_replay_capture`), then its last message (the
+    1056-byte text message of Text0) again every 50 ms until the client leaves."""
+    import select
+
+    capture = (REPO / "drivers/VRPN_drv/tests/conformance/vrpn0738_tcp.bin").read_bytes()
+    text = capture[-1056:]
+    conn.sendall(capture)
+    while True:
+        readable, _, _ = select.select([conn], [], [], 0.05)
+        if readable and not conn.recv(65536):
+            return
+        conn.sendall(text)
+
+
+def test_watch_a_text_sender_of_the_real_vrpn_library(cli) -> None:
+    from vrpn_peers import RawServer
+
+    with RawServer(_replay_capture_repeating_its_text) as server:
+        name = f"Text0@tcp://127.0.0.1:{server.port}"
+        result = cli(
+            "monitor", f"vrpn:{name}", "--duration", "0.5", "--format", "ndjson", "--stats"
+        )
+    assert result.exit_code == 0, result.stderr
+    recs = records(result.stdout)
+    assert recs[0]["info"]["elements"][name]["units"] == {}
+    (stats,) = [r for r in recs if r["type"] == "stats"]
+    health = stats["devices"][name]["health"]
+    assert health["text_messages"] >= 1
+    assert health["last_text"] == "warning 3 from Text0: capture done"

@@ -16,6 +16,7 @@ TRANSPORTS = {
         {"kind": "vrpn", "name": "tracker_server", "count": "tracker_count"},
         {"kind": "vrpn", "name": "button_server", "count": "button_count"},
         {"kind": "vrpn", "name": "analog_server", "count": "analog_count"},
+        {"kind": "vrpn", "name": "text_server"},
     ]
 }
 

@@ -19,8 +19,9 @@ Devices at the same location share one connection. Units:
 Nothing is published before the server's first report of a kind (proxies read "no data
 yet" until then); sensors that have not reported yet in the first ticks are identity poses.
 Sensors, buttons, channels and dials beyond the counts are counted (``beyond_count``) and
-ignored. Text messages of the element's devices are counted (``text_messages``) and the
-newest few kept (:attr:`VrpnInput.texts`).
+ignored. Text messages of the element's devices (and of its ``text_server``, a device read
+for its text only) are counted (``text_messages``) and the newest few kept
+(:attr:`VrpnInput.texts`).
 
 Each sample carries its own VRPN message time, mapped onto the local wall clock
 (:class:`ServerClock`): the server's time plus the smallest ``received - sent`` seen, so the
@@ -246,8 +247,11 @@ class VrpnInput:
         silence_timeout: float | None = 3.0,
         missing_after: float = 1.0,
         udp_receive_buffer: int = 4 << 20,
+        text: str = "",
     ) -> None:
         self.tracker = parse_device_name(tracker) if tracker and tracker_count > 0 else None
+        #: A device read for its text messages only (``text_server``).
+        self.text = parse_device_name(text) if text else None
         self.button = parse_device_name(button) if button and button_count > 0 else None
         self.analog = parse_device_name(analog) if analog and analog_count > 0 else None
         self.tracker_count, self.button_count, self.analog_count = (
@@ -286,7 +290,10 @@ class VrpnInput:
 
     @property
     def devices(self) -> list[DeviceName]:
-        return [d for d in (self.tracker, self.button, self.analog) if d is not None]
+        named = [d for d in (self.tracker, self.button, self.analog) if d is not None]
+        if self.text is not None and self.text not in named:
+            named.append(self.text)
+        return named
 
     @property
     def clients(self) -> dict[Location, VrpnClient]:
@@ -474,6 +481,7 @@ class VrpnInput:
         tracker = self.tracker.device if self.tracker is not None else None
         button = self.button.device if self.button is not None else None
         analog = self.analog.device if self.analog is not None else None
+        texts_from = {d.device for d in self.devices}
         counters = self.counters
         observe, local = clock.observe, clock.local
         for m in messages:
@@ -505,7 +513,7 @@ class VrpnInput:
                         self._end_tick(batch)  # every sensor reported: the tick is whole
                 continue
             if kind == TEXT_MESSAGE and isinstance(report, TextReport):
-                if sender in (tracker, button, analog):
+                if sender in texts_from:
                     counters["text_messages"] += 1
                     self.texts.append(
                         (local(m.timestamp, m.received), sender, *report)  # type: ignore[arg-type]

@@ -26,6 +26,7 @@ import numpy as np
 from gadgetctl.input import Analog, DeviceConfigError, Digital, Position
 from gadgetctl.input.samples import DEFAULT_CAP
 from gadgetctl.jccl.access import ElementAccess
+from gadgetctl.safetext import printable
 from gadgetctl.transport.udp import DatagramLedger
 from gadgetctl.vrpn import VrpnNameError
 from gadgetctl.vrpn.codecs import MAX_SENSORS
@@ -42,6 +43,8 @@ MAX_CHANNELS = 128
 STORE_POSE_BYTES = 64 << 20
 #: The fewest samples the buffer keeps whatever the sensor count.
 MIN_CAP = 64
+#: Characters of the newest text message shown in the device's health.
+MAX_TEXT_SHOWN = 200
 
 
 def sample_cap(sensors: int) -> int:
@@ -109,7 +112,7 @@ class VrpnDevice(Position, Digital, Analog):
 
     def __init__(self) -> None:
         super().__init__()
-        self.tracker_server = self.button_server = self.analog_server = ""
+        self.tracker_server = self.button_server = self.analog_server = self.text_server = ""
         self.tracker_count = self.button_count = self.analog_count = 0
         self._input: VrpnInput | None = None
         self.remote_clock = RemoteClock()
@@ -128,6 +131,7 @@ class VrpnDevice(Position, Digital, Analog):
                 raise DeviceConfigError(f"{kind}_count {count} is out of range (0 to {limit})")
             setattr(self, f"{kind}_server", server)
             setattr(self, f"{kind}_count", count)
+        self.text_server = access.string("text_server").strip() if access.has("text_server") else ""
         self.store.cap = sample_cap(self.tracker_count)
         try:
             self._input = self._make_input()
@@ -146,6 +150,7 @@ class VrpnDevice(Position, Digital, Analog):
             self.analog_count,
             silence_timeout=self.silence_timeout,
             udp_receive_buffer=self.receive_buffer,
+            text=self.text_server,
         )
 
     # -- sampling ---------------------------------------------------------------------------
@@ -191,6 +196,16 @@ class VrpnDevice(Position, Digital, Analog):
         self.remote_clock.add([received - server for received, server in batch.remote_times])
 
     # -- diagnostics ------------------------------------------------------------------------
+
+    def health(self) -> dict[str, int | float | str]:
+        """The base health, and the newest text message of the element's devices
+        (``last_text``: "warning 3 from Text0: ...", made printable)."""
+        found = super().health()
+        if self._input is not None and self._input.texts:
+            _moment, device, severity, level, text = self._input.texts[-1]
+            kind = {0: "normal", 1: "warning", 2: "error"}.get(severity, f"severity {severity}")
+            found["last_text"] = printable(f"{kind} {level} from {device}: {text}")[:MAX_TEXT_SHOWN]
+        return found
 
     def datagram_ledger(self) -> DatagramLedger | None:
         """The account of the UDP channel's datagrams (lob mode) of the element's first

@@ -5,7 +5,9 @@ on the fly (element name ``Device@location``), read by the bundled ``VRPN_drv``.
 asked first (:func:`gadgetctl.vrpn.probe.probe`) so that the element gets the layout the
 device's first reports show: as many position units as tracker sensors, digital units as
 buttons, analog units as channels or dials (a dial's unit is its accumulated rotation in
-revolutions; analog proxies are not involved, so values are raw). Reports beyond the
+revolutions; analog proxies are not involved, so values are raw); a device that sent only
+text (a ``vrpn_Text_Sender``) is watched with no units, its text messages counted and the
+newest shown in its health (``text_messages``, ``last_text``), as for every watched device. Reports beyond the
 client's bounds (a sensor id past :data:`gadgetctl.vrpn.codecs.MAX_SENSORS`...) shape no
 layout: they are reported, once per device, and the watch runs with the rest.
 A server that does not answer, or does not announce the device, is a usage error that
@@ -81,10 +83,10 @@ def resolve(arguments: list[str], *, timeout: float = 2.0) -> list[WatchedDevice
         if layout.stray:
             count = f"{layout.stray} report" + ("" if layout.stray == 1 else "s")
             stray = f"vrpn:{text}: ignored {count} beyond the client's bounds, the first for {layout.first_stray}"
-        if not layout.reports:
+        if not layout.reports and not layout.texts:
             raise GadgetctlError(
                 f"vrpn:{text}: the device sent no tracker, button, analog or dial report "
-                f"within {timeout:g} s, so its layout is unknown"
+                f"and no text within {timeout:g} s, so its layout is unknown"
                 + (f" ({stray.split(': ', 1)[1]})" if stray else "")
             )
         channels = max(layout.channels, layout.dials)
@@ -110,7 +112,7 @@ def configuration_text(devices: list[WatchedDevice]) -> str:
             f"<tracker_server>{server}</tracker_server><button_server>{server}</button_server>"
             f"<analog_server>{server}</analog_server><tracker_count>{d.sensors}</tracker_count>"
             f"<button_count>{d.buttons}</button_count><analog_count>{d.channels}</analog_count>"
-            "<min>-1.0</min><max>1.0</max></vrpn>"
+            f"<min>-1.0</min><max>1.0</max><text_server>{server}</text_server></vrpn>"
         )
     lines += ["</elements>", "</configuration>", ""]
     return "\n".join(lines)
