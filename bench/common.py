@@ -86,3 +86,40 @@ def command_cpu(args: list[str], ok: tuple[int, ...] = (0,)) -> tuple[float, flo
             f"{' '.join(args)} failed ({done.returncode}): {(done.stderr or done.stdout)[-500:]}"
         )
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+# Runs a command and reports its own resource use. A child's peak resident memory counts what
+# it shared with its parent before exec, so the command is started from this small process,
+# never from the benchmark (whose own memory would count).
+_PEAK_LAUNCHER = """
+import os, sys
+pid = os.fork()
+if pid == 0:
+    try:
+        os.execvp(sys.argv[1], sys.argv[1:])
+    finally:
+        os._exit(127)
+_, status, usage = os.wait4(pid, 0)
+print(f"@@peak {usage.ru_maxrss} {usage.ru_utime + usage.ru_stime} "
+      f"{os.waitstatus_to_exitcode(status)}", file=sys.stderr)
+"""
+
+
+def command_peak_memory(args: list[str], ok: tuple[int, ...] = (0,)) -> tuple[float, float, int]:
+    """Wall-clock seconds, CPU seconds (user + system) and peak resident memory in bytes of
+    one run of a command (its own figures, from wait4 in a small launcher process); exits
+    the benchmark when the command ends with a status outside ``ok`` or reports an internal
+    error."""
+    start = time.perf_counter()
+    done = subprocess.run(
+        [sys.executable, "-c", _PEAK_LAUNCHER, *args], capture_output=True, text=True
+    )
+    wall = time.perf_counter() - start
+    errors, _, figures = done.stderr.rpartition("@@peak ")
+    try:
+        maxrss, cpu, status = figures.split()
+    except ValueError:
+        sys.exit(f"{' '.join(args)}: no figures from the launcher: {done.stderr[-500:]}")
+    if int(status) not in ok or "internal error" in errors:
+        sys.exit(f"{' '.join(args)} failed ({status}): {(errors or done.stdout)[-500:]}")
+    return wall, float(cpu), int(maxrss) * 1024  # (Linux gives KiB)

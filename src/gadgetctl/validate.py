@@ -60,8 +60,11 @@ def check_document(doc: XmlDocument, options: ValidateOptions) -> None:
 
 
 def load_and_check(path: Path, options: ValidateOptions) -> XmlDocument:
+    from gadgetctl.jccl.configload import parse_configuration
+
     try:
-        doc = load_file(path, max_size=options.max_size)
+        # (a configuration's elements are read as it is parsed: see parse_configuration)
+        doc = load_file(path, max_size=options.max_size, parse=parse_configuration)
     except OSError as err:
         raise GadgetctlError(f"{path}: {err.strerror or err}") from None
     check_document(doc, options)

@@ -99,7 +99,7 @@ class Node(NamedTuple):
     name: str
     type: str
     version: int | None
-    targets: tuple[str, ...]
+    targets: tuple[str, ...] | str  # (one target may be given as its name alone)
     refused: str | None = None
 
 
@@ -116,11 +116,24 @@ def settle(
     become active). ``refused`` names more elements that never become active; ``active``,
     when given, receives the names of the active ones."""
     fate: dict[str, str | None] = {}
-    waiting: dict[str, list[str]] = {}  # target name -> names of the nodes waiting for it
-    unmet: dict[str, int] = {}
+    # target name -> the name of the node waiting for it, or a list of the names of several
+    # (one name kept without a list, and no count for a node with one target: the usual
+    # case, and 200,000 aliases make 200,000 nodes)
+    waiting: dict[str, str | list[str]] = {}
+    unmet: dict[str, int] = {}  # nodes with several targets: how many are not active yet
     ready: list[str] = []
     refusals: dict[tuple[str, int | None], str | None] = {}  # the same for every element of a kind
     waits: dict[str, bool] = {}
+
+    def wait(dep: str, name: str) -> None:
+        found = waiting.get(dep)
+        if found is None:
+            waiting[dep] = name
+        elif found.__class__ is str:
+            waiting[dep] = [found, name]
+        else:
+            found.append(name)
+
     # one pass over the nodes, unpacked as plain tuples (50,000 aliases make 50,000 nodes)
     for name, type_name, version, targets, node_refused in nodes:
         if node_refused is not None:
@@ -142,23 +155,20 @@ def settle(
         if not waits_here or not targets:
             ready.append(name)
             continue
-        if len(targets) == 1:
-            unmet[name] = 1
-            dep = targets[0]
-            found = waiting.get(dep)
-            if found is None:
-                waiting[dep] = [name]
+        if targets.__class__ is str:  # one target, given as its name
+            found = waiting.get(targets)
+            if found is None:  # (wait(), written out: once per element)
+                waiting[targets] = name
+            elif found.__class__ is str:
+                waiting[targets] = [found, name]
             else:
                 found.append(name)
             continue
         deps = set(targets)
-        unmet[name] = len(deps)
+        if len(deps) > 1:
+            unmet[name] = len(deps)
         for dep in deps:
-            found = waiting.get(dep)
-            if found is None:
-                waiting[dep] = [name]
-            else:
-                found.append(name)
+            wait(dep, name)
     while ready:
         name = ready.pop()
         if fate[name] is None:
@@ -166,9 +176,15 @@ def settle(
         fate[name] = None
         if active is not None:
             active.add(name)
-        for dependent in waiting.get(name, ()):
-            left = unmet[dependent] - 1
-            unmet[dependent] = left
-            if left == 0:
+        dependents = waiting.get(name)
+        if dependents is None:
+            continue
+        for dependent in (dependents,) if dependents.__class__ is str else dependents:
+            left = unmet.get(dependent)
+            if left is None:  # its one target is active
+                ready.append(dependent)
+                continue
+            unmet[dependent] = left - 1
+            if left == 1:
                 ready.append(dependent)
     return fate

@@ -20,7 +20,7 @@ from pathlib import Path
 from gadgetctl.diagnostics import Diagnostic
 from gadgetctl.envvars import expand
 from gadgetctl.jccl.configuration import ConfigElement, ConfigFile, Configuration
-from gadgetctl.jccl.elementcheck import ElementChecker, ElementReport, at, describe
+from gadgetctl.jccl.elementcheck import ElementChecker, at, describe
 from gadgetctl.jccl.repository import DefinitionRepository
 from gadgetctl.jccl.runtime import PATH_PROPERTIES
 from gadgetctl.jccl.searchpath import SearchPathEntry, configuration_entries
@@ -111,21 +111,18 @@ def check_configuration(config: Configuration, session: Session, scope: Scope) -
     repo, entries = session.repository(config)
     found += _definition_path_findings(entries)
     checker = session.checker(repo)
-    reports: dict[int, ElementReport] = {}
     notes: list[tuple[Diagnostic, str]] = []
     for element in config.loaded:
-        report = checker.check(element)
-        reports[id(element)] = report
+        report = checker.check(element)  # (kept as element.report, which wiring reads)
         found += report.diagnostics
         if report.notes:
             notes += report.notes
         if element.type in _PATH_TYPES:
             found += _path_variables(element, session.environ)
-    retain(reports)
     if notes:
         found += _suggestions(notes, config, session)
     unloaded = session.unloaded_types(config) if session.unloaded_types is not None else {}
-    found += check_wiring(config, reports, checker.index, scope, unloaded)
+    found += check_wiring(config, checker.index, scope, unloaded)
     found += proxy_unit_problems(config.elements, repo)
     return found
 
@@ -180,7 +177,7 @@ def _path_variables(element: ConfigElement, environ: Mapping[str, str]) -> list[
     if element.type not in _PATH_TYPES:
         return []
     found = []
-    for prop, values in element.properties.items():
+    for prop, values in element.property_items():
         if (element.type, prop) not in PATH_PROPERTIES:
             continue
         for value in values:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -73,17 +73,86 @@ class TagLocation(SourceLocation):
         return self._found
 
 
-@dataclass(slots=True)
-class PropertyValue:
-    """One value of a property: the text as written, or an embedded element."""
+#: Where a tag read from a document is: its line times _LINE_SPAN plus its rank among the
+#: tags of its name on that line (see TagLocation), one int instead of a location object.
+_LINE_SPAN = 1 << 32
 
-    text: str
-    location: Location | SourceLocation
-    element: ConfigElement | None = None
+
+class _Placed:
+    """Something read from a tag of a document, or placed by its maker: ``_where`` holds a
+    location, or (with ``_at``, a packed position) the document, and :attr:`location` is
+    made when asked for (few of 200,000 elements and values ever are)."""
+
+    __slots__ = ()
+
+    def _tag(self) -> str:
+        """The local name of the tag it was read from."""
+        raise NotImplementedError
+
+    @property
+    def location(self) -> Location | SourceLocation:
+        at = self._at  # type: ignore[attr-defined]
+        if at is None:
+            return self._where  # type: ignore[attr-defined]
+        line, index = divmod(at, _LINE_SPAN)
+        return TagLocation(self._where, line, self._tag(), index)  # type: ignore[attr-defined]
+
+    @location.setter
+    def location(self, location: Location | SourceLocation) -> None:
+        self._where, self._at = location, None  # type: ignore[attr-defined]
+
+
+class PropertyValue(_Placed):
+    """One value of a property: the text as written, or an embedded element.
+
+    A value read from a document keeps the document and a packed position instead of a
+    location object, and makes its :attr:`location` when asked (a configuration of
+    200,000 elements has at least as many values, and few of them are ever reported)."""
+
+    __slots__ = ("_at", "_local", "_where", "element", "text")
+
+    def __init__(
+        self,
+        text: str,
+        location: Location | SourceLocation | None = None,
+        element: ConfigElement | None = None,
+    ) -> None:
+        self.text = text
+        self.element = element
+        self._where = location  # a location, or (with _at) the document
+        self._at: int | None = None
+        self._local: str | None = None
+
+    @classmethod
+    def read(cls, text: str, doc, at: int, local: str) -> PropertyValue:
+        """A value read from ``doc`` at the packed position ``at`` of a ``<local>`` tag."""
+        value = cls(text, doc)
+        value._at = at
+        value._local = local
+        return value
+
+    def _tag(self) -> str:
+        return self._local or ""
 
     @property
     def stripped(self) -> str:
         return self.text.strip()
+
+    def __repr__(self) -> str:
+        return (
+            f"PropertyValue(text={self.text!r}, location={self.location}, element={self.element!r})"
+        )
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, PropertyValue):
+            return NotImplemented
+        return (
+            self.text == other.text
+            and self.element == other.element
+            and str(self.location) == str(other.location)
+        )
+
+    __hash__ = None  # type: ignore[assignment]  (mutable, as the dataclass was)
 
 
 def _version_number(text: str | None) -> int | None:
@@ -93,54 +162,95 @@ def _version_number(text: str | None) -> int | None:
         return None
 
 
+#: The property names of each shape of element seen, shared (see ConfigElement._props).
+_SHAPES: dict[tuple[str, ...], tuple[str, ...]] = {}
+
 #: The number of each version attribute text seen (a file holds a handful of them).
 _VERSION_NUMBERS: dict[str | None, int | None] = {}
 
 
-@dataclass(eq=False, slots=True, init=False)
-class ConfigElement:
-    type: str
-    name: str
-    version_text: str | None
-    location: Location | SourceLocation
-    properties: dict[str, list[PropertyValue]]
-    parent: ConfigElement | None
-    parent_property: str | None
-    node: etree._Element | None = field(repr=False)
-    #: The version attribute as a number (None when missing or not a number), read once: a
-    #: configuration of 50,000 elements asks for it several times per element.
-    version: int | None = field(init=False, repr=False)
+class ConfigElement(_Placed):
+    """One configuration element. Read from a document it keeps the document and a packed
+    position rather than a location object (see :class:`PropertyValue`); ``report`` is
+    where :class:`~gadgetctl.jccl.elementcheck.ElementChecker` keeps its findings."""
+
+    __slots__ = (
+        "_at",
+        "_names",
+        "_props",
+        "_where",
+        "name",
+        "parent",
+        "parent_property",
+        "report",
+        "type",
+        "version",
+        "version_text",
+    )
 
     def __init__(
         self,
         type: str,
         name: str,
         version_text: str | None,
-        location: Location | SourceLocation,
+        location: Location | SourceLocation | None,
         properties: dict[str, list[PropertyValue]] | None = None,
         parent: ConfigElement | None = None,
         parent_property: str | None = None,
-        node: etree._Element | None = None,
     ) -> None:
-        # (written out rather than generated: 50,000 elements are made per large check)
+        # (written out: 200,000 elements are made per large check)
         self.type = type
         self.name = name
         self.version_text = version_text
-        self.location = location
-        self.properties = {} if properties is None else properties
+        self._where = location
+        self._at: int | None = None
+        # A dict of property name -> values, or (read from a file) the values of each name
+        # in a tuple, the names in ``_names``, a tuple shared by every element of that
+        # shape: a dict of one property is 184 bytes, and 200,000 aliases have one each.
+        self._props: dict[str, list[PropertyValue]] | tuple[list[PropertyValue], ...] = (
+            {} if properties is None else properties
+        )
+        self._names: tuple[str, ...] | None = None
         self.parent = parent
         self.parent_property = parent_property
-        self.node = node
+        self.report = None
+        #: The version attribute as a number (None when missing or not a number), read
+        #: once: a configuration of 50,000 elements asks for it several times per element.
         try:
-            self.version = _VERSION_NUMBERS[version_text]
+            self.version: int | None = _VERSION_NUMBERS[version_text]
         except KeyError:
             self.version = _version_number(version_text)
             if len(_VERSION_NUMBERS) < 1024:
                 _VERSION_NUMBERS[version_text] = self.version
 
+    @classmethod
+    def read(
+        cls,
+        type: str,
+        name: str,
+        version_text: str | None,
+        doc,
+        at: int,
+        parent: ConfigElement | None = None,
+        parent_property: str | None = None,
+    ) -> ConfigElement:
+        """An element read from ``doc`` at the packed position ``at`` of its tag."""
+        element = cls(type, name, version_text, doc, None, parent, parent_property)
+        element._at = at
+        return element
+
+    def _tag(self) -> str:
+        return self.type
+
     @property
     def file(self) -> str:
-        return self.location.path
+        return self._where.path
+
+    def __repr__(self) -> str:
+        return (
+            f"ConfigElement(type={self.type!r}, name={self.name!r}, "
+            f"version_text={self.version_text!r}, location={self.location})"
+        )
 
     @property
     def full_name(self) -> str:
@@ -151,15 +261,78 @@ class ConfigElement:
             (self.parent.full_name, self.parent_property or "", self.name)
         )
 
+    @property
+    def properties(self) -> dict[str, list[PropertyValue]]:
+        """Property name -> values as written, in document order (a dict made on first use
+        from the compact form, and kept: the caller may change it)."""
+        if self._names is None:
+            return self._props  # type: ignore[return-value]
+        made = self._props = dict(self.property_items())
+        self._names = None
+        return made
+
+    @properties.setter
+    def properties(self, properties: dict[str, list[PropertyValue]]) -> None:
+        self._props, self._names = properties, None
+
+    def compact(self) -> None:
+        """Keep the properties in the compact form: the names in a tuple shared by every
+        element of that shape, and for each name its one value (no list around it) or its
+        list of values; with one name, that alone. (A dict of one property and its list
+        are 250 bytes, and 200,000 aliases have one each.)"""
+        props = self._props
+        if self._names is not None or not isinstance(props, dict):
+            return
+        names = tuple(props)
+        shared = _SHAPES.get(names)
+        if shared is None:
+            shared = names
+            if len(_SHAPES) < 4096:
+                _SHAPES[names] = names
+        items = tuple(values[0] if len(values) == 1 else values for values in props.values())
+        self._names = shared
+        self._props = items[0] if len(items) == 1 else items
+
+    def _compact_items(self) -> tuple:
+        props = self._props
+        return (props,) if len(self._names) == 1 else props  # type: ignore[arg-type]
+
+    def property_items(self) -> Iterable[tuple[str, list[PropertyValue]]]:
+        """(name, values) of every property written, without making the dict (a value
+        kept alone comes in a list made for the caller)."""
+        if self._names is None:
+            return self._props.items()  # type: ignore[union-attr]
+        return [
+            (name, item if item.__class__ is list else [item])
+            for name, item in zip(self._names, self._compact_items(), strict=True)
+        ]
+
+    def property_values(self) -> Iterable[list[PropertyValue]]:
+        """The values of every property written, property by property."""
+        if self._names is None:
+            return self._props.values()  # type: ignore[union-attr]
+        return [item if item.__class__ is list else [item] for item in self._compact_items()]
+
     def values(self, prop: str) -> list[PropertyValue]:
-        return self.properties.get(prop, [])
+        names = self._names
+        if names is None:
+            return self._props.get(prop, [])  # type: ignore[union-attr]
+        if len(names) == 1:
+            if names[0] != prop:
+                return []
+            item = self._props
+            return item if item.__class__ is list else [item]  # type: ignore[return-value]
+        for name, item in zip(names, self._props, strict=True):  # type: ignore[arg-type]
+            if name == prop:
+                return item if item.__class__ is list else [item]
+        return []
 
     def texts(self, prop: str) -> list[str]:
         return [v.stripped for v in self.values(prop)]
 
     def embedded(self) -> Iterator[ConfigElement]:
         """Embedded elements, depth-first."""
-        for values in self.properties.values():
+        for values in self.property_values():
             for value in values:
                 if value.element is not None:
                     yield value.element

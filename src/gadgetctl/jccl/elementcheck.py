@@ -34,19 +34,41 @@ class PointerValue(NamedTuple):
 _pointer = partial(tuple.__new__, PointerValue)
 
 
-class ElementReport:
-    """What checking one element found: its diagnostics, its pointer values, and the view of
-    its definition it (and each embedded element) was judged by, by ``id`` of the element."""
+class ElementReport(list):
+    """What checking one element found: its diagnostics and the view of its definition it
+    was judged by; the report itself is the list of its pointer values (:attr:`pointers`),
+    so that an element with a pointer and no finding (the usual one: 200,000 aliases make
+    200,000 reports) costs one list."""
 
-    __slots__ = ("diagnostics", "notes", "pointers", "views")
+    __slots__ = ("checker", "diagnostics", "notes", "place", "view")
 
-    def __init__(self) -> None:
-        self.diagnostics: list[Diagnostic] = []
-        self.pointers: list[PointerValue] = []
-        self.views: dict[int, TypeView | None] = {}
+    def __init__(self, checker: ElementChecker | None = None) -> None:
+        super().__init__()
+        # (an empty tuple until there is something: most elements have no finding)
+        self.diagnostics: list[Diagnostic] | tuple[()] = ()
+        #: The definition version the element was judged by (None: none).
+        self.view: TypeView | None = None
         #: Suggestions that hold unless a plug-in or element has the value's exact name:
         #: (the finding, the value without surrounding white space). None when there are none.
         self.notes: list[tuple[Diagnostic, str]] | None = None
+        self.checker = checker  # whose report it is (see ElementChecker.check)
+        self.place = -1  # scratch of wiring's pending simulation (its place in a list)
+
+    @property
+    def pointers(self) -> list[PointerValue]:
+        """The non-empty pointer values of the element and its embedded elements."""
+        return self
+
+    def add(self, diagnostic: Diagnostic) -> None:
+        if self.diagnostics:
+            self.diagnostics.append(diagnostic)
+        else:
+            self.diagnostics = [diagnostic]
+
+    __hash__ = object.__hash__  # (one report per element: identity)
+
+    def __eq__(self, other: object) -> bool:
+        return self is other
 
 
 def at(code: str, message: str, location: Location | SourceLocation, **kwargs) -> Diagnostic:
@@ -63,37 +85,37 @@ class ElementChecker:
     def __init__(self, index: TypeIndex, search_path: str = "") -> None:
         self.index = index
         self.search_path = search_path
-        self._cache: dict[int, tuple[ConfigElement, ElementReport]] = {}
         self._values: dict[tuple[int, str], ValueProblem | None] = {}
         self._clean_views: dict[tuple[str, int | None], TypeView] = {}
         self._plans: dict[int, tuple] = {}  # id of a view -> see _plan (which holds the view)
 
     def check(self, element: ConfigElement) -> ElementReport:
-        cached = self._cache.get(id(element))
-        if cached is not None and cached[0] is element:
-            return cached[1]
-        report = ElementReport()
-        self._check(element, report)
-        self._cache[id(element)] = (element, report)
+        """The element's report, kept on the element (one per element, not a cache entry:
+        a configuration of 200,000 elements would hold 200,000 of those)."""
+        report = element.report
+        if report is not None and report.checker is self:
+            return report
+        report = ElementReport(self)
+        report.view = self._check(element, report)
+        element.report = report
         return report
 
     # -- one element -----------------------------------------------------------------
 
-    def _check(self, element: ConfigElement, report: ElementReport) -> None:
+    def _check(self, element: ConfigElement, report: ElementReport) -> TypeView | None:
+        """Check ``element`` (and its embedded elements) into ``report``; the view it was
+        judged by."""
         view = self._judged_view(element, report)
-        report.views[id(element)] = view
         if view is None:
-            return
+            return None
         plan = self._plans.get(id(view))
         if plan is None or plan[0] is not view:
             plan = self._plans[id(view)] = self._plan(view)
         _, definitions, required = plan
-        for prop_name, values in element.properties.items():
+        for prop_name, values in element.property_items():
             found = definitions.get(prop_name)
             if found is None:
-                report.diagnostics.append(
-                    self._unknown_property(element, view, prop_name, values[0])
-                )
+                report.add(self._unknown_property(element, view, prop_name, values[0]))
                 continue
             prop, slots = found
             if slots is not None and len(values) != slots:
@@ -103,7 +125,7 @@ class ElementChecker:
                     if value.element is None:
                         target = value.text.strip()
                         if target:
-                            report.pointers.append(_pointer((element, prop, value, target)))
+                            report.append(_pointer((element, prop, value, target)))
                     else:
                         self._check_value(element, prop, value, report)
                 continue
@@ -111,6 +133,7 @@ class ElementChecker:
                 self._check_value(element, prop, value, report)
         if required:
             self._check_required(element, required, report)
+        return view
 
     def _plan(
         self, view: TypeView
@@ -131,9 +154,9 @@ class ElementChecker:
 
     def _judged_view(self, element: ConfigElement, report: ElementReport) -> TypeView | None:
         """The definition version the element is judged by; version and type findings."""
-        index, found = self.index, report.diagnostics
+        index, found = self.index, report
         if not element.name.strip():
-            found.append(at("CFG015", f"{element.type} element has no name", element.location))
+            found.add(at("CFG015", f"{element.type} element has no name", element.location))
         clean = self._clean_views.get((element.type, element.version))
         if clean is not None:
             return clean
@@ -142,7 +165,7 @@ class ElementChecker:
             close = close_names(element.type, self.index.repo.names(), cutoff=0.6)
             hint = f"Did you mean {', '.join(close)}? " if close else ""
             searched = f"Searched: {self.search_path}. " if self.search_path else ""
-            found.append(
+            found.add(
                 at(
                     "CFG010",
                     f"no definition of element type {element.type!r} on the search "
@@ -162,7 +185,7 @@ class ElementChecker:
                 if element.version_text is None
                 else f"version {element.version_text!r}"
             )
-            found.append(
+            found.add(
                 at(
                     "CFG014",
                     f"{describe(element)} has {shown}; VR Juggler reads it as 0",
@@ -172,7 +195,7 @@ class ElementChecker:
                 )
             )
         elif declared > newest:
-            found.append(
+            found.add(
                 at(
                     "CFG013",
                     f"{describe(element)} declares version {declared}, newer than "
@@ -183,7 +206,7 @@ class ElementChecker:
             )
         elif declared < newest:
             judged = declared if declared in versions else None
-            found.append(self._older(element, declared, newest, versions))
+            found.add(self._older(element, declared, newest, versions))
         else:
             judged = declared
         view = index.view(element.type, judged)
@@ -193,7 +216,7 @@ class ElementChecker:
             # version: the next one is judged by this view at once.
             self._clean_views[(element.type, declared)] = view
         if view.definition.abstract:
-            found.append(
+            found.add(
                 at(
                     "CFG011",
                     f"{describe(element)}: {element.type} is abstract (a base for "
@@ -297,7 +320,7 @@ class ElementChecker:
         if prop.variable or not slots:  # no slots at all: a broken definition, reported there
             return
         if len(values) > slots:
-            report.diagnostics.append(
+            report.add(
                 at(
                     "CFG023",
                     f"{describe(element)}: {prop.name} has {len(values)} values; its definition "
@@ -314,7 +337,7 @@ class ElementChecker:
                 for i, s in enumerate(prop.values)
                 if i >= len(values)
             ]
-            report.diagnostics.append(
+            report.add(
                 at(
                     "CFG024",
                     f"{describe(element)}: {prop.name} has {len(values)} of {slots} values; "
@@ -334,7 +357,7 @@ class ElementChecker:
         if prop.valuetype is ValueType.CONFIGELEMENT:
             if value.element is None:
                 if value.stripped:
-                    report.diagnostics.append(
+                    report.add(
                         at(
                             "CFG029",
                             f"{describe(element)}: {prop.name} holds text {value.stripped!r}; "
@@ -346,7 +369,7 @@ class ElementChecker:
             self._check_embedded(element, prop, value, report)
             return
         if value.element is not None:
-            report.diagnostics.append(
+            report.add(
                 at(
                     "CFG029",
                     f"{describe(element)}: {prop.name} holds an embedded "
@@ -378,7 +401,7 @@ class ElementChecker:
                 )
             )
             return
-        report.diagnostics.append(
+        report.add(
             at(
                 problem.code,
                 f"{describe(element)}: {problem.message}",
@@ -403,7 +426,7 @@ class ElementChecker:
             and self.index.known(child.type)
             and not self.index.is_any(child.type, allowed)
         ):
-            report.diagnostics.append(
+            report.add(
                 at(
                     "CFG030",
                     f"{describe(element)}: {prop.name} allows {_types(allowed)}, not "
@@ -437,12 +460,12 @@ class ElementChecker:
     ) -> None:
         for prop, effect in required:
             prop_name = prop.name
-            values = element.properties.get(prop_name)
+            values = element.values(prop_name)
             if values and _any_set(values):
                 continue
             where = values[0].location if values else element.location
             state = "is empty" if values else "is not set"
-            report.diagnostics.append(
+            report.add(
                 at(
                     "CFG033",
                     f"{describe(element)}: {prop_name} {state}; {effect}",

@@ -12,19 +12,17 @@ runs what VR Juggler leaves pending, the message says so.
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
-from lxml import etree
-
 from gadgetctl.diagnostics import Diagnostic, Severity
 from gadgetctl.jccl.activation import DIFFERENCES, Node, RunTime, never_handled, settle, too_old
-from gadgetctl.jccl.chains import fold_chains
+from gadgetctl.jccl.chains import fold_chains, leaders
 from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.definitions import PropertyDefinition
-from gadgetctl.jccl.elementcheck import ElementReport, PointerValue, at, describe
+from gadgetctl.jccl.elementcheck import PointerValue, at, describe
 from gadgetctl.jccl.runtime import missing_target_effect
 from gadgetctl.jccl.typeindex import TypeIndex
 from gadgetctl.perf import retain
@@ -39,7 +37,9 @@ _node = partial(
     tuple.__new__, Node
 )  # Node(...) without its Python-level __new__ (50,000 per check)
 #: A pending element, why it is pending where (the run time wording) and its unmet pointers.
-_Waiting = tuple[ConfigElement, str, list[tuple[PointerValue, "ConfigElement | None", str]]]
+_Reason = tuple[PointerValue, "ConfigElement | None", str]
+#: (a single unmet pointer is kept as its tuple, several in a list: see _reasons)
+_Waiting = tuple[ConfigElement, str, "_Reason | list[_Reason] | PointerValue"]
 #: Said of an element VR Juggler leaves pending where gadgetctl deliberately runs it.
 GADGETCTL_RUNS_IT = "gadgetctl runs it"
 
@@ -64,14 +64,13 @@ class Wiring:
     def __init__(
         self,
         config: Configuration,
-        reports: dict[int, ElementReport],
         index: TypeIndex,
         scope: Scope,
         unloaded: Mapping[str, str] | None = None,
     ) -> None:
+        # (each element's findings are in ``element.report``, where the checker left them)
         self.config = config
         self.unloaded = unloaded or {}
-        self.reports = reports
         self.index = index
         self.scope = scope
         self.effective = config.elements
@@ -81,32 +80,34 @@ class Wiring:
         self._suggesters: dict[bool, CloseNames] = {}
         self._taken: dict[tuple[int, str], bool] = {}  # (property, target type) -> allowed
         self._kind_blocked: dict[tuple[str, int | None], tuple[str, Severity] | None] = {}
-        #: Why each element that can never become active cannot (see :meth:`_blocked`).
-        self.blocked: dict[int, tuple[str, Severity]] = {}
+        #: Why each element that can never become active cannot (see :meth:`_blocked`);
+        #: None until :meth:`_walk` has run.
+        self.blocked: dict[int, tuple[str, Severity]] | None = None
 
     def check(self) -> list[Diagnostic]:
         found = self.duplicates()
-        wrong: list[tuple[PointerValue, ConfigElement]] = []  # pointers at a type not allowed
-        nodes = self._walk(found, wrong)
+        wrong: list[PointerValue] = []  # pointers at a type not allowed
+        self._walk(found, wrong)
+        # the "did you mean" indexes serve only the pointer checks of the walk: given back
+        # before the rest (about 100 bytes an element of 200,000)
+        self._suggesters.clear()
         found.extend(self._wrong_types(wrong))
-        found.extend(self.pending(nodes))
+        del wrong
+        found.extend(self.pending())
         return found
 
-    def _walk(
-        self, found: list[Diagnostic], wrong: list[tuple[PointerValue, ConfigElement]]
-    ) -> list[Node]:
+    def _walk(self, found: list[Diagnostic], wrong: list[PointerValue]) -> None:
         """Every pointer of every loaded element checked (CFG031 into ``found``, pointers at
-        a type their property does not take into ``wrong``), and the effective elements as
-        the activation rules see them (filling :attr:`blocked`). When every name occurs once
-        the loaded elements are the effective ones, and both are done in one pass."""
+        a type their property does not take into ``wrong``), and why the effective elements
+        that can never become active cannot (filling :attr:`blocked`; :meth:`_nodes` then
+        gives them as the activation rules see them). When every name occurs once the
+        loaded elements are the effective ones, and both are done in one pass."""
         loaded = self.config.loaded
         unique = len(self.by_name) == len(loaded)
         if not unique:
             self._pointers(loaded, found, wrong)
-        by_name, reports, kind_blocked = self.by_name, self.reports, self._kind_blocked
+        by_name, kind_blocked = self.by_name, self._kind_blocked
         blocked = self.blocked = {}
-        nodes: list[Node] = []
-        add = nodes.append
         # the kind of the element before, and the property and target type of the pointer
         # before, with their answers: a large configuration repeats them element after element
         last_kind: tuple[str, int | None] | None = None
@@ -120,14 +121,10 @@ class Wiring:
                 blocker = kind_blocked.get(last_kind, _UNJUDGED)
                 if blocker is _UNJUDGED:
                     blocker = self._blocked(element)
-            refused = None
             if blocker is not None:
                 blocked[key] = blocker
-                if blocker[0] == UNHANDLED or type_name in self.unloaded:
-                    refused = blocker[0]  # (no rule of activation knows of it: refused here)
-            pointers = reports[key].pointers
+            pointers = element.report.pointers
             if not pointers:
-                add(_node((element.name, type_name, version, (), refused)))
                 continue
             if unique:
                 for pointer in pointers:
@@ -145,30 +142,46 @@ class Wiring:
                     ):
                         last_takes = (prop, target.type, self._takes(prop, target.type))
                     if not last_takes[2]:
-                        wrong.append((pointer, target))
-            targets = (
-                (pointers[0][3],) if len(pointers) == 1 else tuple([p.target for p in pointers])
-            )
-            add(_node((element.name, type_name, version, targets, refused)))
-        return nodes
+                        wrong.append(pointer)
+
+    def _nodes(self) -> Iterator[Node]:
+        """The effective elements as the activation rules see them, made as they are used
+        (a list of them would hold one more tuple per element; :meth:`_walk` first)."""
+        blocked = self.blocked
+        for element in self.effective:
+            refused = None
+            if blocked:
+                blocker = blocked.get(id(element))
+                if blocker is not None and (
+                    blocker[0] == UNHANDLED or element.type in self.unloaded
+                ):
+                    refused = blocker[0]  # (no rule of activation knows of it: refused here)
+            pointers = element.report.pointers
+            if not pointers:
+                targets: tuple[str, ...] | str = ()
+            elif len(pointers) == 1:
+                targets = pointers[0][3]  # (one target as its name alone: no 1-tuple)
+            else:
+                targets = tuple([p.target for p in pointers])
+            yield _node((element.name, element.type, element.version, targets, refused))
 
     def _pointers(
         self,
         elements: list[ConfigElement],
         found: list[Diagnostic],
-        wrong: list[tuple[PointerValue, ConfigElement]],
+        wrong: list[PointerValue],
     ) -> None:
         """The pointer checks of :meth:`_walk` alone, for ``elements``."""
-        by_name, reports = self.by_name, self.reports
+        by_name = self.by_name
         for element in elements:
-            for pointer in reports[id(element)].pointers:
+            for pointer in element.report.pointers:
                 target = by_name.get(pointer.target)
                 if target is None:
                     missing = self.pointer(pointer, element)
                     if missing is not None:
                         found.append(missing)
                 elif not self._takes(pointer.prop, target.type):
-                    wrong.append((pointer, target))
+                    wrong.append(pointer)
 
     # -- names -----------------------------------------------------------------------
 
@@ -178,7 +191,7 @@ class Wiring:
         includes and a later file given supersedes earlier ones (info, CFG042), as does a
         byte-identical copy. Within one file, or between files that neither include each
         other nor are ordered as given files, it may be an accident (CFG040, warning)."""
-        if len({e.name for e in self.config.loaded}) == len(self.config.loaded):
+        if len(self.by_name) == len(self.config.loaded):
             return []  # every name once: nothing to compare (the usual case)
         return self._duplicates()
 
@@ -270,40 +283,45 @@ class Wiring:
             self._taken[key] = takes
         return takes
 
-    def _wrong_types(self, wrong: list[tuple[PointerValue, ConfigElement]]) -> list[Diagnostic]:
+    def _wrong_types(self, wrong: list[PointerValue]) -> list[Diagnostic]:
         """CFG032 for each pointer at an element of a type the property does not take; a
         chain of elements of one type each naming the one before through the same property
         (aliases naming aliases) is one finding at its head, with a count."""
-        position: dict[int, int] = {}  # element -> the place of its (last) wrong pointer
-        several: set[int] = set()  # elements with more than one
-        for i, (pointer, _) in enumerate(wrong):
-            key = id(pointer[0])
-            if key in position:
-                several.add(key)
-            position[key] = i
-        leader: dict[int, int] = {}
-        for i, (pointer, target) in enumerate(wrong):
-            ahead = position.get(id(target))
+        # (keyed by the elements themselves, which hash by identity: no int object per key)
+        position: dict[ConfigElement, int] = {}  # the place of its (last) wrong pointer
+        several: set[ConfigElement] = set()  # elements with more than one
+        by_name = self.by_name
+        for i, pointer in enumerate(wrong):
+            element = pointer[0]
+            if element in position:
+                several.add(element)
+            position[element] = i
+        leader = leaders(len(wrong))
+        for i, pointer in enumerate(wrong):
+            target = by_name[pointer[3]]
+            ahead = position.get(target)
             if ahead is None:
                 continue
             element, prop = pointer[0], pointer[1]
             if (
                 target.type == element.type
-                and (not several or (id(element) not in several and id(target) not in several))
-                and wrong[ahead][0][1].name == prop.name
+                and (not several or (element not in several and target not in several))
+                and wrong[ahead][1].name == prop.name
             ):
                 leader[i] = ahead
+        del position
         heads = fold_chains(len(wrong), leader)
         found = []
         for position, followers in heads.items():
-            pointer, target = wrong[position]
+            pointer = wrong[position]
+            target = by_name[pointer.target]
             prop = pointer.prop
             message = (
                 f"{describe(pointer.element)}: {prop.name} {pointer.target!r} is {with_article(target.type)} "
                 f"(at {target.location}); {prop.name} takes {' or '.join(prop.allowed_types)}"
             )
             if followers:
-                last = wrong[followers[-1]][0].element
+                last = wrong[followers[-1]].element
                 message += (
                     f"; {len(followers)} more {pointer.element.type} elements chained behind it "
                     f"make the same mistake, each naming one before it (the last is "
@@ -334,7 +352,7 @@ class Wiring:
             return self._kind_blocked[kind]
         except KeyError:
             pass
-        view = self.reports[id(element)].views.get(id(element))
+        view = element.report.view
         found: tuple[str, Severity] | None
         if view is None or view.definition.abstract:
             found = UNHANDLED, Severity.ERROR  # reported as CFG010 / CFG011
@@ -350,29 +368,27 @@ class Wiring:
         self._kind_blocked[kind] = found
         return found
 
-    def pending(self, nodes: list[Node] | None = None) -> list[Diagnostic]:
-        """CFG041 for the effective elements VR Juggler would leave pending (``nodes``: the
-        elements as :meth:`_walk` gave them; worked out when not given)."""
-        if nodes is None:
-            nodes = self._walk([], [])
+    def pending(self) -> list[Diagnostic]:
+        """CFG041 for the effective elements VR Juggler would leave pending (after
+        :meth:`_walk`, which it runs when it has not run yet)."""
+        if self.blocked is None:
+            self._walk([], [])
         versions = self.index.versions
         active: set[str] = set()
-        fate = settle(nodes, RunTime.VRJUGGLER, versions, active=active)
+        fate = settle(self._nodes(), RunTime.VRJUGGLER, versions, active=active)
         # The run times' rules differ only for the types of DIFFERENCES: without any, their
         # fates are the same (and no element pending in VR Juggler is active in gadgetctl).
         differ = not DIFFERENCES.keys().isdisjoint(kind[0] for kind in self._kind_blocked)
-        ours = settle(nodes, RunTime.GADGETCTL, versions) if differ else fate
+        ours = settle(self._nodes(), RunTime.GADGETCTL, versions) if differ else fate
         found = []
-        waiting: list[_Waiting] = []
-        position: dict[int, int] = {}  # element -> its place in waiting
-        leader: dict[int, int] = {}  # place in waiting -> the place it follows in a chain
+        waiting = _WaitingList()
+        # each element's place in waiting is kept on its report while this runs (-1: none
+        # yet), where a dict of them would take 70 bytes an element
+        for element in self.effective:
+            element.report.place = -1
+        leader = leaders(len(self.effective))  # place in waiting -> the place it follows
         later: list[int] = []  # places whose leader is found after the walk
-        blocked, by_name, embedded, reports = (
-            self.blocked,
-            self.by_name,
-            self.embedded,
-            self.reports,
-        )
+        blocked, by_name, embedded = self.blocked, self.by_name, self.embedded
         for element in self.effective:
             name = element.name
             if name in active:
@@ -382,9 +398,8 @@ class Wiring:
                 if differ and ours.get(name, "") is None
                 else ""
             )
-            key = id(element)
             if blocked:
-                blocker = blocked.get(key)
+                blocker = blocked.get(id(element))
                 if blocker is not None:
                     if blocker[0] != UNHANDLED:
                         found.append(
@@ -398,7 +413,7 @@ class Wiring:
                     continue
             # the unmet pointers that name an element: (pointer, target, why never met)
             reasons = []
-            for pointer in reports[key].pointers:
+            for pointer in element.report.pointers:
                 target_name = pointer[3]  # (.target)
                 if target_name in active:
                     continue
@@ -417,25 +432,47 @@ class Wiring:
                     )
             if not reasons:  # (only missing targets: reported as CFG031)
                 continue
-            here = position[key] = len(waiting)
-            entry = (element, where, reasons)
-            waiting.append(entry)
+            here = element.report.place = len(waiting)
+            if len(reasons) > 1:
+                cause: object = reasons
+            elif reasons[0][2] is _STAYS and reasons[0][1] is not None:
+                cause = reasons[0][0]  # (its pointer: see _reasons)
+            else:
+                cause = reasons[0]
+            waiting.append(element, where, cause)
             if len(reasons) == 1 and reasons[0][1] is not None:
                 # follows the one it waits for if that one waits already (most chains run
                 # backwards); the others are settled once every place is known
-                ahead = position.get(id(reasons[0][1]), -1)
+                target = reasons[0][1]
+                ahead = target.report.place if target.report is not None else -1
                 if ahead < 0:
                     later.append(here)
                 else:
-                    before = waiting[ahead]  # (_follows, written out: once per element)
-                    if before[0].type == element.type and before[1] == where:
+                    # (_follows, written out: once per element)
+                    if (
+                        waiting.elements[ahead].type == element.type
+                        and waiting.wheres[ahead] == where
+                    ):
                         leader[here] = ahead
         for here in later:
-            ahead = position.get(id(waiting[here][2][0][1]), -1)
+            target = self._reasons(waiting[here])[0][1]
+            ahead = target.report.place if target.report is not None else -1
             if ahead >= 0 and _follows(waiting[here], waiting[ahead]):
                 leader[here] = ahead
         found.extend(self._waiting(waiting, leader, active))
         return found
+
+    def _reasons(self, waiting: _Waiting) -> list[_Reason]:
+        """The unmet pointers of a waiting element: (pointer, target, why never met). One is
+        kept without a list around it, and as its pointer alone when its target is the
+        top-level element of that name, which stays pending itself (a chain of 200,000
+        aliases: 200,000 tuples fewer)."""
+        reasons = waiting[2]
+        if isinstance(reasons, list):
+            return reasons
+        if isinstance(reasons, PointerValue):
+            return [(reasons, self.by_name[reasons.target], _STAYS)]
+        return [reasons]
 
     def _never_met(self, target: ConfigElement) -> str:
         """Why a pointer at ``target``, a pending top-level element, is never met."""
@@ -446,17 +483,18 @@ class Wiring:
         return "which VR Juggler drops because its type has no definition"
 
     def _waiting(
-        self, waiting: list[_Waiting], leader: dict[int, int], active: set[str]
+        self, waiting: _WaitingList, leader: Sequence[int], active: set[str]
     ) -> list[Diagnostic]:
         """CFG041 for elements pending because what they point at stays pending. A chain of
         elements of one type each waiting only for the one before (aliases naming aliases,
         ``leader``: see :func:`_follows`) is one finding at its head, with a count: the
         cause is the same for all of them."""
-        heads = fold_chains(len(waiting), leader)
+        heads = fold_chains(len(waiting), leader[: len(waiting)])
         self._severities = self._root_severities(active, [waiting[h][0] for h in heads])
         found = []
         for head, followers in heads.items():
-            element, where, reasons = waiting[head]
+            element, where, _ = waiting[head]
+            reasons = self._reasons(waiting[head])
             pointer, target, why = reasons[0]
             text = (
                 f"it waits for {target.type} {pointer.target!r}, {why}"
@@ -511,7 +549,7 @@ class Wiring:
             if blocker is not None:
                 reaches.setdefault(blocker[1], []).append(key)
                 continue
-            for pointer in self.reports[key].pointers:
+            for pointer in current.report.pointers:
                 if pointer.target in active:
                     continue
                 target = self.by_name.get(pointer.target)
@@ -547,12 +585,36 @@ class Wiring:
             order.append(current)
             if key in self.blocked:
                 continue
-            for pointer in self.reports[key].pointers:
+            for pointer in current.report.pointers:
                 if pointer.target not in active:
                     target = self.by_name.get(pointer.target)
                     if target is not None and id(target) not in seen:
                         stack.append(target)
         return order
+
+
+class _WaitingList:
+    """The pending elements of :meth:`Wiring.pending` in three lists (element, where it
+    stays pending, its unmet pointers) rather than a tuple each: ``waiting[i]`` makes that
+    tuple when asked for."""
+
+    __slots__ = ("causes", "elements", "wheres")
+
+    def __init__(self) -> None:
+        self.elements: list[ConfigElement] = []
+        self.wheres: list[str] = []
+        self.causes: list[object] = []
+
+    def append(self, element: ConfigElement, where: str, cause: object) -> None:
+        self.elements.append(element)
+        self.wheres.append(where)
+        self.causes.append(cause)
+
+    def __len__(self) -> int:
+        return len(self.elements)
+
+    def __getitem__(self, place: int) -> _Waiting:
+        return (self.elements[place], self.wheres[place], self.causes[place])  # type: ignore[return-value]
 
 
 def _follows(waiting: _Waiting, ahead: _Waiting) -> bool:
@@ -616,21 +678,38 @@ class _FileRelation:
 
 
 def _same_text(one: ConfigElement, other: ConfigElement) -> bool:
-    if one.node is None or other.node is None:
+    """Whether two elements are the same copy: type, name, version and every value as
+    written (text exactly, embedded elements alike), property by property in order.
+    (Comments and layout between the values do not count: VR Juggler never sees them.)"""
+    if (
+        one.type != other.type
+        or one.name != other.name
+        or one.version_text != other.version_text
+        or [n for n, _ in one.property_items()] != [n for n, _ in other.property_items()]
+    ):
         return False
-    return etree.tostring(one.node, with_tail=False) == etree.tostring(other.node, with_tail=False)
+    for name, values in one.property_items():
+        others = other.values(name)
+        if len(values) != len(others):
+            return False
+        for mine, theirs in zip(values, others, strict=True):
+            if mine.text != theirs.text or (mine.element is None) != (theirs.element is None):
+                return False
+            if mine.element is not None and not _same_text(mine.element, theirs.element):
+                return False
+    return True
 
 
 def check_wiring(
     config: Configuration,
-    reports: dict[int, ElementReport],
     index: TypeIndex,
     scope: Scope,
     unloaded: Mapping[str, str] | None = None,
 ) -> list[Diagnostic]:
-    """Pointers, duplicates and pending elements; ``unloaded``: element types whose driver
-    the configuration never loads, with why (gadgetctl.input.unloaded)."""
-    wiring = Wiring(config, reports, index, scope, unloaded)
+    """Pointers, duplicates and pending elements of ``config``, whose reports the checker of
+    ``index`` has just made (``element.report``); ``unloaded``: element types whose driver the
+    configuration never loads, with why (gadgetctl.input.unloaded)."""
+    wiring = Wiring(config, index, scope, unloaded)
     retain(wiring)
     return wiring.check()
 
@@ -641,7 +720,7 @@ def embedded_by_name(elements: list[ConfigElement]) -> dict[str, ConfigElement]:
     per element cost a tenth of the pointer checks of 50,000 aliases)."""
     found: dict[str, ConfigElement] = {}
     for element in elements:
-        for values in element.properties.values():
+        for values in element.property_values():
             for value in values:
                 if value.element is not None:
                     child = value.element

@@ -11,7 +11,8 @@ from __future__ import annotations
 import codecs
 import os
 import re
-from collections.abc import Iterator, Mapping
+from array import array
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass, field
@@ -49,14 +50,38 @@ ROOT_KINDS = {"configuration": FileKind.CONFIGURATION, "definition": FileKind.DE
 
 
 def _parser() -> etree.XMLParser:
-    return etree.XMLParser(
-        resolve_entities=False,
-        no_network=True,
-        load_dtd=False,
-        dtd_validation=False,
-        huge_tree=False,
-        collect_ids=False,
-    )
+    return etree.XMLParser(**xml_parser_options())
+
+
+#: What str.splitlines() splits at.
+_LINE_BREAK = re.compile(r"\r\n|[\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029]")
+
+
+class SourceLines:
+    """The lines of a text as ``text.splitlines()`` gives them, each cut out when asked
+    for: an index of line breaks (8 bytes a line) instead of a string per line."""
+
+    __slots__ = ("_breaks", "_text")
+
+    def __init__(self, text: str) -> None:
+        self._text = text
+        # start and end of every line break, one after the other
+        self._breaks = array("q", (i for m in _LINE_BREAK.finditer(text) for i in m.span()))
+
+    def __len__(self) -> int:
+        count = len(self._breaks) // 2
+        ends_with_break = count and self._breaks[-1] == len(self._text)
+        return count if ends_with_break or not self._text else count + 1
+
+    def __getitem__(self, index: int) -> str:
+        if index < 0:
+            index += len(self)
+        if not 0 <= index < len(self):
+            raise IndexError("line index out of range")
+        breaks = self._breaks
+        start = breaks[2 * index - 1] if index else 0
+        end = breaks[2 * index] if 2 * index < len(breaks) else len(self._text)
+        return self._text[start:end]
 
 
 @dataclass
@@ -68,19 +93,23 @@ class XmlDocument:
     root: etree._Element | None = None
     text: str = ""
     diagnostics: list[Diagnostic] = field(default_factory=list)
-    _lines: list[str] | None = field(default=None, repr=False)
+    _lines: SourceLines | None = field(default=None, repr=False)
     _tag_starts: dict[tuple[int, str], list[int]] | None = field(default=None, repr=False)
     _ranks: dict[etree._Element, int] | None = field(default=None, repr=False)
     _ranked_roots: list[etree._Element] = field(default_factory=list, repr=False)
+    #: Elements read while the document was parsed (see configload.parse_configuration):
+    #: one (``<elements>`` node, its elements) pair per block, whose nodes the tree no
+    #: longer holds. None when the tree is whole.
+    streamed: list | None = field(default=None, repr=False)
 
     @property
     def ok(self) -> bool:
         return self.root is not None
 
     @property
-    def lines(self) -> list[str]:
+    def lines(self) -> SourceLines:
         if self._lines is None:
-            self._lines = self.text.splitlines()
+            self._lines = SourceLines(self.text)
         return self._lines
 
     def column_of(self, element: etree._Element) -> int | None:
@@ -218,6 +247,23 @@ def _position_of_offset(data: bytes, offset: int, encoding: str) -> tuple[int, i
     line = data.count(b"\n", 0, offset) + 1
     column = len(data[line_start:offset].decode(encoding, errors="replace")) + 1
     return line, column
+
+
+def decode_text(doc: XmlDocument, data: bytes) -> str | None:
+    """Set ``doc.text``; None, or the encoding to parse with after a bad byte (reported)."""
+    return _decode(doc, data)
+
+
+def xml_parser_options() -> dict[str, bool]:
+    """The options every JCCL parse uses (no network, no DTD, no entity expansion)."""
+    return {
+        "resolve_entities": False,
+        "no_network": True,
+        "load_dtd": False,
+        "dtd_validation": False,
+        "huge_tree": False,
+        "collect_ids": False,
+    }
 
 
 def _decode(doc: XmlDocument, data: bytes) -> str | None:
@@ -368,11 +414,16 @@ def _unsaved_bytes(text: str) -> bytes:
 
 
 def load_file(
-    path: Path, *, max_size: int = DEFAULT_MAX_SIZE, display: str | None = None
+    path: Path,
+    *,
+    max_size: int = DEFAULT_MAX_SIZE,
+    display: str | None = None,
+    parse: Callable[[bytes, str, FileKind], XmlDocument] | None = None,
 ) -> XmlDocument:
-    """Read (at most ``max_size`` bytes) and parse one file. A file above the limit or not a
-    regular file is a diagnostic; other I/O errors propagate as :class:`OSError`. Inside
-    :func:`unsaved_texts` a path given there is read from its text instead."""
+    """Read (at most ``max_size`` bytes) and parse one file (with ``parse``, by default
+    :func:`parse_bytes`). A file above the limit or not a regular file is a diagnostic;
+    other I/O errors propagate as :class:`OSError`. Inside :func:`unsaved_texts` a path
+    given there is read from its text instead."""
     shown = display or str(path)
     unsaved = unsaved_text(path)
     if unsaved is not None:
@@ -383,7 +434,7 @@ def load_file(
                 Diagnostic.make("XML004", too_large_message(max_size, len(data)), shown)
             )
             return doc
-        return parse_bytes(data, shown, guess_kind(path))
+        return (parse or parse_bytes)(data, shown, guess_kind(path))
     try:
         data = read_limited(path, max_size)
     except (FileTooLarge, NotRegularFile) as err:
@@ -391,4 +442,4 @@ def load_file(
         code = "XML004" if isinstance(err, FileTooLarge) else "XML005"
         doc.diagnostics.append(Diagnostic.make(code, err.strerror, shown))
         return doc
-    return parse_bytes(data, shown, guess_kind(path))
+    return (parse or parse_bytes)(data, shown, guess_kind(path))
