@@ -10,7 +10,6 @@ GADGETCTL_API_VERSION = 1
 PLUGIN_NAME = "TUIO_drv"
 ELEMENT_TYPES = {"TUIO_drv": ("digital", "analog")}
 TRANSPORTS = {"TUIO_drv": {"kind": "udp", "port": "port"}}
-REQUIRES = {"pythonosc": "pip install python-osc (or gadgetctl[tuio])"}
 
 
 def register(registry):

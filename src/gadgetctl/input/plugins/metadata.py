@@ -25,7 +25,7 @@ PLUGIN_NAME = "PLUGIN_NAME"
 ELEMENT_TYPES = "ELEMENT_TYPES"
 TRANSPORTS = "TRANSPORTS"
 #: Python modules a plug-in needs that gadgetctl does not install by default, each with what
-#: to install: ``REQUIRES = {"pythonosc": "pip install 'gadgetctl[tuio]'"}``.
+#: to install: ``REQUIRES = {"sdl2": "pip install 'gadgetctl[sdl]'"}``.
 REQUIRES = "REQUIRES"
 REGISTER = "register"
 _NAMES = (API_VERSION, PLUGIN_NAME, ELEMENT_TYPES, TRANSPORTS, REQUIRES)
@@ -215,7 +215,7 @@ def read_metadata(path: Path) -> PluginMetadata:
 
 def missing_requirements(meta: PluginMetadata) -> list[str]:
     """What a plug-in needs and this Python lacks, one line each (``needs the Python module
-    pythonosc: pip install 'gadgetctl[tuio]'``), found without importing anything."""
+    sdl2: pip install 'gadgetctl[sdl]'``), found without importing anything."""
     import importlib.util
 
     missing = []
