@@ -46,6 +46,12 @@ def view(
         metavar="SECONDS",
         help="Stop after this many seconds (default: until Ctrl-C or SIGTERM).",
     ),
+    replay: Path | None = typer.Option(
+        None,
+        "--replay",
+        metavar="FILE",
+        help="Show a recording (monitor --record, or a VRPN log) instead of live devices, with a timeline: play, pause, speed, scrubbing, its markers. CONFIG files then give the displays, users, proxies and filters; their elements named like recorded devices become replay devices.",
+    ),
     driver_paths: list[Path] = DRIVER_PATH_OPTION,
     trust_driver_path: bool = TRUST_OPTION,
     definitions: list[Path] = DEFINITIONS_OPTION,
@@ -79,9 +85,10 @@ def view(
     check_options(rate, duration, 1.0)
     watched = [a for a in arguments if is_vrpn_argument(a)]
     configs, selectors = split_arguments(
-        [a for a in arguments if not is_vrpn_argument(a)], require_config=not watched
+        [a for a in arguments if not is_vrpn_argument(a)],
+        require_config=not watched and replay is None,
     )
-    if check:
+    if check and configs:
         from gadgetctl.cli.preflight import check_before_running
 
         check_before_running(configs, definitions=definitions, bundled=bundled, strict=strict)
@@ -101,7 +108,8 @@ def view(
             driver_paths=driver_paths,
             definitions=definitions,
             bundled=bundled,
-            title=f"gadgetctl view {title}",
+            title=f"gadgetctl view {title}" + (f" (replay of {replay.name})" if replay else ""),
+            replay=replay,
         )
     raise typer.Exit(code)
 
@@ -120,6 +128,7 @@ def run_view(
     definitions: list[Path],
     bundled: bool,
     title: str,
+    replay: Path | None = None,
 ) -> int:
     from gadgetctl.cli.monitor_cmd import fatal_load_errors
     from gadgetctl.errors import GadgetctlError
@@ -129,16 +138,36 @@ def run_view(
     from gadgetctl.serve.address import is_loopback
     from gadgetctl.view.server import ViewServer
 
-    options = ManagerOptions(driver_dirs=list(driver_paths or ()))
-    manager, configuration = InputManager.from_files(
-        configs, definitions=list(definitions or ()), bundled=bundled, options=options
-    )
-    fatal_load_errors(configuration)
+    timeline = None
+    if replay is not None:
+        from gadgetctl.view.replaysource import open_view_replay
+
+        opened = open_view_replay(
+            replay,
+            configs,
+            definitions=list(definitions or ()),
+            bundled=bundled,
+            driver_dirs=list(driver_paths or ()),
+        )
+        manager, configuration, timeline = opened.manager, opened.configuration, opened.timeline
+        for note in opened.notes:
+            print(f"gadgetctl: note: {note}", file=sys.stderr)
+    else:
+        options = ManagerOptions(driver_dirs=list(driver_paths or ()))
+        manager, configuration = InputManager.from_files(
+            configs, definitions=list(definitions or ()), bundled=bundled, options=options
+        )
+        try:
+            fatal_load_errors(configuration)
+        except BaseException:
+            manager.shutdown()
+            raise
     session = MonitorSession(
         manager,
         configuration,
         selectors=selectors,
         rate=rate,
+        source=timeline,
         info={"config": [str(p) for p in configs]},
     )
     server = None
@@ -152,6 +181,7 @@ def run_view(
                 port=port,
                 title=title,
                 allow=allow,
+                timeline=timeline,
                 on_refused=lambda a: print(
                     f"gadgetctl view: refused a client from {a} (not in --allow)",
                     file=sys.stderr,
@@ -180,7 +210,7 @@ def run_view(
             webbrowser.open(server.url)
         try:
             with raise_on_stop_signals():
-                server.run(duration=duration)
+                server.run(duration=duration, stop_at_end=False)
         except (KeyboardInterrupt, Terminated):
             pass
     finally:

@@ -113,6 +113,12 @@ class ReplaySchedule:
         self.devices = tuple(sorted({self.mapping.get(n, n) for n in names}))
         self.mapping_warnings = self._check_mapping(names)
 
+    @property
+    def offsets(self) -> list[float]:
+        """Each record's replay time from the first sample, in recorded seconds (pauses
+        longer than ``max_pause`` shortened), in the order of :attr:`records`."""
+        return list(self._offsets)
+
     def _timeline(self, kept: list[ReplayRecord], longest: float) -> list[float]:
         """The records' times from the first one, each pause longer than ``longest`` (recorded
         seconds) shortened to it (counted)."""

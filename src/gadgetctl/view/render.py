@@ -108,12 +108,56 @@ class SceneRenderer:
         gui = self.server.gui
         gui.add_markdown(f"**{html.escape(title)}**")
         self._problems = gui.add_html("<p>starting</p>")
+        self._replay_time = None
+        if self.model.timeline is not None:
+            self._build_replay(gui, self.model.timeline)
         with gui.add_folder("Digital and analog units", expand_by_default=True):
             self._units = gui.add_html("<p>-</p>")
         with gui.add_folder("Markers", expand_by_default=False):
             self._markers = gui.add_html("<p>none</p>")
         with gui.add_folder("Scene state (JSON)", expand_by_default=False):
             self._state = gui.add_html(self._state_html({}))
+
+    def _build_replay(self, gui, timeline) -> None:
+        """Play, pause, speed, the time slider with the markers on it, a button per marker."""
+        from gadgetctl.view.timeline import MAX_SPEED, MAX_TIMELINE_MARKERS, MIN_SPEED
+
+        duration = max(timeline.duration, 0.01)
+        markers = timeline.markers[:MAX_TIMELINE_MARKERS]
+        with gui.add_folder("Replay", expand_by_default=True):
+            buttons = gui.add_button_group("Replay", ("Play", "Pause"))
+
+            @buttons.on_click
+            def _(event) -> None:
+                if event.target.value == "Play":
+                    timeline.play()
+                else:
+                    timeline.pause()
+
+            speed = gui.add_slider("Speed", MIN_SPEED, MAX_SPEED, 0.05, 1.0)
+
+            @speed.on_update
+            def _(event) -> None:
+                if event.client is not None:  # not our own update
+                    timeline.set_speed(float(event.target.value))
+
+            self._replay_time = gui.add_slider(
+                "Time (s)",
+                0.0,
+                round(duration, 2),
+                0.01,
+                0.0,
+                marks=tuple((round(t, 2), name) for name, t in markers) or None,
+            )
+
+            @self._replay_time.on_update
+            def _(event) -> None:
+                if event.client is not None:
+                    timeline.seek(float(event.target.value))
+
+            for index, (name, _t) in enumerate(markers):
+                marker = gui.add_button(f"Go to marker: {name}")
+                marker.on_click(lambda _event, index=index: timeline.seek_marker(index))
 
     # -- per frame ----------------------------------------------------------------------
 
@@ -348,6 +392,8 @@ class SceneRenderer:
                 + "".join(f"<li>{html.escape(str(m['name']))}</li>" for m in model.markers)
                 + "</ul>"
             )
+        if self._replay_time is not None and model.timeline is not None:
+            self._replay_time.value = round(min(model.timeline.position, self._replay_time.max), 2)
         self._state.content = self._state_html(model.snapshot())
 
     @staticmethod

@@ -100,7 +100,8 @@ class SceneModel:
         self.units: dict[str, UnitsState] = {}
         self.elements: list[dict[str, object]] = []
         self.markers: list[dict[str, object]] = []
-        self.replay: dict[str, object] | None = None
+        #: The replay being shown (a :class:`~gadgetctl.view.timeline.ReplayTimeline`).
+        self.timeline = None
         self._trail_points = max(2, min(MAX_TRAIL_POINTS, round(trail_seconds * session.rate)))
         self._chains: dict[tuple[int, int], tuple[np.ndarray, np.ndarray] | None] = {}
         self._names: list[str] | None = None
@@ -390,6 +391,6 @@ class SceneModel:
                 for u in self.units.values()
             ],
             "markers": list(self.markers),
-            "replay": self.replay,
+            "replay": self.timeline.state() if self.timeline is not None else None,
             "left_out": self.left_out + self.layout.left_out,
         }

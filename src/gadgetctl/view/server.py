@@ -32,12 +32,14 @@ class ViewServer:
         title: str = "gadgetctl view",
         allow: Iterable[ipaddress.IPv4Network] = (),
         on_refused: Callable[[str], None] | None = None,
+        timeline=None,
     ) -> None:
         import viser
 
         self.session = session
         elements = configuration.elements if configuration is not None else []
         self.model = SceneModel(session, read_layout(elements, session.manager.repo))
+        self.model.timeline = timeline
         self.allow = list(allow)
         self.refused = 0
         self._on_refused = on_refused
@@ -92,6 +94,8 @@ class ViewServer:
         with self._lock:
             self.model.update(statuses=self.renderer.frames_sent % 6 == 0)
             self.renderer.render()
+            if self.model.timeline is not None:
+                self.model.timeline.advance()  # what it hands over shows in the next frame
 
     def snapshot(self) -> dict[str, object]:
         with self._lock:
