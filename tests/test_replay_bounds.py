@@ -95,12 +95,14 @@ def test_a_huge_pause_is_shortened_and_said(tmp_path, cli, second) -> None:
     assert "1 pause longer than 10 s of replay shortened to 10 s" in notes[0]
 
 
-def test_a_vrpn_log_starting_at_time_0_says_its_pause(tmp_path, cli) -> None:
-    path = tmp_path / "zero.vrpn"
+def test_a_vrpn_log_with_a_long_pause_says_its_pause(tmp_path, cli) -> None:
+    # (A log starting at time 0 no longer pauses at all: a VRPN message of time 0 has no
+    # time, and takes the time of the first timed one; tests/test_vrpn_replay.py.)
+    path = tmp_path / "pause.vrpn"
     with LogWriter(path) as log:
         for i in range(5):
             pose = codecs.encode_pose(0, (0.01 * i, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
-            log.write("Tracker0", codecs.TRACKER_POS_QUAT, pose, 0.0 if i == 0 else 1.7e9 + i)
+            log.write("Tracker0", codecs.TRACKER_POS_QUAT, pose, 1.7e9 + (1000 if i else 0) + i)
     result = cli("replay", path, "--format", "ndjson", "--duration", "0.5")
     assert result.exit_code == 0, result.stderr
     assert "1 pause longer than 10 s of replay shortened to 10 s" in result.stderr

@@ -136,3 +136,41 @@ def test_damaged_logs(cli, tmp_path: Path) -> None:
     future.write_bytes(b"vrpn: ver. 08.00  0" + b"\0" * 5)
     result = cli("replay", future, "--summary")
     assert result.exit_code == 2 and "08.00" in result.stderr
+
+
+#: A log written by the real VRPN C++ library (vrpn/vrpn 893c7496, 07.38): its own outgoing
+#: log of the scripted Tracker0/Button0/Analog0/Dial0/Text0 session described in
+#: drivers/VRPN_drv/tests/conformance/README.md (capture_server PORT vrpn0738_out.vrpn).
+REAL_LOG = REPO / "drivers" / "VRPN_drv" / "tests" / "conformance" / "vrpn0738_out.vrpn"
+
+
+def test_replay_of_a_log_the_real_library_wrote(cli) -> None:
+    result = cli("replay", REAL_LOG, "--format", "ndjson")
+    assert result.exit_code == 0, result.stderr
+    recs = records(result.stdout)
+    samples = [r for r in recs if r["type"] == "sample"]
+    # dials are analog units holding their accumulated rotation in revolutions
+    dial = {r["unit"]: r["raw"] for r in samples if r["device"] == "Dial0"}
+    assert dial == {0: pytest.approx(0.05), 1: 0.0, 2: pytest.approx(-0.125)}
+    # the text message is a marker, 0.3 s after the first tracker tick
+    (marker,) = [r for r in recs if r["type"] == "marker"]
+    assert marker["name"] == "Text0: warning 3: capture done"
+    # the button server's messages carry time 0: they take the time before them, so the
+    # whole log spans 0.3 s (not 1.7e9 s from 1970)
+    times = [r["timestamp"] for r in samples] + [marker["timestamp"]]
+    assert max(times) - min(times) == pytest.approx(0.3, abs=1e-3)
+    assert {r["unit"] for r in samples if r["device"] == "Button0"} == {0, 1, 2, 3}
+
+
+def test_a_log_starting_at_time_0_replays_at_once(tmp_path: Path, cli) -> None:
+    path = tmp_path / "zero.vrpn"
+    with LogWriter(path) as log:
+        for i in range(5):
+            pose = codecs.encode_pose(0, (0.01 * i, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+            log.write("Tracker0", codecs.TRACKER_POS_QUAT, pose, 0.0 if i == 0 else T0 + 0.01 * i)
+    result = cli("replay", path, "--format", "ndjson")
+    assert result.exit_code == 0, result.stderr
+    assert "pause" not in result.stderr
+    times = [r["timestamp"] for r in records(result.stdout) if r["type"] == "sample"]
+    # (the time-0 pose shares the next one's time: the replay keeps one sample per instant)
+    assert len(times) >= 4 and max(times) - min(times) == pytest.approx(0.03, abs=2e-3)

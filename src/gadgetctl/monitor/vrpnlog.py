@@ -6,7 +6,12 @@ sensors are position units (4x4 matrices in metres from position and quaternion)
 digital units, analog channels analog units (value normalised over VRPN's usual -1..1, raw
 kept). Sample times are the log's own timestamps (the VRPN sender's clock, Unix seconds).
 Each button change is one sample of its unit; a button "States" message one sample of every
-button; a tracker report one sample of its sensor; an analog report one sample per channel.
+button; a tracker report one sample of its sensor; an analog report one sample per channel;
+a dial update one sample of the analog unit of its dial, the dial's accumulated rotation in
+revolutions (as VRPN_drv reads dials). A text message (``vrpn_Base text_message``) is a
+marker named "DEVICE: SEVERITY LEVEL: TEXT". A message whose time is 0 (the C++
+``vrpn_Button_Server`` writes that) takes the time of the message before it (of the first
+timed message for those that open the log).
 
 A file is a VRPN log when it starts with a VRPN cookie (:func:`is_vrpn_log`). Reading is
 lazy and bounded (:class:`gadgetctl.vrpn.LogReader`); a damaged record stops the reading
@@ -21,9 +26,20 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from gadgetctl.monitor.recording import Recording, RecordingError, RecordingProblem
-from gadgetctl.monitor.records import REPLAY_UNITS, EndRecord, HeaderRecord, Record, SampleRecord
+from gadgetctl.monitor.records import (
+    REPLAY_UNITS,
+    EndRecord,
+    HeaderRecord,
+    MarkerRecord,
+    Record,
+    SampleRecord,
+)
 
 MAGIC = b"vrpn: ver. "
+#: Characters of a text message kept in its marker's name.
+MAX_MARKER_NAME = 300
+#: Messages of time 0 at the start of a log held for the first timed message's time at most.
+MAX_UNTIMED = 1000
 ANALOG_RANGE = (-1.0, 1.0)
 
 
@@ -119,7 +135,14 @@ def _scan(path: Path, routes: Routes) -> tuple[float | None, dict[str, dict[str,
     """The first timestamp and, per device, its kinds and unit counts (a first pass, so the
     header describes every device as a monitor recording's header does)."""
     from gadgetctl.vrpn import LogFormatError, LogReader
-    from gadgetctl.vrpn.codecs import AnalogChannels, ButtonChange, ButtonStates, TrackerPose
+    from gadgetctl.vrpn.codecs import (
+        MAX_DIALS,
+        AnalogChannels,
+        ButtonChange,
+        ButtonStates,
+        DialUpdate,
+        TrackerPose,
+    )
 
     first: float | None = None
     units: dict[str, dict[str, int]] = {}
@@ -137,9 +160,11 @@ def _scan(path: Path, routes: Routes) -> tuple[float | None, dict[str, dict[str,
                     kind, count = "digital", len(report.states)
                 elif isinstance(report, AnalogChannels):
                     kind, count = "analog", len(report.channels)
+                elif isinstance(report, DialUpdate) and 0 <= report.dial < MAX_DIALS:
+                    kind, count = "analog", report.dial + 1
                 else:
                     continue
-                if first is None:
+                if first is None and m.timestamp > 0:
                     first = m.timestamp
                 device = units.setdefault(_route(routes, m.sender, kind), {})
                 device[kind] = max(device.get(kind, 0), count)
@@ -159,11 +184,21 @@ def _scan(path: Path, routes: Routes) -> tuple[float | None, dict[str, dict[str,
     return first, elements
 
 
-def _samples(m, skipped: list[int], routes: Routes) -> list[SampleRecord]:
-    """The sample records of one log message (none for other types)."""
-    from gadgetctl.vrpn.codecs import AnalogChannels, ButtonChange, ButtonStates, TrackerPose
+def _samples(
+    m, skipped: list[int], routes: Routes, t: float, dials: dict[tuple[str, int], float]
+) -> list[SampleRecord]:
+    """The sample records of one log message at time ``t`` (none for other types);
+    ``dials`` holds each dial's rotation so far."""
+    from gadgetctl.vrpn.codecs import (
+        MAX_DIALS,
+        AnalogChannels,
+        ButtonChange,
+        ButtonStates,
+        DialUpdate,
+        TrackerPose,
+    )
 
-    sender, report, t = m.sender, m.report, m.timestamp
+    sender, report = m.sender, m.report
     kind = (
         "position"
         if isinstance(report, TrackerPose)
@@ -193,24 +228,63 @@ def _samples(m, skipped: list[int], routes: Routes) -> list[SampleRecord]:
             SampleRecord(device, "analog", unit, t, _normalise(raw), raw)
             for unit, raw in enumerate(report.channels)
         ]
+    if isinstance(report, DialUpdate):
+        if not 0 <= report.dial < MAX_DIALS:
+            skipped[1] += 1
+            return []
+        key = (device, report.dial)
+        raw = dials[key] = dials.get(key, 0.0) + report.delta
+        return [SampleRecord(device, "analog", report.dial, t, _normalise(raw), raw)]
     return []
+
+
+def _marker(m, t: float) -> MarkerRecord | None:
+    """A text message as a marker (None for other messages)."""
+    from gadgetctl.safetext import printable
+    from gadgetctl.vrpn.codecs import TextReport
+
+    report = m.report
+    if not isinstance(report, TextReport):
+        return None
+    kind = {0: "normal", 1: "warning", 2: "error"}.get(report.severity, "severity")
+    name = f"{m.sender}: {kind} {report.level}: {report.text}"
+    return MarkerRecord(printable(name)[:MAX_MARKER_NAME], t)
 
 
 def _records(reader, problems: list[RecordingProblem], routes: Routes) -> Iterator[Record]:
     from gadgetctl.vrpn import LogFormatError
+    from gadgetctl.vrpn.codecs import MAX_DIALS
 
-    skipped = [0]
-    samples = 0
+    skipped = [0, 0]  # sensors beyond REPLAY_UNITS, dials beyond MAX_DIALS
+    samples = markers = 0
     last: float | None = None
+    held: list = []  # messages of time 0 before the first timed one
+    dials: dict[tuple[str, int], float] = {}
     damaged = False
     try:
         for m in reader:
             if m.sender is None:
                 continue
-            for record in _samples(m, skipped, routes):
-                samples += 1
-                last = record.timestamp
-                yield record
+            if m.timestamp > 0:
+                t = m.timestamp
+            elif last is not None:
+                t = last
+            elif len(held) < MAX_UNTIMED:
+                held.append(m)  # no time yet: they take the first one's
+                continue
+            else:
+                t = 0.0  # a log that never gives a time: as written
+            for early in [*held, m]:
+                marker = _marker(early, t)
+                if marker is not None:
+                    markers += 1
+                    last = t
+                    yield marker
+                for record in _samples(early, skipped, routes, t, dials):
+                    samples += 1
+                    last = record.timestamp
+                    yield record
+            held.clear()
     except LogFormatError as exc:
         damaged = True
         problems.append(
@@ -236,6 +310,14 @@ def _records(reader, problems: list[RecordingProblem], routes: Routes) -> Iterat
                 f"{skipped[0]} tracker reports of sensors beyond {REPLAY_UNITS - 1} skipped",
             )
         )
+    if skipped[1]:
+        problems.append(
+            RecordingProblem(
+                reader.records,
+                "warning",
+                f"{skipped[1]} dial updates of dials beyond {MAX_DIALS - 1} skipped",
+            )
+        )
     if reader.bad_reports:
         problems.append(
             RecordingProblem(
@@ -243,4 +325,4 @@ def _records(reader, problems: list[RecordingProblem], routes: Routes) -> Iterat
             )
         )
     if last is not None and not damaged and not reader.truncated:
-        yield EndRecord(last, "end of the VRPN log", samples, 0, 0)
+        yield EndRecord(last, "end of the VRPN log", samples, markers, 0)
