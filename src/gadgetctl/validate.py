@@ -36,6 +36,10 @@ class ValidateOptions:
     #: definition_dirs), when the caller already has them: the language server keeps them
     #: between checks instead of reading every .jdef again for each edit.
     repository: DefinitionRepository | None = None
+    #: Driver plug-in searches by the places a configuration's input_manager elements name,
+    #: kept between runs by a caller that checks again and again (the language server
+    #: clears it now and then); None: each run searches afresh.
+    driver_searches: dict | None = None
 
 
 @dataclass
@@ -192,8 +196,8 @@ def check_configurations(
         together=options.together,
         environ=options.environ,
         plugin_definitions=plugin_definition_finder(options.environ),
-        plugin_names=plugin_name_finder(options.environ),
-        unloaded_types=unloaded_type_finder(options.environ),
+        plugin_names=plugin_name_finder(options.environ, options.driver_searches),
+        unloaded_types=unloaded_type_finder(options.environ, options.driver_searches),
     )
 
 
@@ -209,43 +213,48 @@ def plugin_definition_finder(environ=None):
     return find
 
 
-def plugin_name_finder(environ=None):
+def plugin_name_finder(environ=None, searches: dict | None = None):
     """A function giving the names of the driver plug-ins a configuration can load."""
+    searches = {} if searches is None else searches
 
     def find(config) -> set[str]:
-        from gadgetctl.input.definitions import driver_search_for
-
-        search = driver_search_for(configuration=config, environ=environ)
+        search = _driver_search(config, environ, searches)
         return {p.name for p in search.plugins() if p.shadowed_by is None}
 
     return find
 
 
-def unloaded_type_finder(environ=None):
+def unloaded_type_finder(environ=None, searches: dict | None = None):
     """A function giving, for a configuration, the element types whose driver plug-in its
     input_manager elements never load, with the reason the input manager gives (DRV030)."""
-
-    searches: dict[tuple, object] = {}  # one search per set of driver places, not per file
+    searches = {} if searches is None else searches  # one search per set of driver places
 
     def find(config) -> dict[str, str]:
-        from gadgetctl.input.definitions import DRIVER_PROPERTIES, driver_search_for
-        from gadgetctl.input.kinds import INPUT_MANAGER
         from gadgetctl.input.unloaded import unloaded_types
 
-        places = tuple(
-            (prop, value.text, str(Path(element.file).parent))
-            for element in config.elements
-            if element.type == INPUT_MANAGER
-            for prop, _ in DRIVER_PROPERTIES
-            for value in element.values(prop)
-            if value.stripped
-        )
-        search = searches.get(places)
-        if search is None:
-            search = searches[places] = driver_search_for(configuration=config, environ=environ)
-        return unloaded_types(config, search)
+        return unloaded_types(config, _driver_search(config, environ, searches))
 
     return find
+
+
+def _driver_search(config, environ, searches: dict):
+    """The driver search of a configuration, shared by every configuration whose
+    input_manager elements name the same driver places."""
+    from gadgetctl.input.definitions import DRIVER_PROPERTIES, driver_search_for
+    from gadgetctl.input.kinds import INPUT_MANAGER
+
+    places = tuple(
+        (prop, value.text, str(Path(element.file).parent))
+        for element in config.elements
+        if element.type == INPUT_MANAGER
+        for prop, _ in DRIVER_PROPERTIES
+        for value in element.values(prop)
+        if value.stripped
+    )
+    search = searches.get(places)
+    if search is None:
+        search = searches[places] = driver_search_for(configuration=config, environ=environ)
+    return search
 
 
 def summarize(diagnostics: Iterable[Diagnostic]) -> dict[str, int]:

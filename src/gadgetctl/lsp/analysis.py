@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import os
 import threading
+import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,6 +26,8 @@ from gadgetctl.jccl.typeindex import TypeIndex
 from gadgetctl.jccl.xmlload import DEFAULT_MAX_SIZE, XmlDocument, unsaved_texts
 
 JCCL_SUFFIXES = (".jconf", ".jdef")
+#: Seconds the driver plug-in searches are kept (plug-ins installed meanwhile are seen after).
+DRIVER_SEARCH_LIFETIME = 30.0
 #: Open documents kept at most; a client opening more is told the newest ones are not checked.
 MAX_OPEN_DOCUMENTS = 4096
 
@@ -78,43 +81,60 @@ class Engine:
         self._generation = 0  # counts changes of the open texts (models of older ones are stale)
         #: The files each open document's configuration loaded at its last check.
         self.reaches: dict[Path, set[Path]] = {}
+        self._searches: dict = {}  # driver plug-in searches (validate's driver_searches)
+        self._searches_at = time.monotonic()
 
     # -- documents ----------------------------------------------------------------------
 
-    def set_text(self, path: Path, text: str) -> bool:
-        """Open or change a document; False when too many are open (it is then not kept)."""
+    def set_text(self, path: Path, text: str) -> bool | None:
+        """Open or change a document. True when what the checks read changed (a document
+        opened as it is on disk changes nothing for the others), False when not, None when
+        too many documents are open (it is then not kept)."""
         key = real(path)
         with self._lock:
-            if key not in self.texts and len(self.texts) >= MAX_OPEN_DOCUMENTS:
-                return False
+            previous = self.texts.get(key)
+            if previous is None and len(self.texts) >= MAX_OPEN_DOCUMENTS:
+                return None
             self.texts[key] = text
             self._generation += 1
-            if key.suffix == ".jdef":
+        changed = previous != text if previous is not None else _on_disk(key) != text
+        if changed and key.suffix == ".jdef":
+            with self._lock:
                 self._base = None  # a definition may be on the search path
-            return True
+        return changed
 
-    def close(self, path: Path) -> None:
+    def close(self, path: Path) -> bool:
+        """Forget a document; True when its text differed from the file (the checks of
+        others then read something else from now on)."""
         key = real(path)
         with self._lock:
-            self.texts.pop(key, None)
+            text = self.texts.pop(key, None)
             self._generation += 1
             self.reaches.pop(key, None)
             self._models.pop(key, None)
             self._good.pop(key, None)
-            if key.suffix == ".jdef":
+        changed = text is not None and _on_disk(key) != text
+        if changed and key.suffix == ".jdef":
+            with self._lock:
                 self._base = None
+        return changed
 
     def saved(self, path: Path) -> None:
+        with self._lock:
+            self._searches = {}  # (a saved file may be a plug-in's: look again)
         if real(path).suffix == ".jdef":
             with self._lock:
                 self._base = None
                 self._generation += 1
 
-    def affected(self, path: Path) -> list[Path]:
-        """The open documents a change of ``path`` can change the findings of: itself and
-        every open configuration that loaded it (a definition: every open document)."""
+    def affected(self, path: Path, changed: bool = True) -> list[Path]:
+        """The open documents whose findings a change of ``path`` can change: itself and,
+        when what the checks read ``changed``, every open configuration that loaded it (for
+        a definition: every open document)."""
         key = real(path)
         with self._lock:
+            if not changed:
+                return [key] if key in self.texts else []
             if key.suffix == ".jdef":
                 return list(self.texts)
             found = [key] if key in self.texts else []
@@ -145,28 +165,29 @@ class Engine:
         with self._lock:
             texts = dict(self.texts)
         base = self.base()
+        with self._lock:
+            if time.monotonic() - self._searches_at > DRIVER_SEARCH_LIFETIME:
+                self._searches, self._searches_at = {}, time.monotonic()
+            searches = self._searches
         options = ValidateOptions(
             max_size=self.options.max_size,
             definition_dirs=list(self.options.definition_dirs),
             bundled=self.options.bundled,
             environ=self.options.environ,
             repository=base,
+            driver_searches=searches,
         )
         try:
             with unsaved_texts(texts):
                 result = validate_paths([key], options)
         except GadgetctlError:
             return []  # (a buffer whose file does not exist: validate has nothing to say)
-        if key.suffix == ".jconf":
-            self.model(key)  # (what it loaded: its includes, for refreshing who includes them)
         return [d for d in result.diagnostics if d.path is not None and _same(d.path, key)]
 
     # -- the model ----------------------------------------------------------------------
 
     def model(self, path: Path) -> Model:
         """The document's configuration as the checks load it, cached until a text changes."""
-        from gadgetctl.jccl.configcheck import Session
-        from gadgetctl.validate import plugin_definition_finder
 
         key = real(path)
         with self._lock:
@@ -175,6 +196,15 @@ class Engine:
             cached = self._models.get(key)
             if cached is not None and cached[0] == stamp:
                 return cached[1]
+        from gadgetctl.perf import collector_paused
+
+        with collector_paused():
+            return self._model(key, texts, stamp)
+
+    def _model(self, key: Path, texts: dict[Path, str], stamp: tuple) -> Model:
+        from gadgetctl.jccl.configcheck import Session
+        from gadgetctl.validate import plugin_definition_finder
+
         base = self.base()
         session = Session(
             base,
@@ -203,6 +233,16 @@ class Engine:
                     self._good[key] = model
         return model
 
+    def recent_model(self, path: Path) -> Model:
+        """The newest model there is, even if the text changed since (completion reads the
+        position from the current text and only the definitions and the element names from
+        the model, which one edit rarely changes): no check's worth of waiting per keystroke.
+        The current model when there is none, or when the last one did not parse."""
+        key = real(path)
+        with self._lock:
+            good = self._good.get(key)
+        return good if good is not None else self.good_model(key)
+
     def good_model(self, path: Path) -> Model:
         """The current model, or while the document does not parse (being typed), the last
         one that did (its elements and pointer targets are what completion can offer)."""
@@ -211,6 +251,16 @@ class Engine:
         if doc is not None and doc.root is None:
             return self._good.get(model.path, model)
         return model
+
+
+def _on_disk(path: Path) -> str | None:
+    """The file's text as a check would read it from disk (None when unreadable)."""
+    from gadgetctl.boundedread import read_limited
+
+    try:
+        return read_limited(path, DEFAULT_MAX_SIZE).decode("utf-8")
+    except (OSError, UnicodeDecodeError):
+        return None
 
 
 _REAL: dict[str, Path] = {}

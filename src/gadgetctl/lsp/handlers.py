@@ -38,13 +38,15 @@ def guarded(handler: Callable) -> Callable:
     return run
 
 
-def _document(ls, uri: str):
-    """(path, text, model) of an open JCCL document, or None."""
+def _document(ls, uri: str, *, recent: bool = False):
+    """(path, text, model) of an open JCCL document, or None. ``recent``: the newest model
+    there is will do (see :meth:`Engine.recent_model`)."""
     path = _path(uri)
     if not _jccl(path) or path not in ls.engine.texts:
         return None
     text = ls.engine.texts[path]
-    return path, text, ls.engine.good_model(path)
+    model = ls.engine.recent_model(path) if recent else ls.engine.good_model(path)
+    return path, text, model
 
 
 def _offset(ls, text: str, position: types.Position) -> int:
@@ -80,7 +82,7 @@ def register(server) -> None:
     )
     @guarded
     def complete(ls, params: types.CompletionParams):
-        found = _document(ls, params.text_document.uri)
+        found = _document(ls, params.text_document.uri, recent=True)
         if found is None:
             return None
         _path, text, model = found

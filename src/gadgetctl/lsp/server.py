@@ -86,6 +86,11 @@ class JcclServer(LanguageServer):
             return  # closed, or changed again: a newer check comes
         self.findings[path] = diagnostics
         self.publish(path, text, diagnostics)
+        if path.suffix == ".jconf":  # ready for completion, and what it loads (for refreshes)
+            try:
+                await loop.run_in_executor(self._worker, self.engine.model, path)
+            except Exception:
+                log.exception("reading the configuration of %s failed", path)
 
     def publish(self, path: Path, text: str, diagnostics) -> None:
         index = self.lines(text)
@@ -125,14 +130,15 @@ def create_server(options: EngineOptions | None = None) -> JcclServer:
         if not _jccl(path):
             return
         ls.uris[path] = params.text_document.uri
-        if not ls.engine.set_text(path, params.text_document.text):
+        changed = ls.engine.set_text(path, params.text_document.text)
+        if changed is None:
             ls.window_log_message(
                 types.LogMessageParams(
                     types.MessageType.Warning, f"too many open documents; {path} is not checked"
                 )
             )
             return
-        ls.schedule(ls.engine.affected(path), delay=0)
+        ls.schedule(ls.engine.affected(path, changed), delay=0)
 
     @server.feature(types.TEXT_DOCUMENT_DID_CHANGE)
     def did_change(ls: JcclServer, params: types.DidChangeTextDocumentParams) -> None:
@@ -140,8 +146,8 @@ def create_server(options: EngineOptions | None = None) -> JcclServer:
         if not _jccl(path) or path not in ls.engine.texts:
             return
         document = ls.workspace.get_text_document(params.text_document.uri)
-        ls.engine.set_text(path, document.source)
-        ls.schedule(ls.engine.affected(path))
+        changed = ls.engine.set_text(path, document.source)
+        ls.schedule(ls.engine.affected(path, bool(changed)))
 
     @server.feature(types.TEXT_DOCUMENT_DID_SAVE)
     def did_save(ls: JcclServer, params: types.DidSaveTextDocumentParams) -> None:
@@ -156,8 +162,8 @@ def create_server(options: EngineOptions | None = None) -> JcclServer:
         path = _path(params.text_document.uri)
         if not _jccl(path):
             return
-        affected = [p for p in ls.engine.affected(path) if p != path]
-        ls.engine.close(path)
+        others = [p for p in ls.engine.affected(path) if p != path]
+        changed = ls.engine.close(path)
         handle = ls._pending.pop(path, None)
         if handle is not None:
             handle.cancel()
@@ -166,7 +172,8 @@ def create_server(options: EngineOptions | None = None) -> JcclServer:
         )
         ls.uris.pop(path, None)
         ls.findings.pop(path, None)
-        ls.schedule(affected)  # who included it now reads the file on disk
+        if changed:
+            ls.schedule(others)  # who included it now reads the file on disk
 
     from gadgetctl.lsp import handlers
 
