@@ -237,3 +237,21 @@ def test_the_vrpn_package_imports_nothing_else_from_gadgetctl():
             ]
     assert package.name == "vrpn" and len(list(package.glob("*.py"))) >= 7
     assert offenders == []
+
+
+def test_bulk_reports_are_framed_apart_and_checked_as_the_cpp_remote_does():
+    pose = wire.pack_message(3, 1, codecs.encode_pose(0, (1.0, 2.0, 3.0)), 5.0)
+    negative = wire.pack_message(3, 1, struct.pack(">ii3d4d", -1, 0, 0, 0, 0, 0, 0, 0, 1), 5.0)
+    short = wire.pack_message(3, 1, b"\0" * 40, 5.0)
+    other = wire.pack_message(4, 1, b"abc", 5.0)
+    described = wire.pack_description(wire.TYPE_DESCRIPTION, 3, "something else")
+    bulk = {(1, 3): (("Tracker0", codecs.TRACKER_POS_QUAT), 88)}
+    data = pose * 3 + negative + short + other + pose + described + pose
+    end, messages, found = wire.split_messages(data, 0, len(data), 1.0, bulk)
+    assert end == len(data)
+    poses = found[("Tracker0", codecs.TRACKER_POS_QUAT)]
+    assert poses == [0, 88, 176, 88 * 4 + 64 + 32]  # the run, then the lone one
+    # a negative sensor and a wrong length go the usual way (where they drop the connection,
+    # as in the C++ remote); after a description nothing more is set apart
+    assert [m.type_id for m in messages] == [3, 3, 4, wire.TYPE_DESCRIPTION, 3]
+    assert len(messages[0].payload) == 64 and len(messages[1].payload) == 40

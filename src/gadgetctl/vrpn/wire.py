@@ -136,6 +136,7 @@ class Block(NamedTuple):
 #: the exact message length such a message must have).
 BulkIds = dict[tuple[int, int], tuple[tuple[str, str], int]]
 _INT32 = struct.Struct(">i")
+#: One per length of a bulk type (tracker reports: two lengths), made when first needed.
 _RUN_STRUCTS: dict[int, struct.Struct] = {}
 
 
@@ -199,14 +200,11 @@ def split_messages(
             offsets.extend(range(pos, pos + count * length, length))
             pos += count * length
             continue
-        else:
-            if type_id < 0:
-                bulk = {}  # the descriptions to come change what the ids mean
-            start = pos + HEADER_SIZE
-            payload = bytes(data[start : start + length - HEADER_SIZE])
-            out.append(
-                new(Message, (type_id, sender, sec, usec, payload, None, None, received, None))
-            )
+        if type_id < 0:
+            bulk = {}  # the descriptions to come change what the ids mean
+        start = pos + HEADER_SIZE
+        payload = bytes(data[start : start + length - HEADER_SIZE])
+        out.append(new(Message, (type_id, sender, sec, usec, payload, None, None, received, None)))
         pos += HEADER_SIZE + body
     return pos, out, found
 
