@@ -57,6 +57,13 @@ def test_a_case_variant_of_a_label_without_such_a_plugin_is_only_a_suggestion(tm
     assert findings(write(tmp_path / "b.jconf", jconf(manager("MyOwnTracker_drv")))) == []
 
 
+def test_a_case_variant_naming_an_element_of_that_exact_name_is_no_suggestion(tmp_path):
+    # (an editable enumeration's text may name anything; an element of that name is meant)
+    named = manager("dtrack_drv") + alias("dtrack_drv", "Head")
+    found = findings(write(tmp_path / "a.jconf", jconf(named)))
+    assert "CFG027" not in [d.code for d in found]
+
+
 # -- 2. a later sibling include overrides an earlier one ----------------------------------------
 
 
