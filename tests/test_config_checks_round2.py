@@ -370,7 +370,11 @@ def test_upgrade_leaves_alone_what_validate_does_not_report_as_outdated(tmp_path
     )
     path = write(tmp_path / "unknown.jconf", configuration(elements))
     assert codes(check(only=("unknown.jconf",))) == ["CFG010"]
-    assert upgrade(cli, defs, "--check", path).exit_code == 0
+    # upgrade --check cannot vouch for a file it cannot check (issue 25 item 3): it fails with
+    # the CFG010 validate gives, and claims nothing about the gizmo validate does not report
+    unknown = upgrade(cli, defs, "--check", path)
+    assert unknown.exit_code == 1 and "CFG010" in unknown.stderr
+    assert "gizmo" not in unknown.stdout + unknown.stderr
     # the same gizmo embedded where the definition allows it is outdated for both
     known = write(tmp_path / "known.jconf", configuration(elements.replace("mystery", "holder")))
     assert "CFG012" in codes(check(only=("known.jconf",)))
