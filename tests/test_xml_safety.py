@@ -116,3 +116,78 @@ def test_kind_falls_back_on_root_element(tmp_path):
 
     path = write(tmp_path / "noext.xml", jconf())
     assert load_file(path).kind is FileKind.CONFIGURATION
+
+
+# -- internal entities and unreadable paths (issue 24 item 8) --------------------------------------
+
+ENTITY_FILE = """<?xml version="1.0" encoding="UTF-8"?>
+<!DOCTYPE configuration [ <!ENTITY port "6000"> <!ENTITY quote '">'> ]>
+<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">
+   <elements>
+      <motion_star name="S&port;" version="2">
+         <server_port>&port;</server_port>
+      </motion_star>
+   </elements>
+</configuration>
+"""
+
+
+def test_an_internal_entity_is_xml003_where_it_is_used_and_never_expanded(tmp_path, cli):
+    from gadgetctl.jccl.configload import load_configuration
+
+    path = write(tmp_path / "entity.jconf", ENTITY_FILE)
+    result = cli("validate", path)
+    assert result.exit_code == 1 and "internal error" not in result.stderr, result.stderr
+    from gadgetctl.validate import ValidateOptions
+
+    for level in ("full", "xml"):
+        found = validate_paths([path], ValidateOptions(level=level)).diagnostics
+        places = sorted((d.line, d.column) for d in found if d.code == "XML003" and d.line > 2)
+        assert places == [(5, 27), (6, 23)], found  # the attribute's and the content's
+    (element,) = load_configuration([path]).elements
+    assert element.name == "S"  # not S6000: the entity in the attribute is not expanded
+
+
+NO_DAC = """
+import ctypes, sys
+libc = ctypes.CDLL(None, use_errno=True)
+header = (ctypes.c_uint32 * 2)(0x20080522, 0)  # _LINUX_CAPABILITY_VERSION_3, this process
+sets = (ctypes.c_uint32 * 6)()
+assert libc.capget(header, sets) == 0
+for i in range(3):  # effective, permitted, inheritable: without DAC override and read search
+    sets[i] &= ~((1 << 1) | (1 << 2)) & 0xFFFFFFFF
+assert libc.capset(header, sets) == 0
+from gadgetctl.cli.main import main
+main(sys.argv[1:])
+"""
+
+
+def _without_permission_override(*args) -> subprocess.CompletedProcess:
+    """``gadgetctl ARGS`` in a process that file permissions bind even when run as root (CI):
+    it drops the capabilities that override them."""
+    return subprocess.run(
+        [sys.executable, "-c", NO_DAC, *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        stdin=subprocess.DEVNULL,
+    )
+
+
+@pytest.mark.parametrize("command", [["validate"], ["upgrade", "--check"]])
+def test_unreadable_places_are_one_line_each(tmp_path, command):
+    closed = tmp_path / "closed"
+    closed.mkdir()
+    write(closed / "inside.jconf", jconf())
+    write(tmp_path / "open.jconf", jconf())
+    closed.chmod(0)
+    try:
+        cases = {
+            closed / "inside.jconf": f"{closed / 'inside.jconf'}: cannot look it up: Permission denied",
+            tmp_path: f"{closed}: directory is not readable (Permission denied); the files in it cannot be checked",
+        }  # fmt: skip
+        for path, line in cases.items():
+            result = _without_permission_override(*command, path)
+            assert (result.returncode, result.stderr) == (2, f"gadgetctl: error: {line}\n")
+    finally:
+        closed.chmod(0o755)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import stat
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -21,16 +22,18 @@ def expand_paths(paths: Iterable[Path]) -> list[Path]:
     found: list[Path] = []
     seen: set[Path] = set()
     for path in paths:
-        if not path.exists():
-            raise GadgetctlError(f"{path}: no such file or directory{_nearby(path, JCCL_SUFFIXES)}")
-        if path.is_dir():
+        try:
+            directory = stat.S_ISDIR(path.stat().st_mode)
+        except (FileNotFoundError, NotADirectoryError):
+            raise GadgetctlError(
+                f"{path}: no such file or directory{_nearby(path, JCCL_SUFFIXES)}"
+            ) from None
+        except OSError as err:  # a directory on the way that may not be searched, a loop
+            raise GadgetctlError(f"{path}: cannot look it up: {err.strerror or err}") from None
+        if directory:
             if not os.access(path, os.R_OK | os.X_OK):
                 raise GadgetctlError(f"{path}: directory is not readable")
-            candidates = sorted(
-                p
-                for p in path.rglob("*")
-                if p.suffix in JCCL_SUFFIXES and p.is_file() and not _hidden(p.relative_to(path))
-            )
+            candidates = _jccl_files(path)
             if not candidates:
                 raise GadgetctlError(
                     f"{path}: no .jconf or .jdef files in this directory or below "
@@ -48,8 +51,28 @@ def expand_paths(paths: Iterable[Path]) -> list[Path]:
     return found
 
 
-def _hidden(relative: Path) -> bool:
-    return any(part.startswith(".") for part in relative.parts)
+def _jccl_files(directory: Path) -> list[Path]:
+    """The .jdef and .jconf files in ``directory`` and below, sorted, hidden ones (and hidden
+    directories) left out, symbolic links to directories not followed. A directory below that
+    cannot be read is an error: its files would pass unchecked."""
+    found: list[Path] = []
+    refused: list[OSError] = []
+    for parent, directories, names in os.walk(directory, onerror=refused.append):
+        directories[:] = [d for d in directories if not d.startswith(".")]
+        found.extend(
+            Path(parent, name)
+            for name in names
+            if not name.startswith(".")
+            and Path(name).suffix in JCCL_SUFFIXES
+            and is_file(Path(parent, name))
+        )
+    if refused:
+        first = refused[0]
+        raise GadgetctlError(
+            f"{first.filename}: directory is not readable ({first.strerror or first}); "
+            "the files in it cannot be checked"
+        )
+    return sorted(found)
 
 
 def is_file(path: Path) -> bool:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from copy import deepcopy
 from functools import cache
 
 from lxml import etree
@@ -82,12 +83,36 @@ def _stray_text_error(message: str, element: etree._Element) -> bool:
     )
 
 
+def _copy_with_lines(root: etree._Element) -> etree._Element:
+    copy = deepcopy(root)
+    for node, original in zip(copy.iter(), root.iter(), strict=True):
+        node.sourceline = original.sourceline
+    return copy
+
+
+def _without_entities(root: etree._Element) -> etree._Element:
+    """``root`` with its entity reference nodes taken out, the text after each kept."""
+    for entity in list(root.iter(etree.Entity)):
+        parent, previous, tail = entity.getparent(), entity.getprevious(), entity.tail or ""
+        if previous is not None:
+            previous.tail = (previous.tail or "") + tail
+        elif parent is not None:
+            parent.text = (parent.text or "") + tail
+        if parent is not None:
+            parent.remove(entity)
+    return root
+
+
 def check_schema(doc: XmlDocument) -> None:
     """Append one SCH001 diagnostic per schema violation, with element path and column."""
     if doc.root is None or doc.kind not in SCHEMA_FILES:
         return
     schema = schema_for(doc.kind)
     root = normalised_copy(doc)
+    if next(root.iter(etree.Entity), None) is not None:
+        # entity references (XML003) make libxml2's validator fail outright: check the
+        # text around them
+        root = _without_entities(root if root is not doc.root else _copy_with_lines(root))
     tree = root.getroottree()
     if schema.validate(tree):
         return

@@ -49,8 +49,8 @@ EXTENSION_KINDS = {".jconf": FileKind.CONFIGURATION, ".jdef": FileKind.DEFINITIO
 ROOT_KINDS = {"configuration": FileKind.CONFIGURATION, "definition": FileKind.DEFINITION}
 
 
-def _parser() -> etree.XMLParser:
-    return etree.XMLParser(**xml_parser_options())
+def _parser(encoding: str | None = None, recover: bool = False) -> etree.XMLParser:
+    return etree.XMLParser(encoding=encoding, recover=recover, **xml_parser_options())
 
 
 #: What str.splitlines() splits at.
@@ -327,6 +327,94 @@ def _report_doctype(doc: XmlDocument, data: bytes) -> None:
     )
 
 
+def _doctype_end(data: bytes, start: int) -> int | None:
+    """The offset just past the document type declaration starting at ``start`` (quoted
+    strings, comments and the internal subset skipped), or None when it does not end."""
+    i, size, quote, in_subset = start + len(b"<!DOCTYPE"), len(data), 0, False
+    while i < size:
+        byte = data[i]
+        if quote:
+            quote = 0 if byte == quote else quote
+        elif byte in b"\"'":
+            quote = byte
+        elif data.startswith(b"<!--", i):
+            end = data.find(b"-->", i + 4)
+            if end < 0:
+                return None
+            i = end + 3
+            continue
+        elif byte == ord("["):
+            in_subset = True
+        elif byte == ord("]"):
+            in_subset = False
+        elif byte == ord(">") and not in_subset:
+            return i + 1
+        i += 1
+    return None
+
+
+def _without_declarations(data: bytes) -> bytes | None:
+    """``data`` with a document type declaration that declares entities blanked out (spaces,
+    line breaks kept, so lines and columns stay), or None when it declares none. libxml2
+    expands an internal entity in an attribute value whatever the parser options; undeclared,
+    every reference stays a reference (in element content) or is left out (in an attribute)."""
+    match = _DOCTYPE.search(data)
+    if match is None:
+        return None
+    end = _doctype_end(data, match.start())
+    if end is None or b"<!ENTITY" not in data[match.start() : end]:
+        return None
+    blank = bytes(b if b in b"\r\n" else 0x20 for b in data[match.start() : end])
+    return data[: match.start()] + blank + data[end:]
+
+
+_UNDECLARED = re.compile(r"Entity '([^']*)' not defined")
+
+
+def _parse_undeclared(doc: XmlDocument, data: bytes, encoding: str | None) -> etree._Element | None:
+    """Parse ``data`` whose entity declarations were blanked out: each reference is XML003 at
+    its own place; any other error is XML001 (and no tree)."""
+    parser = _parser(encoding, recover=True)
+    try:
+        root = etree.fromstring(data, parser)
+    except etree.XMLSyntaxError as err:
+        line, column = err.position if err.position else (err.lineno, None)
+        doc.diagnostics.append(
+            Diagnostic.make("XML001", err.msg or "XML syntax error", doc.path, line, column)
+        )
+        return None
+    errors = [e for e in parser.error_log if e.level >= etree.ErrorLevels.ERROR]
+    other = [e for e in errors if _UNDECLARED.match(e.message) is None]
+    if other or root is None:
+        first = other[0] if other else None
+        doc.diagnostics.append(
+            Diagnostic.make(
+                "XML001",
+                first.message if first else "XML syntax error",
+                doc.path,
+                first.line if first else None,
+                first.column if first else None,
+            )
+        )
+        return None
+    for error in errors:
+        match = _UNDECLARED.match(error.message)
+        assert match is not None
+        reference = f"&{match.group(1)};"
+        column = error.column - len(reference) if error.column > len(reference) else None
+        doc.diagnostics.append(
+            Diagnostic.make(
+                "XML003",
+                f"entity reference {reference} was not expanded",
+                doc.path,
+                error.line or None,
+                column,  # libxml2 points just past the reference
+                hint="Write the text itself instead of an entity reference.",
+            )
+        )
+    return root
+
+
 def _report_entities(doc: XmlDocument, root: etree._Element) -> None:
     for entity in root.iter(etree.Entity):
         parent = entity.getparent()
@@ -347,18 +435,13 @@ def parse_bytes(data: bytes, path: str, kind: FileKind = FileKind.UNKNOWN) -> Xm
     doc = XmlDocument(path=path, kind=kind)
     override = _decode(doc, data)
     _report_doctype(doc, data)
-    parser = (
-        _parser()
-        if override is None
-        else etree.XMLParser(
-            encoding=override,
-            resolve_entities=False,
-            no_network=True,
-            load_dtd=False,
-            huge_tree=False,
-            collect_ids=False,
-        )
-    )
+    undeclared = _without_declarations(data)
+    if undeclared is not None:
+        doc.root = _parse_undeclared(doc, undeclared, override)
+        if doc.root is not None and doc.kind is FileKind.UNKNOWN:
+            doc.kind = ROOT_KINDS.get(etree.QName(doc.root).localname, FileKind.UNKNOWN)
+        return doc
+    parser = _parser(override)
     try:
         root = etree.fromstring(data, parser)
     except etree.XMLSyntaxError as err:
