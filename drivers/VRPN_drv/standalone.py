@@ -273,6 +273,7 @@ class VrpnInput:
         #: Position samples one read makes at most (see :data:`POSE_READ_BYTES`).
         self.pose_limit = max(1, POSE_READ_BYTES // max(1, POSE_BYTES * max(tracker_count, 0)))
         self._clocks: dict[Location, ServerClock] = {}
+        self._last_times: dict[str, float] = {}  # the newest sample time per kind
         #: Per server location, the account of its UDP channel's datagrams (every
         #: connection so far): read, decoded or bad, and dropped by the kernel.
         self.ledgers: dict[Location, DatagramLedger] = {}
@@ -411,11 +412,22 @@ class VrpnInput:
         self._connected_at.pop(location)
         self._checked.add(location)  # checked once per connection
 
+    def _after(self, kind: str, moment: float) -> float:
+        """``moment``, or the kind's previous sample time if that is later: the mapping onto
+        the local clock may move back a little (less latency seen), a kind's samples never
+        do."""
+        last = self._last_times.get(kind)
+        if last is not None and moment < last:
+            moment = last
+        self._last_times[kind] = moment
+        return moment
+
     def _end_tick(self, batch: Batch) -> None:
         """Publish the tick gathered so far as one position sample."""
         self._tick = None
         self._tick_seen[:] = False
         self._tick_count = 0
+        self._tick_time = self._after("position", self._tick_time)
         positions = batch.positions
         if len(positions) >= self.pose_limit:
             # the read's budget is spent: this tick replaces the read's last sample (its
@@ -524,23 +536,31 @@ class VrpnInput:
                     counters["beyond_count"] += 1
                     continue
                 self.buttons[report.button] = report.state
-                batch.digital.append((local(m.timestamp, m.received), tuple(self.buttons)))
+                batch.digital.append(
+                    (self._after("digital", local(m.timestamp, m.received)), tuple(self.buttons))
+                )
             elif sender == button and kind == BUTTON_STATES and isinstance(report, ButtonStates):
                 n = min(len(report.states), self.button_count)
                 self.buttons[:n] = report.states[:n]
-                batch.digital.append((local(m.timestamp, m.received), tuple(self.buttons)))
+                batch.digital.append(
+                    (self._after("digital", local(m.timestamp, m.received)), tuple(self.buttons))
+                )
             elif sender == analog and kind == ANALOG_CHANNEL and isinstance(report, AnalogChannels):
                 n = min(len(report.channels), self.analog_count)
                 if len(report.channels) > self.analog_count:
                     counters["beyond_count"] += 1
                 self.channels[:n] = report.channels[:n]
-                batch.analog.append((local(m.timestamp, m.received), tuple(self.channels)))
+                batch.analog.append(
+                    (self._after("analog", local(m.timestamp, m.received)), tuple(self.channels))
+                )
             elif sender == analog and kind == DIAL_UPDATE and isinstance(report, DialUpdate):
                 if not 0 <= report.dial < self.analog_count:
                     counters["beyond_count"] += 1
                     continue
                 self.channels[report.dial] += report.delta  # revolutions, accumulated
-                batch.analog.append((local(m.timestamp, m.received), tuple(self.channels)))
+                batch.analog.append(
+                    (self._after("analog", local(m.timestamp, m.received)), tuple(self.channels))
+                )
             else:
                 continue
             batch.remote_times.append((m.received, m.timestamp))

@@ -187,3 +187,13 @@ def test_a_whole_read_unpacked_at_once_makes_the_same_samples() -> None:
         np.testing.assert_allclose(va, vb, atol=1e-12)
     assert at_once.digital == one_by_one.digital
     assert device_a.counters["beyond_count"] == device_b.counters["beyond_count"] > 0
+
+
+def test_sample_times_never_go_back() -> None:
+    device = VrpnInput(f"Tracker0@{HOST}", 1)
+    clock = ServerClock()
+    first, second = Batch(), Batch()
+    device._take([pose(0, 100, 0, 150.5)], first, clock)  # 0.5 s of latency at first
+    device._take([pose(0, 100, 1000, 150.002)], second, clock)  # then almost none
+    (t0, _), (t1, _) = first.positions[0], second.positions[0]
+    assert t0 == pytest.approx(150.5) and t1 >= t0
