@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 from VRPN_drv.wrapper import VrpnDevice
 
+from gadgetctl.cli.monitor_run import _evaluate
 from gadgetctl.input import DeviceKind, InputManager, ManagerOptions
 from gadgetctl.input.testing import frames_until, wait_until
 from gadgetctl.input.testing.configs import configuration, proxy
@@ -21,6 +22,7 @@ from gadgetctl.input.testing.floods import bad_one_for_one
 from gadgetctl.monitor.session import MonitorSession
 from gadgetctl.transport.udp import proc_udp_drops
 from gadgetctl.vrpn import VrpnServer
+from gadgetctl.wording import counted
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -115,6 +117,13 @@ def test_the_monitor_shows_exactly_what_the_kernel_dropped(tmp_path: Path, monke
             health = device.health()
             assert health["decoded"] == health["datagrams"] > 0 and health["bad_datagrams"] == 0
             assert health["datagrams"] + kernel == sent  # each one read or dropped
+            # and the run ends with exit status 1 saying so, unless loss is accepted
+            _final, problems = _evaluate(session, accept_loss=False)
+            assert problems == [
+                f"V: lost data: {counted(kernel, 'datagram')} dropped by the kernel "
+                "(receive buffer full) (--accept-loss accepts loss)"
+            ]
+            assert _evaluate(session, accept_loss=True)[1] == []
         finally:
             manager.shutdown()
 
