@@ -15,7 +15,7 @@ from pathlib import Path
 
 from gadgetctl.lsp.analysis import Model
 from gadgetctl.lsp.elements import place_of, property_of, required_properties, view_of
-from gadgetctl.lsp.syntax import TAG, context_at, local, open_stack, text_range
+from gadgetctl.lsp.syntax import TAG, context_at, end_tag, local, open_stack, text_range
 from gadgetctl.suggest import close_names
 
 UPGRADE_CODES = frozenset({"CFG012", "CFG021", "XML010", "XML011", "XML012"})
@@ -65,25 +65,6 @@ def _tag_name_at(text: str, start: int) -> tuple[str, int, int] | None:
     return local(match.group(1)), match.end(1) - len(local(match.group(1))), match.end(1)
 
 
-def _end_tag(text: str, start: int, name: str) -> tuple[int, int] | None:
-    """The name range of the end tag closing the start tag at ``start`` (None if empty)."""
-    open_end = text.find(">", start)
-    if open_end < 0 or text[open_end - 1] == "/":
-        return None
-    depth = 0
-    for match in TAG.finditer(text, open_end + 1):
-        closing, tag, _, empty = match.groups()
-        if local(tag) != name or empty:
-            continue
-        if not closing:
-            depth += 1
-        elif depth == 0:
-            return match.end(2) - len(name), match.end(2)
-        else:
-            depth -= 1
-    return None
-
-
 def _rename_tag(model: Model, text: str, problem: Problem) -> list[Action]:
     found = _tag_name_at(text, problem.start)
     if found is None:
@@ -100,7 +81,7 @@ def _rename_tag(model: Model, text: str, problem: Problem) -> list[Action]:
     else:
         names = [d.name for d in model.repo.all_newest() if not d.abstract]
         candidates = close_names(name, names, cutoff=0.6)
-    end = _end_tag(text, problem.start, name)
+    end = end_tag(text, problem.start, name)
     result = []
     for i, candidate in enumerate(candidates[:MAX_FIXES]):
         edits = [(name_start, name_end, candidate)]
@@ -159,8 +140,8 @@ def _add_required(model: Model, text: str, problem: Problem) -> list[Action]:
     view = view_of(model.index, element)
     if view is None:
         return []
-    end = _end_tag(text, problem.start, tag[0])
-    body = text[tag_end + 1 : end[0] if end else tag_end + 1]
+    end = end_tag(text, problem.start, tag[0])
+    body = text[tag_end + 1 : end[0] - 2 if end else tag_end + 1]  # (up to its "</")
     present = {local(m.group(2)) for m in TAG.finditer(body) if not m.group(1)}
     missing = [p for p in required_properties(model.index, view) if p not in present]
     line_start = text.rfind("\n", 0, problem.start) + 1

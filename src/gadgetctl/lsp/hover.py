@@ -9,11 +9,12 @@ from gadgetctl.jccl.definitions import PropertyDefinition, ValueType
 from gadgetctl.jccl.resolve import DEFAULT, Resolver
 from gadgetctl.lsp.analysis import Model, element_at_line
 from gadgetctl.lsp.elements import place_of, view_of
-from gadgetctl.lsp.syntax import Tag, Where, context_at, tag_at
+from gadgetctl.lsp.syntax import Tag, Where, context_at, end_tag, tag_at
 from gadgetctl.lsp.text import LineIndex
 
-#: validate's codes that say an element will not become active, and why.
-PENDING_CODES = ("CFG041", "CFG033", "CFG031", "CFG010", "CFG011")
+#: validate's codes that say an element stays pending, and why (CFG041: waits for a
+#: pending element, refused version, no handler; CFG031: waits for a name nothing has).
+PENDING_CODES = ("CFG041", "CFG031")
 MAX_CHOICES = 40
 
 
@@ -32,15 +33,16 @@ def hover(model: Model, text: str, offset: int, findings: list[Diagnostic]) -> s
         name = on_tag[0]
         if place.element is None or place.prop is not None:
             line = index.position(at)[0] + 1
-            tag = Tag(name, at, at, {})
-            return _element(model, tag, line, findings)
+            closing = end_tag(text, at, name)
+            last = index.position(closing[1])[0] + 1 if closing else line
+            return _element(model, Tag(name, at, at, {}), line, last, findings)
         return _property(model, place.element, name, index)
     if ctx.where is Where.TEXT and place.element is not None and place.prop is not None:
         return _property(model, place.element, place.prop.name, index)
     return None
 
 
-def _element(model: Model, tag: Tag, line: int, findings: list[Diagnostic]) -> str:
+def _element(model: Model, tag: Tag, line: int, last: int, findings: list[Diagnostic]) -> str:
     element = element_at_line(model, line, tag.name)
     versions = model.index.versions(tag.name)
     if not versions:
@@ -57,7 +59,11 @@ def _element(model: Model, tag: Tag, line: int, findings: list[Diagnostic]) -> s
     if definition.location is not None:
         lines += [f"defined in {definition.location}"]
     if element is not None:
-        reasons = [d.message for d in findings if d.code in PENDING_CODES and d.line == line]
+        reasons = [
+            d.message
+            for d in findings
+            if d.code in PENDING_CODES and d.line is not None and line <= d.line <= last
+        ]
         lines += [""]
         if reasons:
             lines += ["**stays pending**:", *(f"- {r}" for r in reasons)]

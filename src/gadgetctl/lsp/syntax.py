@@ -21,6 +21,8 @@ _COMMENT = re.compile(r"<!--.*?(?:-->|\Z)|<!\[CDATA\[.*?(?:\]\]>|\Z)|<\?.*?(?:\?
 _OPEN_VALUE = re.compile(r"([\w.:-]+)\s*=\s*([\"'])([^\"']*)\Z")
 _NAME_SO_FAR = re.compile(r"[\w.:-]*\Z")
 MAX_DEPTH = 256
+#: How much of a start tag before the position is read (a longer one is not being typed).
+MAX_TAG = 4096
 
 
 class Where(StrEnum):
@@ -98,7 +100,7 @@ def context_at(text: str, offset: int) -> Context:
     clean = blank_comments(text[:offset])
     lt = clean.rfind("<")
     gt = clean.rfind(">")
-    if lt > gt:
+    if lt > gt and offset - lt <= MAX_TAG:
         segment = clean[lt + 1 :]
         stack = open_stack(clean, lt)
         if segment.startswith("/"):
@@ -113,6 +115,8 @@ def context_at(text: str, offset: int) -> Context:
             return Context(Where.VALUE, stack, typed, offset - len(typed), value.group(1), tag)
         word = re.search(r"[\w.:-]*\Z", segment).group(0)
         return Context(Where.ATTRIBUTE, stack, word, offset - len(word), tag=tag)
+    if lt > gt:  # a start tag longer than anyone types: nothing to complete in it
+        return Context(Where.ATTRIBUTE, open_stack(clean, lt), "", offset)
     stack = open_stack(clean, offset)
     typed = clean[gt + 1 :] if gt >= 0 else clean
     stripped = typed.lstrip()
@@ -140,3 +144,22 @@ def tag_at(text: str, offset: int) -> tuple[str, int, int] | None:
     if match is None or not (match.start(1) <= offset <= match.end(1)):
         return None
     return local(match.group(1)), match.start(1), match.end(1)
+
+
+def end_tag(text: str, start: int, name: str) -> tuple[int, int] | None:
+    """The name range of the end tag closing the start tag at ``start`` (None if empty)."""
+    open_end = text.find(">", start)
+    if open_end < 0 or text[open_end - 1] == "/":
+        return None
+    depth = 0
+    for match in TAG.finditer(text, open_end + 1):
+        closing, tag, _, empty = match.groups()
+        if local(tag) != name or empty:
+            continue
+        if not closing:
+            depth += 1
+        elif depth == 0:
+            return match.end(2) - len(name), match.end(2)
+        else:
+            depth -= 1
+    return None

@@ -1,0 +1,201 @@
+"""The language server's features on the library core, in process (no protocol, no pygls):
+completion, hover, navigation and fixes for texts as an editor holds them."""
+
+from __future__ import annotations
+
+import pytest
+
+from gadgetctl.lsp import actions, completion, hover, navigation
+from gadgetctl.lsp.analysis import Engine
+from gadgetctl.lsp.syntax import Where, context_at
+from gadgetctl.validate import validate_paths
+
+from conftest import CORPUS_CONFIGS
+
+HEAD = """<?xml version="1.0" encoding="UTF-8"?>
+<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
+<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">
+"""
+BODY = (
+    HEAD
+    + """   <elements>
+      <dtrack name="Tracker" version="1">
+         <receive_port>5000</receive_port>
+         <position_filters>
+            <position_transform_filter name="Units" version="1">
+               <device_units>feet</device_units>
+            </position_transform_filter>
+         </position_filters>
+      </dtrack>
+      <position_proxy name="Head" version="1">
+         <device>Tracker</device>
+         <unit>0</unit>
+      </position_proxy>
+      <alias name="VJHead" version="1">
+         <proxy>Head</proxy>
+      </alias>
+   </elements>
+</configuration>
+"""
+)
+
+
+@pytest.fixture
+def opened(tmp_path):
+    def open_(text: str, name: str = "t.jconf"):
+        path = tmp_path / name
+        path.write_text(text)
+        engine = Engine()
+        engine.set_text(path, text)
+        return engine, path
+
+    return open_
+
+
+def _labels(model, text: str, offset: int) -> list[str]:
+    return [item.label for item in completion.complete(model, text, offset).items]
+
+
+def test_the_cursor_is_placed_in_half_typed_text():
+    text = HEAD + '<elements>\n<position_proxy name="P" version="'
+    ctx = context_at(text, len(text))
+    assert (ctx.where, ctx.attribute, ctx.tag.name) == (Where.VALUE, "version", "position_proxy")
+    ctx = context_at(text + '1"><dev', len(text) + 7)
+    assert (ctx.where, ctx.prefix, ctx.parent.name) == (Where.TAG, "dev", "position_proxy")
+    commented = HEAD + "<elements><!-- <dtrack> --><"
+    assert context_at(commented, len(commented)).parent.name == "elements"
+
+
+def test_completion_of_types_properties_labels_booleans_and_versions(opened):
+    engine, path = opened(BODY)
+    model = engine.model(path)
+    types = _labels(model, BODY, BODY.index("<dtrack") + 1)
+    assert "position_proxy" in types and "dtrack" in types
+    assert "proxy" not in types  # abstract
+    items = completion.complete(model, BODY, BODY.index("<device>Tracker") + 1).items
+    assert items[0].label == "device" or min(items, key=lambda i: i.sort).label == "device"
+    assert next(i for i in items if i.label == "device").detail.startswith("required")
+    assert "unit" in [i.label for i in items]
+    units = _labels(model, BODY, BODY.index(">feet<") + 1)
+    assert units == ["Custom", "Meters", "Centimeters", "Feet", "Inches"]
+    embedded = _labels(model, BODY, BODY.index("<position_transform_filter") + 1)
+    assert "position_transform_filter" in embedded and "dtrack" not in embedded
+    versions = BODY.index('version="1">\n         <receive') + len('version="')
+    assert _labels(model, BODY, versions) == ["1"]
+    aliases = _labels(model, BODY, BODY.index(">Head</proxy>") + 1)
+    assert aliases == ["Head"]  # a proxy; not the tracker, not the alias itself
+
+
+def test_completion_of_include_paths_and_jdef_parents(opened, tmp_path):
+    (tmp_path / "devices").mkdir()
+    (tmp_path / "devices" / "trackers.jconf").write_text(HEAD + "</configuration>\n")
+    text = HEAD + "   <include>dev</include>\n</configuration>\n"
+    engine, path = opened(text)
+    labels = _labels(engine.model(path), text, text.index("dev</include>") + 3)
+    assert labels == ["devices/trackers.jconf"]
+    jdef = '<definition name="mine"><definition_version version="1"><parent>pos'
+    engine, jpath = opened(jdef, "mine.jdef")
+    parents = _labels(engine.model(jpath), jdef, len(jdef))
+    assert "positional_device" in parents
+
+
+def test_hover_tells_whether_an_element_stays_pending_and_why(opened):
+    text = BODY.replace("<proxy>Head</proxy>", "<proxy>Nobody</proxy>")
+    engine, path = opened(text)
+    findings = engine.diagnose(path)
+    shown = hover.hover(engine.model(path), text, text.index("<alias") + 2, findings)
+    assert "alias" in shown and "stays pending" in shown and "Nobody" in shown
+    shown = hover.hover(engine.model(path), BODY, BODY.index("<position_proxy") + 2, [])
+    assert "becomes active" in shown
+
+
+def test_references_and_rename_follow_pointers(opened):
+    engine, path = opened(BODY)
+    model = engine.model(path)
+    spots = navigation.references(model, BODY, BODY.index('"Head"') + 2, True)
+    assert [BODY[s.start : s.end] for s in spots] == ["Head", "Head"]
+    assert spots[1].start == BODY.index(">Head</proxy>") + 1
+    edits = navigation.rename(model, BODY, BODY.index(">Head</proxy>") + 2, "HeadProxy")
+    assert sorted(s.start for s in edits[path]) == [s.start for s in spots]
+
+
+def test_go_to_definition_of_a_pointer_and_an_element_type(opened):
+    engine, path = opened(BODY)
+    model = engine.model(path)
+    spot = navigation.definition(model, BODY, BODY.index(">Tracker</device>") + 2)
+    assert BODY[spot.start : spot.end] == "Tracker" and spot.start < BODY.index("<position_proxy")
+    target = navigation.definition(model, BODY, BODY.index("<dtrack") + 2)
+    assert target.path.name == "dtrack.jdef" and target.line
+
+
+def test_outline_groups_elements_by_type_and_folds_them(opened):
+    symbols = navigation.symbols(BODY)
+    assert [(s.name, [c.name for c in s.children]) for s in symbols] == [
+        ("dtrack", ["Tracker"]),
+        ("position_proxy", ["Head"]),
+        ("alias", ["VJHead"]),
+    ]
+    lines = BODY.splitlines()
+    first = next(i for i, line in enumerate(lines) if "<dtrack" in line)
+    assert (first, first + 7) in navigation.folding(BODY)
+
+
+def _fix(engine, path, text, code):
+    findings = [d for d in engine.diagnose(path) if d.code == code]
+    assert findings, f"validate finds {code}"
+    from gadgetctl.lsp.findings import findings as ranged
+    from gadgetctl.lsp.text import LineIndex
+
+    finding = ranged(findings, LineIndex(text, utf16=False))[0]
+    problem = actions.Problem(code, finding.start, finding.end)
+    return actions.actions(engine.model(path), text, [problem])
+
+
+def _apply(text, edits):
+    for start, end, new in sorted(edits, reverse=True):
+        text = text[:start] + new + text[end:]
+    return text
+
+
+def test_a_label_in_the_wrong_case_is_fixed(opened):
+    engine, path = opened(BODY)
+    fixes = _fix(engine, path, BODY, "CFG027")
+    assert fixes[0].title == "Write 'Feet'"
+    fixed = _apply(BODY, fixes[0].edits[path])
+    assert fixed == BODY.replace(">feet<", ">Feet<")
+
+
+def test_a_missing_required_pointer_is_added_in_the_files_indentation(opened):
+    text = BODY.replace("         <proxy>Head</proxy>\n", "")
+    engine, path = opened(text)
+    fixes = _fix(engine, path, text, "CFG033")
+    fixed = _apply(text, fixes[0].edits[path])
+    assert '<alias name="VJHead" version="1">\n         <proxy></proxy>' in fixed
+
+
+def test_an_unknown_type_is_renamed_start_and_end_tag(opened):
+    text = BODY.replace("position_proxy", "positon_proxy")
+    engine, path = opened(text)
+    fixes = _fix(engine, path, text, "CFG010")
+    assert fixes[0].title == "Did you mean position_proxy?"
+    assert _apply(text, fixes[0].edits[path]) == BODY
+
+
+def test_an_old_element_is_upgraded_in_the_files_own_formatting(opened):
+    text = (CORPUS_CONFIGS / "example.vrpn.jconf").read_text()
+    engine, path = opened(text)
+    fixes = _fix(engine, path, text, "CFG012")
+    upgrade = next(f for f in fixes if f.title.startswith("Upgrade"))
+    fixed = _apply(text, upgrade.edits[path])
+    path.write_text(fixed)
+    assert not [d for d in validate_paths([path]).diagnostics if d.code == "CFG012"]
+    changed = [a != b for a, b in zip(text.splitlines(), fixed.splitlines(), strict=False)]
+    assert sum(changed) <= 3  # the element's start tag and what the step changes, no more
+
+
+def test_unsaved_text_is_what_validate_reads(opened):
+    engine, path = opened(BODY)
+    assert not [d for d in engine.diagnose(path) if d.code == "CFG020"]
+    engine.set_text(path, BODY.replace("receive_port", "recieve_port"))
+    assert [d.code for d in engine.diagnose(path) if d.code == "CFG020"] == ["CFG020"]
+    assert path.read_text() == BODY  # nothing written
