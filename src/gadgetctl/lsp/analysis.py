@@ -81,6 +81,7 @@ class Engine:
         self._generation = 0  # counts changes of the open texts (models of older ones are stale)
         #: The files each open document's configuration loaded at its last check.
         self.reaches: dict[Path, set[Path]] = {}
+        self._changed: dict[Path, int] = {}  # the generation of each document's last change
         self._searches: dict = {}  # driver plug-in searches (validate's driver_searches)
         self._searches_at = time.monotonic()
 
@@ -98,6 +99,9 @@ class Engine:
             self.texts[key] = text
             self._generation += 1
         changed = previous != text if previous is not None else _on_disk(key) != text
+        if changed:
+            with self._lock:
+                self._changed[key] = self._generation
         if changed and key.suffix == ".jdef":
             with self._lock:
                 self._base = None  # a definition may be on the search path
@@ -110,6 +114,7 @@ class Engine:
         with self._lock:
             text = self.texts.pop(key, None)
             self._generation += 1
+            self._changed[key] = self._generation
             self.reaches.pop(key, None)
             self._models.pop(key, None)
             self._good.pop(key, None)
@@ -126,6 +131,15 @@ class Engine:
             with self._lock:
                 self._base = None
                 self._generation += 1
+
+    @property
+    def generation(self) -> int:
+        return self._generation
+
+    def changed_since(self, generation: int, paths: set[Path]) -> bool:
+        """Whether one of ``paths`` changed after ``generation``."""
+        with self._lock:
+            return any(self._changed.get(p, -1) > generation for p in paths)
 
     def affected(self, path: Path, changed: bool = True) -> list[Path]:
         """The open documents whose findings a change of ``path`` can change: itself and,

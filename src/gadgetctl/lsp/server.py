@@ -73,6 +73,7 @@ class JcclServer(LanguageServer):
         if path not in self.engine.texts:
             return
         loop = asyncio.get_running_loop()
+        generation = self.engine.generation
         try:
             diagnostics = await loop.run_in_executor(self._worker, self.engine.diagnose, path)
         except Exception as err:  # never the server's end: say it, publish nothing new
@@ -88,9 +89,15 @@ class JcclServer(LanguageServer):
         self.publish(path, text, diagnostics)
         if path.suffix == ".jconf":  # ready for completion, and what it loads (for refreshes)
             try:
-                await loop.run_in_executor(self._worker, self.engine.model, path)
+                model = await loop.run_in_executor(self._worker, self.engine.model, path)
             except Exception:
                 log.exception("reading the configuration of %s failed", path)
+                return
+            # A file it includes changed while it was checked, before this check knew it
+            # includes that file (so the change did not ask for this check): check again.
+            others = set(model.files()) - {path}
+            if path not in self._pending and self.engine.changed_since(generation, others):
+                self.schedule([path])
 
     def publish(self, path: Path, text: str, diagnostics) -> None:
         index = self.lines(text)
