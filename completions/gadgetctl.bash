@@ -55,7 +55,7 @@ declare -gA _gadgetctl_opts=(
   ['serve']='--list --name --bind --port --allow --duration --rate --client-buffer --record --overwrite --format -f --driver-path --trust-driver-path --definitions -d --bundled --no-bundled --check --no-check --strict --help -h'
   ['upgrade']='--check --diff --in-place -i --backup --no-backup --output -o --drop-removed --format -f --definitions -d --bundled --no-bundled --help -h'
   ['validate']='--format -f --strict --definitions -d --bundled --no-bundled --together --level --max-size --hints --no-hints --color --help -h'
-  ['view']='--bind --port --allow --open --rate --duration --replay --driver-path --trust-driver-path --definitions -d --bundled --no-bundled --check --no-check --strict --help -h'
+  ['view']='--bind --port --allow --open --rate --duration --export --replay --driver-path --trust-driver-path --definitions -d --bundled --no-bundled --check --no-check --strict --help -h'
 )
 declare -gA _gadgetctl_choices=(
   ['config graph --format']='text dot mermaid json'
@@ -192,6 +192,7 @@ declare -gA _gadgetctl_valueopts=(
   ['view --definitions']=1
   ['view --driver-path']=1
   ['view --duration']=1
+  ['view --export']=1
   ['view --port']=1
   ['view --rate']=1
   ['view --replay']=1

@@ -268,6 +268,7 @@ complete -c gadgetctl -n '__fish_seen_subcommand_from view' -l allow -r -F -d 'A
 complete -c gadgetctl -n '__fish_seen_subcommand_from view' -l open -d 'Open the page in the default web browser'
 complete -c gadgetctl -n '__fish_seen_subcommand_from view' -l rate -r -F -d 'Frames per second: how often the page is updated'
 complete -c gadgetctl -n '__fish_seen_subcommand_from view' -l duration -r -F -d 'Stop after this many seconds (default: until Ctrl-C or SIGTERM)'
+complete -c gadgetctl -n '__fish_seen_subcommand_from view' -l export -r -F -d 'Write the scene as one self-contained page that opens offline with no server (of --duration seconds of live frames, default 2; or the whole --replay recording), instead of serving it'
 complete -c gadgetctl -n '__fish_seen_subcommand_from view' -l replay -r -F -d 'Show a recording (monitor --record, or a VRPN log) instead of live devices, with a timeline: play, pause, speed, scrubbing, its markers'
 complete -c gadgetctl -n '__fish_seen_subcommand_from view' -l driver-path -r -F -d 'Also look for driver plug-ins in DIR (after the bundled drivers and GADGETCTL_DRIVER_PATH)'
 complete -c gadgetctl -n '__fish_seen_subcommand_from view' -l trust-driver-path -d 'Import plug-ins also from directories other users can write to (refused by default: DRV011)'

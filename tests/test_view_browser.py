@@ -107,6 +107,10 @@ def test_c4_cave_with_simulated_head_and_wand_in_a_browser(tmp_path):
             "return document.getElementById('gadgetctl-problems').textContent"
         )
         assert "Motion Star master" in panel and "pending" in panel and "motion_star" in panel
+        fetched = driver.execute_script(
+            "return performance.getEntriesByType('resource').map(function (e) { return e.name; })"
+        )
+        assert [f for f in fetched if not f.startswith((url, "data:", "blob:"))] == []
         painted(driver)
         full, png = screenshot(driver)
         shown = wait_for_scene(driver)

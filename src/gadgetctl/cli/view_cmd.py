@@ -46,6 +46,12 @@ def view(
         metavar="SECONDS",
         help="Stop after this many seconds (default: until Ctrl-C or SIGTERM).",
     ),
+    export: Path | None = typer.Option(
+        None,
+        "--export",
+        metavar="FILE.html",
+        help="Write the scene as one self-contained page that opens offline with no server (of --duration seconds of live frames, default 2; or the whole --replay recording), instead of serving it.",
+    ),
     replay: Path | None = typer.Option(
         None,
         "--replay",
@@ -110,6 +116,7 @@ def view(
             bundled=bundled,
             title=f"gadgetctl view {title}" + (f" (replay of {replay.name})" if replay else ""),
             replay=replay,
+            export=export,
         )
     raise typer.Exit(code)
 
@@ -129,6 +136,7 @@ def run_view(
     bundled: bool,
     title: str,
     replay: Path | None = None,
+    export: Path | None = None,
 ) -> int:
     from gadgetctl.cli.monitor_cmd import fatal_load_errors
     from gadgetctl.errors import GadgetctlError
@@ -177,8 +185,8 @@ def run_view(
             server = ViewServer(
                 session,
                 configuration,
-                host=bind,
-                port=port,
+                host="127.0.0.1" if export is not None else bind,
+                port=0 if export is not None else port,
                 title=title,
                 allow=allow,
                 timeline=timeline,
@@ -192,6 +200,8 @@ def run_view(
             raise GadgetctlError(
                 f"cannot serve the page on {bind}:{port}: {err.strerror or err}"
             ) from None
+        if export is not None:
+            return _export(server, export, duration)
         if port and server.port != port:
             raise GadgetctlError(f"cannot serve the page on {bind}:{port}: the port is taken")
         print(f"gadgetctl view: {server.url} (Ctrl-C stops)", flush=True)
@@ -217,4 +227,26 @@ def run_view(
         if server is not None:
             server.stop()
         manager.shutdown()
+    return 0
+
+
+#: Seconds of live frames an --export writes when --duration does not say.
+EXPORT_SECONDS = 2.0
+
+
+def _export(server, path: Path, duration: float | None) -> int:
+    """Write the self-contained page; its own one-line report."""
+    from gadgetctl.errors import GadgetctlError
+    from gadgetctl.safewrite import WriteError, replace_file
+    from gadgetctl.view.export import export_page
+
+    seconds = EXPORT_SECONDS if duration is None else duration
+    frames = None if server.model.timeline is not None else server.session.frames(duration=seconds)
+    page, written = export_page(server, seconds=seconds, live_frames=frames)
+    try:
+        replace_file(path, page.encode("utf-8"))
+    except WriteError as err:
+        raise GadgetctlError(str(err)) from None
+    size = len(page.encode("utf-8"))
+    print(f"gadgetctl view: wrote {path} ({written} frames, {size / 1e6:.1f} MB; opens offline)")
     return 0

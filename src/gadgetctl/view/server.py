@@ -37,6 +37,7 @@ class ViewServer:
         import viser
 
         self.session = session
+        self.title = title
         elements = configuration.elements if configuration is not None else []
         self.model = SceneModel(session, read_layout(elements, session.manager.repo))
         self.model.timeline = timeline
@@ -96,6 +97,13 @@ class ViewServer:
             self.renderer.render()
             if self.model.timeline is not None:
                 self.model.timeline.advance()  # what it hands over shows in the next frame
+
+    def step_now(self, *, slow: bool) -> None:
+        """Bring the model and the page up to this frame, with (``slow``) or without the
+        statuses, trails and panels; the timeline is left alone (the caller drives it)."""
+        with self._lock:
+            self.model.update(statuses=slow)
+            self.renderer.render(slow=slow)
 
     def snapshot(self) -> dict[str, object]:
         with self._lock:
