@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 import pytest_lsp
+from lsp_samples import DEVICES, HEAD, PROXIES, TRACKERS, configuration
 from lsprotocol import types
 from pytest_lsp import ClientServerConfig, LanguageClient
 
@@ -21,37 +22,6 @@ pytestmark = [pytest.mark.asyncio(loop_scope="module"), pytest.mark.timeout(60)]
 
 DTRACK = CORPUS_CONFIGS / "example.dtrack.jconf"
 TIMEOUT = 20.0  # seconds a test waits for a notification
-
-HEAD = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">
-"""
-DEVICES = (
-    HEAD
-    + """   <elements>
-      <dtrack name="Tracker" version="1">
-         <receive_port>5000</receive_port>
-         <position_filters>
-            <position_transform_filter name="Units" version="1">
-               <device_units>Feet</device_units>
-            </position_transform_filter>
-         </position_filters>
-      </dtrack>
-      <simulated_analog_device name="Sliders" version="2">
-         <keyboard_mouse_proxy>Keys</keyboard_mouse_proxy>
-      </simulated_analog_device>
-      <keyboard_mouse_proxy name="Keys" version="1">
-         <device>Keyboard</device>
-      </keyboard_mouse_proxy>
-      <keyboard_mouse_device name="Keyboard" version="3"/>
-      <position_proxy name="Head" version="1">
-         <device>Tracker</device>
-         <unit>0</unit>
-      </position_proxy>
-   </elements>
-</configuration>
-"""
-)
 
 
 @pytest_lsp.fixture(
@@ -97,6 +67,14 @@ def _change(client: LanguageClient, uri: str, text: str) -> None:
             [types.TextDocumentContentChangeWholeDocument(text=text)],
         )
     )
+
+
+async def _checked(client: LanguageClient, path: Path, text: str = DEVICES) -> str:
+    """Write ``text`` to ``path``, open it and wait for its first diagnostics: its URI."""
+    path.write_text(text)
+    uri = _open(client, path)
+    await _diagnostics(client, uri)
+    return uri
 
 
 async def _diagnostics(client: LanguageClient, uri: str, until=lambda found: True):
@@ -156,10 +134,7 @@ async def test_opening_the_dtrack_example_publishes_what_validate_finds(client):
 
 
 async def test_a_misspelled_property_is_found_and_its_quick_fix_repairs_it(client, tmp_path):
-    path = tmp_path / "typo.jconf"
-    path.write_text(DEVICES)
-    uri = _open(client, path)
-    await _diagnostics(client, uri)
+    uri = await _checked(client, tmp_path / "typo.jconf")
     typo = DEVICES.replace("<receive_port>5000</receive_port>", "<recieve_port>5000</recieve_port>")
     _change(client, uri, typo)
     published = await _diagnostics(client, uri, lambda f: any(d.code == "CFG020" for d in f))
@@ -183,10 +158,7 @@ async def test_a_misspelled_property_is_found_and_its_quick_fix_repairs_it(clien
 async def test_completion_in_a_position_proxy_device_lists_only_positional_devices(
     client, tmp_path
 ):
-    path = tmp_path / "devices.jconf"
-    path.write_text(DEVICES)
-    uri = _open(client, path)
-    await _diagnostics(client, uri)
+    uri = await _checked(client, tmp_path / "devices.jconf")
     answer = await client.text_document_completion_async(
         types.CompletionParams(
             types.TextDocumentIdentifier(uri),
@@ -198,10 +170,7 @@ async def test_completion_in_a_position_proxy_device_lists_only_positional_devic
 
 
 async def test_hover_on_device_units_shows_the_labels_and_the_value_read(client, tmp_path):
-    path = tmp_path / "units.jconf"
-    path.write_text(DEVICES)
-    uri = _open(client, path)
-    await _diagnostics(client, uri)
+    uri = await _checked(client, tmp_path / "units.jconf")
     answer = await client.text_document_hover_async(
         types.HoverParams(types.TextDocumentIdentifier(uri), _position(DEVICES, "device_units", 3))
     )
@@ -213,27 +182,8 @@ async def test_hover_on_device_units_shows_the_labels_and_the_value_read(client,
 async def test_renaming_an_element_updates_pointers_in_an_included_file(client, tmp_path):
     main = tmp_path / "main.jconf"
     proxies = tmp_path / "proxies.jconf"
-    main_text = DEVICES.replace(
-        "   <elements>", "   <include>proxies.jconf</include>\n   <elements>"
-    ).replace(
-        """      <position_proxy name="Head" version="1">
-         <device>Tracker</device>
-         <unit>0</unit>
-      </position_proxy>
-""",
-        "",
-    )
-    proxies_text = (
-        HEAD
-        + """   <elements>
-      <position_proxy name="Head" version="1">
-         <device>Tracker</device>
-         <unit>0</unit>
-      </position_proxy>
-   </elements>
-</configuration>
-"""
-    )
+    main_text = configuration(TRACKERS, before="   <include>proxies.jconf</include>\n")
+    proxies_text = configuration(PROXIES)
     main.write_text(main_text)
     proxies.write_text(proxies_text)
     uri = _open(client, main)

@@ -4,6 +4,7 @@ completion, hover, navigation and fixes for texts as an editor holds them."""
 from __future__ import annotations
 
 import pytest
+from lsp_samples import DEVICES, HEAD
 
 from gadgetctl.lsp import actions, completion, hover, navigation
 from gadgetctl.lsp.analysis import Engine
@@ -12,32 +13,7 @@ from gadgetctl.validate import validate_paths
 
 from conftest import CORPUS_CONFIGS
 
-HEAD = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings configuration.version="3.0"?>
-<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">
-"""
-BODY = (
-    HEAD
-    + """   <elements>
-      <dtrack name="Tracker" version="1">
-         <receive_port>5000</receive_port>
-         <position_filters>
-            <position_transform_filter name="Units" version="1">
-               <device_units>feet</device_units>
-            </position_transform_filter>
-         </position_filters>
-      </dtrack>
-      <position_proxy name="Head" version="1">
-         <device>Tracker</device>
-         <unit>0</unit>
-      </position_proxy>
-      <alias name="VJHead" version="1">
-         <proxy>Head</proxy>
-      </alias>
-   </elements>
-</configuration>
-"""
-)
+BODY = DEVICES.replace(">Feet<", ">feet<")
 
 
 @pytest.fixture
@@ -83,7 +59,7 @@ def test_completion_of_types_properties_labels_booleans_and_versions(opened):
     versions = BODY.index('version="1">\n         <receive') + len('version="')
     assert _labels(model, BODY, versions) == ["1"]
     aliases = _labels(model, BODY, BODY.index(">Head</proxy>") + 1)
-    assert aliases == ["Head"]  # a proxy; not the tracker, not the alias itself
+    assert aliases == ["Keys", "Head"]  # proxies; not the devices, not the alias itself
 
 
 def test_completion_of_include_paths_and_jdef_parents(opened, tmp_path):
@@ -132,6 +108,9 @@ def test_outline_groups_elements_by_type_and_folds_them(opened):
     symbols = navigation.symbols(BODY)
     assert [(s.name, [c.name for c in s.children]) for s in symbols] == [
         ("dtrack", ["Tracker"]),
+        ("simulated_analog_device", ["Sliders"]),
+        ("keyboard_mouse_proxy", ["Keys"]),
+        ("keyboard_mouse_device", ["Keyboard"]),
         ("position_proxy", ["Head"]),
         ("alias", ["VJHead"]),
     ]

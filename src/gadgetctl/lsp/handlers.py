@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from dataclasses import dataclass
 from functools import wraps
 from pathlib import Path
 
@@ -12,67 +13,87 @@ from lsprotocol import types
 from gadgetctl.jccl.xmlload import load_file
 from gadgetctl.lsp import actions as fixes
 from gadgetctl.lsp import completion, hover, navigation
-from gadgetctl.lsp.uris import is_jccl as _jccl
-from gadgetctl.lsp.uris import path_of as _path
+from gadgetctl.lsp.analysis import Model
+from gadgetctl.lsp.text import LineIndex
+from gadgetctl.lsp.uris import is_jccl, path_of
 
 log = logging.getLogger("gadgetctl.lsp")
 
 
-def guarded(handler: Callable) -> Callable:
-    """A handler that fails answers nothing (and says so in the client's log) instead of
-    ending the server."""
+@dataclass
+class Document:
+    """An open JCCL document a request is about."""
 
-    @wraps(handler)
-    def run(ls, params):
-        try:
-            return handler(ls, params)
-        except Exception as err:
-            log.exception("%s failed", handler.__name__)
-            ls.window_log_message(
-                types.LogMessageParams(
-                    types.MessageType.Error, f"gadgetctl lsp: {handler.__name__} failed: {err!r}"
+    path: Path
+    text: str
+    index: LineIndex
+    model: Model | None
+
+    def offset(self, position: types.Position) -> int:
+        return self.index.offset(position.line, position.character)
+
+
+def on_document(model: str | None = "current") -> Callable:
+    """A handler of a request about an open JCCL document, called as
+    ``handler(ls, params, document)``; ``model``: "current" (the text as it is now),
+    "recent" (the newest there is, see :meth:`Engine.recent_model`) or None (the text is
+    enough). A request about another document answers nothing; a handler that fails
+    answers nothing (and says so in the client's log) instead of ending the server."""
+
+    def wrap(handler: Callable) -> Callable:
+        @wraps(handler)
+        def run(ls, params):
+            try:
+                path = path_of(params.text_document.uri)
+                if not is_jccl(path) or path not in ls.engine.texts:
+                    return None
+                text = ls.engine.texts[path]
+                found = None
+                if model == "recent":
+                    found = ls.engine.recent_model(path)
+                elif model == "current":
+                    found = ls.engine.good_model(path)
+                return handler(ls, params, Document(path, text, ls.lines(text), found))
+            except Exception as err:
+                log.exception("%s failed", handler.__name__)
+                ls.window_log_message(
+                    types.LogMessageParams(
+                        types.MessageType.Error,
+                        f"gadgetctl lsp: {handler.__name__} failed: {err!r}",
+                    )
                 )
-            )
-            return None
+                return None
 
-    return run
+        return run
 
-
-def _document(ls, uri: str, *, recent: bool = False):
-    """(path, text, model) of an open JCCL document, or None. ``recent``: the newest model
-    there is will do (see :meth:`Engine.recent_model`)."""
-    path = _path(uri)
-    if not _jccl(path) or path not in ls.engine.texts:
-        return None
-    text = ls.engine.texts[path]
-    model = ls.engine.recent_model(path) if recent else ls.engine.good_model(path)
-    return path, text, model
+    return wrap
 
 
-def _offset(ls, text: str, position: types.Position) -> int:
-    return ls.lines(text).offset(position.line, position.character)
-
-
-def _text_of(ls, model, path: Path) -> str | None:
+def _text_of(ls, model: Model, path: Path) -> str:
+    """A file's text: the editor's, the one the model read, or the file's."""
     if path in ls.engine.texts:
         return ls.engine.texts[path]
     text = model.text_of(path)
-    if text is None:
-        doc = load_file(path)
-        text = doc.text
-    return text
+    return text if text is not None else load_file(path).text
 
 
-def _location(ls, model, spot) -> types.Location | None:
+def _location(ls, model: Model, spot) -> types.Location:
+    index = ls.lines(_text_of(ls, model, spot.path))
     if isinstance(spot, navigation.Target):
-        text = _text_of(ls, model, spot.path) or ""
-        index = ls.lines(text)
-        start = index.at_line_column(spot.line, spot.column)
-        return types.Location(ls.uri_of(spot.path), ls.range_of(index, start, start))
-    text = _text_of(ls, model, spot.path)
-    if text is None:
-        return None
-    return types.Location(ls.uri_of(spot.path), ls.range_of(ls.lines(text), spot.start, spot.end))
+        start = end = index.at_line_column(spot.line, spot.column)
+    else:
+        start, end = spot.start, spot.end
+    return types.Location(ls.uri_of(spot.path), ls.range_of(index, start, end))
+
+
+def _workspace_edit(ls, model: Model, edits: dict[Path, list[tuple[int, int, str]]]):
+    changes = {}
+    for path, replacements in edits.items():
+        index = ls.lines(_text_of(ls, model, path))
+        changes[ls.uri_of(path)] = [
+            types.TextEdit(ls.range_of(index, start, end), new) for start, end, new in replacements
+        ]
+    return types.WorkspaceEdit(changes=changes)
 
 
 def register(server) -> None:
@@ -80,16 +101,11 @@ def register(server) -> None:
         types.TEXT_DOCUMENT_COMPLETION,
         types.CompletionOptions(trigger_characters=["<", '"', ">"]),
     )
-    @guarded
-    def complete(ls, params: types.CompletionParams):
-        found = _document(ls, params.text_document.uri, recent=True)
-        if found is None:
-            return None
-        _path, text, model = found
-        offset = _offset(ls, text, params.position)
-        answer = completion.complete(model, text, offset)
-        index = ls.lines(text)
-        replace = ls.range_of(index, answer.start, offset)
+    @on_document("recent")
+    def complete(ls, params: types.CompletionParams, doc: Document):
+        offset = doc.offset(params.position)
+        answer = completion.complete(doc.model, doc.text, offset)
+        replace = ls.range_of(doc.index, answer.start, offset)
         items = [
             types.CompletionItem(
                 label=item.label,
@@ -104,143 +120,94 @@ def register(server) -> None:
         return types.CompletionList(is_incomplete=False, items=items)
 
     @server.feature(types.TEXT_DOCUMENT_HOVER)
-    @guarded
-    def on_hover(ls, params: types.HoverParams):
-        found = _document(ls, params.text_document.uri)
-        if found is None:
-            return None
-        path, text, model = found
-        offset = _offset(ls, text, params.position)
-        shown = hover.hover(model, text, offset, ls.findings.get(path, []))
+    @on_document()
+    def on_hover(ls, params: types.HoverParams, doc: Document):
+        findings = ls.findings.get(doc.path, [])
+        shown = hover.hover(doc.model, doc.text, doc.offset(params.position), findings)
         if shown is None:
             return None
         return types.Hover(types.MarkupContent(types.MarkupKind.Markdown, shown))
 
     @server.feature(types.TEXT_DOCUMENT_DEFINITION)
-    @guarded
-    def go_to(ls, params: types.DefinitionParams):
-        found = _document(ls, params.text_document.uri)
-        if found is None:
-            return None
-        _path, text, model = found
-        spot = navigation.definition(model, text, _offset(ls, text, params.position))
-        return _location(ls, model, spot) if spot is not None else None
+    @on_document()
+    def go_to(ls, params: types.DefinitionParams, doc: Document):
+        spot = navigation.definition(doc.model, doc.text, doc.offset(params.position))
+        return _location(ls, doc.model, spot) if spot is not None else None
 
     @server.feature(types.TEXT_DOCUMENT_REFERENCES)
-    @guarded
-    def refs(ls, params: types.ReferenceParams):
-        found = _document(ls, params.text_document.uri)
-        if found is None:
-            return None
-        _path, text, model = found
-        spots = navigation.references(
-            model, text, _offset(ls, text, params.position), params.context.include_declaration
-        )
-        return [loc for loc in (_location(ls, model, s) for s in spots) if loc is not None]
+    @on_document()
+    def refs(ls, params: types.ReferenceParams, doc: Document):
+        offset = doc.offset(params.position)
+        declaration = params.context.include_declaration
+        spots = navigation.references(doc.model, doc.text, offset, declaration)
+        return [_location(ls, doc.model, spot) for spot in spots]
 
     @server.feature(types.TEXT_DOCUMENT_PREPARE_RENAME)
-    @guarded
-    def prepare_rename(ls, params: types.PrepareRenameParams):
-        found = _document(ls, params.text_document.uri)
-        if found is None:
-            return None
-        _path, text, model = found
-        spot = navigation.rename_range(model, text, _offset(ls, text, params.position))
+    @on_document()
+    def prepare_rename(ls, params: types.PrepareRenameParams, doc: Document):
+        spot = navigation.rename_range(doc.model, doc.text, doc.offset(params.position))
         if spot is None:
             return None
-        return types.PrepareRenamePlaceholder(
-            ls.range_of(ls.lines(text), spot[0], spot[1]), spot[2]
-        )
+        start, end, name = spot
+        return types.PrepareRenamePlaceholder(ls.range_of(doc.index, start, end), name)
 
     @server.feature(types.TEXT_DOCUMENT_RENAME)
-    @guarded
-    def do_rename(ls, params: types.RenameParams):
-        found = _document(ls, params.text_document.uri)
-        if found is None:
+    @on_document()
+    def do_rename(ls, params: types.RenameParams, doc: Document):
+        offset = doc.offset(params.position)
+        spots = navigation.rename(doc.model, doc.text, offset, params.new_name)
+        if spots is None:
             return None
-        _path, text, model = found
-        edits = navigation.rename(model, text, _offset(ls, text, params.position), params.new_name)
-        if edits is None:
-            return None
-        changes = {}
-        for file, spots in edits.items():
-            file_text = _text_of(ls, model, file) or ""
-            index = ls.lines(file_text)
-            changes[ls.uri_of(file)] = [
-                types.TextEdit(ls.range_of(index, s.start, s.end), _escape(params.new_name))
-                for s in spots
-            ]
-        return types.WorkspaceEdit(changes=changes)
+        new = _escape(params.new_name)
+        edits = {path: [(s.start, s.end, new) for s in found] for path, found in spots.items()}
+        return _workspace_edit(ls, doc.model, edits)
 
     @server.feature(types.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
-    @guarded
-    def outline(ls, params: types.DocumentSymbolParams):
-        found = _document(ls, params.text_document.uri)
-        if found is None:
-            return None
-        _path, text, _model = found
-        index = ls.lines(text)
-
+    @on_document(None)
+    def outline(ls, params: types.DocumentSymbolParams, doc: Document):
         def convert(symbol, kind):
             return types.DocumentSymbol(
                 name=symbol.name,
                 detail=symbol.detail,
                 kind=kind,
-                range=ls.range_of(index, symbol.start, symbol.end),
-                selection_range=ls.range_of(index, symbol.select_start, symbol.select_end),
+                range=ls.range_of(doc.index, symbol.start, symbol.end),
+                selection_range=ls.range_of(doc.index, symbol.select_start, symbol.select_end),
                 children=[convert(c, types.SymbolKind.Object) for c in symbol.children],
             )
 
-        return [convert(s, types.SymbolKind.Class) for s in navigation.symbols(text)]
+        return [convert(s, types.SymbolKind.Class) for s in navigation.symbols(doc.text)]
 
     @server.feature(types.TEXT_DOCUMENT_FOLDING_RANGE)
-    @guarded
-    def folds(ls, params: types.FoldingRangeParams):
-        found = _document(ls, params.text_document.uri)
-        if found is None:
-            return None
+    @on_document(None)
+    def folds(ls, params: types.FoldingRangeParams, doc: Document):
         return [
             types.FoldingRange(start_line=first, end_line=last)
-            for first, last in navigation.folding(found[1])
+            for first, last in navigation.folding(doc.text)
         ]
 
     @server.feature(
         types.TEXT_DOCUMENT_CODE_ACTION,
         types.CodeActionOptions(code_action_kinds=[types.CodeActionKind.QuickFix]),
     )
-    @guarded
-    def code_actions(ls, params: types.CodeActionParams):
-        found = _document(ls, params.text_document.uri)
-        if found is None:
-            return None
-        path, text, model = found
-        index = ls.lines(text)
+    @on_document()
+    def code_actions(ls, params: types.CodeActionParams, doc: Document):
         problems, by_code = [], {}
         for diagnostic in params.context.diagnostics:
             if diagnostic.source != "gadgetctl" or not isinstance(diagnostic.code, str):
                 continue
-            start = index.offset(diagnostic.range.start.line, diagnostic.range.start.character)
-            end = index.offset(diagnostic.range.end.line, diagnostic.range.end.character)
+            start, end = doc.offset(diagnostic.range.start), doc.offset(diagnostic.range.end)
             problems.append(fixes.Problem(diagnostic.code, start, end))
             by_code.setdefault(diagnostic.code, diagnostic)
-        answer = []
-        for action in fixes.actions(model, text, problems):
-            changes = {}
-            for file, edits in action.edits.items():
-                file_index = index if file == path else ls.lines(_text_of(ls, model, file) or "")
-                changes[ls.uri_of(file)] = [
-                    types.TextEdit(ls.range_of(file_index, a, b), new) for a, b, new in edits
-                ]
-            answer.append(
-                types.CodeAction(
-                    title=action.title,
-                    kind=types.CodeActionKind.QuickFix,
-                    diagnostics=[by_code[action.code]] if action.code in by_code else None,
-                    is_preferred=action.preferred or None,
-                    edit=types.WorkspaceEdit(changes=changes),
-                )
+        return [
+            types.CodeAction(
+                title=action.title,
+                kind=types.CodeActionKind.QuickFix,
+                diagnostics=[by_code[action.code]] if action.code in by_code else None,
+                is_preferred=action.preferred or None,
+                edit=_workspace_edit(ls, doc.model, action.edits),
             )
-        return answer
+            for action in fixes.actions(doc.model, doc.text, problems)
+        ]
 
 
 def _escape(name: str) -> str:
