@@ -14,6 +14,14 @@ the server being asked for the layout):
   UDP channel, a `recv` loop that counts datagrams and decodes nothing), its share of a core
   and its CPU per report, and the monitor's CPU per report over it.
 
+* where built locally, VRPN's own C++ client: ``bench/vrpn_count_client.cpp`` (ours) reads
+  the tracker with the library's ``vrpn_Tracker_Remote`` and counts; set
+  ``VRPN_COUNT_CLIENT`` to the built program (build it against the vrpn/vrpn sources, which
+  gadgetctl does not ship: ``g++ -O2 -Isrc -Isrc/quat bench/vrpn_count_client.cpp
+  src/vrpn_Connection.C src/vrpn_Shared.C src/vrpn_BaseClass.C src/vrpn_Tracker.C
+  src/vrpn_FileConnection.C src/vrpn_EndpointContainer.C src/vrpn_Serial.C
+  src/vrpn_RedundantTransmission.C src/vrpn_Thread.C src/quat/*.c -lpthread``).
+
 ``--load N`` keeps N extra processes spinning meanwhile (N = 2 on this 2-core machine is
 "load 2": both cores busy besides the benchmark). Exit status 1 when a target is missed.
 
@@ -137,6 +145,23 @@ def monitor_run(port: int, seconds: float) -> tuple[float, float, dict, list[dic
     return cpu, wall, stats, frames
 
 
+def cpp_client(port: int, seconds: float) -> tuple[int, float, float] | None:
+    """(reports, CPU seconds, wall seconds) of VRPN's C++ client, when built (see above)."""
+    program = os.environ.get("VRPN_COUNT_CLIENT")
+    if not program or not Path(program).is_file():
+        return None
+    done = subprocess.run(
+        [program, f"Tracker32@127.0.0.1:{port}", f"{seconds:g}"],
+        capture_output=True,
+        text=True,
+        timeout=seconds + 30,
+    )
+    if done.returncode != 0:
+        sys.exit(f"{program} failed ({done.returncode}): {done.stderr[-500:]}")
+    reports, cpu, wall = done.stdout.split()
+    return int(reports), float(cpu), float(wall)
+
+
 def missing_ticks(device: dict) -> int:
     """Ticks missing between the first and the newest sample the monitor published (each
     sample keeps its VRPN time: serve's ticks are exactly 1/RATE apart)."""
@@ -179,8 +204,11 @@ def main() -> None:
                 raw_cpu, raw_wall = measured
                 raw_reports = max(1, reports_in(raw.bytes))
                 served.wait_disconnects(1)
+                cpp = cpp_client(served.port, args.seconds)
+                if cpp is not None:
+                    served.wait_disconnects(2)
                 cpu, wall, stats, _frames = monitor_run(served.port, args.seconds)
-                gone = served.wait_disconnects(2)[-1]
+                gone = served.wait_disconnects(3 if cpp is not None else 2)[-1]
             finally:
                 served.stop()
     finally:
@@ -189,7 +217,7 @@ def main() -> None:
             p.join(5)
     device = next(iter(stats["devices"].values()))
     health = device.get("health", {})
-    rate = float(device.get("window_rate") or device.get("mean_rate") or 0.0)
+    rate = float(device.get("mean_rate") or 0.0)  # samples over the span they cover
     lost = int(device.get("dropped", 0)) + int(gone.get("dropped", 0)) + missing_ticks(device)
     reports = rate * SENSORS * wall
     print(f"  {SENSORS} sensors at {RATE:g} Hz over the lob and a UDP channel, {args.seconds:g} s")
@@ -205,6 +233,17 @@ def main() -> None:
         cpu / max(1.0, reports),
         raw_cpu / raw_reports,
     )
+    if cpp is not None:
+        cpp_reports, cpp_cpu, cpp_wall = cpp
+        report.figure("C++ vrpn_Tracker_Remote: reports per second", cpp_reports / cpp_wall, "/s")
+        report.figure("C++ vrpn_Tracker_Remote: share of a core", cpp_cpu / cpp_wall * 100, "%")
+        report.ratio(
+            "monitor CPU per report / C++ client",
+            cpu / max(1.0, reports),
+            cpp_cpu / max(1, cpp_reports),
+        )
+    else:
+        print("  (C++ client not measured: VRPN_COUNT_CLIENT names no built program)")
     report.exit()
 
 
