@@ -369,17 +369,11 @@ def _client(port: int, seconds: float, rate: float, results, defer: bool = True)
     )  # the first tenth: the connection's start
 
 
-def _flooder(port: int, seconds: float, rate: float, sender: str, results) -> None:
-    """A hostile client (issue 24 item 4): pings from a served sender at ``rate`` bytes per
-    second (as fast as serve takes them when it takes fewer), reading and discarding the
-    pongs (the worst case for serve: every pong is written)."""
+def _hostile_connection(port: int, setup: bytes = b"") -> socket.socket:
+    """A direct TCP connection to serve that sent the cookie and ``setup``, and whose
+    incoming bytes a thread of its own reads and discards."""
     sock = socket.create_connection(("127.0.0.1", port), timeout=10)
-    port_of = sock.getsockname()[1]
-    sock.sendall(
-        make_cookie()
-        + pack_description(SENDER_DESCRIPTION, 0, sender)
-        + pack_description(TYPE_DESCRIPTION, 0, codecs.PING)
-    )
+    sock.sendall(make_cookie() + setup)
 
     def discard() -> None:
         try:
@@ -389,6 +383,19 @@ def _flooder(port: int, seconds: float, rate: float, sender: str, results) -> No
             pass
 
     threading.Thread(target=discard, daemon=True).start()
+    return sock
+
+
+def _flooder(port: int, seconds: float, rate: float, sender: str, results) -> None:
+    """A hostile client (issue 24 item 4): pings from a served sender at ``rate`` bytes per
+    second (as fast as serve takes them when it takes fewer), reading and discarding the
+    pongs (the worst case for serve: every pong is written)."""
+    sock = _hostile_connection(
+        port,
+        pack_description(SENDER_DESCRIPTION, 0, sender)
+        + pack_description(TYPE_DESCRIPTION, 0, codecs.PING),
+    )
+    port_of = sock.getsockname()[1]
     ping = pack_message(0, 0, b"", 0.0)
     step = 0.01
     chunk = ping * max(1, int(rate * step) // len(ping))
@@ -714,17 +721,7 @@ def rss_bytes(pid: int) -> int:
 def _describer(port: int, seconds: float, results) -> None:
     """A hostile client (issue 24 item 1): sender descriptions that keep their ids within
     0..1999 but bring ever-new names of 90 characters, as fast as serve reads them."""
-    sock = socket.create_connection(("127.0.0.1", port), timeout=10)
-    sock.sendall(make_cookie())
-
-    def discard() -> None:
-        try:
-            while sock.recv(1 << 20):
-                pass
-        except OSError:
-            pass
-
-    threading.Thread(target=discard, daemon=True).start()
+    sock = _hostile_connection(port)
     sent = 0
     number = 0
     end = time.monotonic() + seconds

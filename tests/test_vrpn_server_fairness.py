@@ -143,3 +143,28 @@ def test_a_flooding_client_is_served_a_budget_per_pass_and_the_others_as_usual()
         finally:
             flooder.sock.close()
             other.sock.close()
+
+
+def test_a_client_describing_ever_new_sender_names_leaves_bounded_tables():
+    # issue 24 item 1, on the server side: ids within 0..1999, a new name every time
+    names = 20_000
+    with VrpnServer("127.0.0.1", 0) as server:
+        peer = Peer(server)
+        try:
+            ep = peer.client.endpoint
+            peer.sock.sendall(
+                b"".join(
+                    describe(wire.SENDER_DESCRIPTION, i % 2000, f"n{i:060d}") for i in range(names)
+                )
+            )
+            last = (names - 1) % 2000, f"n{names - 1:060d}"
+            assert wait_until(
+                lambda: ep.remote_senders.get(last[0]) == last[1],  # the last one was read
+                timeout=30,
+                step=lambda: server.poll(0.01),
+            )
+            assert peer.client.state == "open"
+            assert len(ep.remote_senders) <= wire.MAX_IDS
+            assert len(ep.setup_senders) + len(ep.later_senders) <= 2 * wire.MAX_IDS
+        finally:
+            peer.sock.close()
