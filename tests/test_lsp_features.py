@@ -4,7 +4,7 @@ completion, hover, navigation and fixes for texts as an editor holds them."""
 from __future__ import annotations
 
 import pytest
-from lsp_samples import DEVICES, HEAD
+from lsp_samples import DEVICES, HEAD, configuration
 
 from gadgetctl.lsp import actions, completion, hover, navigation
 from gadgetctl.lsp.analysis import Engine
@@ -178,3 +178,63 @@ def test_unsaved_text_is_what_validate_reads(opened):
     engine.set_text(path, BODY.replace("receive_port", "recieve_port"))
     assert [d.code for d in engine.diagnose(path) if d.code == "CFG020"] == ["CFG020"]
     assert path.read_text() == BODY  # nothing written
+
+
+def test_one_old_element_is_upgraded_alone(opened):
+    text = (CORPUS_CONFIGS / "example.vrpn.jconf").read_text()
+    start = text.index('      <vrpn name="Vrpn"')
+    end = text.index("</vrpn>\n", start) + len("</vrpn>\n")
+    second = text[start:end].replace('name="Vrpn"', 'name="Vrpn2"')
+    text = text[:end] + second + text[end:]
+    engine, path = opened(text)
+    fixes = _fix(engine, path, text, "CFG012")
+    assert [f.title for f in fixes] == [
+        "Upgrade this element",
+        "Upgrade the file (gadgetctl upgrade)",
+    ]
+    fixed = _apply(text, fixes[0].edits[path])
+    assert (
+        fixed.endswith(text[end:])
+        and fixed[end - len(text) :] == second + text[end + len(second) :]
+    )
+    path.write_text(fixed)
+    old = [d for d in validate_paths([path]).diagnostics if d.code == "CFG012"]
+    assert [d.line for d in old] == [text[:end].count("\n") + 1]  # only the copy is left
+
+
+def test_a_definition_file_is_checked_and_its_unsaved_text_judges_configurations(opened, tmp_path):
+    defs = tmp_path / "defs"
+    defs.mkdir()
+    jdef = defs / "probe.jdef"
+    definition = """<?xml version="1.0" encoding="UTF-8"?>
+<?org-vrjuggler-jccl-settings definition.version="3.1"?>
+<definition xmlns="http://www.vrjuggler.org/jccl/xsd/3.1/definition" name="probe">
+   <definition_version version="1" label="Probe">
+      <abstract>false</abstract>
+      <help>A probe.</help>
+      <parent>positional_device</parent>
+      <category>/Devices</category>
+      <property valuetype="integer" variable="false" name="rate">
+         <help>Samples a second.</help>
+         <value label="Rate" defaultvalue="60"/>
+      </property>
+      <upgrade_transform/>
+   </definition_version>
+</definition>
+"""
+    jdef.write_text(definition)
+    config = configuration(
+        '      <probe name="P" version="1">\n         <depth>3</depth>\n      </probe>\n',
+        before="   <definition_path>\n      <dir>defs</dir>\n   </definition_path>\n",
+    )
+    engine, path = opened(config)
+    assert [d.code for d in engine.diagnose(path) if d.code.startswith("CFG02")] == ["CFG020"]
+    types = _labels(engine.model(path), config, config.index("<probe") + 1)
+    assert "probe" in types
+    edited = definition.replace('name="rate"', 'name="depth"')
+    engine.set_text(jdef, edited)
+    assert not [d for d in engine.diagnose(path) if d.code.startswith("CFG02")]
+    broken = edited.replace("<parent>positional_device</parent>", "<parent>no_such</parent>")
+    engine.set_text(jdef, broken)
+    assert any(d.code.startswith("DEF") for d in engine.diagnose(jdef))
+    assert jdef.read_text() == definition  # nothing written

@@ -486,7 +486,7 @@ def has_unsaved(path: str | os.PathLike[str]) -> bool:
     return unsaved_text(path) is not None
 
 
-def _unsaved_bytes(text: str) -> bytes:
+def unsaved_bytes(text: str) -> bytes:
     """The bytes a saved buffer would have: in the encoding its declaration names, where
     Python has that text codec (characters it cannot hold become character references)."""
     head = text[:200].encode("utf-8", errors="replace")
@@ -510,7 +510,7 @@ def load_file(
     shown = display or str(path)
     unsaved = unsaved_text(path)
     if unsaved is not None:
-        data = _unsaved_bytes(unsaved)
+        data = unsaved_bytes(unsaved)
         if len(data) > max_size:
             doc = XmlDocument(path=shown, kind=guess_kind(path))
             doc.diagnostics.append(

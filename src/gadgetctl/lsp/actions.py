@@ -13,6 +13,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from gadgetctl.jccl.xmlload import declared_encoding
 from gadgetctl.lsp.analysis import Model
 from gadgetctl.lsp.elements import place_of, property_of, required_properties, view_of
 from gadgetctl.lsp.syntax import TAG, context_at, end_tag, local, open_stack, text_range
@@ -41,7 +42,7 @@ class Problem:
 
 def actions(model: Model, text: str, problems: list[Problem]) -> list[Action]:
     found: list[Action] = []
-    upgrade_offered = False
+    upgraded: list[list[tuple[int, int, str]] | None] = []  # the file's upgrade, once
     for problem in problems:
         code = problem.code
         if code in ("CFG020", "CFG010"):
@@ -50,11 +51,14 @@ def actions(model: Model, text: str, problems: list[Problem]) -> list[Action]:
             found += _fix_value(model, text, problem)
         elif code == "CFG033":
             found += _add_required(model, text, problem)
-        if code in UPGRADE_CODES and not upgrade_offered:
-            upgrade = _upgrade(model, text, code)
-            if upgrade is not None:
-                found.append(upgrade)
-                upgrade_offered = True
+        if code in UPGRADE_CODES:
+            if not upgraded:
+                upgraded.append(_upgrade_hunks(model, text))
+            if upgraded[0]:
+                found += _upgrades(model, text, problem, upgraded[0])
+    files = [a for a in found if a.title == FILE_UPGRADE]
+    for extra in files[1:]:
+        found.remove(extra)
     return found
 
 
@@ -163,33 +167,53 @@ def _add_required(model: Model, text: str, problem: Problem) -> list[Action]:
     return actions
 
 
-def _upgrade(model: Model, text: str, code: str) -> Action | None:
-    from gadgetctl.jccl.upgrade import upgrade_bytes
+FILE_UPGRADE = "Upgrade the file (gadgetctl upgrade)"
 
-    data = text.encode("utf-8")
+
+def _upgrade_hunks(model: Model, text: str) -> list[tuple[int, int, str]] | None:
+    """`gadgetctl upgrade` of the text as edits, one per changed run of lines (the rest of
+    the file is left alone); None when nothing changes or it cannot be upgraded."""
+    from gadgetctl.jccl.upgrade import upgrade_bytes
+    from gadgetctl.jccl.xmlload import unsaved_bytes
+
+    data = unsaved_bytes(text)
     result = upgrade_bytes(model.path, data, model.repo, environ=model.environ)
     if result.failed or not result.changed or result.upgraded is None:
         return None
     try:
-        new = result.upgraded.decode("utf-8")
-    except UnicodeDecodeError:
+        return _hunks(text, result.upgraded.decode(declared_encoding(data)))
+    except (UnicodeDecodeError, LookupError):
         return None
-    start, old_end, new_end = _changed(text, new)
-    return Action(
-        "Upgrade the file (gadgetctl upgrade)",
-        code,
-        {model.path: [(start, old_end, new[start:new_end])]},
-    )
 
 
-def _changed(old: str, new: str) -> tuple[int, int, int]:
-    """The one region that differs: (start, its end in old, its end in new)."""
-    limit = min(len(old), len(new))
-    start = 0
-    while start < limit and old[start] == new[start]:
-        start += 1
-    old_end, new_end = len(old), len(new)
-    while old_end > start and new_end > start and old[old_end - 1] == new[new_end - 1]:
-        old_end -= 1
-        new_end -= 1
-    return start, old_end, new_end
+def _upgrades(
+    model: Model, text: str, problem: Problem, hunks: list[tuple[int, int, str]]
+) -> list[Action]:
+    """The whole file's upgrade and, for an outdated element, the edits within it alone."""
+    found = [Action(FILE_UPGRADE, problem.code, {model.path: hunks})]
+    if problem.code == "CFG012":
+        tag = _tag_name_at(text, problem.start)
+        end = end_tag(text, problem.start, tag[0]) if tag else None
+        stop = end[1] + 1 if end else text.find(">", problem.start) + 1
+        mine = [h for h in hunks if h[0] < stop and h[1] > problem.start]
+        if mine and mine != hunks:
+            found.insert(0, Action("Upgrade this element", problem.code, {model.path: mine}))
+    found[0].preferred = True
+    return found
+
+
+def _hunks(old: str, new: str) -> list[tuple[int, int, str]]:
+    """The edits turning ``old`` into ``new``: one per run of changed lines."""
+    from difflib import SequenceMatcher
+
+    old_lines = old.splitlines(keepends=True)
+    new_lines = new.splitlines(keepends=True)
+    starts = [0]
+    for line in old_lines:
+        starts.append(starts[-1] + len(line))
+    matcher = SequenceMatcher(None, old_lines, new_lines, autojunk=False)
+    return [
+        (starts[i1], starts[i2], "".join(new_lines[j1:j2]))
+        for op, i1, i2, j1, j2 in matcher.get_opcodes()
+        if op != "equal"
+    ]

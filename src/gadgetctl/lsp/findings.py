@@ -28,6 +28,14 @@ class Finding:
     def explain(self) -> str:
         return f"gadgetctl explain {self.diagnostic.code}"
 
+    @property
+    def described(self) -> str:
+        """What the code means, in the catalog's words, and where to read more."""
+        from gadgetctl.diagnostics.codes import lookup
+
+        code = self.diagnostic.code
+        return f"{code}: {lookup(code).title} (`{self.explain}` describes it with an example)"
+
 
 def token_end(text: str, start: int) -> int:
     """The end of what a finding at ``start`` points at: a whole tag, or a word."""

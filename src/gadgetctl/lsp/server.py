@@ -109,9 +109,7 @@ class JcclServer(LanguageServer):
             related = []
             if d.hint:
                 related.append(types.DiagnosticRelatedInformation(where, f"hint: {d.hint}"))
-            related.append(
-                types.DiagnosticRelatedInformation(where, f"`{finding.explain}` describes {d.code}")
-            )
+            related.append(types.DiagnosticRelatedInformation(where, finding.described))
             shown.append(
                 types.Diagnostic(
                     range=where.range,
