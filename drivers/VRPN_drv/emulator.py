@@ -11,7 +11,8 @@ served with gadgetctl's VRPN server (:class:`gadgetctl.vrpn.VrpnServer`).
 Devices (names configurable): ``Tracker0`` with ``sensors`` sensors moving on circles,
 ``Button0`` with ``buttons`` buttons, ``Analog0`` with ``channels`` channels in [-1, 1].
 Scenarios: ``idle`` (everything at rest), ``motion`` (poses and analogs move, buttons still)
-and ``buttons`` (``motion``, and the buttons are pressed and released one after the other).
+and ``buttons`` (``motion``, and the buttons are pressed and released one after the other);
+``silent``: the devices are announced and answer pings, but report nothing.
 Tracker reports go unreliable (by UDP to lob clients, as the C++ tracker sends them);
 buttons reliable, with the button states sent on every connection and ping.
 
@@ -29,7 +30,7 @@ from gadgetctl.emulation import Console
 from gadgetctl.emulation.command import EmulatorArgumentParser
 from gadgetctl.vrpn import VrpnServer, codecs
 
-SCENARIOS = ("idle", "motion", "buttons")
+SCENARIOS = ("idle", "motion", "buttons", "silent")
 
 
 # -- the scenario's data (pure functions, so tests can compute what to expect) ----------------
@@ -172,6 +173,8 @@ class VrpnEmulator:
 
     def tick(self) -> None:
         """Send one frame: every sensor's pose, button changes, the analog channels."""
+        if self.scenario == "silent":
+            return
         n, s, moving = self.frame, self.server, self.scenario != "idle"
         stamp = time.time()
         if self._tracker is not None:

@@ -45,6 +45,7 @@ from itertools import pairwise
 
 import numpy as np
 
+from gadgetctl.serve.framing import POSE_MESSAGE
 from gadgetctl.transport.udp import DatagramLedger
 from gadgetctl.vrpn import VrpnClient, parse_device_name
 from gadgetctl.vrpn.codecs import (
@@ -133,23 +134,6 @@ def pose_rows(
         [s * (x * z - y * w), s * (y * z + x * w), 1.0 - s * (x * x + y * y), pz],
         [0.0, 0.0, 0.0, 1.0],
     ]
-
-
-#: A whole tracker pose message: the header, then the Pos_Quat payload.
-POSE_MESSAGE = np.dtype(
-    [
-        ("length", ">u4"),
-        ("sec", ">i4"),
-        ("usec", ">i4"),
-        ("sender", ">i4"),
-        ("type", ">i4"),
-        ("sequence", ">u4"),
-        ("sensor", ">i4"),
-        ("filler", ">i4"),
-        ("position", ">f8", (3,)),
-        ("quat", ">f8", (4,)),
-    ]
-)
 
 
 def pose_records(block: Block) -> np.ndarray:

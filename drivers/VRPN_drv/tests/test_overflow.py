@@ -4,14 +4,12 @@ the monitor's statistics; and nothing is published before the server's first rep
 
 from __future__ import annotations
 
-import contextlib
 import socket
 import struct
-import threading
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from VRPN_drv.emulator import VrpnEmulator
 from VRPN_drv.wrapper import VrpnDevice
 
 from gadgetctl.cli.monitor_run import _evaluate
@@ -21,7 +19,6 @@ from gadgetctl.input.testing.configs import configuration, proxy
 from gadgetctl.input.testing.floods import bad_one_for_one
 from gadgetctl.monitor.session import MonitorSession
 from gadgetctl.transport.udp import proc_udp_drops
-from gadgetctl.vrpn import VrpnServer
 from gadgetctl.wording import counted
 
 pytestmark = pytest.mark.timeout(60)
@@ -51,21 +48,9 @@ def flood(port: int, count: int) -> None:
             tx.sendto(message * 16, ("127.0.0.1", port))
 
 
-@contextlib.contextmanager
-def silent_server() -> Iterator[VrpnServer]:
+def silent_server() -> VrpnEmulator:
     """A VRPN server announcing Tracker0 and answering pings, reporting nothing."""
-    server = VrpnServer("127.0.0.1", 0)
-    server.register_sender("Tracker0")
-    server.start()
-    stop = threading.Event()
-    thread = threading.Thread(target=server.serve_forever, args=(stop, 0.02), daemon=True)
-    thread.start()
-    try:
-        yield server
-    finally:
-        stop.set()
-        thread.join(5)
-        server.close()
+    return VrpnEmulator(0, scenario="silent", sensors=1, buttons=0, channels=0)
 
 
 def test_the_monitor_shows_exactly_what_the_kernel_dropped(tmp_path: Path, monkeypatch) -> None:

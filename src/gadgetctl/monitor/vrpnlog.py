@@ -134,15 +134,7 @@ def read_vrpn_log(path: str | Path, routes: Routes | None = None) -> Recording:
 def _scan(path: Path, routes: Routes) -> tuple[float | None, dict[str, dict[str, object]]]:
     """The first timestamp and, per device, its kinds and unit counts (a first pass, so the
     header describes every device as a monitor recording's header does)."""
-    from gadgetctl.vrpn import LogFormatError, LogReader
-    from gadgetctl.vrpn.codecs import (
-        MAX_DIALS,
-        AnalogChannels,
-        ButtonChange,
-        ButtonStates,
-        DialUpdate,
-        TrackerPose,
-    )
+    from gadgetctl.vrpn import LogFormatError, LogReader, codecs
 
     first: float | None = None
     units: dict[str, dict[str, int]] = {}
@@ -152,15 +144,15 @@ def _scan(path: Path, routes: Routes) -> tuple[float | None, dict[str, dict[str,
                 if m.sender is None:
                     continue
                 report = m.report
-                if isinstance(report, TrackerPose) and report.sensor < REPLAY_UNITS:
+                if isinstance(report, codecs.TrackerPose) and report.sensor < REPLAY_UNITS:
                     kind, count = "position", report.sensor + 1
-                elif isinstance(report, ButtonChange):
+                elif isinstance(report, codecs.ButtonChange):
                     kind, count = "digital", report.button + 1
-                elif isinstance(report, ButtonStates):
+                elif isinstance(report, codecs.ButtonStates):
                     kind, count = "digital", len(report.states)
-                elif isinstance(report, AnalogChannels):
+                elif isinstance(report, codecs.AnalogChannels):
                     kind, count = "analog", len(report.channels)
-                elif isinstance(report, DialUpdate) and 0 <= report.dial < MAX_DIALS:
+                elif isinstance(report, codecs.DialUpdate) and 0 <= report.dial < codecs.MAX_DIALS:
                     kind, count = "analog", report.dial + 1
                 else:
                     continue

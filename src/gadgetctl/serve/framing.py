@@ -31,6 +31,8 @@ _POSE = np.dtype(
     ]
 )
 _CHANGE = np.dtype([*_HEADER_FIELDS, ("button", ">i4"), ("state", ">i4")])
+#: One whole tracker pose message, header and payload (VRPN_drv reads received ones with it).
+POSE_MESSAGE = _POSE
 #: Bytes of one framed message of each batch (every message of a batch has the same size).
 POSE_SIZE = _POSE.itemsize
 CHANGE_SIZE = _CHANGE.itemsize
