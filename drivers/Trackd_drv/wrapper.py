@@ -75,7 +75,7 @@ class TrackdDevice(Input):
         if wait > 0:
             time.sleep(wait)
         self._next_poll = max(self._next_poll + 1.0 / self.poll_rate, time.monotonic() - 0.05)
-        data = segment.read()
+        data = self._read(segment)
         self.polls += 1
         if data == self._last:
             return
@@ -86,6 +86,10 @@ class TrackdDevice(Input):
             self.bad_records += 1
             return
         self.records += 1
+
+    def _read(self, segment: TrackdSegment) -> bytes:
+        """The header and the blocks it names, never the whole segment."""
+        raise NotImplementedError
 
     def _decode(self, data: bytes) -> None:
         raise NotImplementedError
@@ -103,6 +107,9 @@ class TrackdSensorDevice(TrackdDevice, Position):
     ELEMENT_TYPE = "trackd_sensor"
     DEFAULT_KEY = 4126
 
+    def _read(self, segment: TrackdSegment) -> bytes:
+        return segment.read_tracker()
+
     def _decode(self, data: bytes) -> None:
         poses = tracker_poses(data)
         if len(poses):
@@ -114,6 +121,9 @@ class TrackdControllerDevice(TrackdDevice, Digital, Analog):
 
     ELEMENT_TYPE = "trackd_controller"
     DEFAULT_KEY = 4127
+
+    def _read(self, segment: TrackdSegment) -> bytes:
+        return segment.read_controller()
 
     def _decode(self, data: bytes) -> None:
         state = decode_controller(data)

@@ -9,6 +9,7 @@ import os
 import re
 import selectors
 import signal
+import struct
 import subprocess
 import sys
 import time
@@ -25,7 +26,10 @@ from Trackd_drv.emulator import (
     valuator_value,
 )
 from Trackd_drv.standalone import (
+    CONTROLLER_HEADER,
     MAX_UNITS,
+    SENSOR,
+    TRACKER_HEADER,
     BadSegment,
     SensorReading,
     TrackdDisconnected,
@@ -34,7 +38,10 @@ from Trackd_drv.standalone import (
     decode_tracker,
     encode_controller,
     encode_tracker,
+    read_controller,
+    read_tracker,
     sensor_matrix,
+    tracker_poses,
 )
 
 from gadgetctl.doctor import Status
@@ -146,6 +153,92 @@ def test_the_sensor_matrix_is_yaw_pitch_roll_about_y_x_z_with_the_stored_transla
         for a in ((30.0, 0, 0), (0, 20.0, 0), (0, 0, 10.0))
     )
     np.testing.assert_allclose(m[:3, :3], ry @ rx @ rz, atol=1e-12)
+
+
+# -- polling reads the header and the blocks it names only (issue 24 item 9) --------------------
+
+HUGE = 256 << 20  # a 256 MB segment: copied whole on every poll, 815 MB and 9 frames/s
+
+
+class SparseSegment:
+    """A segment of ``size`` bytes, zero but for ``parts`` ({offset: bytes}), read through
+    ``read(offset, count)``; remembers every read."""
+
+    def __init__(self, size: int, parts: dict[int, bytes]) -> None:
+        self.size, self.parts, self.reads = size, parts, []
+
+    def read(self, offset: int, count: int) -> bytes:
+        assert offset >= 0 and offset + count <= self.size
+        self.reads.append((offset, count))
+        out = bytearray(count)
+        for start, part in self.parts.items():
+            low, high = max(start, offset), min(start + len(part), offset + count)
+            if low < high:
+                out[low - offset : high - offset] = part[low - start : high - start]
+        return bytes(out)
+
+
+@pytest.mark.parametrize("stride", [SENSOR.size, 1 << 20])
+def test_a_tracker_poll_reads_the_header_and_the_named_sensors_only(stride) -> None:
+    poses = [sensor_pose(5, i) for i in range(3)]
+    offset = 100 << 20
+    header = TRACKER_HEADER.pack(1, 3, offset, stride, 7, 8, 0)
+    parts = {0: header} | {
+        offset + i * stride: SENSOR.pack(*pose, 7, 8, 1, i) for i, pose in enumerate(poses)
+    }
+    segment = SparseSegment(HUGE, parts)
+    data = read_tracker(segment.read, segment.size)
+    assert sum(count for _, count in segment.reads) == TRACKER_HEADER.size + 3 * SENSOR.size
+    assert data == encode_tracker(poses, (7, 8))  # the compact layout decodes alike
+    np.testing.assert_allclose(tracker_poses(data), np.array(poses, dtype=np.float32))
+
+
+def test_a_controller_poll_reads_the_header_and_the_named_blocks_only() -> None:
+    b_off, v_off = 50 << 20, 200 << 20
+    header = CONTROLLER_HEADER.pack(1, b_off, v_off, 2, 3, 4, 5, 0)
+    parts = {0: header, b_off: struct.pack("=2i", 1, 0), v_off: struct.pack("=3f", 0.5, -1, 1)}
+    segment = SparseSegment(HUGE, parts)
+    state = decode_controller(read_controller(segment.read, segment.size))
+    assert state.buttons == (1, 0) and state.valuators == (0.5, -1.0, 1.0)
+    assert state.timestamp == (4, 5)
+    assert sum(count for _, count in segment.reads) == CONTROLLER_HEADER.size + 20
+
+
+@pytest.mark.parametrize(
+    "header",
+    [
+        TRACKER_HEADER.pack(1, MAX_UNITS + 1, 28, 40, 0, 0, 0),  # too many sensors
+        TRACKER_HEADER.pack(1, 2, HUGE - 40, 40, 0, 0, 0),  # the second one beyond the end
+        TRACKER_HEADER.pack(1, 2, 28, 8, 0, 0, 0),  # sensors overlapping
+    ],
+    ids=["too-many", "beyond-the-end", "overlapping"],
+)
+def test_a_bad_tracker_header_reads_nothing_more_and_decodes_as_bad(header) -> None:
+    segment = SparseSegment(HUGE, {0: header})
+    data = read_tracker(segment.read, segment.size)
+    assert segment.reads == [(0, TRACKER_HEADER.size)] and data == header
+    with pytest.raises(BadSegment):
+        tracker_poses(data)
+
+
+def test_a_large_real_segment_is_read_in_a_few_bytes(fresh_key) -> None:
+    import sysv_ipc
+
+    key = fresh_key()
+    memory = sysv_ipc.SharedMemory(key, sysv_ipc.IPC_CREX, mode=0o600, size=64 << 20)
+    try:
+        poses = [sensor_pose(1, i) for i in range(2)]
+        memory.write(encode_tracker(poses, (1, 2)))
+        segment = TrackdSegment(key)
+        segment.open()
+        try:
+            data = segment.read_tracker()
+            assert data == encode_tracker(poses, (1, 2))
+        finally:
+            segment.close()
+    finally:
+        memory.detach()
+        memory.remove()
 
 
 # -- the reader over shared memory --------------------------------------------------------------
