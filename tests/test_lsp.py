@@ -134,12 +134,31 @@ async def test_opening_the_dtrack_example_publishes_what_validate_finds(client):
 
 
 async def test_a_misspelled_property_is_found_and_its_quick_fix_repairs_it(client, tmp_path):
-    uri = await _checked(client, tmp_path / "typo.jconf")
-    typo = DEVICES.replace("<receive_port>5000</receive_port>", "<recieve_port>5000</recieve_port>")
-    _change(client, uri, typo)
+    # Typed as an editor sends it: ranged edits, after characters that take two UTF-16
+    # units on the same line (positions count UTF-16 units).
+    text = DEVICES.replace("<receive_port>", "<!-- Ü𝄞 --><receive_port>")
+    uri = await _checked(client, tmp_path / "typo.jconf", text)
+    typo = text.replace("receive_port", "recieve_port", 2)
+    index = LineIndex(text)
+    _versions[uri] += 1
+    client.text_document_did_change(
+        types.DidChangeTextDocumentParams(
+            text_document=types.VersionedTextDocumentIdentifier(version=_versions[uri], uri=uri),
+            content_changes=[
+                types.TextDocumentContentChangePartial(
+                    range=types.Range(
+                        types.Position(*index.position(at)), types.Position(*index.position(at + 7))
+                    ),
+                    text="recieve",
+                )
+                for at in (text.index("receive_port"), text.index("/receive_port") + 1)
+            ],
+        )
+    )
     published = await _diagnostics(client, uri, lambda f: any(d.code == "CFG020" for d in f))
     finding = next(d for d in published if d.code == "CFG020")
     assert "recieve_port" in finding.message
+    assert finding.range.start == _position(typo, "<recieve_port>")
     actions = await client.text_document_code_action_async(
         types.CodeActionParams(
             types.TextDocumentIdentifier(uri),
@@ -150,7 +169,7 @@ async def test_a_misspelled_property_is_found_and_its_quick_fix_repairs_it(clien
     fix = next(a for a in actions if a.is_preferred)
     assert fix.title == "Did you mean receive_port?"
     repaired = _apply(typo, fix.edit.changes[uri])
-    assert repaired == DEVICES
+    assert repaired == text
     _change(client, uri, repaired)
     await _diagnostics(client, uri, lambda f: not any(d.code == "CFG020" for d in f))
 
