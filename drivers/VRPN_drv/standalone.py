@@ -25,10 +25,17 @@ for its text only) are counted (``text_messages``) and the newest few kept
 
 Each sample carries its own VRPN message time, mapped onto the local wall clock
 (:class:`ServerClock`): the server's time plus the smallest ``received - sent`` seen, so the
-intervals between samples are the server's, not those of the reads. A message whose time is
-0 (a C++ ``vrpn_Button_Server`` sends it) takes its receive time. The server's time of each
-message is also kept beside its receive time (``remote_times``), so that clock offset plus
-transport latency can be shown.
+intervals between samples are the server's, not those of the reads; a kind's sample times
+never go back. A message whose time is 0 (a C++ ``vrpn_Button_Server`` sends it) takes its
+receive time. The server's time of each message is also kept beside its receive time
+(``remote_times``), so that clock offset plus transport latency can be shown.
+
+The tracker's poses are not decoded one by one: the client leaves them framed
+(``VrpnClient(bulk=...)``, :class:`gadgetctl.vrpn.wire.Block`) and :meth:`VrpnInput.
+_take_block` reads a whole read's worth with one numpy record view and builds every matrix
+at once. Each server location's UDP channel is accounted for by a
+:class:`~gadgetctl.transport.udp.DatagramLedger` (:attr:`VrpnInput.ledgers`): datagrams
+decoded or bad, and the kernel's drops.
 
 A read makes at most :data:`POSE_READ_BYTES` of position samples: with a large
 ``tracker_count``, ticks beyond that within one read are merged into the read's last sample
