@@ -149,7 +149,7 @@ complete -c gadgetctl -n '__fish_seen_subcommand_from explain ; and not __gadget
 complete -c gadgetctl -n '__fish_seen_subcommand_from explain' -l format -s f -x -a 'text json' -d 'Output format'
 complete -c gadgetctl -n '__fish_seen_subcommand_from explain' -l help -s h -d 'Show help and exit'
 complete -c gadgetctl -n '__fish_seen_subcommand_from lsp' -F
-complete -c gadgetctl -n '__fish_seen_subcommand_from lsp' -l tcp -r -F -d 'Listen on 127.0.0.1:PORT instead of standard input/output'
+complete -c gadgetctl -n '__fish_seen_subcommand_from lsp' -l tcp -r -F -d 'Serve one client on 127.0.0.1:PORT instead of standard input/output (0: a port the OS picks, said on standard error)'
 complete -c gadgetctl -n '__fish_seen_subcommand_from lsp' -l definitions -s d -r -F -d 'Add a directory to the definition search path (after the bundled set, VJ_BASE_DIR and JCCL_DEFINITION_PATH)'
 complete -c gadgetctl -n '__fish_seen_subcommand_from lsp' -l bundled -l no-bundled -d 'Use gadgetctl'\''s bundled standard definitions'
 complete -c gadgetctl -n '__fish_seen_subcommand_from lsp' -l help -s h -d 'Show help and exit'

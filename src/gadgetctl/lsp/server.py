@@ -191,4 +191,41 @@ def serve(*, tcp_port: int | None = None, options: EngineOptions | None = None) 
     if tcp_port is None:
         server.start_io()
     else:
-        server.start_tcp("127.0.0.1", tcp_port)
+        serve_tcp(server, tcp_port)
+
+
+def serve_tcp(server: JcclServer, port: int) -> None:
+    """Serve one client on 127.0.0.1:``port`` (0: a port the OS picks), saying on standard
+    error which port; the server ends when that client's session does (as pygls's own
+    ``start_tcp``, which cannot say an OS-picked port)."""
+    import socket
+    import sys
+    from threading import Event
+
+    from pygls.io_ import run_async
+
+    listener = socket.create_server(("127.0.0.1", port))
+    shown = listener.getsockname()[1]
+    print(f"gadgetctl lsp: listening on 127.0.0.1:{shown}", file=sys.stderr, flush=True)
+    server._stop_event = stop = Event()
+
+    async def connection(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        server.protocol.set_writer(writer)
+        await run_async(
+            stop_event=stop,
+            reader=reader,
+            protocol=server.protocol,
+            logger=log,
+            error_handler=server.report_server_error,
+        )
+        server.shutdown()
+
+    async def listen() -> None:
+        server._server = await asyncio.start_server(connection, sock=listener)
+        async with server._server:
+            await server._server.serve_forever()
+
+    try:
+        asyncio.run(listen())
+    except asyncio.CancelledError:
+        pass
