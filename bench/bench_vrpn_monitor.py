@@ -14,13 +14,10 @@ the server being asked for the layout):
   UDP channel, a `recv` loop that counts datagrams and decodes nothing), its share of a core
   and its CPU per report, and the monitor's CPU per report over it.
 
-* where built locally, VRPN's own C++ client: ``bench/vrpn_count_client.cpp`` (ours) reads
-  the tracker with the library's ``vrpn_Tracker_Remote`` and counts; set
-  ``VRPN_COUNT_CLIENT`` to the built program (build it against the vrpn/vrpn sources, which
-  gadgetctl does not ship: ``g++ -O2 -Isrc -Isrc/quat bench/vrpn_count_client.cpp
-  src/vrpn_Connection.C src/vrpn_Shared.C src/vrpn_BaseClass.C src/vrpn_Tracker.C
-  src/vrpn_FileConnection.C src/vrpn_EndpointContainer.C src/vrpn_Serial.C
-  src/vrpn_RedundantTransmission.C src/vrpn_Thread.C src/quat/*.c -lpthread``).
+* where one was built by hand outside this repository, a C++ VRPN client as a second
+  baseline: set ``VRPN_COUNT_CLIENT`` to a program that takes ``Device@host SECONDS``, reads
+  the tracker with VRPN's own ``vrpn_Tracker_Remote`` and prints one line, ``reports cpu_seconds
+  wall_seconds``. gadgetctl ships neither VRPN's code nor anything that builds it.
 
 ``--load N`` keeps N extra processes spinning meanwhile (N = 2 on this 2-core machine is
 "load 2": both cores busy besides the benchmark). Exit status 1 when a target is missed.
