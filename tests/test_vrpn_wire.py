@@ -255,3 +255,18 @@ def test_bulk_reports_are_framed_apart_and_checked_as_the_cpp_remote_does():
     # as in the C++ remote); after a description nothing more is set apart
     assert [m.type_id for m in messages] == [3, 3, 4, wire.TYPE_DESCRIPTION, 3]
     assert len(messages[0].payload) == 64 and len(messages[1].payload) == 40
+
+
+def test_alternating_bulk_reports_are_each_set_apart():
+    # a C++ tracker sends pose, velocity and acceleration of each sensor in turn
+    pose = wire.pack_message(3, 1, codecs.encode_pose(0, (1.0, 2.0, 3.0)), 5.0)
+    velocity = wire.pack_message(4, 1, codecs.encode_velocity(0, (0.0, 0.0, 0.0)), 5.0)
+    bulk = {
+        (1, 3): (("Tracker0", codecs.TRACKER_POS_QUAT), 88),
+        (1, 4): (("Tracker0", codecs.TRACKER_VELOCITY), 96),
+    }
+    data = (pose + velocity) * 3 + pose * 2
+    end, messages, found = wire.split_messages(data, 0, len(data), 1.0, bulk)
+    assert end == len(data) and messages == []
+    assert found[("Tracker0", codecs.TRACKER_POS_QUAT)] == [0, 184, 368, 552, 640]
+    assert found[("Tracker0", codecs.TRACKER_VELOCITY)] == [88, 272, 456]

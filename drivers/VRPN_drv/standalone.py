@@ -61,7 +61,9 @@ from gadgetctl.vrpn.codecs import (
     BUTTON_STATES,
     DIAL_UPDATE,
     TEXT_MESSAGE,
+    TRACKER_ACCELERATION,
     TRACKER_POS_QUAT,
+    TRACKER_VELOCITY,
     AnalogChannels,
     ButtonChange,
     ButtonStates,
@@ -73,6 +75,8 @@ from gadgetctl.vrpn.names import DeviceName, Location
 from gadgetctl.vrpn.probe import SYSTEM_SENDERS
 from gadgetctl.vrpn.wire import Block
 
+#: Tracker reports that come with the poses and are not read.
+TRACKER_MOTION = (TRACKER_VELOCITY, TRACKER_ACCELERATION)
 #: Seconds an incomplete tracker tick waits for the rest of its sensors before it is
 #: published with what came (a server that reports a subset of its sensors per tick).
 TICK_HOLD = 0.02
@@ -362,7 +366,10 @@ class VrpnInput:
             clock = self._clocks.setdefault(location, ServerClock())
             self._take(messages, batch, clock)
             for block in blocks:
-                self._take_block(block, batch, clock)
+                if block.type == TRACKER_POS_QUAT:
+                    self._take_block(block, batch, clock)
+                else:
+                    self.counters["motion_reports"] += len(block.offsets)  # not read
         if self._tick is not None and time.time() - self._tick_arrival >= TICK_HOLD:
             self._end_tick(batch)  # the rest of its sensors did not come
         return batch
@@ -373,7 +380,9 @@ class VrpnInput:
         tracker = self.tracker
         if tracker is None or tracker.location != location:
             return []
-        return [(tracker.device, TRACKER_POS_QUAT)]
+        # velocity and acceleration too: not read, but then they cost no decoding either (a
+        # C++ tracker sends both with every pose)
+        return [(tracker.device, kind) for kind in (TRACKER_POS_QUAT, *TRACKER_MOTION)]
 
     @property
     def kernel_dropped(self) -> int:

@@ -180,7 +180,13 @@ def split_messages(
             offsets = found.get(wanted[0])
             if offsets is None:
                 offsets = found[wanted[0]] = []
-            if length % ALIGN:  # padded: no run of back-to-back messages of this length
+            following = pos + length
+            if (
+                length % ALIGN  # padded: no run of back-to-back messages of this length
+                or following + length > end
+                or data[following : following + 4] != data[pos : pos + 4]
+                or data[following + 12 : following + 20] != data[pos + 12 : pos + 20]
+            ):  # a lone one (a tracker's pose, velocity and acceleration alternate)
                 offsets.append(pos)
                 pos += HEADER_SIZE + body
                 continue
