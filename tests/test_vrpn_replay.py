@@ -140,7 +140,7 @@ def test_damaged_logs(cli, tmp_path: Path) -> None:
 
 #: A log written by the real VRPN C++ library (vrpn/vrpn 893c7496, 07.38): its own outgoing
 #: log of the scripted Tracker0/Button0/Analog0/Dial0/Text0 session described in
-#: drivers/VRPN_drv/tests/conformance/README.md (capture_server PORT vrpn0738_out.vrpn).
+#: drivers/VRPN_drv/tests/conformance/README.md (the server program logging what it sent).
 REAL_LOG = REPO / "drivers" / "VRPN_drv" / "tests" / "conformance" / "vrpn0738_out.vrpn"
 
 
