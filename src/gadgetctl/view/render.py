@@ -20,8 +20,15 @@ import numpy as np
 from gadgetctl.monitor.poses import quaternions_wxyz
 from gadgetctl.view.scene import SceneModel, colour_of
 
-#: Trails, panels and the JSON state are refreshed every this many frames.
+#: Trails and panels are refreshed every this many frames; the JSON state every
+#: STATE_EVERY frames (it is the largest message: every pose's matrices).
 SLOW_EVERY = 6
+STATE_EVERY = 30
+#: Up to this many poses, labels follow their axes every frame; beyond, with the trails.
+LABELS_EVERY_FRAME = 32
+LABEL_OFFSET = np.array((0.0, 0.06, 0.0))
+#: Points of a trail sent to the page, at most (the newest kept, the rest thinned evenly).
+TRAIL_POINTS_SENT = 30
 AXES_LENGTH = 0.15
 FADE_FROM = np.array((235, 235, 235), dtype=float)  # trails fade to the background
 SURFACE_COLOUR = (90, 140, 220)
@@ -57,16 +64,22 @@ class SceneRenderer:
         self.server = server
         self.model = model
         self.frames_sent = 0
-        self._frames: dict[str, Any] = {}
-        self._raw: dict[str, Any] = {}
+        self._axes: Any = None
+        self._origins: Any = None
+        self._names: tuple[str, ...] = ()
+        self._stamps: tuple[float | None, ...] = ()
+        self._colours = np.zeros((0, 3), dtype=np.uint8)
+        self._raw_axes: Any = None
+        self._raw_names: tuple[str, ...] = ()
+        self._raw_labels: dict[str, Any] = {}
         self._tracker: dict[str, Any] = {}
-        self._trails: dict[str, Any] = {}
+        self._tracker_keys: dict[str, tuple[float, ...]] = {}
+        self._trails: Any = None
+        self._trail_key: tuple = ()
         self._labels: dict[str, Any] = {}
         self._surfaces: dict[str, Any] = {}
         self._cameras: dict[str, Any] = {}
         self._users: dict[str, tuple[Any, Any, Any]] = {}
-        self._colours: dict[str, tuple[int, int, int]] = {}
-        self._sent: dict[str, float | None] = {}
         self._labels_text: dict[str, str] = {}
         self._aliases: dict[str, list[str]] = {}
         self._build_static(title)
@@ -163,22 +176,26 @@ class SceneRenderer:
 
     def render(self, *, slow: bool | None = None) -> None:
         """Send this frame's changes in one batch."""
-        model = self.model
+        state = slow is True or self.frames_sent % STATE_EVERY == 0
         if slow is None:
             slow = self.frames_sent % SLOW_EVERY == 0
         with self.server.atomic():
-            self._render_poses()
+            self._render_poses(slow)
             self._render_users()
             self._render_tracked_surfaces()
             self._render_cameras()
             if slow:
                 self._render_trails()
                 self._render_panels()
+            if state:
+                self._state.content = self._state_html(self.model.snapshot())
         self.frames_sent += 1
-        del model
 
-    def _render_poses(self) -> None:
-        scene = self.server.scene
+    def _render_poses(self, slow: bool) -> None:
+        """Every drawn pose's axes in one instanced object and its health colour in one
+        point cloud (two messages per frame however many poses), the raw frames likewise,
+        and a label per pose (moved every frame for up to ``LABELS_EVERY_FRAME`` poses, else
+        with the trails)."""
         drawn = self.model.poses
         # An alias of a drawn proxy is named on the proxy's axes rather than drawn again.
         self._aliases = {}
@@ -190,37 +207,74 @@ class SceneRenderer:
             for p in drawn.values()
             if p.matrix is not None and not (p.element == "alias" and p.proxy in drawn)
         ]
+        stamps = tuple(p.timestamp for p in poses)
+        names = tuple(p.name for p in poses)
+        colours = np.array([colour_of(p.state) for p in poses], dtype=np.uint8).reshape(-1, 3)
+        moved = stamps != self._stamps
+        if names != self._names:
+            self._rebuild(poses)
+        elif moved:
+            self._move(poses)
+        if len(poses) and (names != self._names or not np.array_equal(colours, self._colours)):
+            self._origins.colors = colours
+        self._names, self._stamps, self._colours = names, stamps, colours
+        move_labels = moved and (slow or len(poses) <= LABELS_EVERY_FRAME)
+        for pose in poses:
+            label = self._labels[pose.name]
+            text = self._label(pose)
+            if self._labels_text.get(pose.name) != text:
+                label.text = text
+                self._labels_text[pose.name] = text
+            if move_labels:
+                label.position = pose.matrix[:3, 3] + LABEL_OFFSET
+        self._render_raw(poses, moved, slow)
+
+    def _rebuild(self, poses: list) -> None:
+        """(Re)create the batched objects and the labels for this set of poses."""
+        scene = self.server.scene
+        for handle in (self._axes, self._origins):
+            if handle is not None:
+                handle.remove()
+        for name in list(self._labels):
+            if name not in {p.name for p in poses}:
+                self._labels.pop(name).remove()
+                self._labels_text.pop(name, None)
+        self._axes = self._origins = None
         if not poses:
             return
         matrices = np.stack([p.matrix for p in poses])
-        quats = quaternions_wxyz(matrices)
-        for pose, quat in zip(poses, quats, strict=True):
-            node = f"/poses/{_node(pose.name)}"
-            handle = self._frames.get(pose.name)
-            colour = colour_of(pose.state)
-            position = pose.matrix[:3, 3]
-            if handle is None:
-                alias = pose.element == "alias"
-                handle = self._frames[pose.name] = scene.add_frame(
-                    node,
-                    axes_length=AXES_LENGTH * (0.6 if alias else 1.0),
-                    axes_radius=0.006 if alias else 0.01,
-                    origin_color=colour,
-                    wxyz=quat,
-                    position=position,
-                )
+        scales = np.array([0.6 if p.element == "alias" else 1.0 for p in poses], dtype=np.float32)
+        self._axes = scene.add_batched_axes(
+            "/poses/axes",
+            quaternions_wxyz(matrices).astype(np.float32),
+            matrices[:, :3, 3].astype(np.float32),
+            scales,
+            axes_length=AXES_LENGTH,
+            axes_radius=0.01,
+        )
+        self._origins = scene.add_point_cloud(
+            "/poses/health",
+            matrices[:, :3, 3].astype(np.float32),
+            colors=np.array([colour_of(p.state) for p in poses], dtype=np.uint8),
+            point_size=0.035,
+            point_shape="circle",
+            precision="float32",
+        )
+        for pose in poses:
+            if pose.name not in self._labels:
                 self._labels[pose.name] = scene.add_label(
-                    node + "/label", self._label(pose), position=(0.0, 0.06, 0.0)
+                    f"/poses/labels/{_node(pose.name)}",
+                    self._label(pose),
+                    position=pose.matrix[:3, 3] + LABEL_OFFSET,
                 )
-                self._colours[pose.name] = colour
-                self._sent[pose.name] = pose.timestamp
-            elif self._sent.get(pose.name) != pose.timestamp:
-                handle.wxyz = quat
-                handle.position = position
-                self._sent[pose.name] = pose.timestamp
-            self._mark_state(pose)
-            if pose.raw is not None:
-                self._render_raw(pose)
+                self._labels_text[pose.name] = self._label(pose)
+
+    def _move(self, poses: list) -> None:
+        matrices = np.stack([p.matrix for p in poses])
+        positions = matrices[:, :3, 3].astype(np.float32)
+        self._axes.batched_wxyzs = quaternions_wxyz(matrices).astype(np.float32)
+        self._axes.batched_positions = positions
+        self._origins.points = positions
 
     def _label(self, pose) -> str:
         text = pose.name if pose.element == "proxy" else f"{pose.name} \u2192 {pose.proxy}"
@@ -231,51 +285,64 @@ class SceneRenderer:
             text += f" [{pose.state}{': ' + pose.reason if pose.reason else ''}]"
         return text
 
-    def _mark_state(self, pose) -> None:
-        handle = self._frames.get(pose.name)
-        if handle is None:
-            return
-        colour = colour_of(pose.state)
-        if self._colours.get(pose.name) != colour:
-            handle.origin_color = colour
-            self._colours[pose.name] = colour
-        text = self._label(pose)
-        if self._labels_text.get(pose.name) != text:
-            self._labels[pose.name].text = text
-            self._labels_text[pose.name] = text
-
-    def _render_raw(self, pose) -> None:
+    def _render_raw(self, poses: list, moved: bool, slow: bool) -> None:
+        """The raw frames (before every filter) of the filtered poses, batched as the poses
+        are, and each one's tracker frame."""
         scene = self.server.scene
-        raw_quat = quaternions_wxyz(pose.raw[None])[0]
-        handle = self._raw.get(pose.name)
-        if handle is None:
-            node = f"/raw/{_node(pose.name)}"
-            self._raw[pose.name] = scene.add_frame(
-                node,
-                axes_length=AXES_LENGTH * 0.7,
-                axes_radius=0.004,
-                origin_color=(120, 120, 120),
-                wxyz=raw_quat,
-                position=pose.raw[:3, 3],
+        filtered = [p for p in poses if p.raw is not None]
+        names = tuple(p.name for p in filtered)
+        if not filtered:
+            if self._raw_axes is not None:
+                self._raw_axes.remove()
+                self._raw_axes = None
+            self._raw_names = names
+            return
+        raws = np.stack([p.raw for p in filtered])
+        quats = quaternions_wxyz(raws).astype(np.float32)
+        positions = raws[:, :3, 3].astype(np.float32)
+        if names != self._raw_names:
+            if self._raw_axes is not None:
+                self._raw_axes.remove()
+            self._raw_axes = scene.add_batched_axes(
+                "/raw/axes", quats, positions, axes_length=AXES_LENGTH * 0.7, axes_radius=0.004
             )
-            scene.add_label(node + "/label", f"{pose.name} raw", position=(0.0, -0.04, 0.0))
+        elif moved:
+            self._raw_axes.batched_wxyzs = quats
+            self._raw_axes.batched_positions = positions
+        move_labels = moved and (slow or len(filtered) <= LABELS_EVERY_FRAME)
+        for pose in filtered:
+            label = self._raw_labels.get(pose.name)
+            where = pose.raw[:3, 3] - LABEL_OFFSET
+            if label is None:
+                self._raw_labels[pose.name] = scene.add_label(
+                    f"/raw/labels/{_node(pose.name)}", f"{pose.name} raw", position=where
+                )
+            elif move_labels:
+                label.position = where
             tracker = pose.tracker
-            self._tracker[pose.name] = scene.add_frame(
-                f"/tracker/{_node(pose.name)}",
-                axes_length=0.25,
-                axes_radius=0.004,
-                origin_color=(90, 90, 90),
-                wxyz=quaternions_wxyz(tracker[None])[0],
-                position=tracker[:3, 3],
-            )
-            scene.add_label(
-                f"/tracker/{_node(pose.name)}/label",
-                f"tracker frame of {pose.name}",
-                position=(0.0, -0.04, 0.0),
-            )
-        else:
-            handle.wxyz = raw_quat
-            handle.position = pose.raw[:3, 3]
+            key = tuple(np.round(tracker.ravel(), 6))
+            if self._tracker_keys.get(pose.name) != key:
+                self._tracker_keys[pose.name] = key
+                handle = self._tracker.get(pose.name)
+                if handle is None:
+                    node = f"/tracker/{_node(pose.name)}"
+                    self._tracker[pose.name] = scene.add_frame(
+                        node,
+                        axes_length=0.25,
+                        axes_radius=0.004,
+                        origin_color=(90, 90, 90),
+                        wxyz=quaternions_wxyz(tracker[None])[0],
+                        position=tracker[:3, 3],
+                    )
+                    scene.add_label(
+                        node + "/label",
+                        f"tracker frame of {pose.name}",
+                        position=(0.0, -0.04, 0.0),
+                    )
+                else:
+                    handle.wxyz = quaternions_wxyz(tracker[None])[0]
+                    handle.position = tracker[:3, 3]
+        self._raw_names = names
 
     def _render_users(self) -> None:
         scene = self.server.scene
@@ -343,24 +410,40 @@ class SceneRenderer:
                 handle.position = m[:3, 3]
 
     def _render_trails(self) -> None:
-        scene = self.server.scene
+        """Every trail in one line-segments object: the newest points of each pose, fading
+        from the background to its health colour."""
+        segments: list[np.ndarray] = []
+        keys: list[tuple[int, tuple[int, int, int]]] = []
         for pose in self.model.poses.values():
             points = np.array(pose.trail, dtype=np.float32)
+            if len(points) > TRAIL_POINTS_SENT:  # every n-th point, the newest kept
+                stride = -(-len(points) // TRAIL_POINTS_SENT)
+                points = points[::-1][::stride][::-1]
             if len(points) < 2:
                 continue
-            segments = np.stack([points[:-1], points[1:]], axis=1)
-            weights = np.linspace(0.0, 1.0, len(segments) + 1)
-            colour = np.array(colour_of(pose.state), dtype=float)
-            ramp = FADE_FROM + (colour - FADE_FROM) * weights[:, None]
-            colours = np.stack([ramp[:-1], ramp[1:]], axis=1).astype(np.uint8)
-            handle = self._trails.get(pose.name)
-            if handle is None:
-                self._trails[pose.name] = scene.add_line_segments(
-                    f"/trails/{_node(pose.name)}", segments, colors=colours, thickness=0.004
-                )
-            else:
-                handle.points = segments
-                handle.colors = colours
+            segments.append(np.stack([points[:-1], points[1:]], axis=1))
+            keys.append((len(points) - 1, colour_of(pose.state)))
+        if not segments:
+            return
+        points = np.concatenate(segments)
+        key = tuple(keys)
+        colours = None
+        if key != self._trail_key:
+            ramps = []
+            for count, colour in keys:
+                weights = np.linspace(0.0, 1.0, count + 1)
+                ramp = FADE_FROM + (np.array(colour, dtype=float) - FADE_FROM) * weights[:, None]
+                ramps.append(np.stack([ramp[:-1], ramp[1:]], axis=1))
+            colours = np.concatenate(ramps).astype(np.uint8)
+        if self._trails is None:
+            self._trails = self.server.scene.add_line_segments(
+                "/trails", points, colors=colours, thickness=0.004
+            )
+        else:
+            self._trails.points = points
+            if colours is not None:
+                self._trails.colors = colours
+        self._trail_key = key
 
     def _render_panels(self) -> None:
         model = self.model
@@ -394,7 +477,6 @@ class SceneRenderer:
             )
         if self._replay_time is not None and model.timeline is not None:
             self._replay_time.value = round(min(model.timeline.position, self._replay_time.max), 2)
-        self._state.content = self._state_html(model.snapshot())
 
     @staticmethod
     def _state_html(snapshot: dict[str, object]) -> str:
