@@ -378,3 +378,33 @@ def test_examples_configure_with_nothing_pending_and_every_kind_reachable(manage
     ]
     for alias in m.aliases:
         assert m.proxy(alias) is not None
+
+
+class Recorded(Digital):
+    ELEMENT_TYPE = "button_device"
+    SAMPLING = "frame"
+    events: list[tuple[str, str]] = []
+
+    def config(self, access):
+        super().config(access)
+        Recorded.events.append(("config", self.name))
+
+    def start_sampling(self):
+        Recorded.events.append(("start", self.name))
+
+
+def test_a_configuration_starts_its_devices_after_configuring_them_all(make):
+    """Issue 27: devices started one by one while the others were configured sampled (and
+    the scheduler passed over them) for as long as configuring took, which grew with their
+    number: 10,000 devices cost a quadratic amount of work before the first frame."""
+    registry = DeviceRegistry.with_builtins()
+    registry.register_device(Recorded)
+    Recorded.events = []
+    m = make(
+        "".join(f'<button_device name="B{i}" version="1"/>' for i in range(3))
+        + '<digital_proxy name="P" version="1"><device>B2</device></digital_proxy>',
+        registry,
+    )
+    assert [e[0] for e in Recorded.events] == ["config"] * 3 + ["start"] * 3
+    assert not m.pending() and not m.proxy("P").stupefied
+    assert all(m.device(f"B{i}").state.value == "running" for i in range(3))

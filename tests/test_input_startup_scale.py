@@ -155,6 +155,24 @@ def test_starting_a_device_never_waits_for_the_scheduler_to_sample_the_others():
         scheduler.shutdown()
 
 
+@pytest.mark.timeout(60)
+def test_a_held_scheduler_steps_no_device_until_released():
+    scheduler = SharedScheduler()
+    runner = ScheduledRunner(Held(), RestartPolicy(), scheduler)
+    try:
+        runner.start()
+        assert wait_until(lambda: runner.device.samples > 3, timeout=20)
+        with scheduler.hold():
+            held_at = runner.device.samples  # a pass under way ends after this device
+            later = ScheduledRunner(Held(), RestartPolicy(), scheduler)
+            later.start()  # added while held: not stepped either
+            assert not threading.Event().wait(0.3)
+            assert runner.device.samples <= held_at + 1 and later.device.samples == 0
+        assert wait_until(lambda: later.device.samples > 3, timeout=20)
+    finally:
+        scheduler.shutdown()
+
+
 @pytest.mark.timeout(300)
 def test_a_large_configuration_starts_and_runs_its_first_frame(tmp_path):
     """A hang guard: 1,500 devices with 3,000 proxies and 1,500 aliases (6,000 elements) took

@@ -163,17 +163,23 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
             finally:
                 if feeder is not None:
                     feeder.stop()
-                outcome = _evaluate(session, accept_loss=options.accept_loss)
+                # the frames are over: no sample is read any more, so the scheduler stands
+                # still (with 10,000 devices its passes cost more than what follows)
+                hold = session.manager.hold_sampling()
+                hold.__enter__()
                 try:
-                    if broken_pipe:
+                    outcome = _evaluate(session, accept_loss=options.accept_loss)
+                    try:
+                        if broken_pipe:
+                            _silence_stdout()
+                        session.close_sinks(reason)
+                    except RecordingError as err:
+                        if not broken_pipe and "Broken pipe" not in str(err):
+                            raise GadgetctlError(str(err)) from None
                         _silence_stdout()
-                    session.close_sinks(reason)
-                except RecordingError as err:
-                    if not broken_pipe and "Broken pipe" not in str(err):
-                        raise GadgetctlError(str(err)) from None
-                    _silence_stdout()
                 finally:
                     session.manager.shutdown()
+                    hold.__exit__(None, None, None)
     except (KeyboardInterrupt, Terminated):
         reason = "interrupted"  # a second signal while finishing: the files are complete up to here
     if broken_pipe:

@@ -20,6 +20,7 @@ Elements that are not about input (displays, users...) are ignored, not pending.
 
 from __future__ import annotations
 
+import contextlib
 import gc
 import threading
 import time
@@ -148,6 +149,8 @@ class InputManager:
         self.frame = 0
         self._context = _Context(self)
         self._scheduler = SharedScheduler()
+        #: Devices configured by the running reconfiguration, started at its end.
+        self._starts: list[tuple[str, Runner]] | None = None
         self._incoming: deque[tuple[bool, ConfigElement | str]] = deque()
         self._incoming_lock = threading.Lock()
         self._known: dict[str, ConfigElement] = {}  # input elements, active or pending
@@ -251,9 +254,43 @@ class InputManager:
                 processed += self._remove(item)
             changed = True
         if changed or retry_failed:
-            processed += self._process_pending(retry_failed=retry_failed)
+            self._starts = []
+            try:
+                processed += self._process_pending(retry_failed=retry_failed)
+            finally:
+                starts, self._starts = self._starts, None
+                processed -= self._start_devices(starts)
             self._refresh_proxies()  # their reasons quote the final pending reasons
         return processed
+
+    def _start_devices(self, starts: list[tuple[str, Runner]]) -> int:
+        """Start the devices a reconfiguration configured, all at once after the last one
+        was configured (so that none samples, and no scheduler pass runs, while the others
+        are configured: with 10,000 devices that work grew with the time configuring took,
+        quadratically); returns how many failed to start (pending again, as START_FAILED,
+        with what pointed at them)."""
+        failed = 0
+        with self._scheduler.hold():
+            for name, runner in starts:
+                entry = self._devices.get(name)
+                if entry is None or entry.runner is not runner:
+                    continue  # replaced or removed meanwhile
+                try:
+                    runner.start()
+                except Exception as err:
+                    entry.device.state = DeviceState.STOPPED
+                    self._devices.pop(name, None)
+                    self._device_objects.pop(name, None)
+                    self._frame_order = None
+                    self._pending[name] = PendingEntry(
+                        entry.element,
+                        PendingKind.START_FAILED,
+                        f"the device failed to start: {describe(err)}",
+                    )
+                    failed += 1
+        if failed:
+            self._lost_dependencies()
+        return failed
 
     def retry_pending(self) -> int:
         """Retry every pending element, failed configurations and starts included."""
@@ -619,15 +656,18 @@ class InputManager:
         runner: Runner | None = None
         if self.options.start_devices:
             runner = self._runner(device)
-            try:
-                runner.start()
-            except Exception as err:
-                device.state = DeviceState.STOPPED
-                return PendingEntry(
-                    element,
-                    PendingKind.START_FAILED,
-                    f"the device failed to start: {describe(err)}",
-                )
+            if self._starts is not None:  # started with the others (_start_devices)
+                self._starts.append((name, runner))
+            else:
+                try:
+                    runner.start()
+                except Exception as err:
+                    device.state = DeviceState.STOPPED
+                    return PendingEntry(
+                        element,
+                        PendingKind.START_FAILED,
+                        f"the device failed to start: {describe(err)}",
+                    )
         self._devices[name] = _DeviceEntry(element, device, runner)
         self._device_objects[name] = device
         self._frame_order = None
@@ -804,13 +844,20 @@ class InputManager:
             gc.collect()
         gc.freeze()
 
+    def hold_sampling(self) -> contextlib.AbstractContextManager[None]:
+        """While the block runs, the shared scheduler steps no device (devices sampling in
+        their own threads go on): for a caller done with the samples, e.g. a monitor
+        reading its final statistics before :meth:`shutdown`."""
+        return self._scheduler.hold()
+
     def shutdown(self) -> None:
         """Stop every device (sampling threads joined with the stop timeout)."""
         if self._shut_down:
             return
         self._shut_down = True
-        for entry in list(self._devices.values()):
-            self._stop(entry)
+        with self._scheduler.hold():  # no scheduler pass over the devices being stopped
+            for entry in list(self._devices.values()):
+                self._stop(entry)
         self._scheduler.shutdown()
 
     # -- lookups ----------------------------------------------------------------------------

@@ -11,9 +11,10 @@ sample. Other devices are not affected.
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 from gadgetctl.input.clock import now
@@ -221,6 +222,21 @@ class SharedScheduler:
         self._order: tuple[ScheduledRunner, ...] | None = ()  # the runners of a pass; None: stale
         self._stepping: ScheduledRunner | None = None
         self._thread: threading.Thread | None = None
+        self._held = 0  # hold() depth: no pass begins while it is above 0
+
+    @contextlib.contextmanager
+    def hold(self) -> Iterator[None]:
+        """No device is stepped until the block ends (a pass under way stops after the
+        device it is stepping): adding or removing many runners then costs one pass, not
+        one per runner."""
+        with self._changed:
+            self._held += 1
+        try:
+            yield
+        finally:
+            with self._changed:
+                self._held -= 1
+            self._wake.set()
 
     def add(self, runner: ScheduledRunner) -> None:
         with self._changed:
@@ -233,7 +249,8 @@ class SharedScheduler:
                     target=self._loop, name="gadgetctl-scheduler", daemon=True
                 )
                 self._thread.start()
-        self._wake.set()
+        if not self._held:
+            self._wake.set()
 
     def remove(self, runner: ScheduledRunner) -> None:
         """Take ``runner`` out; when this returns its device's sample() is not running."""
@@ -256,6 +273,10 @@ class SharedScheduler:
             self._members,
         )
         while not stop.is_set():
+            if self._held:
+                wake.wait(self.IDLE_WAKE)
+                wake.clear()
+                continue
             moment = clock()
             next_due = moment + self.IDLE_WAKE
             order = self._order
@@ -263,6 +284,8 @@ class SharedScheduler:
                 with changed:
                     order = self._order = tuple(members)
             for runner in order:
+                if self._held or stop.is_set():
+                    break  # resumed by the next pass
                 if runner.due <= moment:
                     with changed:
                         if runner not in members:  # removed since the pass began
