@@ -9,6 +9,7 @@ import sys
 import numpy as np
 import pytest
 
+from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.manager import InputManager
 from gadgetctl.input.testing.configs import CONFIGURATION_HEAD, CONFIGURATION_TAIL, corpus_file
 from gadgetctl.monitor.session import MonitorSession
@@ -178,3 +179,75 @@ def test_without_viser_view_names_the_extra_to_install(tmp_path):
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1, done.stderr
     assert "gadgetctl[view]" in lines[0] and "viser" in lines[0]
+
+
+TRACKED = """
+<waveform_device name="Board Tracker" version="1">
+  <rate>120.0</rate>
+  <position_path>spin</position_path>
+  <position_period>4.0</position_period>
+  <position_center>0.5</position_center>
+  <position_center>1.0</position_center>
+  <position_center>-1.0</position_center>
+  <event_period>0.0</event_period>
+</waveform_device>
+<position_proxy name="Board" version="1"><device>Board Tracker</device><unit>0</unit></position_proxy>
+<display_window name="Tablet" version="6">
+  <surface_viewports>
+    <surface_viewport name="Tablet viewport" version="2">
+      <lower_left_corner>-0.2</lower_left_corner><lower_left_corner>-0.1</lower_left_corner><lower_left_corner>0</lower_left_corner>
+      <lower_right_corner>0.2</lower_right_corner><lower_right_corner>-0.1</lower_right_corner><lower_right_corner>0</lower_right_corner>
+      <upper_right_corner>0.2</upper_right_corner><upper_right_corner>0.1</upper_right_corner><upper_right_corner>0</upper_right_corner>
+      <upper_left_corner>-0.2</upper_left_corner><upper_left_corner>0.1</upper_left_corner><upper_left_corner>0</upper_left_corner>
+      <tracked>true</tracked>
+      <tracker_proxy>Board</tracker_proxy>
+    </surface_viewport>
+  </surface_viewports>
+</display_window>
+<waveform_device name="Sticks" version="1">
+  <rate>120.0</rate>
+  <analog_waveform>sine</analog_waveform>
+  <analog_waveform>triangle</analog_waveform>
+  <min>-1.0</min>
+  <max>1.0</max>
+  <button_period>0.5</button_period>
+  <event_period>0.0</event_period>
+</waveform_device>
+"""
+
+
+def test_a_tracked_surface_follows_its_tracker_proxy_and_units_are_listed(running):
+    session, model = running(TRACKED)
+    proxy = session.manager.proxy("Board")
+    run_until(
+        session,
+        model,
+        lambda: (
+            model.poses["Board"].matrix is not None
+            and abs(model.poses["Board"].matrix[0, 2]) > 0.1  # turned away from the start
+            and "Sticks" in model.units
+        ),
+    )
+    surface = model.snapshot()["surfaces"][0]
+    assert surface["tracked"] and surface["tracker_proxy"] == "Board"
+    local = np.array([[-0.2, -0.1, 0, 1], [0.2, -0.1, 0, 1], [0.2, 0.1, 0, 1], [-0.2, 0.1, 0, 1]])
+    expected = (proxy.matrix @ local.T).T[:, :3]
+    assert np.allclose(surface["corners"], expected, atol=1e-5)
+    sticks = next(u for u in model.snapshot()["units"] if u["name"] == "Sticks")
+    assert len(sticks["analog"]) == 2 and all(0.0 <= v <= 1.0 for v in sticks["analog"])
+    device = session.manager.device("Sticks")
+    assert len(sticks["digital"]) == len(device.store.latest(DeviceKind.DIGITAL).values)
+
+
+def test_a_simulator_camera_sits_on_its_proxy():
+    manager, configuration = InputManager.from_files([corpus_file("sim.base.jconf")])
+    try:
+        session = MonitorSession(manager, configuration, rate=60)
+        session.start()
+        model = SceneModel(session, read_layout(configuration.elements, manager.repo))
+        run_until(session, model, lambda: model.poses["SimCam1 Proxy"].matrix is not None)
+        camera = model.snapshot()["cameras"][0]
+        assert camera["proxy"] == "SimCam1 Proxy" and camera["vertical_fov"] > 0
+        assert np.allclose(camera["matrix"], manager.proxy("SimCam1 Proxy").matrix, atol=1e-6)
+    finally:
+        manager.shutdown()
