@@ -12,7 +12,7 @@ EDITORS = """Point your editor's LSP client at `gadgetctl lsp` for *.jconf and *
 
 \b
   VS Code  a generic LSP client extension: command gadgetctl, args ["lsp"]
-  Neovim   vim.lsp.start({name = "gadgetctl", cmd = {"gadgetctl", "lsp"}})
+  Neovim   vim.lsp.start with name "gadgetctl" and cmd "gadgetctl", "lsp" (docs/lsp.md)
   Helix    [language-server.gadgetctl] command = "gadgetctl", args = ["lsp"]
   Emacs    (add-to-list 'eglot-server-programs '((nxml-mode) "gadgetctl" "lsp"))
 

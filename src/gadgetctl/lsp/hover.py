@@ -11,6 +11,7 @@ from gadgetctl.lsp.analysis import Model, element_at_line
 from gadgetctl.lsp.elements import place_of, view_of
 from gadgetctl.lsp.syntax import Tag, Where, context_at, end_tag, tag_at
 from gadgetctl.lsp.text import LineIndex
+from gadgetctl.wording import counted
 
 #: validate's codes that say an element stays pending, and why (CFG041: waits for a
 #: pending element, refused version, no handler; CFG031: waits for a name nothing has).
@@ -124,5 +125,5 @@ def _kind(prop: PropertyDefinition) -> str:
     kind = prop.valuetype.value
     if prop.valuetype is ValueType.POINTER:
         kind = "pointer"
-    count = "variable number of values" if prop.variable else f"{len(prop.values)} value(s)"
+    count = "variable number of values" if prop.variable else counted(len(prop.values), "value")
     return f"{kind}, {count}"
