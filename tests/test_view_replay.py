@@ -166,3 +166,23 @@ def test_a_recording_replays_in_the_page_and_a_marker_scrubs_to_its_poses(files)
             driver, lambda s: s["replay"]["playing"] or s["replay"]["position"] > MARKERS["late"]
         )
         wait_for_scene(driver, lambda s: s["replay"]["position"] > MARKERS["late"] + 0.1)
+
+
+def test_a_recording_with_no_configuration_shows_its_devices_units(files):
+    recording, _ = files
+    opened = open_view_replay(recording, [], definitions=[], bundled=True, driver_dirs=[])
+    manager, timeline = opened.manager, opened.timeline
+    try:
+        session = MonitorSession(manager, opened.configuration, rate=60, source=timeline)
+        session.start()
+        model = SceneModel(session, read_layout(opened.configuration.elements, manager.repo))
+        timeline.pause()
+        timeline.seek_marker(1)
+        timeline.advance()
+        session.step()
+        model.update()
+        pose = next(p for p in model.snapshot()["poses"] if p["name"] == "Tracker[0]")
+        assert pose["element"] == "device"
+        assert pose["matrix"][0][3] == pytest.approx(recorded_x(MARKERS["late"]), abs=1e-9)
+    finally:
+        manager.shutdown()

@@ -20,8 +20,8 @@ def register(app: typer.Typer) -> None:
 
 
 def view(
-    arguments: list[str] = typer.Argument(
-        ...,
+    arguments: list[str] | None = typer.Argument(
+        None,
         metavar="CONFIG... [NAME...]",
         show_default=False,
         help="Configuration files (existing files ending in .jconf) and VRPN devices (vrpn:Device@host), then names or glob patterns of the devices, proxies and aliases to show (default: all), as for monitor.",
@@ -89,6 +89,12 @@ def view(
     check_port(port)
     networks = parse_allow(allow)
     check_options(rate, duration, 1.0)
+    arguments = list(arguments or ())
+    if not arguments and replay is None:
+        raise GadgetctlError(
+            "no configuration given: CONFIG arguments are existing files ending in .jconf "
+            "(or vrpn:Device@host, or --replay FILE)"
+        )
     watched = [a for a in arguments if is_vrpn_argument(a)]
     configs, selectors = split_arguments(
         [a for a in arguments if not is_vrpn_argument(a)],

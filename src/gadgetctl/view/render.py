@@ -277,7 +277,7 @@ class SceneRenderer:
         self._origins.points = positions
 
     def _label(self, pose) -> str:
-        text = pose.name if pose.element == "proxy" else f"{pose.name} \u2192 {pose.proxy}"
+        text = f"{pose.name} \u2192 {pose.proxy}" if pose.element == "alias" else pose.name
         aliases = self._aliases.get(pose.name)
         if aliases:
             text = f"{', '.join(aliases)} \u2192 {text}"

@@ -62,8 +62,8 @@ class PoseState:
     """One positional proxy or alias."""
 
     name: str
-    element: str  # proxy or alias
-    proxy: str  # the proxy read (itself for a proxy)
+    element: str  # proxy, alias, or device (a device's unit no drawn proxy reads)
+    proxy: str  # the proxy read (itself for a proxy; the device for a device's unit)
     device: str | None = None
     unit: int = 0
     state: str = "pending"
@@ -105,6 +105,7 @@ class SceneModel:
         self._trail_points = max(2, min(MAX_TRAIL_POINTS, round(trail_seconds * session.rate)))
         self._chains: dict[tuple[int, int], tuple[np.ndarray, np.ndarray] | None] = {}
         self._names: list[str] | None = None
+        self._unit_devices: list[str] = []
         self._plan_key: tuple[int, int] | None = None
 
     # -- what is drawn ------------------------------------------------------------------
@@ -132,6 +133,21 @@ class SceneModel:
                 add(name)
         for name in needed:
             add(name)
+        # Positional devices no drawn proxy reads (a replay with no configuration, a
+        # vrpn:Device@host watch) are drawn unit by unit, as their samples come.
+        read = {manager.proxies[n].device_name for n in wanted if n in manager.proxies}
+        read |= {
+            manager.proxies[t].device_name
+            for n in wanted
+            if (t := manager.aliases.get(n)) is not None and t in manager.proxies
+        }
+        self._unit_devices = [
+            name
+            for name in self.session.selected
+            if name not in read
+            and (device := manager.device(name)) is not None
+            and DeviceKind.POSITION in device.kinds()
+        ]
         if len(wanted) > MAX_POSES:
             self.left_out = len(wanted) - MAX_POSES
             wanted = wanted[:MAX_POSES]
@@ -189,11 +205,53 @@ class SceneModel:
         if self._names is None or key != self._plan_key:
             self._names = self._positional_names()
             self._plan_key = key
+            kept = {n: p for n, p in self.poses.items() if p.element == "device"}
             self.poses = {n: self.poses.get(n) or self._make_pose(n) for n in self._names}
-        for pose in self.poses.values():
+            self.poses.update((n, p) for n, p in kept.items() if p.proxy in self._unit_devices)
+        for pose in list(self.poses.values()):
+            if pose.element == "device":
+                continue
             self._update_pose(pose)
+        self._update_device_units()
         if statuses:
             self._update_statuses()
+
+    def _update_device_units(self) -> None:
+        """The position units of the devices in ``_unit_devices``, each a pose
+        ``DEVICE[unit]`` with the device's sample (after the device's own filters)."""
+        manager = self.session.manager
+        for name in self._unit_devices:
+            device = manager.device(name)
+            if device is None:
+                continue
+            latest = device.store.latest(DeviceKind.POSITION)
+            shown, reason = device.shown_state()
+            state = "active" if shown.value == "running" else shown.value
+            values = [] if latest is None else list(latest.values)[:MAX_UNITS]
+            for unit, matrix in enumerate(values):
+                key = f"{name}[{unit}]"
+                pose = self.poses.get(key)
+                if pose is None:
+                    if len(self.poses) >= MAX_POSES:
+                        self.left_out += 1
+                        break
+                    pose = self.poses[key] = PoseState(key, "device", name, name, unit)
+                    pose.trail = deque(maxlen=self._trail_points)
+                pose.state, pose.reason = state, reason
+                if latest.timestamp == pose.timestamp:
+                    continue
+                pose.timestamp = latest.timestamp
+                pose.matrix = np.array(matrix, dtype=float)
+                chain = getattr(device, "position_filters", None)
+                folded = chain.folded if isinstance(chain, FilterChain) and chain else None
+                if folded is not None:
+                    left, right = folded
+                    pose.raw = np.linalg.inv(left) @ pose.matrix @ np.linalg.inv(right)
+                    tracker = left.copy()
+                    scale = np.linalg.norm(tracker[:3, :3], axis=0)
+                    tracker[:3, :3] /= np.where(scale > 0, scale, 1.0)
+                    pose.tracker = tracker
+                pose.trail.append(pose.matrix[:3, 3].copy())
 
     def _update_pose(self, pose: PoseState) -> None:
         manager = self.session.manager
