@@ -189,6 +189,8 @@ class SceneModel:
                 left, right = folded[0] @ left, right @ folded[1]
             if left is not None:
                 result = (np.linalg.inv(left), np.linalg.inv(right))
+        if len(self._chains) >= MAX_POSES:  # devices restarted many times: start again
+            self._chains.clear()
         self._chains[cache_key] = result
         return result
 
