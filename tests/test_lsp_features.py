@@ -238,3 +238,24 @@ def test_a_definition_file_is_checked_and_its_unsaved_text_judges_configurations
     engine.set_text(jdef, broken)
     assert any(d.code.startswith("DEF") for d in engine.diagnose(jdef))
     assert jdef.read_text() == definition  # nothing written
+
+
+@pytest.mark.parametrize(
+    "shape",
+    [
+        "<a" + "b" * 300_000,  # a name with no end
+        "<a " + 'x="1" ' * 50_000,  # attributes with no end of tag
+        "<a " + '="' * 150_000,  # values opened and never closed
+        "<" + "a" * 300_000 + "\n",
+        "<!--" * 75_000,  # comments never closed
+        "<a b" + " " * 300_000,
+        "<a>" * 100_000,  # elements nested far past any limit
+    ],
+)
+def test_hostile_lines_are_read_in_linear_time(shape):
+    # Each of these made a scan backtrack quadratically (hours at this size); the test's
+    # timeout is the guard, nothing here is timed.
+    for offset in (len(shape) // 2, len(shape)):
+        context_at(shape, offset)
+    assert len(navigation.symbols(shape)) <= navigation.MAX_SYMBOLS
+    navigation.folding(shape)

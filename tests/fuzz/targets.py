@@ -984,6 +984,37 @@ def _jccl_upgrade(data: bytes) -> None:
     assert result is not None
 
 
+
+@target("lsp.document", seeds=_jccl_seeds, grammar=_jccl_configuration, examples=25)
+def _lsp_document(data: bytes) -> None:
+    """What the language server does with a document as an editor holds it: validate's
+    findings, then completion, hover, navigation and fixes at positions across it."""
+    from gadgetctl.lsp import actions, completion, hover, navigation
+    from gadgetctl.lsp.analysis import Engine
+    from gadgetctl.lsp.findings import findings
+    from gadgetctl.lsp.text import LineIndex
+
+    text = data.decode("utf-8", errors="replace")
+    for name in ("fuzz.jconf", "fuzz.jdef"):
+        path = _as_file(data, name)
+        engine = Engine()
+        engine.set_text(path, text)
+        found = engine.diagnose(path)
+        model = engine.good_model(path)
+        for offset in sorted({len(text) * k // 7 for k in range(8)}):
+            completion.complete(model, text, offset)
+            hover.hover(model, text, offset, found)
+            navigation.definition(model, text, offset)
+            navigation.references(model, text, offset, True)
+            navigation.rename_range(model, text, offset)
+        assert len(navigation.symbols(text)) <= navigation.MAX_SYMBOLS
+        navigation.folding(text)
+        problems = [
+            actions.Problem(f.diagnostic.code, f.start, f.end)
+            for f in findings(found, LineIndex(text, utf16=False))
+        ]
+        actions.actions(model, text, problems[:20])
+
 # -- recordings -----------------------------------------------------------------------------------
 
 

@@ -14,7 +14,16 @@ from gadgetctl.jccl.definitions import ValueType
 from gadgetctl.jccl.resolve import judged_view
 from gadgetctl.lsp.analysis import Model, elements_of, real
 from gadgetctl.lsp.elements import place_of, property_of
-from gadgetctl.lsp.syntax import TAG, Where, blank_comments, context_at, local, tag_at, text_range
+from gadgetctl.lsp.syntax import (
+    COMMENT,
+    TAG,
+    Where,
+    blank_comments,
+    context_at,
+    local,
+    tag_at,
+    text_range,
+)
 from gadgetctl.lsp.text import LineIndex
 
 MAX_SYMBOLS = 20000
@@ -327,7 +336,9 @@ def folding(text: str) -> list[tuple[int, int]]:
         first, last = index.position(start)[0], index.position(max(start, end - 1))[0]
         if last > first:
             ranges.append((first, last))
-    for match in re.finditer(r"<!--.*?-->", text, re.S):
+    for match in COMMENT.finditer(text):
+        if not match.group(0).startswith("<!--"):
+            continue
         first, last = index.position(match.start())[0], index.position(match.end() - 1)[0]
         if last > first:
             ranges.append((first, last))

@@ -4,7 +4,10 @@ lxml cannot parse a half-typed file, and completion is asked for exactly then. T
 finds start and end tags with one regular expression (comments blanked out first), keeps
 the stack of elements open at the position, and says what the position is in: a tag name
 being typed, an attribute value, or the text of an element. Work is bounded by the text
-before the position (and ``MAX_DEPTH`` open elements).
+before the position (and ``MAX_DEPTH`` open elements), and every expression here runs in
+time linear in its input: names and runs are possessive and attributes start at a word's
+start, so a hostile line (a long name with no ``>``, thousands of ``="``) cannot make a
+search backtrack quadratically.
 """
 
 from __future__ import annotations
@@ -14,12 +17,15 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 
 TAG = re.compile(
-    r"<(/?)([A-Za-z_][\w.:-]*)((?:[^<>\"']|\"[^\"<]*\"|'[^'<]*')*?)(/?)>",
+    r"<(/?)([A-Za-z_][\w.:-]*+)((?:[^<>\"'/]++|/(?!>)|\"[^\"<]*+\"|'[^'<]*+')*+)(/?)>",
 )
-ATTRIBUTE = re.compile(r"([\w.:-]+)\s*=\s*(?:\"([^\"]*)\"|'([^']*)')")
-_COMMENT = re.compile(r"<!--.*?(?:-->|\Z)|<!\[CDATA\[.*?(?:\]\]>|\Z)|<\?.*?(?:\?>|\Z)", re.S)
-_OPEN_VALUE = re.compile(r"([\w.:-]+)\s*=\s*([\"'])([^\"']*)\Z")
-_NAME_SO_FAR = re.compile(r"[\w.:-]*\Z")
+ATTRIBUTE = re.compile(r"(?<![\w.:-])([\w.:-]++)\s*+=\s*+(?:\"([^\"]*+)\"|'([^']*+)')")
+COMMENT = re.compile(r"<!--.*?(?:-->|\Z)|<!\[CDATA\[.*?(?:\]\]>|\Z)|<\?.*?(?:\?>|\Z)", re.S)
+#: An attribute whose value is being typed: what is left of a start tag after its
+#: complete attributes (matched at that point only).
+_OPEN_VALUE = re.compile(r"\s*+([\w.:-]++)\s*+=\s*+([\"'])([^\"']*+)\Z")
+_NEXT_ATTRIBUTE = re.compile(r"\s*+[\w.:-]++\s*+=\s*+(?:\"[^\"]*+\"|'[^']*+')")
+_NAME_SO_FAR = re.compile(r"[\w.:-]*+\Z")
 MAX_DEPTH = 256
 #: How much of a start tag before the position is read (a longer one is not being typed).
 MAX_TAG = 4096
@@ -76,7 +82,7 @@ def blank_comments(text: str) -> str:
     """``text`` with comments, CDATA and processing instructions replaced by spaces (offsets kept)."""
     if "<!" not in text and "<?" not in text:
         return text
-    return _COMMENT.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), text)
+    return COMMENT.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), text)
 
 
 def open_stack(text: str, end: int) -> list[Tag]:
@@ -107,14 +113,20 @@ def context_at(text: str, offset: int) -> Context:
             return Context(Where.CLOSING, stack, segment[1:], lt + 2)
         if _NAME_SO_FAR.fullmatch(segment):
             return Context(Where.TAG, stack, segment, lt + 1)
-        name = re.match(r"[\w.:-]*", segment).group(0)
+        name = re.match(r"[\w.:-]*+", segment).group(0)
         tag = Tag(local(name), lt, offset, attributes(segment))
-        value = _OPEN_VALUE.search(segment)
+        rest = len(name)
+        while (complete := _NEXT_ATTRIBUTE.match(segment, rest)) is not None:
+            rest = complete.end()
+        value = _OPEN_VALUE.match(segment, rest)
         if value is not None:
             typed = value.group(3)
             return Context(Where.VALUE, stack, typed, offset - len(typed), value.group(1), tag)
-        word = re.search(r"[\w.:-]*\Z", segment).group(0)
-        return Context(Where.ATTRIBUTE, stack, word, offset - len(word), tag=tag)
+        word = len(segment)
+        while word > 0 and (segment[word - 1].isalnum() or segment[word - 1] in "_.:-"):
+            word -= 1
+        typed = segment[word:]
+        return Context(Where.ATTRIBUTE, stack, typed, offset - len(typed), tag=tag)
     if lt > gt:  # a start tag longer than anyone types: nothing to complete in it
         return Context(Where.ATTRIBUTE, open_stack(clean, lt), "", offset)
     stack = open_stack(clean, offset)
