@@ -293,3 +293,31 @@ def test_summary_of_odd_values(tmp_path):
     assert devices["P"].units[0].translation_min == (3.0, 7.0, 11.0)
     hat = devices["H"]
     assert hat.units[0].minimum == 4 and hat.mean_rate == 0.0 and hat.median_interval is None
+
+
+def test_a_device_s_timestamp_ring_grows_with_what_it_was_given():
+    """Issue 27: every device held 4096 timestamps (32 KB) from the start, 320 MB for 10,000
+    devices whose short run gave each a handful; the ring now grows to ``history``, and the
+    figures are those of the newest ``history`` timestamps at every size on the way."""
+    rng = np.random.default_rng(7)
+    stats = DeviceStats("d", history=300)
+    few = DeviceStats("few")
+    few.add_timestamps([0.0, 0.1, 0.2])
+    few.snapshot(0.3)
+    assert few._ring.nbytes <= 64 * 8
+    fed: list[float] = []
+    t = 0.0
+    for size in (2, 5, 30, 2, 70, 150, 1, 400, 3, 299, 7):
+        batch = (t + np.cumsum(rng.uniform(0.001, 0.02, size))).tolist()
+        t = batch[-1]
+        stats.add_timestamps(batch)
+        fed += batch
+        assert stats.recent_timestamps().tolist() == fed[-300:]
+        intervals = np.diff(fed[-300:])
+        p50, p99, jitter = stats.interval_stats()
+        ordered = np.sort(intervals)
+        assert p50 == ordered[math.ceil(0.5 * len(ordered)) - 1]
+        assert p99 == ordered[math.ceil(0.99 * len(ordered)) - 1]
+        assert jitter == pytest.approx(float(np.std(intervals)))
+        assert stats.max_gap == max(np.diff(fed))
+    assert len(stats._ring) == 300

@@ -172,7 +172,7 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
                     try:
                         if broken_pipe:
                             _silence_stdout()
-                        session.close_sinks(reason)
+                        session.close_sinks(reason, final=outcome[0])
                     except RecordingError as err:
                         if not broken_pipe and "Broken pipe" not in str(err):
                             raise GadgetctlError(str(err)) from None
@@ -254,7 +254,7 @@ def _evaluate(session: MonitorSession, *, accept_loss: bool = True) -> tuple[dic
     from gadgetctl.monitor.loss import run_problems
 
     final = session.final_stats()
-    snapshot = session.snapshot()
+    snapshot = session.snapshot(detail=False)  # the states and reasons are what it reads
     problems = problem_lines(snapshot)
     problems += [
         f"{name}: {counted(s['faults'], 'fault')}, last error: {s.get('error') or '-'}"

@@ -57,7 +57,7 @@ class ElementAccess:
     def __init__(self, element: ConfigElement, repo: DefinitionRepository) -> None:
         self.element = element
         self.repo = repo
-        self._props = {p.name: p.definition for p in repo.effective_properties(element.type)}
+        self._props = repo.property_map(element.type)
 
     @property
     def name(self) -> str:

@@ -146,7 +146,9 @@ Record = (
 
 _NUMERIC_LIST = re.compile(r"[\[\]0-9eE.,+\- ]*")
 _PREFIXES: dict[tuple[str, str], str] = {}
-_PREFIX_CACHE_LIMIT = 4096
+#: Record heads kept (device and kind pairs, about 100 bytes each): enough for 10,000 devices
+#: of a few kinds each (at 4096 such a monitor made every head anew, with json.dumps).
+_PREFIX_CACHE_LIMIT = 1 << 16
 _SCALARS = (float, int, str, bool)
 _DECODER = json.JSONDecoder()
 

@@ -1206,11 +1206,21 @@ class MonitorSession:
         for track in self._tracks.values():
             track.reset()
 
-    def close_sinks(self, reason: str = "closed", *, stats: bool = True) -> None:
-        """Write the final statistics record and the end record of every sink."""
+    def close_sinks(
+        self,
+        reason: str = "closed",
+        *,
+        stats: bool = True,
+        final: dict[str, dict[str, object]] | None = None,
+    ) -> None:
+        """Write the final statistics record (``final``, :meth:`final_stats` when not given)
+        and the end record of every sink."""
         if self._sinks and not self._sinks_open:
             self._open_sinks()
-        final = self.final_stats() if stats else None
+        if not stats:
+            final = None
+        elif final is None and self._sinks:
+            final = self.final_stats()
         moment = now()
         for sink in self._sinks:
             recorder = sink.recorder
@@ -1305,12 +1315,18 @@ class MonitorSession:
         ]
 
     def snapshot(
-        self, moment: float | None = None, *, names: Iterable[str] | None = None
+        self,
+        moment: float | None = None,
+        *,
+        names: Iterable[str] | None = None,
+        detail: bool = True,
     ) -> Snapshot:
-        """Everything a view shows, for the selected elements (or ``names`` of them)."""
+        """Everything a view shows, for the selected elements (or ``names`` of them); without
+        ``detail``, their statuses only (no statistics, values or health)."""
         moment = now() if moment is None else moment
         views = [
-            self.element_view(name, moment) for name in (self._selected if names is None else names)
+            self.element_view(name, moment, detail=detail)
+            for name in (self._selected if names is None else names)
         ]
         return Snapshot(
             self.frame,
@@ -1324,8 +1340,10 @@ class MonitorSession:
             self.finished,
         )
 
-    def element_view(self, name: str, moment: float | None = None) -> ElementView:
-        """One element's status, statistics and values now."""
+    def element_view(
+        self, name: str, moment: float | None = None, *, detail: bool = True
+    ) -> ElementView:
+        """One element's status, statistics and values now (without ``detail``: its status)."""
         moment = now() if moment is None else moment
         manager = self.manager
         element, element_type, state, reason = self._status_of(name)
@@ -1338,6 +1356,8 @@ class MonitorSession:
             note=manager.vrjuggler_difference(name),
         )
         device = manager.device(name)
+        if device is not None and not detail:
+            return view
         if device is not None:
             track = self._current_track(name)
             if track is not None and track.device is device:
@@ -1356,6 +1376,8 @@ class MonitorSession:
             if device_state not in ("running", "configured", "removed"):
                 view.blocked_by = proxy.device_name
         view.unit = proxy.unit if proxy.HAS_UNIT else None
+        if not detail:
+            return view
         track = self._current_track(proxy.device_name)
         live = track is not None and track.device is proxy.device
         if live:

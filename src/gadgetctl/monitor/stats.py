@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Iterable, Iterator, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -27,6 +27,8 @@ __all__ = ["DeviceSnapshot", "DeviceStats", "MonitorStats", "summarize_recording
 
 DEFAULT_WINDOW = 1.0
 DEFAULT_HISTORY = 4096
+#: Timestamps a device's ring holds before it first grows (doubling up to its history).
+INITIAL_RING = 64
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,7 +57,11 @@ class DeviceSnapshot:
     window_samples_per_frame: float | None = None
 
     def to_dict(self) -> dict[str, object]:
-        return asdict(self)
+        # every field is a number, a name or None: no deep copy (asdict) needed
+        return {name: getattr(self, name) for name in _SNAPSHOT_FIELDS}
+
+
+_SNAPSHOT_FIELDS = tuple(f.name for f in fields(DeviceSnapshot))
 
 
 def _nearest_rank(sorted_or_partitioned: np.ndarray, n: int, percent: float) -> float:
@@ -75,7 +81,9 @@ class DeviceStats:
         self.name = name
         self.window = window
         self.history = history
-        self._ring = np.empty(history, dtype=np.float64)
+        # grown as timestamps come, up to ``history``: a 10 Hz device of a short run holds a
+        # few, not 4096 (32 KB for each of 10,000 devices)
+        self._ring = np.empty(min(history, INITIAL_RING), dtype=np.float64)
         self.reset()
 
     def reset(self) -> None:
@@ -162,9 +170,17 @@ class DeviceStats:
         self._last = float(batch[-1])
         cap = self.history
         if len(batch) >= cap:
+            if len(self._ring) < cap:
+                self._ring = np.empty(cap, dtype=np.float64)
             self._ring[:] = batch[-cap:]
             self._ring_pos, self._ring_len = 0, cap
             return
+        size = len(self._ring)
+        if size < cap and self._ring_len + len(batch) > size:
+            # below ``history`` the ring never wraps: its timestamps are [0, ring_len)
+            grown = np.empty(min(cap, max(2 * size, self._ring_len + len(batch))), np.float64)
+            grown[: self._ring_len] = self._ring[: self._ring_len]
+            self._ring = grown
         end = self._ring_pos + len(batch)
         if end <= cap:
             self._ring[self._ring_pos : end] = batch
