@@ -224,8 +224,12 @@ def test_rumble_takes_any_duration_and_refuses_nan(build) -> None:
         assert pad.rumble(0.5, 0.5, float("inf"))
         assert pad.rumble(0.25, 0.25, 1e300)
         assert pad.rumble(0.25, 0.25, -float("inf"))  # no duration: the motors stop
-        assert wait_until(lambda: len(emu.rumbles) >= 3, timeout=10.0)
-        assert emu.rumbles[:3] == [(32768, 32768), (16384, 16384), (0, 0)]
+
+        def changes() -> list[tuple[int, int]]:  # SDL may send a rumble again after a while
+            return [r for i, r in enumerate(emu.rumbles) if i == 0 or r != emu.rumbles[i - 1]]
+
+        assert wait_until(lambda: len(changes()) >= 3, timeout=10.0)
+        assert changes()[:3] == [(32768, 32768), (16384, 16384), (0, 0)]
 
 
 def test_a_joystick_without_motors_does_not_rumble(build) -> None:
