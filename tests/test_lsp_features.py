@@ -83,6 +83,10 @@ def test_hover_tells_whether_an_element_stays_pending_and_why(opened):
     assert "alias" in shown and "stays pending" in shown and "Nobody" in shown
     shown = hover.hover(engine.model(path), BODY, BODY.index("<position_proxy") + 2, [])
     assert "becomes active" in shown
+    at_end = hover.hover(engine.model(path), BODY, BODY.index("</position_proxy") + 4, [])
+    assert at_end == shown
+    unit = hover.hover(engine.model(path), BODY, BODY.index("</unit>") + 3, [])
+    assert unit.startswith("**unit** (integer")
 
 
 def test_references_and_rename_follow_pointers(opened):

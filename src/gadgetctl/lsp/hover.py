@@ -21,11 +21,17 @@ MAX_CHOICES = 40
 
 def hover(model: Model, text: str, offset: int, findings: list[Diagnostic]) -> str | None:
     """Markdown for the position, or None."""
-    on_tag = tag_at(text, offset)
-    at = on_tag[1] - 1 if on_tag else offset
-    ctx = context_at(text, at)
     if model.path.suffix == ".jdef":
         return None
+    on_tag = tag_at(text, offset)
+    at = on_tag[1] - 1 if on_tag else offset
+    if on_tag is not None and text[at] == "/":  # an end tag: what its start tag is
+        at -= 1
+        stack = context_at(text, at).stack
+        if not stack or stack[-1].name != on_tag[0]:
+            return None
+        at = stack[-1].start
+    ctx = context_at(text, at)
     place = place_of(ctx.stack)
     if place is None:
         return None
