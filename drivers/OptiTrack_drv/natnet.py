@@ -90,6 +90,13 @@ _ASSET_BODY = struct.Struct("<i7ffh")
 _ASSET_MARKER = struct.Struct("<i3ffhf")
 
 
+def _float64(values: np.ndarray) -> np.ndarray:
+    """float32 coordinates as float64; a signalling NaN from the wire becomes a quiet one
+    (counted as a bad record by the caller), not a RuntimeWarning on stderr."""
+    with np.errstate(invalid="ignore"):
+        return values.astype(np.float64)
+
+
 @dataclass(frozen=True)
 class NatNetLimits:
     """Most of each thing one packet may hold. A count beyond one makes the packet bad (a
@@ -291,9 +298,9 @@ class _FrameDecoder:
         for _ in range(reader.count(limits.marker_sets, "marker set", section=True)):
             name = reader.name(limits.name_length)
             points = reader.points(reader.count(limits.markers, "marker"))
-            frame.marker_sets.append((name, points.astype(np.float64)))
+            frame.marker_sets.append((name, _float64(points)))
         n_other = reader.count(limits.markers, "unidentified marker", section=True)
-        markers = reader.points(n_other).astype(np.float64)
+        markers = _float64(reader.points(n_other))
         finite = np.isfinite(markers).all(axis=1)
         if not finite.all():
             frame.bad_records += int((~finite).sum())
@@ -329,7 +336,7 @@ class _FrameDecoder:
                 count=n,
                 offset=reader.take(size * n),
             )
-            xyz = records["xyz"].astype(np.float64)
+            xyz = _float64(records["xyz"])
             finite = np.isfinite(xyz).all(axis=1)
             frame.bad_records += int(n - finite.sum())
             frame.labeled_markers.update(

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import socket
 import struct
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -124,6 +125,27 @@ def test_a_body_without_a_rotation_is_a_bad_record() -> None:
     )
     frame = decode_frame(packet, V20)
     assert frame.bodies == {} and frame.bad_records == 2
+
+
+def test_signalling_nan_coordinates_are_bad_records_without_a_warning() -> None:
+    """A float32 signalling NaN (found by ``make fuzz``'s udp.optitrack) in a marker set, an
+    unidentified and a labeled marker: bad records, and no numpy RuntimeWarning ("invalid value
+    encountered in cast") on stderr."""
+    quiet = struct.pack("<f", 1.5)
+    packet = encode_frame(
+        3,
+        [],
+        [(1.5, 0.0, 0.0)],
+        [("set", [(1.5, 0.0, 0.0)])],
+        version=(3, 0),
+        labeled=[(7, (1.5, 0.0, 0.0))],
+    )
+    assert packet.count(quiet) == 3
+    packet = packet.replace(quiet, struct.pack("<I", 0x7F800001))  # signalling NaN
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        frame = decode_frame(packet, (3, 0))
+    assert frame.bad_records >= 2 and frame.markers.shape == (1, 3)
 
 
 # -- through the input manager -------------------------------------------------------------------
