@@ -1,7 +1,9 @@
 # Two entry points for a fresh machine with Python 3.11+ and make:
 #   make demo   - install gadgetctl into .venv and run it on the bundled simulated devices
 #   make test   - install with the test extras and run the whole test suite
-#   make fuzz   - fuzz every parser and driver decoder for SECONDS (default 600) on WORKERS (2)
+#   make fuzz   - fuzz every parser and driver decoder for SECONDS (default 600) on WORKERS (2),
+#                 then drive each whole path (serve, monitor vrpn:, UDP and serial drivers) for
+#                 PATH_SECONDS (20) each with memory and time caps: about 17 minutes in all
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
@@ -38,8 +40,9 @@ bench: $(VENV)/.installed-test
 
 SECONDS ?= 600
 WORKERS ?= 2
+PATH_SECONDS ?= 20
 fuzz: $(VENV)/.installed-test
-	$(BIN)/python tests/fuzz/campaign.py --seconds $(SECONDS) --workers $(WORKERS)
+	$(BIN)/python tests/fuzz/campaign.py --seconds $(SECONDS) --workers $(WORKERS) --path-seconds $(PATH_SECONDS)
 
 completions: $(VENV)/.installed
 	$(BIN)/python -m gadgetctl.cli.completions completions

@@ -20,7 +20,9 @@ passes ``--memory-mb``. A failure is saved as ``NAME-seedN.json`` (and the last 
 as ``NAME-seedN.bin``); ``--replay FILE.json`` runs that target again with the same seed.
 
 Prints the inputs tried per target, the time, the peak memory of each path target and the
-failures; exit status 1 when anything failed or exceeded a cap, 2 on usage errors.
+failures; exit status 1 when anything failed or exceeded a cap, 2 on usage errors. The
+default run (``make fuzz``) takes about 17 minutes: 600 s of parser targets, then 18 path
+targets of 20 s, each 1 to 3 s more to start and stop.
 """
 
 from __future__ import annotations

@@ -19,6 +19,7 @@ import struct
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -259,6 +260,11 @@ def _serve_hostile_client(run: Run) -> None:
         )  # fmt: skip
         with killed_at_end(serve), PeakWatch(serve.pid) as memory:
             port = _listening_port(serve, 60.0)
+            # its event lines (one per client that comes and goes) are read to the end, or
+            # a full pipe would stop serve
+            assert serve.stdout is not None
+            events = threading.Thread(target=serve.stdout.read, name="serve events", daemon=True)
+            events.start()
             watcher = Watcher(port)
             try:
                 # the baseline: serve with a well-behaved client only, after its start-up
@@ -292,8 +298,7 @@ def _serve_hostile_client(run: Run) -> None:
                     f"time cap exceeded: serve did not stop within {EXIT_CAP:g} s of SIGTERM"
                 ) from None
             run.figures["stop_s"] = round(time.monotonic() - began, 2)
-            assert serve.stdout is not None
-            serve.stdout.close()
+            events.join(10)
         check_stderr("serve", (Path(tmp) / "stderr").read_bytes())
         if serve.returncode != 0:
             raise PathFailure(f"serve exited {serve.returncode} after SIGTERM")
