@@ -46,6 +46,7 @@ fuzz: $(VENV)/.installed-test
 
 completions: $(VENV)/.installed
 	$(BIN)/python -m gadgetctl.cli.completions completions
+	$(BIN)/python -m gadgetctl.cli.roothelp
 
 clean:
 	rm -rf $(VENV) build dist

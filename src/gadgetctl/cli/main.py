@@ -22,6 +22,11 @@ def main(argv: list[str] | None = None) -> None:
 
         print(f"gadgetctl {__version__}")
         return
+    if args in (["--help"], ["-h"]):  # the root help, kept as typer renders it (roothelp)
+        from gadgetctl.cli import roothelp
+
+        if roothelp.answer(args):
+            return
     if args[:1] == ["__complete"]:  # the shell's Tab: answered without the CLI framework either
         from gadgetctl.cli.candidates import main as complete
 
