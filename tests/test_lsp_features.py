@@ -263,3 +263,10 @@ def test_hostile_lines_are_read_in_linear_time(shape):
         context_at(shape, offset)
     assert len(navigation.symbols(shape)) <= navigation.MAX_SYMBOLS
     navigation.folding(shape)
+
+
+def test_the_outline_says_where_it_stops():
+    many = configuration("".join(f'<alias name="A{i}" version="1"/>' for i in range(20_005)))
+    groups = navigation.symbols(many)
+    assert len(groups[0].children) == navigation.MAX_SYMBOLS
+    assert groups[-1].name == f"(the outline stops at {navigation.MAX_SYMBOLS} elements)"

@@ -115,6 +115,8 @@ class Engine:
             text = self.texts.pop(key, None)
             self._generation += 1
             self._changed[key] = self._generation
+            if len(self._changed) > 2 * MAX_OPEN_DOCUMENTS:  # (closed long ago: forgotten)
+                self._changed = {p: g for p, g in self._changed.items() if p in self.texts}
             self.reaches.pop(key, None)
             self._models.pop(key, None)
             self._good.pop(key, None)

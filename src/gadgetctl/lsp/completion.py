@@ -37,6 +37,7 @@ class Item:
 class Completion:
     start: int  # the completed word's start: items replace start..position
     items: list[Item]
+    complete: bool = True  # False: more candidates than MAX_ITEMS, the rest left out
 
 
 CONFIGURATION_CHILDREN = ("include", "definition_path", "elements")
@@ -45,8 +46,10 @@ CONFIGURATION_CHILDREN = ("include", "definition_path", "elements")
 def complete(model: Model, text: str, offset: int) -> Completion:
     ctx = context_at(text, offset)
     if model.path.suffix == ".jdef":
-        return Completion(ctx.start, _definition_file(model, ctx))
-    return Completion(ctx.start, _configuration(model, ctx)[:MAX_ITEMS])
+        items = _definition_file(model, ctx)
+    else:
+        items = _configuration(model, ctx)
+    return Completion(ctx.start, items[:MAX_ITEMS], len(items) <= MAX_ITEMS)
 
 
 def _configuration(model: Model, ctx: Context) -> list[Item]:
@@ -164,8 +167,8 @@ def _targets(model: Model, allowed: tuple[str, ...], own: str | None) -> list[It
             continue
         seen.add(element.name)
         items.append(Item(element.name, REFERENCE, element.type, f"{element.file}"))
-        if len(items) >= MAX_ITEMS:
-            break
+        if len(items) > MAX_ITEMS:
+            break  # (one more than shown: the list says it is incomplete)
     return items
 
 

@@ -117,7 +117,7 @@ def register(server) -> None:
             )
             for item in answer.items
         ]
-        return types.CompletionList(is_incomplete=False, items=items)
+        return types.CompletionList(is_incomplete=not answer.complete, items=items)
 
     @server.feature(types.TEXT_DOCUMENT_HOVER)
     @on_document()

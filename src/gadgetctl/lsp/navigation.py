@@ -261,7 +261,11 @@ class Symbol:
     children: list[Symbol]
 
 
-def element_spans(text: str) -> list[tuple[str, dict, int, int, int]]:
+#: Tags read for the outline and folding at most (a file past it: the outline says so).
+MAX_SPANS = 8 * MAX_SYMBOLS
+
+
+def element_spans(text: str) -> list[tuple[str, str, int, int, int]]:
     """(tag, attribute text, start, end, depth) of every element of the text, by a forgiving
     scan (an element left open ends where its parent does, or at the end)."""
     clean = blank_comments(text)
@@ -281,7 +285,7 @@ def element_spans(text: str) -> list[tuple[str, dict, int, int, int]]:
             spans.append((name, attrs, match.start(), match.end(), len(stack)))
         elif len(stack) < 256:
             stack.append([name, attrs, match.start()])
-        if len(spans) > 4 * MAX_SYMBOLS:
+        if len(spans) >= MAX_SPANS:
             break
     while stack:
         entry = stack.pop()
@@ -294,7 +298,10 @@ def symbols(text: str) -> list[Symbol]:
     """The outline: the configuration's elements grouped by type, or a .jdef's definitions."""
     by_type: dict[str, list[Symbol]] = {}
     elements_depth = None
-    for name, attrs, start, end, depth in element_spans(text):
+    shown = 0
+    truncated = False
+    spans = element_spans(text)
+    for name, attrs, start, end, depth in spans:
         if name in ("elements",) and elements_depth is None:
             elements_depth = depth
             continue
@@ -306,12 +313,14 @@ def symbols(text: str) -> list[Symbol]:
                     Symbol(label, "definition", start, end, start, start + 1 + len(name), [])
                 )
             continue
+        if shown >= MAX_SYMBOLS:
+            truncated = True
+            break
         match = _NAME_ATTRIBUTE.search(attrs)
         label = match.group(2) if match and match.group(2) else f"({name})"
         symbol = Symbol(label, name, start, end, start + 1, start + 1 + len(name), [])
         by_type.setdefault(name, []).append(symbol)
-        if sum(len(v) for v in by_type.values()) >= MAX_SYMBOLS:
-            break
+        shown += 1
     groups = []
     for type_name, members in by_type.items():
         groups.append(
@@ -325,6 +334,9 @@ def symbols(text: str) -> list[Symbol]:
                 members,
             )
         )
+    if truncated or len(spans) >= MAX_SPANS:
+        note = f"(the outline stops at {MAX_SYMBOLS} elements)"
+        groups.append(Symbol(note, "", 0, 0, 0, 0, []))
     return groups
 
 
