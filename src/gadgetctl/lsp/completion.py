@@ -16,7 +16,7 @@ from gadgetctl.lsp.elements import (
     required_properties,
     view_of,
 )
-from gadgetctl.lsp.syntax import Context, Where, context_at
+from gadgetctl.lsp.syntax import TAG, Context, Tag, Where, context_at, end_tag, local
 
 #: Completion kinds of the protocol used here.
 CLASS, PROPERTY, ENUM_MEMBER, VALUE, REFERENCE, FILE, KEYWORD = 7, 10, 20, 12, 18, 17, 14
@@ -48,11 +48,11 @@ def complete(model: Model, text: str, offset: int) -> Completion:
     if model.path.suffix == ".jdef":
         items = _definition_file(model, ctx)
     else:
-        items = _configuration(model, ctx)
+        items = _configuration(model, ctx, text)
     return Completion(ctx.start, items[:MAX_ITEMS], len(items) <= MAX_ITEMS)
 
 
-def _configuration(model: Model, ctx: Context) -> list[Item]:
+def _configuration(model: Model, ctx: Context, text: str) -> list[Item]:
     index = model.index
     names = ctx.names()
     place = place_of(ctx.stack)
@@ -75,7 +75,7 @@ def _configuration(model: Model, ctx: Context) -> list[Item]:
                     return []
                 allowed = prop.allowed_types
             return _types(model, allowed)
-        return _properties(model, place.element)
+        return _properties(model, place.element, _written(text, place.element, ctx.start - 1))
     if ctx.where is Where.VALUE:
         if ctx.attribute == "version" and ctx.tag is not None and place is not None:
             versions = index.versions(ctx.tag.name)
@@ -125,7 +125,26 @@ def _types(model: Model, allowed: tuple[str, ...]) -> list[Item]:
     return items
 
 
-def _properties(model: Model, element) -> list[Item]:
+def _written(text: str, element: Tag, typing: int) -> set[str]:
+    """The property tags the element already has (other than the one being typed)."""
+    end = end_tag(text, element.start, element.name)
+    stop = end[0] - 2 if end is not None else len(text)
+    found, depth = set(), 0
+    for match in TAG.finditer(text, element.end, max(element.end, stop)):
+        closing, name, _, empty = match.groups()
+        if closing:
+            depth -= 1
+        else:
+            if depth == 0 and match.start() != typing:
+                found.add(local(name))
+            if not empty:
+                depth += 1
+    return found
+
+
+def _properties(model: Model, element: Tag, written: set[str]) -> list[Item]:
+    """The element's properties, the pointers it must set first; one-value properties it
+    already has are left out."""
     view = view_of(model.index, element)
     if view is None:
         return []
@@ -133,6 +152,8 @@ def _properties(model: Model, element) -> list[Item]:
     items = []
     for name, effective in view.properties.items():
         prop = effective.definition
+        if name in written and not prop.variable and len(prop.values) <= 1:
+            continue
         default = prop.default(0)
         detail = prop.valuetype.value
         if prop.allowed_types:
