@@ -297,3 +297,58 @@ async def test_a_16_mb_document_is_a_finding_and_the_server_answers_next(client,
         )
     )
     assert answer is not None
+
+
+async def test_an_include_changed_on_disk_refreshes_who_includes_it(client, tmp_path):
+    main = tmp_path / "top.jconf"
+    devices = tmp_path / "devs.jconf"
+    devices.write_text(DEVICES.replace("Head", "Other"))
+    text = configuration(PROXIES, before="   <include>devs.jconf</include>\n")
+    main_uri = await _checked(client, main, text)
+    assert not any(d.code == "CFG031" for d in client.diagnostics[main_uri])
+    devices.write_text(DEVICES.replace("Head", "Other").replace('name="Tracker"', 'name="Gone"'))
+    client.workspace_did_change_watched_files(
+        types.DidChangeWatchedFilesParams(
+            [types.FileEvent(uri=_uri(devices), type=types.FileChangeType.Changed)]
+        )
+    )
+    found = await _diagnostics(client, main_uri, lambda f: any(d.code == "CFG031" for d in f))
+    assert any("Tracker" in d.message for d in found)
+
+
+registrations: list[types.RegistrationParams] = []
+
+
+@pytest_lsp.fixture(
+    config=ClientServerConfig(server_command=[sys.executable, "-m", "gadgetctl", "lsp"]),
+    scope="module",
+)
+async def watching(lsp_client: LanguageClient):
+    @lsp_client.feature(types.CLIENT_REGISTER_CAPABILITY)
+    def on_register(params: types.RegistrationParams) -> None:
+        registrations.append(params)
+
+    capabilities = types.ClientCapabilities(
+        workspace=types.WorkspaceClientCapabilities(
+            did_change_watched_files=types.DidChangeWatchedFilesClientCapabilities(
+                dynamic_registration=True
+            )
+        )
+    )
+    await lsp_client.initialize_session(types.InitializeParams(capabilities=capabilities))
+    yield
+    await lsp_client.shutdown_session()
+
+
+async def test_a_client_that_can_watch_files_is_asked_to_watch_jccl_files(watching):
+    import asyncio
+
+    async def registered():
+        while not registrations:
+            await asyncio.sleep(0.01)
+
+    await asyncio.wait_for(registered(), TIMEOUT)
+    (registration,) = registrations[0].registrations
+    assert registration.method == types.WORKSPACE_DID_CHANGE_WATCHED_FILES
+    patterns = {w["globPattern"] for w in registration.register_options["watchers"]}
+    assert patterns == {"**/*.jconf", "**/*.jdef"}

@@ -127,12 +127,15 @@ class Engine:
         return changed
 
     def saved(self, path: Path) -> None:
+        """A file was written (saved from the editor, or changed on disk by another program):
+        what was read of it is stale."""
+        key = real(path)
         with self._lock:
             self._searches = {}  # (a saved file may be a plug-in's: look again)
-        if real(path).suffix == ".jdef":
-            with self._lock:
+            self._generation += 1
+            self._changed[key] = self._generation
+            if key.suffix == ".jdef":
                 self._base = None
-                self._generation += 1
 
     @property
     def generation(self) -> int:

@@ -18,7 +18,7 @@ from lsprotocol import types
 from pygls.lsp.server import LanguageServer
 from pygls.uris import from_fs_path
 
-from gadgetctl.lsp.analysis import Engine, EngineOptions
+from gadgetctl.lsp.analysis import JCCL_SUFFIXES, Engine, EngineOptions
 from gadgetctl.lsp.findings import SEVERITIES, findings
 from gadgetctl.lsp.text import LineIndex
 from gadgetctl.lsp.uris import is_jccl as _jccl
@@ -179,6 +179,40 @@ def create_server(options: EngineOptions | None = None) -> JcclServer:
         ls.findings.pop(path, None)
         if changed:
             ls.schedule(others)  # who included it now reads the file on disk
+
+    @server.feature(types.INITIALIZED)
+    def initialized(ls: JcclServer, params: types.InitializedParams) -> None:
+        """Ask a client that can to say when .jconf and .jdef files change on disk (an
+        include changed by another program, a checkout)."""
+        workspace = ls.client_capabilities.workspace
+        watched = workspace.did_change_watched_files if workspace else None
+        if watched is None or not watched.dynamic_registration:
+            return
+        watchers = [types.FileSystemWatcher(glob_pattern=f"**/*{s}") for s in JCCL_SUFFIXES]
+        ls.client_register_capability(
+            types.RegistrationParams(
+                [
+                    types.Registration(
+                        id="gadgetctl-jccl-files",
+                        method=types.WORKSPACE_DID_CHANGE_WATCHED_FILES,
+                        register_options=types.DidChangeWatchedFilesRegistrationOptions(watchers),
+                    )
+                ]
+            )
+        )
+
+    @server.feature(types.WORKSPACE_DID_CHANGE_WATCHED_FILES)
+    def files_changed(ls: JcclServer, params: types.DidChangeWatchedFilesParams) -> None:
+        """A file changed on disk: the open documents that read it are checked again (an
+        open one is read from its buffer, which the editor reports itself)."""
+        affected: set[Path] = set()
+        for change in params.changes:
+            path = _path(change.uri)
+            if not _jccl(path) or path in ls.engine.texts:
+                continue
+            ls.engine.saved(path)
+            affected.update(ls.engine.affected(path))
+        ls.schedule(sorted(affected))
 
     from gadgetctl.lsp import handlers
 
