@@ -984,7 +984,6 @@ def _jccl_upgrade(data: bytes) -> None:
     assert result is not None
 
 
-
 @target("lsp.document", seeds=_jccl_seeds, grammar=_jccl_configuration, examples=25)
 def _lsp_document(data: bytes) -> None:
     """What the language server does with a document as an editor holds it: validate's
@@ -1014,6 +1013,7 @@ def _lsp_document(data: bytes) -> None:
             for f in findings(found, LineIndex(text, utf16=False))
         ]
         actions.actions(model, text, problems[:20])
+
 
 # -- recordings -----------------------------------------------------------------------------------
 
