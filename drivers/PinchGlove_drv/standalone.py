@@ -240,7 +240,9 @@ class PinchGlove:
     ``command_delay`` between the two command bytes (100 ms upstream),
     ``echo_wait`` for a confused-glove ``?`` after the first byte, ``read_timeout``
     per byte of a reply or frame (5 s upstream), ``sample_timeout`` for
-    :meth:`sample` to wait for a frame to start.
+    :meth:`sample` to wait for a frame to start, ``setup_timeout`` for the whole of
+    :meth:`open` (its queries and commands: a line that keeps sending junk or ``?`` slowly
+    enough would otherwise hold it for minutes, each byte within ``read_timeout``).
     """
 
     def __init__(
@@ -256,6 +258,7 @@ class PinchGlove:
         sample_timeout: float = 0.5,
         poll_interval: float = 0.05,
         command_retries: int = 2,
+        setup_timeout: float = 6.0,
     ) -> None:
         self.port_spec = port
         self.baud = baud
@@ -267,6 +270,8 @@ class PinchGlove:
         self.sample_timeout = sample_timeout
         self.poll_interval = poll_interval
         self.command_retries = command_retries
+        self.setup_timeout = setup_timeout
+        self._setup_deadline: float | None = None  # while open() runs
         self.info: dict[str, str] = {}
         self.last = PinchSample.open_hands()
         self.frames = 0
@@ -287,6 +292,7 @@ class PinchGlove:
         except (serial.SerialException, OSError, ValueError) as exc:
             raise PinchGloveDisconnected(f"cannot open {self.port_spec}: {exc}") from exc
         self._link = _SerialLink(port, self.poll_interval)
+        self._setup_deadline = time.monotonic() + self.setup_timeout
         try:
             _ignore_break(port)
             self._raise_control_lines(port)
@@ -297,6 +303,8 @@ class PinchGlove:
         except BaseException:
             self.close()
             raise
+        finally:
+            self._setup_deadline = None
         # The glove is silent until a contact changes, so start from open hands.
         self.last = PinchSample.open_hands()
         return self.last
@@ -502,7 +510,15 @@ class PinchGlove:
             body.append(value)
 
     def _reply_byte(self, link: _SerialLink) -> int:
-        value = link.read_byte(self.read_timeout)
+        timeout = self.read_timeout
+        deadline = self._setup_deadline
+        if deadline is not None:
+            timeout = min(timeout, deadline - time.monotonic())
+        value = link.read_byte(timeout) if timeout > 0 else None
         if value is None:
+            if deadline is not None and time.monotonic() >= deadline:
+                raise PinchGloveTimeout(
+                    f"the PinchGlove did not complete its setup within {self.setup_timeout:g} s"
+                )
             raise PinchGloveTimeout("no reply from the PinchGlove")
         return value

@@ -1,11 +1,22 @@
-"""A glove line that never ends a frame or a reply: bounded frames and replies, over a pty."""
+"""A glove line that never ends a frame or a reply: bounded frames and replies, and a setup
+bounded in time however the line trickles, over a pty."""
 
 from __future__ import annotations
 
+import threading
+import time
+
 import pytest
 from PinchGlove_drv.emulator import DEFAULT_INFO, PinchGloveEmulator
-from PinchGlove_drv.standalone import MAX_FRAME_BODY, MAX_REPLY, PinchGlove, PinchGloveProtocolError
+from PinchGlove_drv.standalone import (
+    MAX_FRAME_BODY,
+    MAX_REPLY,
+    PinchGlove,
+    PinchGloveProtocolError,
+    PinchGloveTimeout,
+)
 
+from gadgetctl.emulation.testing import FixtureLine
 from gadgetctl.input.testing.fixtures import emulator_fixture
 
 pytestmark = pytest.mark.timeout(20)
@@ -33,3 +44,30 @@ def test_a_reply_longer_than_any_reply_fails_the_start(emulator) -> None:
     with pytest.raises(PinchGloveProtocolError, match=f"longer than {MAX_REPLY}"):
         glove.open()
     assert not glove.is_open
+
+
+def test_a_line_that_trickles_junk_fails_the_setup_within_its_timeout() -> None:
+    """Found by make fuzz (serial.pinchglove): a byte now and then, never a reply, kept
+    open() (and the input manager's frame that started the device) for 30 to 95 s."""
+    outcome: list[BaseException | None] = []
+    with FixtureLine() as line:
+        glove = PinchGlove(line.address, **{**FAST, "read_timeout": 2.0, "setup_timeout": 1.0})
+
+        def start() -> None:
+            try:
+                glove.open()
+                outcome.append(None)
+            except Exception as err:
+                outcome.append(err)
+
+        opener = threading.Thread(target=start, daemon=True)
+        began = time.monotonic()
+        opener.start()
+        while opener.is_alive() and time.monotonic() - began < 6.0:
+            line.feed(b"\x00" * 10)  # junk, never a reply: each byte keeps it reading
+            time.sleep(0.02)
+        opener.join(1.0)
+        took = time.monotonic() - began
+    assert not opener.is_alive(), "open() still reading after 6 s"
+    assert isinstance(outcome[0], PinchGloveTimeout) and "within 1 s" in str(outcome[0])
+    assert took < 4.0 and not glove.is_open
