@@ -154,6 +154,16 @@ def test_a_label_in_the_wrong_case_is_fixed(opened):
     assert fixed == BODY.replace(">feet<", ">Feet<")
 
 
+def test_a_pointer_naming_nothing_is_fixed_with_the_close_names(opened):
+    text = BODY.replace("<proxy>Head</proxy>", "<proxy>head</proxy>")
+    engine, path = opened(text)
+    (finding,) = [d for d in engine.diagnose(path) if d.code == "CFG031"]
+    assert finding.hint == "Did you mean 'Head', 'VJHead'?"
+    fixes = _fix(engine, path, text, "CFG031")
+    assert [f.title for f in fixes] == ["Did you mean 'Head'?", "Did you mean 'VJHead'?"]
+    assert _apply(text, fixes[0].edits[path]) == BODY
+
+
 def test_a_missing_required_pointer_is_added_in_the_files_indentation(opened):
     text = BODY.replace("         <proxy>Head</proxy>\n", "")
     engine, path = opened(text)

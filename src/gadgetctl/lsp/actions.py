@@ -21,6 +21,7 @@ from gadgetctl.suggest import close_names
 
 UPGRADE_CODES = frozenset({"CFG012", "CFG021", "XML010", "XML011", "XML012"})
 MAX_FIXES = 5
+POINTER_CUTOFF = 0.7  # how close a name must be to a pointer naming nothing (as validate's)
 
 
 @dataclass
@@ -49,6 +50,8 @@ def actions(model: Model, text: str, problems: list[Problem]) -> list[Action]:
             found += _rename_tag(model, text, problem)
         elif code in ("CFG026", "CFG027", "CFG028"):
             found += _fix_value(model, text, problem)
+        elif code == "CFG031":
+            found += _fix_pointer(model, text, problem)
         elif code == "CFG033":
             found += _add_required(model, text, problem)
         if code in UPGRADE_CODES:
@@ -126,6 +129,35 @@ def _fix_value(model: Model, text: str, problem: Problem) -> list[Action]:
     return [
         Action(f"Write {r!r}", problem.code, {model.path: [(start, end, r)]}, preferred=i == 0)
         for i, r in enumerate(replacements[:MAX_FIXES])
+    ]
+
+
+def _value_at(text: str, problem: Problem) -> tuple[int, int] | None:
+    """The range of the text of the property tag a finding is on."""
+    if _tag_name_at(text, problem.start) is None:
+        return None
+    tag_end = text.find(">", problem.start)
+    if tag_end < 0 or text[tag_end - 1] == "/":
+        return None
+    return text_range(text, tag_end + 1)
+
+
+def _fix_pointer(model: Model, text: str, problem: Problem) -> list[Action]:
+    """A pointer naming no element: the names close to it, as validate's hint gives them
+    (top-level names, or embedded elements' full names for a name with a '/')."""
+    configuration = model.configuration
+    where = _value_at(text, problem)
+    if configuration is None or where is None:
+        return []
+    value = text[where[0] : where[1]]
+    if "/" in value:
+        names = [e.full_name for e in configuration.all_elements() if e.parent is not None]
+    else:
+        names = [e.name for e in configuration.elements]
+    close = close_names(value, names, n=3, cutoff=POINTER_CUTOFF)
+    return [
+        Action(f"Did you mean {name!r}?", problem.code, {model.path: [(*where, name)]}, i == 0)
+        for i, name in enumerate(close)
     ]
 
 
