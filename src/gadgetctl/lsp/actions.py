@@ -86,8 +86,7 @@ def _rename_tag(model: Model, text: str, problem: Problem) -> list[Action]:
             return []
         candidates = close_names(name, list(view.properties), cutoff=0.6)
     else:
-        names = [d.name for d in model.repo.all_newest() if not d.abstract]
-        candidates = close_names(name, names, cutoff=0.6)
+        candidates = close_names(name, model.repo.names(), cutoff=0.6)  # (validate's hint)
     end = end_tag(text, problem.start, name)
     result = []
     for i, candidate in enumerate(candidates[:MAX_FIXES]):
