@@ -28,8 +28,19 @@ EMPTY = (
 )
 
 
-def c4_arguments() -> list[str]:
-    return [str(corpus_file(name)) for name in C4_FILES] + [str(SIMULATED)]
+#: The C4's MotionStar with no input_manager loading its driver: it stays pending, with the
+#: reason, beside the simulated head and wand.
+PENDING_MOTIONSTAR = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="mstar">'
+    '<elements><motion_star name="Motion Star master" version="2"><address>mstar3</address>'
+    "<server_port>6000</server_port></motion_star></elements></configuration>\n"
+)
+
+
+def c4_arguments(*more: str) -> list[str]:
+    return [str(corpus_file(name)) for name in C4_FILES] + [str(SIMULATED), *more]
 
 
 def configured_corners() -> dict[str, list[list[float]]]:
@@ -79,7 +90,9 @@ def not_blank(image: np.ndarray) -> bool:
 def test_c4_cave_with_simulated_head_and_wand_in_a_browser(tmp_path):
     expected = configured_corners()
     assert len(expected) == 4
-    with view_process(*c4_arguments()) as (_, url), chromium() as driver:
+    pending = tmp_path / "c4.mstar.pending.jconf"
+    pending.write_text(PENDING_MOTIONSTAR, encoding="utf-8")
+    with view_process(*c4_arguments(str(pending))) as (_, url), chromium() as driver:
         driver.get(url)
         first = wait_for_scene(
             driver, lambda s: all(pose(s, n)["matrix"] for n in ("VJHead", "VJWand"))
