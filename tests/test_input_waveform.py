@@ -265,3 +265,28 @@ def test_waveform_devices_are_updated_together_at_one_instant_and_fault_alone(ma
     assert checked >= 60
     assert devices[3].state.value == "faulted" and "broken on purpose" in devices[3].error
     assert all(d.state.value == "running" for d in devices[:3])
+
+
+def test_a_backlog_is_computed_in_one_block(make):
+    """Issue 27: the first frame after a long start-up (or a stalled frame loop) computed a
+    block per half second of backlog; 10,000 devices paid for each second of start-up."""
+    from gadgetctl.input.device import DeviceState
+
+    m = make(
+        '<waveform_device name="W" version="1"><rate>1000</rate>'
+        "<position_path>circle</position_path><event_period>0</event_period></waveform_device>",
+        start_devices=False,
+    )
+    device = m.device("W")
+    device.start_sampling()
+    device.state = DeviceState.RUNNING
+    device.t0 -= 2.0  # two seconds of samples due at once: four blocks' worth
+    computed = []
+    real = device.compute
+    device.compute = lambda start, count: computed.append(count) or real(start, count)
+    device.update_data()
+    frame = device.store.frame(DeviceKind.POSITION)
+    assert len(computed) == 1 and computed[0] >= frame.count >= 2000
+    stamps = np.concatenate([np.asarray(c.timestamps) for c in frame.chunks])
+    assert np.array_equal(stamps, device.t0 + np.arange(frame.count) / 1000.0)
+    assert frame.count == device.next_index
