@@ -54,14 +54,19 @@ def test_the_last_unit_within_the_limit_is_replayed(tmp_path, cli) -> None:
     assert units == set(range(REPLAY_UNITS)) and stderr == []
 
 
-def test_a_header_claiming_more_units_than_replayed_is_said(tmp_path, cli) -> None:
-    elements = {"W": {"element": "device", "type": "x", "kinds": ["analog"], "units": {"analog": 65536}}}  # fmt: skip
+@pytest.mark.parametrize(
+    ("kind", "claimed"), [("analog", 65536), ("analog", REPLAY_UNITS), ("position", 2)]
+)
+def test_a_header_claiming_more_units_than_its_samples_is_said(tmp_path, cli, kind, claimed):
+    """Claimed units only padded every instant: 1,024 glove units claimed by a 17 KB file
+    made 33 MB of output (found by make fuzz's replay.recording)."""
+    elements = {"W": {"element": "device", "type": "x", "kinds": [kind], "units": {kind: claimed}}}  # fmt: skip
     header = {**HEADER, "info": {"elements": elements}}
-    records = [sample(0, 1 + 0.01 * i) for i in range(5)]
+    records = [sample(0, 1 + 0.01 * i, kind) for i in range(5)]
     units, stderr = replayed(cli, write_recording(tmp_path / "claims.ndjson", records, header))
     assert units == {0}
-    assert len(stderr) == 1 and "claims 65536 analog units of 'W'" in stderr[0]
-    assert f"units from {REPLAY_UNITS} on are not replayed" in stderr[0]
+    assert len(stderr) == 1 and f"claims {claimed} {kind} units of 'W'" in stderr[0]
+    assert "the 1 its samples hold are replayed" in stderr[0]
 
 
 def test_a_vrpn_log_with_a_far_sensor_replays_the_near_ones(tmp_path, cli) -> None:

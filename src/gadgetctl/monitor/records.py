@@ -25,8 +25,7 @@ MAX_UNITS = 1 << 16
 #: Units of one device and kind a replay plays (0 to REPLAY_UNITS - 1), as many as the VRPN and
 #: Trackd drivers take. A replayed sampling instant holds every unit up to the highest one seen,
 #: so one sample of a far unit would make every later instant that wide: samples of units
-#: beyond are skipped and counted (one line on stderr), as are larger unit counts a header
-#: claims.
+#: beyond are skipped and counted (one line on stderr).
 REPLAY_UNITS = 1024
 KINDS = ("analog", "digital", "position", "glove", "gesture", "command", "string", "hat")
 
