@@ -13,7 +13,7 @@ FILE``).
 
 Then the path targets (:mod:`fuzz.paths`: a hostile VRPN peer against ``serve`` and against
 ``monitor vrpn:``, floods of mutated datagrams to each UDP driver, mutated pty streams to each
-serial driver), one after the other, each for ``--path-seconds`` in a process of its own.
+serial driver, hostile recordings through ``replay``), one after the other, each for ``--path-seconds`` in a process of its own.
 Each checks its own memory and time caps as it runs (``--list`` prints them); the campaign
 also kills one that runs past its time by more than its overrun, or whose resident memory
 passes ``--memory-mb``. A failure is saved as ``NAME-seedN.json`` (and the last inputs sent
@@ -21,7 +21,7 @@ as ``NAME-seedN.bin``); ``--replay FILE.json`` runs that target again with the s
 
 Prints the inputs tried per target, the time, the peak memory of each path target and the
 failures; exit status 1 when anything failed or exceeded a cap, 2 on usage errors. The
-default run (``make fuzz``) takes about 17 minutes: 600 s of parser targets, then 18 path
+default run (``make fuzz``) takes about 17 minutes: 600 s of parser targets, then 19 path
 targets of 20 s, each 1 to 3 s more to start and stop.
 """
 

@@ -118,6 +118,7 @@ def path_target(
 def load() -> dict[str, PathTarget]:
     """Every path target (importing the modules that register them)."""
     import fuzz.path_drivers
+    import fuzz.path_replay
     import fuzz.path_vrpn  # noqa: F401
 
     return PATHS
