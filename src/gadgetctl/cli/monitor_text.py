@@ -302,8 +302,14 @@ def snapshot_table(
     return head + "\n" + body + "\n" + notes
 
 
+#: Lines of a table that are not element rows: the heading, the column names, the line
+#: saying what was left out, and the blank line after it.
+TABLE_CHROME = 4
+
+
 class TableView:
-    """Prints a plain-text table of every selected element every ``interval`` seconds."""
+    """Prints a plain-text table of every selected element every ``interval`` seconds (on a
+    terminal, the rows its height leaves room for)."""
 
     def __init__(
         self,
@@ -333,14 +339,31 @@ class TableView:
             self.print()
 
     def print(self) -> None:
-        snapshot = self.session.snapshot()
-        self.stream.write(
-            snapshot_table(
-                snapshot, length_unit=self.length_unit, quaternion=self.quaternion, pose=self.pose
-            )
-            + "\n"
+        selected = self.session.selected
+        fit = self.rows_that_fit(len(selected))
+        snapshot = self.session.snapshot(names=selected[:fit] if fit < len(selected) else None)
+        text = snapshot_table(
+            snapshot, length_unit=self.length_unit, quaternion=self.quaternion, pose=self.pose
         )
+        if fit < len(selected):
+            text += (
+                f"… and {counted(len(selected) - fit, 'more element')} the terminal has no room "
+                "for (name or pattern them to see them; a pipe or file gets every row)\n"
+            )
+        self.stream.write(text + "\n")
         self.stream.flush()
+
+    def rows_that_fit(self, count: int) -> int:
+        """How many of ``count`` rows a table printed to a terminal shows: as many as its
+        height leaves (a table of 10,000 rows no terminal shows cost more than the run
+        itself); a pipe or a file gets them all."""
+        isatty = getattr(self.stream, "isatty", None)
+        if isatty is None or not isatty():
+            return count
+        import shutil
+
+        room = shutil.get_terminal_size().lines - TABLE_CHROME
+        return count if count <= room else max(1, room)
 
 
 # --------------------------------------------------------------------------- statistics
