@@ -57,6 +57,12 @@ def test_a_target_that_grows_fails_the_campaign_by_its_memory_cap(tmp_path: Path
     assert "memory cap exceeded" in saved["error"]
     assert saved["figures"]["peak_mb"] - saved["figures"]["baseline_mb"] > 63.8  # MB, rounded
     assert (failures / "selftest.grows-seed5.bin").is_file()
+    replayed = subprocess.run(
+        [sys.executable, "tests/fuzz/campaign.py", "--replay", str(failures / "selftest.grows-seed5.json")],
+        cwd=REPO, capture_output=True, text=True, timeout=100,
+    )  # fmt: skip
+    assert replayed.returncode == 1, replayed.stdout + replayed.stderr
+    assert "selftest.grows (seed 5): CapExceeded: memory cap exceeded" in replayed.stdout
 
 
 @pytest.mark.timeout(60)
