@@ -11,10 +11,8 @@ corpus, start-up included (target: under 0.5 s).
 
 from __future__ import annotations
 
-import statistics
 import tempfile
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 from common import CORPUS, GADGETCTL, Report, command_time, median_time, replicate_corpus
@@ -29,17 +27,6 @@ EXTRA = [
 ]
 
 PARSE_TARGET = 3.5
-
-
-def cpu_time(fn: Callable[[], object], repeat: int = 7) -> float:
-    """Median CPU seconds of this process over ``repeat`` calls (steadier than the wall clock
-    on a loaded machine)."""
-    times = []
-    for _ in range(repeat):
-        start = time.process_time()
-        fn()
-        times.append(time.process_time() - start)
-    return statistics.median(times)
 
 
 def bare_parse(files: list[Path]) -> None:
@@ -69,8 +56,8 @@ report.figure("ratio 50x / 1x", times[50] / times[1], "x", target=55)
 
 print("the corpus in-process against a bare lxml parse of its files (median CPU time):")
 corpus_files = sorted(p for p in CORPUS.rglob("*") if p.suffix in (".jdef", ".jconf"))
-validate_cpu = cpu_time(lambda: validate_paths([CORPUS], options))
-parse_cpu = cpu_time(lambda: bare_parse(corpus_files))
+validate_cpu = median_time(lambda: validate_paths([CORPUS], options), clock=time.process_time)
+parse_cpu = median_time(lambda: bare_parse(corpus_files), clock=time.process_time)
 report.figure(f"validate CORPUS ({len(corpus_files)} files), CPU", validate_cpu * 1000, "ms")
 report.figure("bare lxml parse of the same files (baseline), CPU", parse_cpu * 1000, "ms")
 report.figure("validate / bare parse", validate_cpu / parse_cpu, "x", target=PARSE_TARGET)
