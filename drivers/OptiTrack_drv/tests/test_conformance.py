@@ -28,6 +28,7 @@ import math
 import socket
 import struct
 import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -367,6 +368,18 @@ class StandIn:
 build = managers_fixture("Optitrack_drv", name="build", ready=True)  # no tuning at all
 
 
+def settled_counters(device, timeout: float = 10.0) -> dict[str, int]:
+    """The device's counters once its receiver has taken every datagram sent (three equal
+    reads in a row): counters read while it works may be caught between two of them."""
+    deadline = time.monotonic() + timeout
+    seen = [device.counters]
+    while len(seen) < 3 or any(c != seen[-1] for c in seen[-3:]):
+        assert time.monotonic() < deadline, "the receiver's counters never settled"
+        time.sleep(0.05)  # the pace of the reads; the condition is the three equal reads
+        seen.append(device.counters)
+    return seen[-1]
+
+
 @pytest.mark.parametrize("version", VERSIONS, ids=[f"{a}.{b}" for a, b in VERSIONS])
 def test_sdk_frames_over_multicast_at_motive_defaults_with_no_option_given(build, version):
     bone = (4 << 16) | 2
@@ -385,8 +398,8 @@ def test_sdk_frames_over_multicast_at_motive_defaults_with_no_option_given(build
 
         with StandIn(server_information(*version), frame, 0.005) as motive:
             frames_until(manager, lambda: device.store.total(DeviceKind.POSITION) >= 20)
-            counters = device.counters
             number = last["n"]
+        counters = settled_counters(device)
         assert motive.connects >= 1 and counters["server_infos"] >= 1
         # bad only if frames overflowed the hold while waiting for the reply (a slow machine)
         assert counters["bad_datagrams"] == counters["undecoded_frames"]
@@ -431,7 +444,7 @@ def test_real_motive_frames_over_multicast_at_motive_defaults(build) -> None:
                 ),
                 timeout=30,
             )
-        counters = device.counters
+        counters = settled_counters(device)
     assert counters["bad_datagrams"] == counters["undecoded_frames"] and counters["frames"] > 0
     assert counters["frames"] + counters["undecoded_frames"] + counters["kernel_dropped"] == 518
     # every decoded frame is a sample; once all are in the store, a frame makes the newest
