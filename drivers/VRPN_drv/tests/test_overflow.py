@@ -53,8 +53,7 @@ def silent_server() -> VrpnEmulator:
     return VrpnEmulator(0, scenario="silent", sensors=1, buttons=0, channels=0)
 
 
-def test_the_monitor_shows_exactly_what_the_kernel_dropped(tmp_path: Path, monkeypatch) -> None:
-    monkeypatch.setattr(VrpnDevice, "receive_buffer", 1)  # the kernel's smallest buffer
+def test_the_monitor_shows_exactly_what_the_kernel_dropped(tmp_path: Path) -> None:
     with silent_server() as server:  # nothing on the UDP channel but the flood
         config = tmp_path / "v.jconf"
         config.write_text(configuration("VRPN_drv", element("V", f"127.0.0.1:{server.port}", 1)))
@@ -67,14 +66,22 @@ def test_the_monitor_shows_exactly_what_the_kernel_dropped(tmp_path: Path, monke
             frames_until(manager, lambda: udp_channel(device) is not None, timeout=15)
             channel = udp_channel(device)
             port = channel.getsockname()[1]
+            # the kernel's smallest receive buffer, set on the channel itself: a class
+            # attribute patched here would not reach the driver, which the plug-in loader
+            # imports under a module name of its own
+            channel.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1)
+            session.step()  # the monitor watches the device from here: later drops are its
 
             sent = 0
 
             def burst() -> None:
                 nonlocal sent
+                taken = device.health()["datagrams"]
                 flood(port, 300)
                 sent += 300
-                session.step()
+                # the kernel tells its drop count with the next datagram read: let the reader
+                # take one of those the full buffer kept (a loaded machine delays it)
+                wait_until(lambda: device.health()["datagrams"] > taken, 10.0, session.step)
 
             assert wait_until(lambda: device.health()["kernel_dropped"] > 0, 20.0, burst)
 
@@ -94,9 +101,9 @@ def test_the_monitor_shows_exactly_what_the_kernel_dropped(tmp_path: Path, monke
                 sent,
             )
             kernel = proc_udp_drops(channel)
-            stats = session.device_stats("V")
-            assert stats is not None and device.store.dropped() == 0
-            assert stats.dropped == kernel > 0
+            assert device.store.dropped() == 0 and kernel > 0
+            # the statistics monitor --format ndjson ends with (the live view's snapshot is
+            # recomputed every STATS_REFRESH seconds, so it may show them a moment later)
             assert session.final_stats()["V"]["dropped"] == kernel
             # every datagram read was whole VRPN messages: counted as decoded, none bad
             health = device.health()
