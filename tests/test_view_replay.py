@@ -127,7 +127,10 @@ def test_seeking_shows_the_poses_recorded_then_and_playing_moves_on(files):
             if session.markers:
                 break
         assert ran < 600
-        assert [m.name for m in session.markers] == ["middle"]  # passed while playing
+        # the first marker passed while playing is the one after 0.5 s (a stalled frame on a
+        # loaded machine may pass the next one in the same frame: they come in order)
+        names = [m.name for m in session.markers]
+        assert names[0] == "middle" and names == [n for n in MARKERS if n in names]
         assert proxy_x(manager) >= 1.5
     finally:
         manager.shutdown()
