@@ -125,6 +125,10 @@ def test_c4_cave_with_simulated_head_and_wand_in_a_browser(tmp_path):
         )
         assert [f for f in fetched if not f.startswith((url, "data:", "blob:"))] == []
         painted(driver)
+        # the page timed, itself, when it first held the most poses and drew the frame after
+        most = driver.execute_script("return window.gadgetctlSceneMost")
+        assert most["poses"] >= sum(1 for p in second["poses"] if p["matrix"]) > 0
+        assert 0 < most["at"] <= most["painted"]
         full, png = screenshot(driver)
         shown = wait_for_scene(driver)
     empty_config = tmp_path / "empty.jconf"

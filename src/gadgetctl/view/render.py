@@ -40,11 +40,19 @@ INITIAL_CAMERA = {"position": (2.5, 3.0, 6.5), "look_at": (0.0, 1.0, 0.0), "fov"
 
 # The page's own copy of the scene state: the HTML panel's text, parsed into
 # window.gadgetctlScene by the handler of an image that cannot load (it runs each time the
-# panel is replaced, i.e. each time the state is sent).
+# panel is replaced, i.e. each time the state is sent). The handler also keeps, in
+# window.gadgetctlSceneMost, when the page first held the most poses it has held (``at``,
+# milliseconds from navigation) and when the browser drew its next frame after that
+# (``painted``): a busy page answers scripts late, so the time is taken in the page.
 _STATE_HOOK = (
     '<img alt="" style="display:none" src="data:," '
-    f"onerror=\"try{{window.gadgetctlScene=JSON.parse(document.getElementById('{SCENE_ELEMENT_ID}')"
-    '.textContent);window.gadgetctlSceneUpdates=(window.gadgetctlSceneUpdates||0)+1}catch(e){}">'
+    "onerror=\"try{var s=JSON.parse(document.getElementById("
+    f"'{SCENE_ELEMENT_ID}').textContent);"
+    "window.gadgetctlScene=s;window.gadgetctlSceneUpdates=(window.gadgetctlSceneUpdates||0)+1;"
+    "var n=(s.poses||[]).filter(function(p){return p.matrix}).length,m=window.gadgetctlSceneMost;"
+    "if(!m||n>m.poses){m=window.gadgetctlSceneMost={poses:n,at:performance.now()};"
+    "requestAnimationFrame(function(){requestAnimationFrame(function(){m.painted=performance.now()})})}"
+    '}catch(e){}">'
 )
 
 
