@@ -303,7 +303,9 @@ def main() -> None:
             )
             report.figure("chromium: the page answered a script after", answered, "s")
             empty_rendered, empty_answered = empty_browser_render(empty, args.rate)
-            report.figure("chromium: page of an empty configuration drawn after", empty_rendered, "s")
+            report.figure(
+                "chromium: page of an empty configuration drawn after", empty_rendered, "s"
+            )
             report.figure("chromium: the empty page answered a script after", empty_answered, "s")
             report.ratio(
                 "first render, 100 devices / empty configuration", rendered, empty_rendered

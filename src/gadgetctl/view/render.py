@@ -46,7 +46,7 @@ INITIAL_CAMERA = {"position": (2.5, 3.0, 6.5), "look_at": (0.0, 1.0, 0.0), "fov"
 # (``painted``): a busy page answers scripts late, so the time is taken in the page.
 _STATE_HOOK = (
     '<img alt="" style="display:none" src="data:," '
-    "onerror=\"try{var s=JSON.parse(document.getElementById("
+    'onerror="try{var s=JSON.parse(document.getElementById('
     f"'{SCENE_ELEMENT_ID}').textContent);"
     "window.gadgetctlScene=s;window.gadgetctlSceneUpdates=(window.gadgetctlSceneUpdates||0)+1;"
     "var n=(s.poses||[]).filter(function(p){return p.matrix}).length,m=window.gadgetctlSceneMost;"
