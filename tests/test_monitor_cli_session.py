@@ -18,6 +18,7 @@ from gadgetctl.jccl.configuration import Configuration
 from gadgetctl.jccl.definitions import Location
 from gadgetctl.jccl.repository import default_repository
 from gadgetctl.monitor import replaydevice
+from gadgetctl.monitor.gather import frame_timestamps
 from gadgetctl.monitor.recording import Recorder, read_recording
 from gadgetctl.monitor.records import (
     HeaderRecord,
@@ -28,7 +29,7 @@ from gadgetctl.monitor.records import (
     encode_rows,
     encode_samples,
 )
-from gadgetctl.monitor.session import MonitorSession, SelectionError, frame_timestamps
+from gadgetctl.monitor.session import MonitorSession, SelectionError
 
 from conftest import REPO
 

@@ -30,8 +30,9 @@ from gadgetctl.cli.monitor_text import (
 )
 from gadgetctl.input.clock import now
 from gadgetctl.monitor.events import number_text
-from gadgetctl.monitor.session import ElementView, MonitorSession, UnitView
+from gadgetctl.monitor.session import MonitorSession
 from gadgetctl.monitor.sparkline import sparkline
+from gadgetctl.monitor.views import ElementView, UnitView
 from gadgetctl.safetext import fixed, printable
 
 BAR_WIDTH = 16

@@ -12,9 +12,10 @@ from typing import Any, TextIO
 import numpy as np
 
 from gadgetctl.monitor.events import FINGERS, HAT_NAMES, UNIT_SYMBOLS, number_text, pose_text
-from gadgetctl.monitor.session import ElementView, MonitorSession, Snapshot, UnitView
+from gadgetctl.monitor.session import MonitorSession
 from gadgetctl.monitor.stats import DeviceSnapshot
 from gadgetctl.monitor.units import euler_xyz_degrees, from_meters, quaternion_wxyz
+from gadgetctl.monitor.views import ElementView, Snapshot, UnitView
 from gadgetctl.safetext import fixed, printable
 from gadgetctl.wording import counted
 

@@ -11,7 +11,11 @@ out); the last two run it:
 * :mod:`~gadgetctl.monitor.units`: display units and rotation conversions;
 * :mod:`~gadgetctl.monitor.session`: :class:`MonitorSession`, which runs the input manager
   frame by frame, gathers every sample, keeps the statistics, writes records and hands the
-  views their snapshots;
+  views their snapshots, with its parts in modules of their own:
+  :mod:`~gadgetctl.monitor.gather` (a frame's samples by device),
+  :mod:`~gadgetctl.monitor.tracks` (what is kept per device between frames),
+  :mod:`~gadgetctl.monitor.encoding` (samples and proxy values as records) and
+  :mod:`~gadgetctl.monitor.views` (the snapshots views draw);
 * :mod:`~gadgetctl.monitor.replaydevice`: the replay driver (``replay_device``) and the
   thread that feeds a recording into it.
 

@@ -30,6 +30,7 @@ from gadgetctl.input.device import DeviceState
 from gadgetctl.input.devicetypes import Analog
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.samples import Sample
+from gadgetctl.monitor.encoding import proxy_value
 from gadgetctl.monitor.poses import (
     EULER,
     MATRIX,
@@ -153,8 +154,6 @@ class ChangeDetector:
         """A selected proxy's or alias's changes, under its own name and without a unit: the
         value it gives this frame (normalised, filtered, a button's state), as the
         application reading it sees it; its state when it is stupefied or comes back."""
-        from gadgetctl.monitor.session import proxy_value
-
         state = "stupefied" if proxy.stupefied else "active"
         reason = proxy.reason if proxy.stupefied else None
         if (state, reason) != (memory.state, memory.error):

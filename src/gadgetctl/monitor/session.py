@@ -19,11 +19,9 @@ from __future__ import annotations
 import fnmatch
 import gc
 import time
-from collections import deque
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
-from types import MappingProxyType
-from typing import Any, Protocol
+from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
@@ -31,21 +29,24 @@ from gadgetctl.errors import GadgetctlError
 from gadgetctl.input.clock import now
 from gadgetctl.input.device import DeviceState, Input
 from gadgetctl.input.devicetypes import Analog
-from gadgetctl.input.events import KeyEvent, MouseMoveEvent, ScrollEvent
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.manager import InputManager
 from gadgetctl.input.proxies import (
     AnalogProxy,
     DigitalProxy,
-    GestureProxy,
-    GloveProxy,
-    KeyboardMouseProxy,
     PositionProxy,
-    Proxy,
 )
-from gadgetctl.input.samples import FrameSamples, Sample, SharedWindows
+from gadgetctl.input.samples import FrameSamples, SharedWindows
 from gadgetctl.input.status import UNKNOWN_TYPE, ElementKind, ElementStatus
 from gadgetctl.jccl.configuration import Configuration
+from gadgetctl.monitor.encoding import encode_frame, json_value, plain_json, proxy_value
+from gadgetctl.monitor.gather import (
+    NO_GATHERING,
+    NOTHING,
+    GatheredFrames,
+    GatherPlan,
+    SharedGroup,
+)
 from gadgetctl.monitor.poses import MATRIX, pose_values
 from gadgetctl.monitor.recording import Recorder
 from gadgetctl.monitor.records import (
@@ -54,25 +55,22 @@ from gadgetctl.monitor.records import (
     MarkerRecord,
     SampleRecord,
     StatusRecord,
-    encode_rows,
     encode_samples,
 )
-from gadgetctl.monitor.stats import DeviceSnapshot, DeviceStats
+from gadgetctl.monitor.stats import DeviceSnapshot
+from gadgetctl.monitor.tracks import DeviceTrack
+from gadgetctl.monitor.views import ElementView, Frame, Snapshot, UnitView
 from gadgetctl.suggest import did_you_mean
 
 DEVICE, PROXY, ALIAS = ElementKind.DEVICE.value, ElementKind.PROXY.value, ElementKind.ALIAS.value
 PENDING = "pending"
 DEFAULT_HISTORY_SECONDS = 5.0
-STATS_REFRESH = 0.25  # seconds between recomputations of interval percentiles and jitter
 SINK_WARMUP = 0.5  # seconds a session waits for every device's first sample before its header
 #: Work done ahead between frames (InputManager.prepare, serve's rows framed ahead) waits for
 #: a later pause when less than this share of a frame period is left before the next frame
 #: (0: only when the next frame is already due; skipped work is done by a later pause, or by
 #: the frame that needs it).
 PREPARE_SLACK = 0.0
-
-
-_NOTHING: Mapping = MappingProxyType({})
 
 
 class SelectionError(GadgetctlError):
@@ -92,499 +90,6 @@ class ReplaySource(Protocol):
     def done(self) -> bool: ...
 
     def drain_markers(self) -> list[MarkerRecord]: ...
-
-
-# --------------------------------------------------------------------------- snapshots
-
-
-@dataclass(slots=True)
-class UnitView:
-    """One unit of one kind, as a view shows it.
-
-    ``value``: analog normalised to [0, 1]; digital 0/1 for devices and the toggle state
-    0-3 (off, on, toggle on, toggle off) for proxies; position a 4x4 array in meters; glove
-    a (6, 4) array of radians; gesture, command and hat integers; string text; keyboard and
-    mouse the names of the keys held. ``raw`` is the device datum where it differs.
-    """
-
-    kind: str
-    unit: int
-    value: Any
-    raw: Any = None
-    changed: bool = False  # digital: the state changed during this frame
-    presses: int = 0  # digital: presses (off -> on) counted since the start or the last reset
-    history: Sequence[float] | None = None  # analog: the normalised value, one per frame
-
-
-@dataclass(slots=True)
-class ElementView:
-    """One device, proxy or alias: its status, the statistics of the device that feeds it
-    and its current values."""
-
-    name: str
-    element: str  # device, proxy, alias
-    type: str
-    state: str
-    reason: str | None = None
-    target: str | None = None  # a proxy's device, an alias's proxy
-    #: Why VR Juggler would leave this element pending although gadgetctl runs it.
-    note: str | None = None
-    unit: int | None = None  # a proxy's unit
-    device: str | None = None  # the device whose statistics are shown
-    stats: DeviceSnapshot | None = None
-    age: float | None = None  # seconds since the newest sample
-    count: int = 0  # samples this frame (sampling instants)
-    values: list[UnitView] = field(default_factory=list)
-    health: dict[str, object] = field(default_factory=dict)  # a device's Input.health()
-    #: A stupefied proxy's or alias's device when that device is pending, faulted or
-    #: otherwise not running: the one cause, whose own line gives the reason.
-    blocked_by: str | None = None
-
-
-@dataclass(slots=True)
-class Snapshot:
-    frame: int
-    timestamp: float
-    elapsed: float
-    frame_rate: float
-    elements: list[ElementView]
-    markers: list[MarkerRecord]
-    keyboards: list[str]
-    samples_written: int
-    finished: bool = False
-
-
-@dataclass(frozen=True, slots=True)
-class Frame:
-    """What :meth:`MonitorSession.frames` yields once per frame."""
-
-    number: int
-    timestamp: float
-    elapsed: float
-    samples: int  # samples of the watched devices this frame (sampling instants)
-
-
-# --------------------------------------------------------------------------- per device
-
-
-def _chunk_timestamps(frame: FrameSamples) -> np.ndarray:
-    parts = []
-    singles: list[float] = []
-    for chunk in frame.chunks:
-        if type(chunk) is Sample:
-            singles.append(chunk.timestamp)
-        else:
-            if singles:
-                parts.append(np.asarray(singles, dtype=np.float64))
-                singles = []
-            parts.append(np.asarray(chunk.timestamps, dtype=np.float64))
-    if singles:
-        parts.append(np.asarray(singles, dtype=np.float64))
-    if len(parts) == 1:
-        return parts[0]
-    return np.concatenate(parts) if parts else np.empty(0)
-
-
-def frame_timestamps(frames: Mapping[DeviceKind, FrameSamples]) -> np.ndarray:
-    """The distinct sampling instants of one device's frame, over all its kinds, in order."""
-    arrays = [_chunk_timestamps(f) for f in frames.values() if f.count]
-    if not arrays:
-        return np.empty(0)
-    if len(arrays) == 1:
-        return arrays[0]
-    longest = max(arrays, key=len)
-    if all(len(a) == len(longest) and a[0] == longest[0] and a[-1] == longest[-1] for a in arrays):
-        return longest  # the kinds were sampled together (the usual multi-kind driver)
-    return np.unique(np.concatenate(arrays))
-
-
-def _rows(values: Any) -> np.ndarray:
-    array = np.asarray(values)
-    return array.reshape(len(array), -1) if array.ndim != 2 else array
-
-
-class SharedGroup:
-    """The watched devices of one frame group that share windows (see
-    :class:`~gadgetctl.input.samples.SharedWindows`): their slots and names, in slot order
-    (``slots`` is the windows' ``every`` when they are all of them)."""
-
-    __slots__ = ("names", "slots", "windows")
-
-    def __init__(self, windows: SharedWindows, slots: list[int], names: list[str]) -> None:
-        order = sorted(range(len(slots)), key=slots.__getitem__)  # in slot order
-        self.windows = windows
-        self.slots = np.array([slots[i] for i in order], dtype=np.int64)
-        self.names = [names[i] for i in order]
-        if np.array_equal(self.slots, windows.every):
-            self.slots = windows.every  # all of them: read with slices
-
-
-class GatheredFrames(Mapping[str, Mapping[DeviceKind, FrameSamples]]):
-    """A frame's samples by device name (:attr:`MonitorSession.gathered`): those gathered per
-    device, and those of the devices whose frame is a window of their group's shared arrays,
-    made per device only when asked. ``groups``: the latter, for a consumer that reads the
-    shared arrays of every device at once (a slot is in this frame when ``fresh``)."""
-
-    __slots__ = ("_own", "_shared", "groups")
-
-    def __init__(
-        self,
-        own: dict[str, Mapping[DeviceKind, FrameSamples]],
-        shared: Mapping[str, tuple[SharedWindows, int, Input]] = _NOTHING,
-        groups: Sequence[SharedGroup] = (),
-    ) -> None:
-        self._own = own
-        self._shared = shared
-        self.groups = groups
-
-    def __getitem__(self, name: str) -> Mapping[DeviceKind, FrameSamples]:
-        frames = self._own.get(name)
-        if frames is not None:
-            return frames
-        entry = self._shared.get(name)
-        if entry is not None and entry[0].fresh[entry[1]]:
-            return entry[2].store.current
-        raise KeyError(name)
-
-    def get(self, name: str, default: Any = None) -> Any:
-        try:
-            return self[name]
-        except KeyError:
-            return default
-
-    def __contains__(self, name: object) -> bool:
-        return self.get(name) is not None  # type: ignore[arg-type]
-
-    def __iter__(self) -> Iterator[str]:
-        yield from self._own
-        for name, (windows, slot, _) in self._shared.items():
-            if windows.fresh[slot]:
-                yield name
-
-    def __len__(self) -> int:
-        return len(self._own) + sum(1 for w, slot, _ in self._shared.values() if w.fresh[slot])
-
-
-class _GatherPlan:
-    """How a session without statistics gathers: the watched devices read per device, and
-    per frame group sharing windows, the watched members read at once."""
-
-    __slots__ = ("arrangement", "groups", "own", "shared", "watch")
-
-    def __init__(
-        self,
-        arrangement: object,
-        watch: list[str],
-        own: list[str],
-        shared: dict[str, tuple[SharedWindows, int, Input]],
-        groups: list[SharedGroup],
-    ) -> None:
-        self.arrangement, self.watch, self.own, self.shared, self.groups = (
-            arrangement,
-            watch,
-            own,
-            shared,
-            groups,
-        )
-
-
-_NO_GATHERING = GatheredFrames({})
-
-
-class DeviceTrack:
-    """What a session keeps about one device between frames."""
-
-    def __init__(self, name: str, device: Input, history: int, statistics: bool = True) -> None:
-        self.name = name
-        self.device = device
-        self.statistics = statistics
-        self.stats = DeviceStats(name)
-        self.history_length = history
-        self.frames: dict[DeviceKind, FrameSamples] = {}
-        self.count = 0
-        self.frame_seen = -1  # the manager frame whose samples ``frames`` holds
-        self.units: dict[str, int] = {}
-        self._dropped_seen = self._dropped_now()
-        # a device is new to its manager, and the session started it: a fault before the first
-        # frame (while it started) is one of this run's too
-        self._faults_seen = 0
-        self.digital_state: np.ndarray | None = None
-        self.presses: np.ndarray | None = None
-        self.changed: np.ndarray | None = None
-        self.analog_history: list[deque[float]] = []
-        self._snapshot: DeviceSnapshot | None = None
-        self._snapshot_at = -1.0
-        self._swapped_at: float | None = None
-
-    def reset(self) -> None:
-        self.stats.reset()
-        if self.presses is not None:
-            self.presses[:] = 0
-        self._snapshot = None
-        self._dropped_seen = self._dropped_now()
-        self._faults_seen = self.device.faults
-
-    def _dropped_now(self) -> int:
-        """Samples dropped by the store (the most of any kind) plus what the transport lost
-        before the driver read it (kernel receive-buffer overflows)."""
-        store = self.device.store
-        most = max((store.dropped(kind) for kind in store.kinds), default=0)
-        return most + self.device.transport_dropped()
-
-    def update(self) -> int:
-        device = self.device
-        store = device.store
-        swapped_at = store.swapped_at
-        fresh = swapped_at != self._swapped_at  # a failed update_data leaves the old frame
-        self._swapped_at = swapped_at
-        # the kinds with samples this frame, as the swap found them (a read-only mapping)
-        self.frames = frames = store.current if fresh else {}
-        if not self.statistics:  # gathering only (serve): no rates, presses or histories
-            if not frames:
-                self.count = 0
-            elif len(frames) == 1:
-                self.count = next(iter(frames.values())).count
-            else:
-                self.count = max(f.count for f in frames.values())
-            return self.count
-        dropped = self._dropped_now()
-        stamps = frame_timestamps(frames) if frames else ()
-        count = len(stamps)
-        if count:
-            self.stats.add_timestamps(stamps)
-        self.count = count
-        self.stats.end_frame(now())
-        if dropped != self._dropped_seen:
-            self.stats.add_dropped(max(0, dropped - self._dropped_seen))
-            self._dropped_seen = dropped
-        faults = device.faults
-        if faults != self._faults_seen:
-            self.stats.add_fault(max(0, faults - self._faults_seen))
-            self._faults_seen = faults
-        digital = frames.get(DeviceKind.DIGITAL)
-        if digital is not None:
-            self._scan_digital(digital)
-        elif self.changed is not None and self.changed.any():
-            self.changed[:] = False
-        if DeviceKind.ANALOG in store.kinds:
-            self._note_analog(store.latest(DeviceKind.ANALOG))
-        for kind, samples in frames.items():
-            newest = samples.newest
-            if newest is not None:
-                self.units[kind.value] = max(self.units.get(kind.value, 0), len(newest.values))
-        return count
-
-    def _scan_digital(self, frame: FrameSamples) -> None:
-        try:
-            parts = [
-                np.asarray([chunk.values]) if type(chunk) is Sample else _rows(chunk.values)
-                for chunk in frame.chunks
-            ]
-            rows = (np.concatenate(parts) if len(parts) > 1 else parts[0]) != 0
-        except ValueError:  # units changed within the frame: look at the newest sample only
-            newest = frame.newest
-            rows = (
-                np.asarray([newest.values]) != 0 if newest is not None else np.zeros((0, 0), bool)
-            )
-        if not rows.size:
-            return
-        units = rows.shape[1]
-        previous = self.digital_state
-        if previous is None or len(previous) != units:
-            previous = rows[0]
-            presses = np.zeros(units, dtype=np.int64)
-            if self.presses is not None:
-                presses[: min(units, len(self.presses))] = self.presses[:units]
-            self.presses = presses
-        stacked = np.vstack((previous[None, :], rows)).astype(np.int8)
-        steps = np.diff(stacked, axis=0)
-        self.presses += (steps > 0).sum(axis=0)
-        self.changed = (steps != 0).any(axis=0)
-        self.digital_state = rows[-1].copy()
-
-    def _note_analog(self, newest: Sample | None) -> None:
-        if newest is None:
-            return
-        values = newest.values
-        histories = self.analog_history
-        while len(histories) < len(values):
-            histories.append(deque(maxlen=self.history_length))
-        device = self.device
-        normalize = device.normalize if isinstance(device, Analog) else float
-        for unit, raw in enumerate(values):
-            histories[unit].append(normalize(float(raw)))
-
-    def snapshot(self, moment: float) -> DeviceSnapshot:
-        if self._snapshot is None or moment - self._snapshot_at >= STATS_REFRESH:
-            self._snapshot = self.stats.snapshot(moment)
-            self._snapshot_at = moment
-        return self._snapshot
-
-    # -- values -------------------------------------------------------------------------
-
-    def unit_views(self) -> list[UnitView]:
-        device = self.device
-        store = device.store
-        views: list[UnitView] = []
-        for kind in store.kinds:
-            latest = store.latest(kind)
-            if latest is None:
-                continue
-            values = latest.values
-            if kind is DeviceKind.ANALOG:
-                for unit, raw in enumerate(values):
-                    raw = float(raw)
-                    value = device.normalize(raw) if isinstance(device, Analog) else raw
-                    history = self.analog_history[unit] if unit < len(self.analog_history) else None
-                    views.append(UnitView(kind.value, unit, value, raw, history=history))
-            elif kind is DeviceKind.DIGITAL:
-                for unit, state in enumerate(values):
-                    changed = (
-                        bool(self.changed[unit])
-                        if self.changed is not None and unit < len(self.changed)
-                        else False
-                    )
-                    presses = (
-                        int(self.presses[unit])
-                        if self.presses is not None and unit < len(self.presses)
-                        else 0
-                    )
-                    views.append(
-                        UnitView(kind.value, unit, int(state), changed=changed, presses=presses)
-                    )
-            elif kind is DeviceKind.KEYBOARD_MOUSE:
-                held = getattr(device, "held", frozenset())
-                views.append(UnitView(kind.value, 0, sorted(k.name for k in held)))
-            else:
-                for unit, value in enumerate(values):
-                    views.append(UnitView(kind.value, unit, _plain(kind, value)))
-        return views
-
-
-def _plain(kind: DeviceKind, value: Any) -> Any:
-    if kind is DeviceKind.POSITION or kind is DeviceKind.GLOVE:
-        return np.asarray(value, dtype=np.float64)
-    if kind is DeviceKind.STRING:
-        return str(value)
-    try:
-        return int(value)
-    except (TypeError, ValueError):
-        return value
-
-
-def event_value(event: Any) -> dict[str, object]:
-    """A keyboard/mouse event as a JSON object for sample records."""
-    if isinstance(event, KeyEvent):
-        return {"event": "key", "key": event.key.name, "pressed": event.pressed}
-    if isinstance(event, MouseMoveEvent):
-        return {"event": "move", "dx": float(event.dx), "dy": float(event.dy)}
-    if isinstance(event, ScrollEvent):
-        return {"event": "scroll", "direction": str(event.direction)}
-    return {"event": str(event)}
-
-
-def _plain_json(value: Any) -> Any:
-    tolist = getattr(value, "tolist", None)
-    return tolist() if tolist is not None else value
-
-
-def _json_value(kind: DeviceKind, value: Any) -> Any:
-    if kind is DeviceKind.KEYBOARD_MOUSE:
-        return event_value(value)
-    tolist = getattr(value, "tolist", None)
-    return tolist() if tolist is not None else value
-
-
-def encode_frame(
-    name: str, kind: DeviceKind, frame: FrameSamples, device: Input, pose: str = MATRIX
-) -> tuple[str, int]:
-    """Sample records (NDJSON text, count) of every sample of one kind in one frame;
-    positions in the ``pose`` format (:mod:`gadgetctl.monitor.poses`)."""
-    parts: list[str] = []
-    count = 0
-    label = kind.value
-    if kind is DeviceKind.POSITION and pose != MATRIX:
-        return _encode_poses(name, frame, pose)
-    analog = kind is DeviceKind.ANALOG and isinstance(device, Analog)
-    low, high = (device.analog_min, device.analog_max) if analog else (0.0, 1.0)
-    for chunk in frame.chunks:
-        if type(chunk) is Sample:
-            stamps = [chunk.timestamp]
-            row = [_json_value(kind, v) for v in chunk.values]
-            rows = [row]
-            count += len(row)
-            if analog:
-                parts.append(
-                    encode_rows(
-                        name, label, stamps, [[device.normalize(float(v)) for v in row]], rows
-                    )
-                )
-            else:
-                parts.append(encode_rows(name, label, stamps, rows))
-            continue
-        values = np.asarray(chunk.values)
-        stamps = np.asarray(chunk.timestamps, dtype=np.float64).tolist()
-        if not len(stamps):
-            continue
-        count += values.shape[0] * (values.shape[1] if values.ndim > 1 else 1)
-        if values.ndim == 1:
-            values = values[:, None]
-        if analog:
-            if high <= low:
-                normalised = np.zeros(values.shape)
-            else:
-                normalised = (np.clip(values.astype(np.float64), low, high) - low) / (high - low)
-            parts.append(encode_rows(name, label, stamps, normalised.tolist(), values.tolist()))
-        else:
-            parts.append(encode_rows(name, label, stamps, values.tolist()))
-    return "".join(parts), count
-
-
-def _encode_poses(name: str, frame: FrameSamples, pose: str) -> tuple[str, int]:
-    parts: list[str] = []
-    count = 0
-    for chunk in frame.chunks:
-        if type(chunk) is Sample:
-            stamps, matrices = [chunk.timestamp], np.asarray(chunk.values, dtype=np.float64)[None]
-        else:
-            stamps = np.asarray(chunk.timestamps, dtype=np.float64).tolist()
-            matrices = np.asarray(chunk.values, dtype=np.float64)
-        if not len(stamps):
-            continue
-        matrices = matrices.reshape(len(stamps), -1, 4, 4)
-        units = matrices.shape[1]
-        flat = pose_values(matrices, pose)
-        rows = [flat[i * units : (i + 1) * units] for i in range(len(stamps))]
-        parts.append(encode_rows(name, "position", stamps, rows))
-        count += len(stamps) * units
-    return "".join(parts), count
-
-
-# --------------------------------------------------------------------------- proxies
-
-
-def proxy_value(proxy: Proxy) -> tuple[Any, Any]:
-    """(value, raw) of a proxy for records and views; raw is None where it equals the value."""
-    device = proxy.device
-    if isinstance(proxy, AnalogProxy):
-        return float(proxy.data), (proxy.raw if proxy.raw is not None else None)
-    if isinstance(proxy, DigitalProxy):
-        raw = None
-        if device is not None:
-            latest = device.store.latest(DeviceKind.DIGITAL)
-            if latest is not None and proxy.unit < len(latest.values):
-                raw = int(latest.values[proxy.unit])
-        return int(proxy.data), raw
-    if isinstance(proxy, PositionProxy):
-        return proxy.matrix, None
-    if isinstance(proxy, GloveProxy):
-        return proxy.data, None
-    if isinstance(proxy, GestureProxy):
-        return int(proxy.data), None
-    if isinstance(proxy, KeyboardMouseProxy):
-        return sorted(k.name for k in proxy.data), None
-    data = proxy.data
-    return (str(data) if isinstance(data, str) else int(data)), None
 
 
 # --------------------------------------------------------------------------- the session
@@ -666,8 +171,8 @@ class MonitorSession:
         self._samples_written = 0
         self._watch: list[str] = []
         self._consumers: list[FrameConsumer] = []
-        self._gathered: Mapping[str, Mapping[DeviceKind, FrameSamples]] = _NO_GATHERING
-        self._plan: _GatherPlan | None = None
+        self._gathered: Mapping[str, Mapping[DeviceKind, FrameSamples]] = NO_GATHERING
+        self._plan: GatherPlan | None = None
 
     # -- setting up ---------------------------------------------------------------------
 
@@ -747,7 +252,7 @@ class MonitorSession:
     def frame_samples(self, name: str) -> Mapping[DeviceKind, FrameSamples]:
         """Every sample the watched device ``name`` delivered this frame, per kind (empty
         when it delivered nothing or is not watched)."""
-        return self._gathered.get(name, _NOTHING)
+        return self._gathered.get(name, NOTHING)
 
     @property
     def gathered(self) -> Mapping[str, Mapping[DeviceKind, FrameSamples]]:
@@ -985,7 +490,7 @@ class MonitorSession:
                 gathered[name] = track.frames
         return samples
 
-    def _gather_plan(self) -> _GatherPlan:
+    def _gather_plan(self) -> GatherPlan:
         """The plan of :meth:`step` without statistics, made again when the watched names or
         what the manager updates change."""
         manager = self.manager
@@ -1011,7 +516,7 @@ class MonitorSession:
             entry[1].append(slot)
             entry[2].append(name)
         groups = [SharedGroup(windows, slots, names) for windows, slots, names in members.values()]
-        self._plan = _GatherPlan(arrangement, self._watch, own, shared, groups)
+        self._plan = GatherPlan(arrangement, self._watch, own, shared, groups)
         return self._plan
 
     def _current_track(self, name: str) -> DeviceTrack | None:
@@ -1124,7 +629,7 @@ class MonitorSession:
                 value = (
                     pose_values(value, pose)[0]
                     if isinstance(proxy, PositionProxy)
-                    else _plain_json(value)
+                    else plain_json(value)
                 )
                 raw = value if raw is None else raw
                 unit = proxy.unit if proxy.HAS_UNIT else 0
@@ -1158,7 +663,7 @@ class MonitorSession:
                         values[kind.value] = dict(enumerate(pose_values(latest.values, pose)))
                     else:
                         values[kind.value] = {
-                            u: _json_value(kind, v) for u, v in enumerate(latest.values)
+                            u: json_value(kind, v) for u, v in enumerate(latest.values)
                         }
                 devices[name] = FrameDevice(track.count, values)
                 continue
@@ -1175,7 +680,7 @@ class MonitorSession:
             value = (
                 pose_values(value, pose)[0]
                 if isinstance(proxy, PositionProxy)
-                else _plain_json(value)
+                else plain_json(value)
             )
             devices[name] = FrameDevice(1 if fresh else 0, {proxy.KIND.value: {unit: value}})
         return FrameRecord(self.frame, self.frame_timestamp, devices)

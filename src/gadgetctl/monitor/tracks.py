@@ -1,0 +1,190 @@
+"""What a monitor session keeps about one device between frames (:class:`DeviceTrack`):
+its running statistics, button presses, analog histories and the values a view shows."""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+
+from gadgetctl.input.clock import now
+from gadgetctl.input.device import Input
+from gadgetctl.input.devicetypes import Analog
+from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.samples import FrameSamples, Sample
+from gadgetctl.monitor.encoding import plain_value
+from gadgetctl.monitor.gather import as_rows, frame_timestamps
+from gadgetctl.monitor.stats import DeviceSnapshot, DeviceStats
+from gadgetctl.monitor.views import UnitView
+
+STATS_REFRESH = 0.25  # seconds between recomputations of interval percentiles and jitter
+
+
+class DeviceTrack:
+    """What a session keeps about one device between frames."""
+
+    def __init__(self, name: str, device: Input, history: int, statistics: bool = True) -> None:
+        self.name = name
+        self.device = device
+        self.statistics = statistics
+        self.stats = DeviceStats(name)
+        self.history_length = history
+        self.frames: dict[DeviceKind, FrameSamples] = {}
+        self.count = 0
+        self.frame_seen = -1  # the manager frame whose samples ``frames`` holds
+        self.units: dict[str, int] = {}
+        self._dropped_seen = self._dropped_now()
+        # a device is new to its manager, and the session started it: a fault before the first
+        # frame (while it started) is one of this run's too
+        self._faults_seen = 0
+        self.digital_state: np.ndarray | None = None
+        self.presses: np.ndarray | None = None
+        self.changed: np.ndarray | None = None
+        self.analog_history: list[deque[float]] = []
+        self._snapshot: DeviceSnapshot | None = None
+        self._snapshot_at = -1.0
+        self._swapped_at: float | None = None
+
+    def reset(self) -> None:
+        self.stats.reset()
+        if self.presses is not None:
+            self.presses[:] = 0
+        self._snapshot = None
+        self._dropped_seen = self._dropped_now()
+        self._faults_seen = self.device.faults
+
+    def _dropped_now(self) -> int:
+        """Samples dropped by the store (the most of any kind) plus what the transport lost
+        before the driver read it (kernel receive-buffer overflows)."""
+        store = self.device.store
+        most = max((store.dropped(kind) for kind in store.kinds), default=0)
+        return most + self.device.transport_dropped()
+
+    def update(self) -> int:
+        device = self.device
+        store = device.store
+        swapped_at = store.swapped_at
+        fresh = swapped_at != self._swapped_at  # a failed update_data leaves the old frame
+        self._swapped_at = swapped_at
+        # the kinds with samples this frame, as the swap found them (a read-only mapping)
+        self.frames = frames = store.current if fresh else {}
+        if not self.statistics:  # gathering only (serve): no rates, presses or histories
+            if not frames:
+                self.count = 0
+            elif len(frames) == 1:
+                self.count = next(iter(frames.values())).count
+            else:
+                self.count = max(f.count for f in frames.values())
+            return self.count
+        dropped = self._dropped_now()
+        stamps = frame_timestamps(frames) if frames else ()
+        count = len(stamps)
+        if count:
+            self.stats.add_timestamps(stamps)
+        self.count = count
+        self.stats.end_frame(now())
+        if dropped != self._dropped_seen:
+            self.stats.add_dropped(max(0, dropped - self._dropped_seen))
+            self._dropped_seen = dropped
+        faults = device.faults
+        if faults != self._faults_seen:
+            self.stats.add_fault(max(0, faults - self._faults_seen))
+            self._faults_seen = faults
+        digital = frames.get(DeviceKind.DIGITAL)
+        if digital is not None:
+            self._scan_digital(digital)
+        elif self.changed is not None and self.changed.any():
+            self.changed[:] = False
+        if DeviceKind.ANALOG in store.kinds:
+            self._note_analog(store.latest(DeviceKind.ANALOG))
+        for kind, samples in frames.items():
+            newest = samples.newest
+            if newest is not None:
+                self.units[kind.value] = max(self.units.get(kind.value, 0), len(newest.values))
+        return count
+
+    def _scan_digital(self, frame: FrameSamples) -> None:
+        try:
+            parts = [
+                np.asarray([chunk.values]) if type(chunk) is Sample else as_rows(chunk.values)
+                for chunk in frame.chunks
+            ]
+            rows = (np.concatenate(parts) if len(parts) > 1 else parts[0]) != 0
+        except ValueError:  # units changed within the frame: look at the newest sample only
+            newest = frame.newest
+            rows = (
+                np.asarray([newest.values]) != 0 if newest is not None else np.zeros((0, 0), bool)
+            )
+        if not rows.size:
+            return
+        units = rows.shape[1]
+        previous = self.digital_state
+        if previous is None or len(previous) != units:
+            previous = rows[0]
+            presses = np.zeros(units, dtype=np.int64)
+            if self.presses is not None:
+                presses[: min(units, len(self.presses))] = self.presses[:units]
+            self.presses = presses
+        stacked = np.vstack((previous[None, :], rows)).astype(np.int8)
+        steps = np.diff(stacked, axis=0)
+        self.presses += (steps > 0).sum(axis=0)
+        self.changed = (steps != 0).any(axis=0)
+        self.digital_state = rows[-1].copy()
+
+    def _note_analog(self, newest: Sample | None) -> None:
+        if newest is None:
+            return
+        values = newest.values
+        histories = self.analog_history
+        while len(histories) < len(values):
+            histories.append(deque(maxlen=self.history_length))
+        device = self.device
+        normalize = device.normalize if isinstance(device, Analog) else float
+        for unit, raw in enumerate(values):
+            histories[unit].append(normalize(float(raw)))
+
+    def snapshot(self, moment: float) -> DeviceSnapshot:
+        if self._snapshot is None or moment - self._snapshot_at >= STATS_REFRESH:
+            self._snapshot = self.stats.snapshot(moment)
+            self._snapshot_at = moment
+        return self._snapshot
+
+    # -- values -------------------------------------------------------------------------
+
+    def unit_views(self) -> list[UnitView]:
+        device = self.device
+        store = device.store
+        views: list[UnitView] = []
+        for kind in store.kinds:
+            latest = store.latest(kind)
+            if latest is None:
+                continue
+            values = latest.values
+            if kind is DeviceKind.ANALOG:
+                for unit, raw in enumerate(values):
+                    raw = float(raw)
+                    value = device.normalize(raw) if isinstance(device, Analog) else raw
+                    history = self.analog_history[unit] if unit < len(self.analog_history) else None
+                    views.append(UnitView(kind.value, unit, value, raw, history=history))
+            elif kind is DeviceKind.DIGITAL:
+                for unit, state in enumerate(values):
+                    changed = (
+                        bool(self.changed[unit])
+                        if self.changed is not None and unit < len(self.changed)
+                        else False
+                    )
+                    presses = (
+                        int(self.presses[unit])
+                        if self.presses is not None and unit < len(self.presses)
+                        else 0
+                    )
+                    views.append(
+                        UnitView(kind.value, unit, int(state), changed=changed, presses=presses)
+                    )
+            elif kind is DeviceKind.KEYBOARD_MOUSE:
+                held = getattr(device, "held", frozenset())
+                views.append(UnitView(kind.value, 0, sorted(k.name for k in held)))
+            else:
+                for unit, value in enumerate(values):
+                    views.append(UnitView(kind.value, unit, plain_value(kind, value)))
+        return views
