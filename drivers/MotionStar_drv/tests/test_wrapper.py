@@ -128,7 +128,7 @@ def test_example_positions_reach_proxies_in_meters_with_zyx_angles(
     )
     assert not manager.pending()
     device = manager.device("MotionStar")
-    assert wait_until(lambda: device.packets > 0)
+    assert wait_until(lambda: device.store.total(DeviceKind.POSITION) > 0)  # stored, not counted
     manager.update()
     expected = poses_sent(emu, device.sequence)
     for alias, unit in (("VJHead", 0), ("VJWand", 1)):
@@ -191,7 +191,7 @@ def test_device_units_scale_and_warn(tmp_path, emulator, managers, filters, scal
         assert found == []
     else:
         assert len(found) == 1 and warning in found[0]
-    assert wait_until(lambda: device.packets > 0)
+    assert wait_until(lambda: device.store.total(DeviceKind.POSITION) > 0)  # stored, not counted
     manager.update()
     np.testing.assert_allclose(
         manager.proxy("Star 0").matrix, poses_sent(emu, device.sequence, scale)[0], atol=1e-12
@@ -406,7 +406,7 @@ def test_corpus_c4_mstar_delivers_through_its_proxies_and_aliases(
     found = [d.message for d in manager.diagnostics if d.code == "DRV024"]
     assert len(found) == 1 and "device_units 0.3048" in found[0] and "12 times" in found[0]
 
-    assert wait_until(lambda: device.packets >= 3)
+    assert wait_until(lambda: device.store.total(DeviceKind.POSITION) >= 3)  # stored
     manager.update()
     for name, matrix in c4_expected(emu, device.sequence).items():
         proxy = manager.proxy(name)

@@ -102,9 +102,9 @@ def test_initial_state_then_touch_frames_reach_proxies_and_aliases(
         assert not proxy.stupefied and proxy.data.shape == (6, 4) and not proxy.data.any()
 
     def touch(groups: tuple[tuple[int, int], ...]) -> None:
-        before = device.frames
+        before = device.store.total(DeviceKind.GLOVE)  # stored last, after the digital sample
         emu.send_raw(encode_frame(groups, 5))
-        assert wait_until(lambda: device.frames > before)
+        assert wait_until(lambda: device.store.total(DeviceKind.GLOVE) > before)
         manager.update()
 
     touch(((L_THUMB, R_THUMB),))  # both thumbs touch each other
@@ -285,9 +285,9 @@ def test_corpus_pinch_mixin_delivers_through_its_proxies(tmp_path, emulator, man
 
     device = manager.device("FakespacePinchGlove")
     assert device.glove_position_proxies == ["GlovePos Proxy"]  # read, unlike the C++ wrapper
-    before = device.frames
+    before = device.store.total(DeviceKind.GLOVE)  # stored last, after the digital sample
     emu.send_raw(encode_frame(((L_PINKY | L_RING, R_PINKY | R_RING),), 1))
-    assert wait_until(lambda: device.frames > before)
+    assert wait_until(lambda: device.store.total(DeviceKind.GLOVE) > before)
     manager.update()
 
     assert manager.proxy("PinchLeftThumb").data == DigitalState.TOGGLE_ON  # unit 0: left pinky
