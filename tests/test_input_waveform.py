@@ -290,3 +290,43 @@ def test_a_backlog_is_computed_in_one_block(make):
     stamps = np.concatenate([np.asarray(c.timestamps) for c in frame.chunks])
     assert np.array_equal(stamps, device.t0 + np.arange(frame.count) / 1000.0)
     assert frame.count == device.next_index
+
+
+def test_standing_in_for_frames_backs_off_when_it_costs_more_than_its_share():
+    """Issue 27: with 10,000 devices a pass standing in for frames cost about a second; a
+    pass every FRAME_GRACE while a long first frame was written slowed that frame (the
+    scheduler held the GIL), which let more passes in. The grid's spacing now grows with
+    the share of a core the passes take, and comes back once they are cheap."""
+    from gadgetctl.input import waveform
+
+    stand_in = waveform._StandIn()
+    assert stand_in.spacing == waveform.FRAME_GRACE
+    # a whole spacing spent standing in: a full core, ten times the share allowed
+    moment = 100.0
+    for _ in range(10):
+        stand_in.spent(moment, waveform.FRAME_GRACE / 10)
+        moment += waveform.FRAME_GRACE / 10
+    assert stand_in.spacing == pytest.approx(waveform.FRAME_GRACE / waveform.STAND_IN_SHARE)
+    # the next look of a device is on the wider grid: one pass, not one per FRAME_GRACE
+    look = stand_in.next_look(moment)
+    assert look - moment >= stand_in.spacing
+    assert look / stand_in.spacing == pytest.approx(round(look / stand_in.spacing))
+    # the spacing never grows past the cap, whatever a pass costs
+    stand_in.spent(moment + stand_in.spacing, 100.0)
+    assert stand_in.spacing == waveform.STAND_IN_MAX_SPACING
+    # cheap passes bring it back to FRAME_GRACE
+    moment += 200.0
+    for _ in range(5):
+        moment += stand_in.spacing
+        stand_in.spent(moment, 1e-4)
+    assert stand_in.spacing == waveform.FRAME_GRACE
+
+
+def test_before_the_first_frame_the_scheduler_waits_a_grace_before_standing_in(make):
+    """A device's start counts as its last frame: the scheduler does not publish sample by
+    sample while a large configuration is still being set up around it."""
+    from gadgetctl.input import waveform
+
+    m = make(WAVE.format(name="Early", rate=1000.0, seed=0))
+    device = m.device("Early")
+    assert device.next_sample_due() >= device.t0 + waveform.FRAME_GRACE

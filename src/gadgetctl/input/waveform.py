@@ -11,10 +11,13 @@ Samples are published as numpy batches cut from a block computed ahead (never a 
 whose time has not come), by whichever comes first: each frame publishes, just before its
 swap, every sample that has come due (so a frame carries samples up to its own instant,
 however fast frames run), and the shared scheduler publishes what is due when no frame did
-for ``FRAME_GRACE`` seconds (so a stalled frame loop still finds every sample, or the
-store's count of those dropped over its cap). While frames run, the scheduler leaves the
-devices alone: it looks in once per ``FRAME_GRACE`` (every device at the same instants, one
-pass) and finds the frames publishing.
+for ``FRAME_GRACE`` seconds, counted from its start before the first frame (so a stalled
+frame loop still finds every sample, or the store's count of those dropped over its cap).
+While frames run, the scheduler leaves the devices alone: it looks in on a grid of instants
+shared by every device (one pass), at least ``FRAME_GRACE`` apart and far enough apart that
+standing in takes at most ``STAND_IN_SHARE`` of a core (:class:`_StandIn`): with 10,000
+devices a pass costs about a second, and a pass every ``FRAME_GRACE`` while a long first
+frame was written slowed that frame, which let more passes in.
 
 The input manager updates the waveform devices of a frame together (:attr:`FRAME_GROUP`):
 one clock reading, then, with numpy over all of them at once, each device's window of its
@@ -28,6 +31,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -49,6 +53,10 @@ BLOCK_SECONDS = 0.5
 #: Long enough that a frame loop falling behind under load is not also fighting the
 #: scheduler thread for the GIL; a frame publishes, and counts over the cap, what came due.
 FRAME_GRACE = 0.25
+#: At most this share of a core goes to standing in for frames (see :class:`_StandIn`).
+STAND_IN_SHARE = 0.1
+#: The longest time between two passes standing in for frames.
+STAND_IN_MAX_SPACING = 5.0
 #: Seconds before a device's block ends when the next block is computed ahead, between frames.
 AHEAD_SECONDS = 0.1
 #: Blocks computed ahead between two frames: at most one per this many seconds since the
@@ -60,6 +68,40 @@ _RUNNING = DeviceState.RUNNING
 #: frame group is updated: one lock for all of them, so that a group frame takes it once.
 _PUBLISHING = threading.Lock()
 HAT_SEQUENCE = (HatState.CENTERED, HatState.UP, HatState.RIGHT, HatState.DOWN, HatState.LEFT)
+
+
+class _StandIn:
+    """The grid of instants at which the scheduler looks in on the waveform devices while no
+    frame publishes. Its spacing is ``FRAME_GRACE``, or longer while standing in takes more
+    than ``STAND_IN_SHARE`` of a core (many devices, a busy machine): measured over windows
+    of one spacing, the spacing grows or shrinks by the share used over the share allowed.
+    Scheduler threads call :meth:`spent`; with several managers in one process they share
+    it, and a window mismeasured by a race only moves the spacing within its bounds."""
+
+    def __init__(self) -> None:
+        self.spacing = FRAME_GRACE
+        self.window = -math.inf  # when the current measuring window began
+        self.cost = 0.0  # seconds spent standing in since then
+
+    def next_look(self, last: float) -> float:
+        """The first grid instant at least one spacing after ``last``."""
+        spacing = self.spacing
+        return (math.floor(last / spacing) + 2) * spacing
+
+    def spent(self, moment: float, seconds: float) -> None:
+        """A device stood in at ``moment`` for ``seconds``."""
+        if self.window == -math.inf:
+            self.window = moment
+        self.cost += seconds
+        elapsed = moment + seconds - self.window
+        if elapsed >= self.spacing:
+            share = self.cost / elapsed
+            wanted = self.spacing * share / STAND_IN_SHARE
+            self.spacing = min(STAND_IN_MAX_SPACING, max(FRAME_GRACE, wanted))
+            self.window, self.cost = moment + seconds, 0.0
+
+
+_STAND_IN = _StandIn()
 
 
 class Wave(StrEnum):
@@ -214,26 +256,26 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
             self._mirror()
 
     def _last_frame(self) -> float:
-        """When a frame last published this device's samples."""
+        """When a frame last published this device's samples (its start before the first)."""
         group = self._group
-        return self._frame_published if group is None else max(self._frame_published, group.moment)
+        last = self._frame_published if group is None else max(self._frame_published, group.moment)
+        return max(last, self.t0)
 
     def next_sample_due(self) -> float:
-        # while frames publish, the scheduler only stands in when they stop; it looks again
+        # the scheduler only stands in when frames stop (or have not begun); it looks again
         # at instants on a grid shared by every device (one scheduler pass for all of them)
         due = self.t0 + self.next_index / self.rate
-        last = self._last_frame()
-        if last == -math.inf:
-            return due
-        return max(due, (math.floor(last / FRAME_GRACE) + 2) * FRAME_GRACE)
+        return max(due, _STAND_IN.next_look(self._last_frame()))
 
     def sample(self) -> None:
         with self._publishing:
             moment = now()
             if moment - self._last_frame() < FRAME_GRACE:
                 return  # frames publish
+            began = time.perf_counter()
             self._publish_due(moment)
             self._mirror()
+            _STAND_IN.spent(moment, time.perf_counter() - began)
 
     FRAME_GROUP = True
 

@@ -13,7 +13,7 @@ import json
 import os
 import signal
 import time
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import BinaryIO, NamedTuple
 
@@ -220,6 +220,13 @@ class Recorder:
     def write_status(self, record: StatusRecord) -> None:
         """Append an element status record."""
         self._write_record(record)
+
+    def write_statuses(self, records: Sequence[StatusRecord]) -> None:
+        """Append element status records with one write (a configuration's start: 20,000
+        writes of one line each cost seconds while another thread held the GIL)."""
+        self.flush()
+        if records:
+            self._write("".join(encode_record(r) for r in records))
 
     def write_stats(
         self, devices: Mapping[str, Mapping[str, object]], timestamp: float | None = None

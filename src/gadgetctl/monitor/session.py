@@ -595,8 +595,8 @@ class MonitorSession:
             elif what == "frame":
                 if sink.per_frame:
                     recorder.write_frame(payload[sink.pose])  # type: ignore[index]
-            elif what == "status":
-                recorder.write_status(payload)  # type: ignore[arg-type]
+            elif what == "statuses":
+                recorder.write_statuses(payload)  # type: ignore[arg-type]
             elif what == "marker":
                 marker = payload
                 recorder.write_marker(marker.name, marker.timestamp)  # type: ignore[attr-defined]
@@ -686,14 +686,15 @@ class MonitorSession:
         return FrameRecord(self.frame, self.frame_timestamp, devices)
 
     def _check_statuses(self, moment: float) -> None:
+        changed: list[StatusRecord] = []
         for name in self._selected:
             element, element_type, state, reason = self._status_of(name)
             current = (state, reason)
             if self._statuses.get(name) != current:
                 self._statuses[name] = current
-                self._emit(
-                    "status", StatusRecord(moment, name, element, element_type, state, reason), 0
-                )
+                changed.append(StatusRecord(moment, name, element, element_type, state, reason))
+        if changed:
+            self._emit("statuses", changed, 0)
 
     def mark(self, name: str | None = None) -> MarkerRecord:
         """Write a marker (named ``marker N`` when no name is given) to every sink."""
