@@ -295,30 +295,47 @@ def test_a_backlog_is_computed_in_one_block(make):
 def test_standing_in_for_frames_backs_off_when_it_costs_more_than_its_share():
     """Issue 27: with 10,000 devices a pass standing in for frames cost about a second; a
     pass every FRAME_GRACE while a long first frame was written slowed that frame (the
-    scheduler held the GIL), which let more passes in. The grid's spacing now grows with
-    the share of a core the passes take, and comes back once they are cheap."""
+    scheduler held the GIL), which let more passes in. Publishing is now paid from a budget
+    that fills at STAND_IN_SHARE of a second per second, and the grid of looks widens while
+    the looks cost more than that share, and comes back once they are cheap."""
     from gadgetctl.input import waveform
 
     stand_in = waveform._StandIn()
     assert stand_in.spacing == waveform.FRAME_GRACE
-    # a whole spacing spent standing in: a full core, ten times the share allowed
+    # a burst is allowed at once, then the budget runs out within the same instant
     moment = 100.0
+    published = 0
+    while stand_in.may_publish(moment):
+        stand_in.spent(moment, 0.001, published=True)
+        published += 1
+    assert published == round(waveform.STAND_IN_BURST / 0.001)
+    # it fills at the share allowed (0.3 s later: 0.03 s of publishing), up to the burst
+    moment += 0.3
+    again = 0
+    while stand_in.may_publish(moment):
+        stand_in.spent(moment, 0.001, published=True)
+        again += 1
+    assert again == pytest.approx(0.3 * waveform.STAND_IN_SHARE / 0.001, abs=1)
+    moment += 1000.0
+    assert stand_in.may_publish(moment) and stand_in.budget == waveform.STAND_IN_BURST
+    # looks that take a whole spacing (a full core) widen the grid by the share over
+    stand_in = waveform._StandIn()
     for _ in range(10):
-        stand_in.spent(moment, waveform.FRAME_GRACE / 10)
+        stand_in.spent(moment, waveform.FRAME_GRACE / 10, published=False)
         moment += waveform.FRAME_GRACE / 10
     assert stand_in.spacing == pytest.approx(waveform.FRAME_GRACE / waveform.STAND_IN_SHARE)
     # the next look of a device is on the wider grid: one pass, not one per FRAME_GRACE
     look = stand_in.next_look(moment)
     assert look - moment >= stand_in.spacing
     assert look / stand_in.spacing == pytest.approx(round(look / stand_in.spacing))
-    # the spacing never grows past the cap, whatever a pass costs
-    stand_in.spent(moment + stand_in.spacing, 100.0)
+    # the spacing never grows past the cap, whatever a look costs
+    stand_in.spent(moment + stand_in.spacing, 100.0, published=False)
     assert stand_in.spacing == waveform.STAND_IN_MAX_SPACING
-    # cheap passes bring it back to FRAME_GRACE
+    # cheap looks bring it back to FRAME_GRACE
     moment += 200.0
     for _ in range(5):
         moment += stand_in.spacing
-        stand_in.spent(moment, 1e-4)
+        stand_in.spent(moment, 1e-4, published=False)
     assert stand_in.spacing == waveform.FRAME_GRACE
 
 

@@ -191,9 +191,11 @@ class InputManager:
         ``definitions``, the files' definition_path, plug-in folders), not yet configured."""
         from gadgetctl.input.definitions import repository_for
         from gadgetctl.jccl.configload import load_configuration
+        from gadgetctl.perf import collector_paused
 
         options = options or ManagerOptions()
-        configuration = load_configuration(list(paths), environ=options.environ)
+        with collector_paused():  # what is loaded lives as long as the manager
+            configuration = load_configuration(list(paths), environ=options.environ)
         repo = repository_for(
             configuration,
             definitions=definitions,
@@ -240,6 +242,14 @@ class InputManager:
     def reconfigure(self, *, retry_failed: bool = False) -> int:
         """Apply queued additions and removals and retry pending elements; returns how many
         elements were configured or removed."""
+        from gadgetctl.perf import collector_paused
+
+        # the devices, proxies and stores made here live on: the cyclic collector walking
+        # them again and again while 20,000 elements are configured took a third of the time
+        with collector_paused():
+            return self._reconfigure(retry_failed)
+
+    def _reconfigure(self, retry_failed: bool) -> int:
         with self._incoming_lock:
             work = list(self._incoming)
             self._incoming.clear()

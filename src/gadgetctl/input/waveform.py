@@ -14,10 +14,10 @@ however fast frames run), and the shared scheduler publishes what is due when no
 for ``FRAME_GRACE`` seconds, counted from its start before the first frame (so a stalled
 frame loop still finds every sample, or the store's count of those dropped over its cap).
 While frames run, the scheduler leaves the devices alone: it looks in on a grid of instants
-shared by every device (one pass), at least ``FRAME_GRACE`` apart and far enough apart that
-standing in takes at most ``STAND_IN_SHARE`` of a core (:class:`_StandIn`): with 10,000
-devices a pass costs about a second, and a pass every ``FRAME_GRACE`` while a long first
-frame was written slowed that frame, which let more passes in.
+shared by every device (one pass), and standing in takes at most about ``STAND_IN_SHARE``
+of a core (:class:`_StandIn`): with 10,000 devices a pass cost about a second, and a pass
+every ``FRAME_GRACE`` while a long first frame was written slowed that frame, which let
+more passes in.
 
 The input manager updates the waveform devices of a frame together (:attr:`FRAME_GROUP`):
 one clock reading, then, with numpy over all of them at once, each device's window of its
@@ -57,6 +57,9 @@ FRAME_GRACE = 0.25
 STAND_IN_SHARE = 0.1
 #: The longest time between two passes standing in for frames.
 STAND_IN_MAX_SPACING = 5.0
+#: Seconds of publishing the scheduler may do at once while standing in (a few hundred
+#: devices), before :data:`STAND_IN_SHARE` paces it.
+STAND_IN_BURST = 0.05
 #: Seconds before a device's block ends when the next block is computed ahead, between frames.
 AHEAD_SECONDS = 0.1
 #: Blocks computed ahead between two frames: at most one per this many seconds since the
@@ -71,25 +74,41 @@ HAT_SEQUENCE = (HatState.CENTERED, HatState.UP, HatState.RIGHT, HatState.DOWN, H
 
 
 class _StandIn:
-    """The grid of instants at which the scheduler looks in on the waveform devices while no
-    frame publishes. Its spacing is ``FRAME_GRACE``, or longer while standing in takes more
-    than ``STAND_IN_SHARE`` of a core (many devices, a busy machine): measured over windows
-    of one spacing, the spacing grows or shrinks by the share used over the share allowed.
-    Scheduler threads call :meth:`spent`; with several managers in one process they share
-    it, and a window mismeasured by a race only moves the spacing within its bounds."""
+    """What the scheduler may spend standing in for frames, shared by every waveform device.
+
+    Publishing is paid from a budget that fills at ``STAND_IN_SHARE`` of a second per second
+    up to ``STAND_IN_BURST``: a device looked in on when it is spent is left to the next
+    frame, or to a later look, which publishes the same samples (they depend on time alone).
+    The looks themselves are on a grid of instants shared by every device, ``FRAME_GRACE``
+    apart, or further while the looks and what they publish take more than that share of
+    a core (measured over windows of one spacing). Scheduler threads call :meth:`spent`;
+    with several managers in one process they share it, and a race only mismeasures a
+    window or the budget within their bounds."""
 
     def __init__(self) -> None:
         self.spacing = FRAME_GRACE
         self.window = -math.inf  # when the current measuring window began
-        self.cost = 0.0  # seconds spent standing in since then
+        self.cost = 0.0  # seconds spent looking in since then
+        self.budget = STAND_IN_BURST
+        self.filled = -math.inf  # when the budget was last filled
 
     def next_look(self, last: float) -> float:
         """The first grid instant at least one spacing after ``last``."""
         spacing = self.spacing
         return (math.floor(last / spacing) + 2) * spacing
 
-    def spent(self, moment: float, seconds: float) -> None:
-        """A device stood in at ``moment`` for ``seconds``."""
+    def may_publish(self, moment: float) -> bool:
+        """Whether the budget allows a device to publish at ``moment``."""
+        if self.filled != -math.inf:
+            refill = (moment - self.filled) * STAND_IN_SHARE
+            self.budget = min(STAND_IN_BURST, self.budget + max(0.0, refill))
+        self.filled = moment
+        return self.budget > 0.0
+
+    def spent(self, moment: float, seconds: float, *, published: bool) -> None:
+        """A device was looked in on at ``moment`` for ``seconds`` (and published)."""
+        if published:
+            self.budget -= seconds
         if self.window == -math.inf:
             self.window = moment
         self.cost += seconds
@@ -268,14 +287,16 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         return max(due, _STAND_IN.next_look(self._last_frame()))
 
     def sample(self) -> None:
+        began = time.perf_counter()
         with self._publishing:
             moment = now()
-            if moment - self._last_frame() < FRAME_GRACE:
-                return  # frames publish
-            began = time.perf_counter()
-            self._publish_due(moment)
-            self._mirror()
-            _STAND_IN.spent(moment, time.perf_counter() - began)
+            published = moment - self._last_frame() >= FRAME_GRACE and _STAND_IN.may_publish(
+                moment
+            )  # else frames publish, or the budget is spent: the next frame or look does
+            if published:
+                self._publish_due(moment)
+                self._mirror()
+            _STAND_IN.spent(moment, time.perf_counter() - began, published=published)
 
     FRAME_GROUP = True
 
