@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from enum import StrEnum
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
@@ -75,6 +76,9 @@ DEAD_BAND_OPTION = typer.Option(
     metavar="SHARE",
     help="--format events: report an analog unit when it moved more than this share of its device's range (min..max) since it was last reported.",
 )
+
+if TYPE_CHECKING:
+    from gadgetctl.jccl.xmlload import XmlDocument
 POSE_THRESHOLD_OPTION = typer.Option(
     0.01,
     "--pose-threshold",
@@ -176,10 +180,13 @@ def monitor(
     configs, selectors = split_arguments(
         [a for a in arguments if not is_vrpn_argument(a)], require_config=not watched
     )
+    parsed = {}
     if check:
         from gadgetctl.cli.preflight import check_before_running
 
-        check_before_running(configs, definitions=definitions, bundled=bundled, strict=strict)
+        parsed = check_before_running(
+            configs, definitions=definitions, bundled=bundled, strict=strict
+        )
     title = " ".join([*(str(p) for p in configs), *watched])  # as typed, no scratch file
     with watched_devices(configs, watched) as configs:
         code = run_monitor(
@@ -204,6 +211,7 @@ def monitor(
             thresholds=event_thresholds(dead_band, pose_threshold, angle_threshold),
             accept_loss=accept_loss,
             title=title,
+            parsed=parsed,
         )
     # devices stopped, recordings closed: the process may end without freeing what the
     # run built (10,000 devices: the collector's last walk over them took most of a second)
@@ -342,6 +350,7 @@ def run_monitor(
     thresholds=None,
     accept_loss: bool = False,
     title: str | None = None,
+    parsed: Mapping[Path, XmlDocument] | None = None,
 ) -> int:
     from gadgetctl.cli.monitor_run import RunOptions, check_record_path, choose_format, run
     from gadgetctl.input.manager import InputManager, ManagerOptions
@@ -352,7 +361,11 @@ def run_monitor(
     check_record_path(record, overwrite, mode)
     options = ManagerOptions(driver_dirs=list(driver_paths or ()))
     manager, configuration = InputManager.from_files(
-        configs, definitions=list(definitions or ()), bundled=bundled, options=options
+        configs,
+        definitions=list(definitions or ()),
+        bundled=bundled,
+        options=options,
+        parsed=parsed,
     )
     fatal_load_errors(configuration)
     info = {"config": [str(p) for p in configs]}

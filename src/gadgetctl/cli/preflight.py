@@ -6,9 +6,13 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gadgetctl.errors import GadgetctlError
 from gadgetctl.wording import counted
+
+if TYPE_CHECKING:
+    from gadgetctl.jccl.xmlload import XmlDocument
 
 #: Findings printed in full; the rest are counted in one summary line.
 MOST_SHOWN = 10
@@ -21,16 +25,18 @@ def check_before_running(
     bundled: bool = True,
     strict: bool = False,
     stream=None,
-) -> None:
+) -> dict[Path, XmlDocument]:
     """Print the configuration findings (errors and warnings) of ``configs`` checked together;
-    with ``strict``, errors stop the run (exit status 1)."""
+    with ``strict``, errors stop the run (exit status 1). Returns the documents it parsed, by
+    resolved path, for the run to load without parsing them again."""
     from gadgetctl.diagnostics import Severity
     from gadgetctl.files import require_file
+    from gadgetctl.jccl.xmlload import FileKind
     from gadgetctl.report import render
     from gadgetctl.validate import ValidateOptions, validate_paths
 
     if not configs:
-        return
+        return {}
     for path in configs:
         require_file(path)  # the usual one-line message for a missing or unreadable file
     stream = stream or sys.stderr
@@ -38,9 +44,14 @@ def check_before_running(
         definition_dirs=list(definitions or ()), bundled=bundled, together=True
     )
     result = validate_paths(configs, options)
+    parsed = {
+        Path(doc.path).resolve(): doc
+        for doc in result.documents
+        if doc.root is not None and doc.kind is FileKind.CONFIGURATION
+    }
     found = [d for d in result.diagnostics if d.severity in (Severity.ERROR, Severity.WARNING)]
     if not found:
-        return
+        return parsed
     shown = found[:MOST_SHOWN]
     text = render("text", shown, files_checked=len(result.files), hints=True).rstrip("\n")
     if len(found) > len(shown):
@@ -56,6 +67,7 @@ def check_before_running(
     stream.flush()
     if strict and any(d.severity is Severity.ERROR for d in found):
         raise StrictStop("configuration errors found (--strict); not starting")
+    return parsed
 
 
 class StrictStop(GadgetctlError):

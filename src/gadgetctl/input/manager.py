@@ -29,6 +29,7 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
+from typing import TYPE_CHECKING
 
 from gadgetctl.diagnostics import Diagnostic
 from gadgetctl.input.clock import now
@@ -72,6 +73,9 @@ from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.definitions import Location
 from gadgetctl.jccl.repository import DefinitionRepository
 from gadgetctl.jccl.units import proxy_unit_problem
+
+if TYPE_CHECKING:
+    from gadgetctl.jccl.xmlload import XmlDocument
 
 NOT_PROCESSED = "not processed yet"
 INPUT_WINDOW = "input_window"
@@ -186,16 +190,18 @@ class InputManager:
         definitions: Iterable[Path] = (),
         bundled: bool = True,
         options: ManagerOptions | None = None,
+        parsed: Mapping[Path, XmlDocument] | None = None,
     ) -> tuple[InputManager, Configuration]:
         """Load configuration files and make a manager with the right definitions (bundled,
-        ``definitions``, the files' definition_path, plug-in folders), not yet configured."""
+        ``definitions``, the files' definition_path, plug-in folders), not yet configured.
+        ``parsed``: documents of these files a caller parsed already, by resolved path."""
         from gadgetctl.input.definitions import repository_for
         from gadgetctl.jccl.configload import load_configuration
         from gadgetctl.perf import collector_paused
 
         options = options or ManagerOptions()
         with collector_paused():  # what is loaded lives as long as the manager
-            configuration = load_configuration(list(paths), environ=options.environ)
+            configuration = load_configuration(list(paths), environ=options.environ, parsed=parsed)
         repo = repository_for(
             configuration,
             definitions=definitions,

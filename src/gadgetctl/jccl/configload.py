@@ -333,9 +333,13 @@ class ConfigurationLoader:
         max_size: int = DEFAULT_MAX_SIZE,
         documents: dict[Path, XmlDocument] | None = None,
         files: dict[Path, ConfigFile] | None = None,
+        parsed: Mapping[Path, XmlDocument] | None = None,
     ) -> None:
         self.environ = os.environ if environ is None else environ
         self.max_size = max_size
+        # Documents a caller parsed already (a check before running), by resolved path:
+        # taken instead of reading the file again, as if loaded here (diagnostics included).
+        self.parsed = dict(parsed or {})
         # Already loaded documents and read files, by resolved path; shared (not copied) so
         # that several configurations of one run read each file once.
         self.documents = {} if documents is None else documents
@@ -354,12 +358,16 @@ class ConfigurationLoader:
     def _document(self, resolved: Path, display: str) -> XmlDocument:
         doc = self.documents.get(resolved)
         if doc is None:
-            doc = load_file(
+            doc = self.parsed.pop(resolved, None) or load_file(
                 resolved, max_size=self.max_size, display=display, parse=parse_configuration
             )
             self.documents[resolved] = doc
             self.configuration.diagnostics.extend(
-                d for d in doc.diagnostics if d.code.startswith("XML0")
+                # the problems of reading the file (XML001-XML005), not those of checks a
+                # caller ran on a document it parsed (XML010 and on)
+                d
+                for d in doc.diagnostics
+                if d.code.startswith("XML00")
             )
         return doc
 
@@ -487,8 +495,11 @@ def load_configuration(
     environ: Mapping[str, str] | None = None,
     documents: dict[Path, XmlDocument] | None = None,
     files: dict[Path, ConfigFile] | None = None,
+    parsed: Mapping[Path, XmlDocument] | None = None,
 ) -> Configuration:
-    return ConfigurationLoader(environ=environ, documents=documents, files=files).load(paths)
+    return ConfigurationLoader(
+        environ=environ, documents=documents, files=files, parsed=parsed
+    ).load(paths)
 
 
 def require_loadable(configuration: Configuration) -> None:
