@@ -324,7 +324,8 @@ def _table(session: MonitorSession, options: RunOptions, human) -> None:
     for frame in session.frames(duration=options.duration):
         notice.check()
         table.frame(frame.elapsed)
-    table.print()
+    with collector_paused():  # the frames are over: no walk of the whole heap for the table
+        table.print()
     notice.check()
 
 

@@ -73,7 +73,7 @@ def position_text(
     if pose is not None:
         return pose_text(matrix, pose, length_unit)
     m = np.asarray(matrix, dtype=np.float64).reshape(4, 4)
-    x, y, z = (float(from_meters(v, length_unit)) for v in m[:3, 3])
+    x, y, z = from_meters(m[:3, 3], length_unit).tolist()
     symbol = UNIT_SYMBOLS.get(length_unit, length_unit)
     text = f"x {fixed(x, 3, True)} y {fixed(y, 3, True)} z {fixed(z, 3, True)} {symbol}"
     try:

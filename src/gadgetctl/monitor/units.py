@@ -63,8 +63,9 @@ def _rotation_block(matrix: Sequence[Sequence[float]] | np.ndarray) -> np.ndarra
     if m.shape not in ((3, 3), (4, 4)):
         raise ValueError(f"expected a 3x3 or 4x4 matrix, got shape {m.shape}")
     r = m[:3, :3]
-    norms = np.linalg.norm(r, axis=0)
-    if not np.all(norms > 0):
+    with np.errstate(over="ignore", invalid="ignore"):  # inf and nan come out as such
+        norms = np.sqrt((r * r).sum(axis=0))
+    if not (norms > 0).all():
         raise ValueError("the rotation block has a zero column")
     return r / norms  # uniform or per-axis scale does not change the angles
 
@@ -80,16 +81,17 @@ def euler_xyz_degrees(matrix: Sequence[Sequence[float]] | np.ndarray) -> np.ndar
 
     At gimbal lock (y = ±90°) z is reported as 0 and x carries the whole remaining turn.
     """
-    r = _rotation_block(matrix)
-    sy = float(np.clip(r[0, 2], -1.0, 1.0))
+    r = _rotation_block(matrix).tolist()
+    # one 3x3 block: Python floats (a table of 10,000 poses paid a dozen numpy calls a row)
+    sy = min(max(r[0][2], -1.0), 1.0) if r[0][2] == r[0][2] else r[0][2]
     y = math.asin(sy)
-    if math.sqrt(r[0, 0] ** 2 + r[0, 1] ** 2) > GIMBAL_EPSILON:
-        x = math.atan2(0.0 - r[1, 2], r[2, 2])  # 0.0 - v: no -0.0, so no -180 for 180
-        z = math.atan2(0.0 - r[0, 1], r[0, 0])
+    if math.sqrt(r[0][0] ** 2 + r[0][1] ** 2) > GIMBAL_EPSILON:
+        x = math.atan2(0.0 - r[1][2], r[2][2])  # 0.0 - v: no -0.0, so no -180 for 180
+        z = math.atan2(0.0 - r[0][1], r[0][0])
     else:
-        x = math.atan2(r[2, 1], r[1, 1])
+        x = math.atan2(r[2][1], r[1][1])
         z = 0.0
-    return np.degrees(np.array([x, y, z])) + 0.0
+    return np.array([math.degrees(x) + 0.0, math.degrees(y) + 0.0, math.degrees(z) + 0.0])
 
 
 def rotation_from_euler_xyz_degrees(x: float, y: float, z: float) -> np.ndarray:
