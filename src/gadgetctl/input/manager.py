@@ -248,6 +248,8 @@ class InputManager:
     def reconfigure(self, *, retry_failed: bool = False) -> int:
         """Apply queued additions and removals and retry pending elements; returns how many
         elements were configured or removed."""
+        if not (self._incoming or retry_failed):
+            return 0  # nothing to do (every frame asks)
         from gadgetctl.perf import collector_paused
 
         # the devices, proxies and stores made here live on: the cyclic collector walking
