@@ -347,3 +347,17 @@ def test_before_the_first_frame_the_scheduler_waits_a_grace_before_standing_in(m
     m = make(WAVE.format(name="Early", rate=1000.0, seed=0))
     device = m.device("Early")
     assert device.next_sample_due() >= device.t0 + waveform.FRAME_GRACE
+
+
+def test_each_input_manager_has_its_own_stand_in(make):
+    """A manager of 10,000 devices that widened its grid and spent its budget leaves another
+    manager's devices (a test after a large one, a second configuration) as they were."""
+    from gadgetctl.input import waveform
+
+    first = make(WAVE.format(name="One", rate=100.0, seed=0)).device("One")
+    second = make(WAVE.format(name="Two", rate=100.0, seed=0)).device("Two")
+    assert first._stand_in is not second._stand_in
+    first._stand_in.spacing = waveform.STAND_IN_MAX_SPACING
+    first._stand_in.budget = -1.0
+    assert second._stand_in.spacing == waveform.FRAME_GRACE
+    assert second._stand_in.may_publish(waveform.now())

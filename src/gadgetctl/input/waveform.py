@@ -32,6 +32,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+import weakref
 import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -81,9 +82,8 @@ class _StandIn:
     frame, or to a later look, which publishes the same samples (they depend on time alone).
     The looks themselves are on a grid of instants shared by every device, ``FRAME_GRACE``
     apart, or further while the looks and what they publish take more than that share of
-    a core (measured over windows of one spacing). Scheduler threads call :meth:`spent`;
-    with several managers in one process they share it, and a race only mismeasures a
-    window or the budget within their bounds."""
+    a core (measured over windows of one spacing). One for the devices of each input
+    manager (:func:`_stand_in_for`); its scheduler thread calls :meth:`spent`."""
 
     def __init__(self) -> None:
         self.spacing = FRAME_GRACE
@@ -120,7 +120,19 @@ class _StandIn:
             self.window, self.cost = moment + seconds, 0.0
 
 
+#: Devices outside any input manager (no context) share this one.
 _STAND_IN = _StandIn()
+_STAND_INS: weakref.WeakKeyDictionary[object, _StandIn] = weakref.WeakKeyDictionary()
+
+
+def _stand_in_for(context: object | None) -> _StandIn:
+    """The stand-in budget and grid of the devices of one input manager (its context)."""
+    if context is None:
+        return _STAND_IN
+    found = _STAND_INS.get(context)
+    if found is None:
+        found = _STAND_INS[context] = _StandIn()
+    return found
 
 
 class Wave(StrEnum):
@@ -207,6 +219,7 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         # the scheduler's sample() and the frames publish one at a time
         self._publishing = _PUBLISHING
         self._frame_published = -math.inf  # when a frame last published (input-manager clock)
+        self._stand_in = _STAND_IN  # its manager's, once it starts
 
     @property
     def next_index(self) -> int:
@@ -267,6 +280,7 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
 
     def start_sampling(self) -> None:
         with self._publishing:
+            self._stand_in = _stand_in_for(self.context)
             self.t0 = now()
             self.next_index = 0
             self._block = None
@@ -284,19 +298,19 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         # the scheduler only stands in when frames stop (or have not begun); it looks again
         # at instants on a grid shared by every device (one scheduler pass for all of them)
         due = self.t0 + self.next_index / self.rate
-        return max(due, _STAND_IN.next_look(self._last_frame()))
+        return max(due, self._stand_in.next_look(self._last_frame()))
 
     def sample(self) -> None:
         began = time.perf_counter()
         with self._publishing:
             moment = now()
-            published = moment - self._last_frame() >= FRAME_GRACE and _STAND_IN.may_publish(
-                moment
-            )  # else frames publish, or the budget is spent: the next frame or look does
+            stand_in = self._stand_in
+            # else frames publish, or the budget is spent: the next frame or look does
+            published = moment - self._last_frame() >= FRAME_GRACE and stand_in.may_publish(moment)
             if published:
                 self._publish_due(moment)
                 self._mirror()
-            _STAND_IN.spent(moment, time.perf_counter() - began, published=published)
+            stand_in.spent(moment, time.perf_counter() - began, published=published)
 
     FRAME_GROUP = True
 
