@@ -114,10 +114,13 @@ def serve(
     from gadgetctl.serve.service import ServeOptions, ServeService
 
     configs, selectors = split_arguments(arguments, command="serve")
+    parsed = {}  # the documents the check parsed: loaded without parsing them again
     if check:  # the configuration findings first, as monitor does
         from gadgetctl.cli.preflight import check_before_running
 
-        check_before_running(configs, definitions=definitions, bundled=bundled, strict=strict)
+        parsed = check_before_running(
+            configs, definitions=definitions, bundled=bundled, strict=strict
+        )
     options = ServeOptions(
         selectors=selectors,
         renames=parse_renames(names),
@@ -137,6 +140,7 @@ def serve(
         definitions=list(definitions),
         bundled=bundled,
         options=ManagerOptions(driver_dirs=list(driver_paths)),
+        parsed=parsed,
     )
     fatal_load_errors(configuration)
     if record is not None and not list_:
