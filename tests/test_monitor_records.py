@@ -225,3 +225,28 @@ def test_malformed_records_raise_format_errors(line, message):
 def test_unknown_record_types_have_their_own_error():
     with pytest.raises(UnknownRecordType):
         decode_line('{"v":1,"type":"calibration","data":[]}')
+
+
+def test_a_statistics_record_in_parts_is_the_record_in_one_piece():
+    """Issue 27: the statistics of 10,000 devices are written in parts of about a megabyte;
+    joined, they are exactly the line encode_record writes (and it decodes the same)."""
+    from gadgetctl.monitor.records import (
+        StatsRecord,
+        decode_line,
+        encode_record,
+        encode_stats_parts,
+    )
+
+    devices = {
+        f"Dev ice \u00e9{i}": {"count": i, "mean_rate": i / 3, "p99": None, "kinds": ["position"]}
+        for i in range(2000)
+    }
+    record = StatsRecord(12.5, devices)
+    parts = list(encode_stats_parts(record, size=10_000))
+    assert len(parts) > 10 and all(p for p in parts)
+    assert "".join(parts) == encode_record(record)
+    assert decode_line("".join(parts)) == record
+    empty = StatsRecord(1.0, {})
+    assert "".join(encode_stats_parts(empty)) == encode_record(empty)
+    with pytest.raises(ValueError):
+        list(encode_stats_parts(StatsRecord(float("nan"), devices)))

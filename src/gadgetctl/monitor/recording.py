@@ -36,6 +36,7 @@ from gadgetctl.monitor.records import (
     decode_record,
     encode_record,
     encode_samples,
+    encode_stats_parts,
 )
 from gadgetctl.safewrite import WriteError, create_new
 
@@ -231,13 +232,15 @@ class Recorder:
     def write_stats(
         self, devices: Mapping[str, Mapping[str, object]], timestamp: float | None = None
     ) -> None:
-        """Append a statistics snapshot (device name -> statistic -> value)."""
-        self._write_record(
-            StatsRecord(
-                self._clock() if timestamp is None else timestamp,
-                {name: dict(v) for name, v in devices.items()},
-            )
-        )
+        """Append a statistics snapshot (device name -> statistic -> value), written in
+        parts of about a megabyte (one line all the same)."""
+        record = StatsRecord(self._clock() if timestamp is None else timestamp, devices)
+        parts = list(encode_stats_parts(record))  # what cannot be encoded raises before a write
+        self.flush()
+        for part in parts:
+            self._write(part)
+            self._writing = True  # until the line ends: close() ends a line cut short
+        self._writing = False
 
     def close(self, reason: str = "closed") -> None:
         """Write pending samples and the end record, then close the file (idempotent)."""
