@@ -119,8 +119,10 @@ def search_path_diagnostics(repo, given: Iterable[str] = ()) -> list[Diagnostic]
 
 
 def _resolved(path: str) -> str:
+    from gadgetctl.jccl.configcheck import real_path
+
     try:
-        return str(Path(path).resolve())
+        return str(real_path(path))
     except OSError:
         return path
 
@@ -190,25 +192,27 @@ def check_configurations(
     configuration with ``options.together``."""
     from gadgetctl.jccl.configcheck import check_documents
 
+    # One driver search per set of driver places for the three questions below (each
+    # search scans the plug-in directories and the installed entry points).
+    searches = {} if options.driver_searches is None else options.driver_searches
     return check_documents(
         result.documents,
         repo,
         together=options.together,
         environ=options.environ,
-        plugin_definitions=plugin_definition_finder(options.environ),
-        plugin_names=plugin_name_finder(options.environ, options.driver_searches),
-        unloaded_types=unloaded_type_finder(options.environ, options.driver_searches),
+        plugin_definitions=plugin_definition_finder(options.environ, searches),
+        plugin_names=plugin_name_finder(options.environ, searches),
+        unloaded_types=unloaded_type_finder(options.environ, searches),
     )
 
 
-def plugin_definition_finder(environ=None):
+def plugin_definition_finder(environ=None, searches: dict | None = None):
     """A function giving the definition folders of the driver plug-ins a configuration can
     load (bundled, installed, GADGETCTL_DRIVER_PATH, its input_manager driver paths)."""
+    searches = {} if searches is None else searches
 
     def find(config) -> list[Path]:
-        from gadgetctl.input.definitions import driver_definition_dirs
-
-        return driver_definition_dirs(configuration=config, environ=environ)
+        return _driver_search(config, environ, searches).definition_dirs()
 
     return find
 

@@ -198,7 +198,7 @@ def _real_directory(directory: str) -> str:
     return os.path.realpath(directory)
 
 
-def _real_path(path: str) -> Path:
+def real_path(path: str) -> Path:
     """``Path(path).resolve()``, with the directory part resolved once per directory."""
     if os.path.islink(path):
         return Path(path).resolve()
@@ -234,12 +234,12 @@ def check_documents(
     given: list[Path] = []
     for doc in documents:
         if _is_configuration(doc):
-            resolved = _real_path(doc.path)
+            resolved = real_path(doc.path)
             session.documents[resolved] = doc
             given.append(resolved)
         elif doc.root is None and doc.kind is FileKind.CONFIGURATION:
             # Reported with the file itself; an include of it must not report it again.
-            session.documents[_real_path(doc.path)] = doc
+            session.documents[real_path(doc.path)] = doc
     if not given:
         return []
     retain(session)  # (the loaded configurations: kept to the end when nothing is freed then)

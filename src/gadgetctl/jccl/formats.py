@@ -95,14 +95,14 @@ def _check_pi(
         )
         return None
     attrs = pi_attributes(pi)
-    line, column = _pi_location(doc, pi)
     for key in keys:
         if key in attrs:
             return (
                 attrs[key]
                 if attrs[key] == expected
-                else _wrong_version(doc, key, attrs[key], expected, line, column)
+                else _wrong_version(doc, key, attrs[key], expected, pi)
             )
+    line, column = _pi_location(doc, pi)  # (looked up only for a finding)
     doc.diagnostics.append(
         Diagnostic.make(
             "XML011",
@@ -116,9 +116,12 @@ def _check_pi(
     return None
 
 
-def _wrong_version(doc: XmlDocument, key: str, value: str, expected: str, line, column) -> str:
+def _wrong_version(
+    doc: XmlDocument, key: str, value: str, expected: str, pi: etree._ProcessingInstruction
+) -> str:
     if key in ns.DEFINITION_VERSION_KEYS and value == "3.0":
         return value  # reported once, with the namespace, as an older definition format
+    line, column = _pi_location(doc, pi)
     doc.diagnostics.append(
         Diagnostic.make(
             "XML011",

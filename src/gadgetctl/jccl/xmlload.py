@@ -17,6 +17,8 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass, field
 from enum import StrEnum
+from itertools import accumulate, count, repeat
+from operator import add
 from pathlib import Path
 
 from lxml import etree
@@ -55,6 +57,26 @@ def _parser(encoding: str | None = None, recover: bool = False) -> etree.XMLPars
 
 #: What str.splitlines() splits at.
 _LINE_BREAK = re.compile(r"\r\n|[\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029]")
+#: Line breaks other than \n (a text without them is indexed by splitting).
+_OTHER_BREAK = re.compile(r"[\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029]")
+#: Characters split at a time when indexing \n line breaks (bounds the pieces held at once).
+_SPLIT_CHUNK = 1 << 20
+
+
+def _line_breaks(text: str) -> array:
+    """Start and end of every line break of ``text``, one after the other."""
+    if _OTHER_BREAK.search(text):
+        return array("q", (i for m in _LINE_BREAK.finditer(text) for i in m.span()))
+    breaks = array("q")
+    for start in range(0, len(text), _SPLIT_CHUNK):
+        pieces = text[start : start + _SPLIT_CHUNK].split("\n")
+        # the k-th \n of the chunk follows k + 1 pieces and k earlier line breaks
+        ends = array("q", map(add, accumulate(map(len, pieces[:-1])), count(start)))
+        pair = array("q", bytes(16 * len(ends)))
+        pair[0::2] = ends
+        pair[1::2] = array("q", map(add, ends, repeat(1)))
+        breaks.extend(pair)
+    return breaks
 
 
 class SourceLines:
@@ -65,8 +87,7 @@ class SourceLines:
 
     def __init__(self, text: str) -> None:
         self._text = text
-        # start and end of every line break, one after the other
-        self._breaks = array("q", (i for m in _LINE_BREAK.finditer(text) for i in m.span()))
+        self._breaks = _line_breaks(text)  # start and end of every line break, in turn
 
     def __len__(self) -> int:
         count = len(self._breaks) // 2

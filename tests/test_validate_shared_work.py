@@ -1,0 +1,187 @@
+"""Work `validate` does once, or only when a finding needs it (issue 27 goal 4): the results
+must be those of doing it every time, eagerly."""
+
+from __future__ import annotations
+
+import random
+import re
+
+import pytest
+
+from gadgetctl.jccl import configload, xmlload
+from gadgetctl.jccl.configload import load_configuration
+from gadgetctl.jccl.xmlload import SourceLines
+from gadgetctl.validate import (
+    ValidateOptions,
+    plugin_definition_finder,
+    plugin_name_finder,
+    validate_paths,
+)
+
+from conftest import CORPUS, write
+from jccl_samples import jconf
+
+# -- line index ------------------------------------------------------------------------
+
+
+def _texts(seed: int) -> list[str]:
+    rng = random.Random(seed)
+    pieces = ["a", "bc", "\n", "\n", "\n\n", "é", "\r", "\r\n", "\u2028", "\x0c", " "]
+    plain = ["ab", "\n", "\n\n", "é€", "  "]
+    texts = ["", "\n", "a", "a\n", "\na", "\r\n", "a\r\nb\n"]
+    for i in range(400):
+        choices = pieces if i % 2 else plain  # half with \n only (the split path)
+        texts.append("".join(rng.choice(choices) for _ in range(rng.randint(0, 60))))
+    return texts
+
+
+@pytest.mark.parametrize("chunk", [1, 3, 7, 1 << 20])
+def test_source_lines_are_those_of_splitlines(monkeypatch, chunk):
+    monkeypatch.setattr(xmlload, "_SPLIT_CHUNK", chunk)  # \n on every side of a chunk's edge
+    for text in _texts(chunk):
+        lines = SourceLines(text)
+        assert len(lines) == len(text.splitlines()), repr(text)
+        assert [lines[i] for i in range(len(lines))] == text.splitlines(), repr(text)
+        if len(lines):
+            assert lines[-1] == text.splitlines()[-1]
+
+
+# -- which configurations are read while parsed --------------------------------------
+
+# The rule as one search of the file as written (what _needs_whole_tree answered before it
+# searched the file without white space): every file it flags must still be parsed whole.
+_WRITTEN_RULE = re.compile(
+    rb"<!DOCTYPE"
+    rb"|(?:/>|</[^>]*>|-->|\?>|]]>)[ \t\r\n]*[^ \t\r\n<]"
+    rb"|[^ \t\r\n>][ \t\r\n]*<(?:[A-Za-z_:]|!--|!\[|\?)",
+    re.IGNORECASE,
+)
+
+HEAD = (
+    b'<?xml version="1.0"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    b'<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">\n'
+    b"<elements>\n"
+)
+TAIL = b"</elements>\n</configuration>\n"
+PARTS = [
+    b'<alias name="A" version="1">',
+    b"<proxy>P</proxy>",
+    b"</alias>",
+    b"<proxy/>",
+    b"<!-- note -->",
+    b"<?pi x?>",
+    b"<![CDATA[x]]>",
+    b"8",
+    b"text",
+    b" ",
+    b"\n  ",
+    b"\t",
+    b"<a:b>x</a:b>",
+    b"</proxy >",
+]
+
+
+def _bodies(count: int) -> list[bytes]:
+    rng = random.Random(27)
+    return [b"".join(rng.choice(PARTS) for _ in range(rng.randint(1, 8))) for _ in range(count)]
+
+
+def test_every_file_the_written_rule_flags_is_parsed_whole():
+    flagged = 0
+    for body in _bodies(3000):
+        data = HEAD + body + TAIL
+        if _WRITTEN_RULE.search(data):
+            flagged += 1
+            assert configload._needs_whole_tree(data), data
+    assert flagged > 1000  # the cases cover each kind of stray text
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        b"<alias name='A'><proxy>P</proxy></alias> 8 ",  # after an end tag
+        b"<alias name='A'><proxy/>  x</alias>",  # after a self-closing tag
+        b"<alias name='A'><!-- c -->\n x<proxy>P</proxy></alias>",  # after a comment
+        b"<alias name='A'><?pi?>x<proxy>P</proxy></alias>",  # after a PI
+        b"<alias name='A'>x\n  <proxy>P</proxy></alias>",  # before a start tag
+        b"<alias name='A'>x <!-- c --><proxy>P</proxy></alias>",  # before a comment
+    ],
+)
+def test_stray_text_is_parsed_whole(body):
+    assert configload._needs_whole_tree(HEAD + body + TAIL)
+
+
+def test_a_usual_configuration_is_read_while_parsed():
+    body = b'<alias name="A" version="1">\n  <proxy>P</proxy>\n</alias>\n<!-- c -->\n'
+    assert not configload._needs_whole_tree(HEAD + body + TAIL)
+
+
+def _written_needs_whole_tree(data: bytes) -> bool:
+    """The whole rule as it was with the one search of the file as written."""
+    if _WRITTEN_RULE.search(data):
+        return True
+    elements = configload._ELEMENTS_TAG.search(data)
+    if elements is None:
+        return True
+    if data.find(configload._XSI, elements.start()) >= 0:
+        return True
+    for prefix in set(configload._XSI_PREFIX.findall(data)):
+        attribute = re.compile(rb"[ \t\r\n]" + re.escape(prefix) + rb":[\w.-]+[ \t\r\n]*=")
+        if attribute.search(data, elements.start()):
+            return True
+    return False
+
+
+def test_the_corpus_is_split_as_the_written_rule_splits_it():
+    for path in sorted(CORPUS.rglob("*.jconf")):
+        data = path.read_bytes()
+        assert configload._needs_whole_tree(data) == _written_needs_whole_tree(data), path
+
+
+# -- the settings PI's position, looked up for a finding only -------------------------
+
+
+def test_a_wrong_format_version_is_placed_at_the_processing_instruction(tmp_path):
+    text = jconf().replace('configuration.version="3.0"', 'configuration.version="2.9"')
+    text = text.replace("<?org", "  <?org", 1)
+    (diag,) = validate_paths([write(tmp_path / "v.jconf", text)]).diagnostics
+    assert (diag.code, diag.line, diag.column) == ("XML011", 2, 3)
+
+
+def test_a_missing_version_key_is_placed_at_the_processing_instruction(tmp_path):
+    text = jconf().replace('configuration.version="3.0"', 'other="1"')
+    (diag,) = validate_paths([write(tmp_path / "k.jconf", text)]).diagnostics
+    assert (diag.code, diag.line, diag.column) == ("XML011", 2, 1)
+    assert "no configuration.version" in diag.message
+
+
+# -- one driver search per run -------------------------------------------------------
+
+
+def test_the_plugin_finders_share_one_search(tmp_path):
+    path = write(tmp_path / "c.jconf", jconf())
+    config = load_configuration([path], environ={})
+    searches: dict = {}
+    dirs = plugin_definition_finder({}, searches)(config)
+    assert len(searches) == 1
+    (search,) = searches.values()
+    names = plugin_name_finder({}, searches)(config)
+    assert list(searches.values()) == [search]  # the same search answered both
+    assert dirs == search.definition_dirs()
+    assert names == {p.name for p in search.plugins() if p.shadowed_by is None}
+
+
+def test_validate_keeps_the_searches_it_is_given(tmp_path):
+    path = write(tmp_path / "c.jconf", jconf())
+    searches: dict = {}
+    validate_paths([path], ValidateOptions(environ={}, driver_searches=searches))
+    assert len(searches) == 1
+
+
+def test_a_plugin_finder_without_shared_searches_still_answers(tmp_path):
+    from gadgetctl.input.definitions import driver_definition_dirs
+
+    config = load_configuration([write(tmp_path / "c.jconf", jconf())], environ={})
+    assert plugin_definition_finder({})(config) == driver_definition_dirs(
+        configuration=config, environ={}
+    )
