@@ -19,7 +19,7 @@ from gadgetctl.validate import (
 )
 
 from conftest import CORPUS, write
-from jccl_samples import jconf
+from jccl_samples import jconf, jdef, prop
 
 # -- line index ------------------------------------------------------------------------
 
@@ -185,3 +185,36 @@ def test_a_plugin_finder_without_shared_searches_still_answers(tmp_path):
     assert plugin_definition_finder({})(config) == driver_definition_dirs(
         configuration=config, environ={}
     )
+
+
+# -- where a given definition's parts are, looked up when asked ----------------------
+
+
+def test_definition_locations_are_looked_up_when_asked(tmp_path):
+    from gadgetctl.jccl.defparser import read_definition
+    from gadgetctl.jccl.xmlload import load_file
+
+    text = jdef("thing", prop("a") + prop("b")).replace("<property ", "  <property ", 1)
+    doc = load_file(write(tmp_path / "thing.jdef", text))
+    definition = read_definition(doc)
+    assert doc._lines is None  # no line of the file was indexed for reading it
+    version = definition.newest
+    nodes = doc.root.xpath("//*[local-name()='property']")
+    for prop_definition, node in zip(version.properties, nodes, strict=True):
+        where = prop_definition.location
+        assert (where.path, where.line, where.column) == (doc.path, *doc.locate(node))
+    assert version.properties[0].location.column == version.properties[1].location.column + 2
+    plain = read_definition(load_file(tmp_path / "thing.jdef"), columns=False)
+    assert plain.newest.properties[0].location.column is None
+
+
+def test_a_definition_finding_has_its_column(tmp_path):
+    text = jdef("thing", prop("a", "integer", values='<value label="v" defaultvalue="x"/>'))
+    text = text.replace("<property ", "   <property ", 1)
+    (diag,) = [
+        d
+        for d in validate_paths([write(tmp_path / "t.jdef", text)]).diagnostics
+        if d.code == "DEF001"
+    ]
+    line = text.splitlines()[diag.line - 1]
+    assert line[diag.column - 1 :].startswith("<property ")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from lxml import etree
 
+from gadgetctl.jccl.configuration import SourceLocation
 from gadgetctl.jccl.definitions import (
     Definition,
     DefinitionVersion,
@@ -73,11 +74,12 @@ class DefinitionReader:
         self.doc = doc
         self.columns = columns
 
-    def location(self, node: etree._Element) -> Location:
+    def location(self, node: etree._Element) -> Location | SourceLocation:
+        """Where ``node`` is: its line only, or (``columns``) its line and column, looked up
+        when first asked for (few definitions and properties are ever reported)."""
         if not self.columns:
             return Location(self.doc.path, node.sourceline)
-        line, column = self.doc.locate(node)
-        return Location(self.doc.path, line, column)
+        return SourceLocation(self.doc, node)
 
     def read(self) -> Definition | None:
         root = self.doc.root
@@ -155,5 +157,6 @@ class DefinitionReader:
 
 
 def read_definition(doc: XmlDocument, *, columns: bool = True) -> Definition | None:
-    """Read a definition; ``columns=False`` skips the column lookup (faster bulk loads)."""
+    """Read a definition; ``columns=False`` gives locations without a column (bulk loads:
+    they keep no reference to the document)."""
     return DefinitionReader(doc, columns=columns).read()

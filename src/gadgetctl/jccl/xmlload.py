@@ -57,15 +57,17 @@ def _parser(encoding: str | None = None, recover: bool = False) -> etree.XMLPars
 
 #: What str.splitlines() splits at.
 _LINE_BREAK = re.compile(r"\r\n|[\n\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029]")
-#: Line breaks other than \n (a text without them is indexed by splitting).
-_OTHER_BREAK = re.compile(r"[\r\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029]")
+#: Line breaks other than \n (a text without them is indexed by splitting); the ASCII ones
+#: first, all that an ASCII text can hold.
+_OTHER_BREAKS = ("\r", "\x0b", "\x0c", "\x1c", "\x1d", "\x1e", "\x85", "\u2028", "\u2029")
 #: Characters split at a time when indexing \n line breaks (bounds the pieces held at once).
 _SPLIT_CHUNK = 1 << 20
 
 
 def _line_breaks(text: str) -> array:
     """Start and end of every line break of ``text``, one after the other."""
-    if _OTHER_BREAK.search(text):
+    others = _OTHER_BREAKS[:6] if text.isascii() else _OTHER_BREAKS
+    if any(other in text for other in others):  # (each a fast scan for one character)
         return array("q", (i for m in _LINE_BREAK.finditer(text) for i in m.span()))
     breaks = array("q")
     for start in range(0, len(text), _SPLIT_CHUNK):
@@ -83,21 +85,22 @@ class SourceLines:
     """The lines of a text as ``text.splitlines()`` gives them, each cut out when asked
     for: an index of line breaks (8 bytes a line) instead of a string per line."""
 
-    __slots__ = ("_breaks", "_text")
+    __slots__ = ("_breaks", "_count", "_text")
 
     def __init__(self, text: str) -> None:
         self._text = text
-        self._breaks = _line_breaks(text)  # start and end of every line break, in turn
+        self._breaks = breaks = _line_breaks(text)  # start and end of every line break, in turn
+        count = len(breaks) // 2
+        ends_with_break = count and breaks[-1] == len(text)
+        self._count = count if ends_with_break or not text else count + 1
 
     def __len__(self) -> int:
-        count = len(self._breaks) // 2
-        ends_with_break = count and self._breaks[-1] == len(self._text)
-        return count if ends_with_break or not self._text else count + 1
+        return self._count
 
     def __getitem__(self, index: int) -> str:
         if index < 0:
-            index += len(self)
-        if not 0 <= index < len(self):
+            index += self._count
+        if not 0 <= index < self._count:
             raise IndexError("line index out of range")
         breaks = self._breaks
         start = breaks[2 * index - 1] if index else 0
@@ -147,9 +150,10 @@ class XmlDocument:
         scan, not one per element.
         """
         line_no = element.sourceline
-        if not line_no or not isinstance(element.tag, str) or line_no > len(self.lines):
+        tag = element.tag
+        if not line_no or not isinstance(tag, str) or line_no > len(self.lines):
             return line_no, None
-        local = etree.QName(element).localname
+        local = tag.rpartition("}")[2]  # (what etree.QName(element).localname gives)
         starts = self.tag_starts(line_no, local)
         if len(starts) == 1:
             return line_no, starts[0]
