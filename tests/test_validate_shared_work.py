@@ -7,10 +7,11 @@ import random
 import re
 
 import pytest
+from lxml import etree
 
 from gadgetctl.jccl import configload, xmlload
 from gadgetctl.jccl.configload import load_configuration
-from gadgetctl.jccl.xmlload import SourceLines
+from gadgetctl.jccl.xmlload import FileKind, SourceLines
 from gadgetctl.validate import (
     ValidateOptions,
     plugin_definition_finder,
@@ -218,3 +219,64 @@ def test_a_definition_finding_has_its_column(tmp_path):
     ]
     line = text.splitlines()[diag.line - 1]
     assert line[diag.column - 1 :].startswith("<property ")
+
+
+XSI_HEAD = HEAD.replace(
+    b"<configuration ",
+    b'<configuration xmlns:xi="http://www.w3.org/2001/XMLSchema-instance" ',
+)
+
+
+def test_an_xsi_attribute_in_elements_is_parsed_whole():
+    used = b'<alias name="A" version="1"\n  xi:type="x"><proxy>P</proxy></alias>\n'
+    assert configload._needs_whole_tree(XSI_HEAD + used + TAIL)
+
+
+def test_an_xsi_prefix_declared_and_unused_in_elements_is_read_while_parsed():
+    unused = b'<alias name="A" version="1"><proxy>xi:P</proxy></alias>\n'  # text, no attribute
+    assert not configload._needs_whole_tree(XSI_HEAD + unused + TAIL)
+    assert not configload._needs_whole_tree(XSI_HEAD + b'<alias name="A"/>\n' + TAIL)
+
+
+# -- a configuration of one chunk: parsed in one call, then read ----------------------
+
+
+def test_every_corpus_configuration_reads_the_same_in_one_parse():
+    from test_streamed_configurations import both_ways, elements
+
+    taken = 0
+    for path in sorted(CORPUS.rglob("*.jconf")):
+        data = path.read_bytes()
+        assert len(data) <= configload.STREAM_CHUNK  # (each takes the one-parse way)
+        streamed, whole = both_ways(data, str(path))
+        taken += streamed.streamed is not None
+        assert [d.to_dict() for d in streamed.diagnostics] == [
+            d.to_dict() for d in whole.diagnostics
+        ], path
+        if whole.root is not None:
+            assert elements(streamed) == elements(whole), path
+        if streamed.streamed is not None:
+            assert etree.tostring(streamed.root) == etree.tostring(_emptied(whole.root)), path
+    assert taken >= 50
+
+
+def _emptied(root):
+    """The whole tree with every <elements> child of the root emptied, as streaming leaves it."""
+    for node in root:
+        if isinstance(node.tag, str) and node.tag.rpartition("}")[2] == "elements":
+            del node[:]
+    return root
+
+
+def test_one_parse_and_the_pull_parse_read_the_same(monkeypatch):
+    from test_streamed_configurations import elements, one_line_file
+
+    data = one_line_file(40)
+    once = configload.parse_configuration(data, "t.jconf", FileKind.CONFIGURATION)
+    monkeypatch.setattr(configload, "STREAM_CHUNK", 256)  # the pull parse, many chunks
+    pulled = configload.parse_configuration(data, "t.jconf", FileKind.CONFIGURATION)
+    assert once.streamed is not None and pulled.streamed is not None
+    assert elements(once) == elements(pulled)
+    assert [len(b.elements) for b in once.streamed] == [len(b.elements) for b in pulled.streamed]
+    assert [b.embedded for b in once.streamed] == [b.embedded for b in pulled.streamed] == [40]
+    assert etree.tostring(once.root) == etree.tostring(pulled.root)

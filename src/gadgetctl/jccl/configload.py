@@ -264,6 +264,8 @@ def _needs_whole_tree(data: bytes) -> bool:
     if data.find(_XSI, elements.start()) >= 0:
         return True
     for prefix in set(_XSI_PREFIX.findall(data)):
+        if data.find(prefix + b":", elements.start()) < 0:
+            continue  # (a fast scan for the prefix first: it is rarely used in <elements>)
         attribute = re.compile(rb"[ \t\r\n]" + re.escape(prefix) + rb":[\w.-]+[ \t\r\n]*=")
         if attribute.search(data, elements.start()):
             return True
@@ -293,7 +295,10 @@ def parse_configuration(data: bytes, path: str, kind: FileKind = FileKind.UNKNOW
     if decode_text(doc, data) is not None:
         return parse_bytes(data, path, kind)
     try:
-        root, blocks = _stream(doc, data)
+        # (a file of one chunk at most is parsed whole in one call, then read: the same
+        # tree and elements as a pull parse, without its cost)
+        taken = _stream(doc, data) if len(data) > STREAM_CHUNK else _take_after_parse(doc, data)
+        root, blocks = taken
     except (etree.XMLSyntaxError, UnusualDocument):
         return parse_bytes(data, path, kind)
     doc.root = root
@@ -338,6 +343,26 @@ def _stream(doc: XmlDocument, data: bytes) -> tuple[etree._Element, list[Streame
     root = parser.close()
     if blocks:
         take(blocks[-1], keep_last=False)
+    return root, blocks
+
+
+def _take_after_parse(doc: XmlDocument, data: bytes) -> tuple[etree._Element, list[StreamedBlock]]:
+    """What :func:`_stream` gives for a file of one chunk: the file parsed in one call, then
+    the elements of each ``<elements>`` child of the root read and dropped, in document
+    order."""
+    root = etree.fromstring(data, etree.XMLParser(**xml_parser_options()))
+    reader = ElementReader(doc, streaming=True)
+    blocks: list[StreamedBlock] = []
+    for node in root:
+        tag = node.tag
+        if not isinstance(tag, str) or tag.rpartition("}")[2] != "elements":
+            continue
+        block = StreamedBlock(node)
+        before = reader.embedded
+        block.elements = [reader.read(child) for child in node if isinstance(child.tag, str)]
+        block.embedded = reader.embedded - before
+        del node[:]
+        blocks.append(block)
     return root, blocks
 
 
