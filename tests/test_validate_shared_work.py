@@ -280,3 +280,37 @@ def test_one_parse_and_the_pull_parse_read_the_same(monkeypatch):
     assert [len(b.elements) for b in once.streamed] == [len(b.elements) for b in pulled.streamed]
     assert [b.embedded for b in once.streamed] == [b.embedded for b in pulled.streamed] == [40]
     assert etree.tostring(once.root) == etree.tostring(pulled.root)
+
+
+def test_definition_texts_are_those_of_every_text_node(tmp_path):
+    from gadgetctl.jccl.defparser import read_definition
+    from gadgetctl.jccl.xmlload import load_file
+
+    body = prop("a").replace("<help>property a</help>", "<help>\n  one <!-- c -->two </help>")
+    body += prop("b").replace("<help>property b</help>", "<help>  <b>bold</b> tail </help>")
+    body += prop("c").replace("<help>property c</help>", "<help/>")
+    definition = read_definition(load_file(write(tmp_path / "t.jdef", jdef("t", body))))
+    assert [p.help for p in definition.newest.properties] == ["one two", "bold tail", ""]
+
+
+# -- a repository compares a word with its names once --------------------------------
+
+
+def test_repository_close_names_are_those_of_close_names_and_follow_additions(monkeypatch):
+    from gadgetctl import suggest
+    from gadgetctl.jccl.definitions import Definition, DefinitionVersion
+    from gadgetctl.jccl.repository import DefinitionRepository, default_repository
+
+    repo = default_repository()
+    expected = suggest.close_names("positon_proxy", repo.names(), cutoff=0.6)
+    assert expected and repo.close_names("positon_proxy") == expected
+    calls = []
+    monkeypatch.setattr(suggest, "close_names", lambda *a, **k: calls.append(a) or ["remembered?"])
+    assert repo.close_names("positon_proxy") == expected and not calls  # asked once
+    assert repo.close_names("positon_proxy", cutoff=0.9) == ["remembered?"]  # its own key
+    monkeypatch.undo()
+    fresh = DefinitionRepository()
+    assert fresh.close_names("positon_proxy") == []
+    version = DefinitionVersion("position_proxy", 1, "", False, "", (), (), ())
+    fresh.add(Definition(name="position_proxy", versions={1: version}))
+    assert fresh.close_names("positon_proxy") == ["position_proxy"]  # the addition counts

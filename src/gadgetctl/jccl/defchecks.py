@@ -13,7 +13,6 @@ from gadgetctl.jccl.definitions import (
     parse_value,
 )
 from gadgetctl.jccl.repository import DefinitionRepository
-from gadgetctl.suggest import close_names
 from gadgetctl.wording import counted
 
 _TYPED = (ValueType.INTEGER, ValueType.FLOAT, ValueType.BOOLEAN)
@@ -138,7 +137,7 @@ def _check_properties(
                         "on the search path",
                         where,
                         severity=None if newest else Severity.INFO,
-                        hint=_suggest(allowed, repo.names()),
+                        hint=_suggest(allowed, repo),
                     )
                 )
         inherited = _inherited_property(version, prop.name, repo)
@@ -177,7 +176,7 @@ def _check_parents(version: DefinitionVersion, repo: DefinitionRepository) -> li
                     f"{version.name} v{version.version}: parent {parent!r} is not defined "
                     "on the search path",
                     version.location,
-                    hint=_suggest(parent, repo.names()),
+                    hint=_suggest(parent, repo),
                 )
             )
     return found
@@ -226,7 +225,6 @@ def _cycle_path(
     return path, True
 
 
-def _suggest(name: str, candidates: list[str]) -> str | None:
-
-    close = close_names(name, candidates, cutoff=0.6)
+def _suggest(name: str, repo: DefinitionRepository) -> str | None:
+    close = repo.close_names(name, cutoff=0.6)
     return f"Did you mean {', '.join(close)}?" if close else None

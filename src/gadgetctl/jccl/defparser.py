@@ -58,7 +58,12 @@ def _only(groups: dict[str, list[etree._Element]], name: str) -> etree._Element 
 
 
 def _text(node: etree._Element | None) -> str:
-    return "" if node is None else "".join(node.itertext()).strip()
+    if node is None:
+        return ""
+    if not len(node):  # (the usual leaf: its text is all itertext() gives)
+        text = node.text
+        return text.strip() if text else ""
+    return "".join(node.itertext()).strip()
 
 
 def _bool(text: str | None, default: bool = False) -> bool:

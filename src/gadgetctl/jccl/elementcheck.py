@@ -162,7 +162,7 @@ class ElementChecker:
             return clean
         versions = index.versions(element.type)
         if not versions:
-            close = close_names(element.type, self.index.repo.names(), cutoff=0.6)
+            close = self.index.repo.close_names(element.type, cutoff=0.6)
             hint = f"Did you mean {', '.join(close)}? " if close else ""
             searched = f"Searched: {self.search_path}. " if self.search_path else ""
             found.add(

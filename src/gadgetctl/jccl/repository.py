@@ -68,6 +68,8 @@ class DefinitionRepository:
     )
     _map_cache: dict[str, Mapping[str, PropertyDefinition]] = field(default_factory=dict)
     _property_owners: dict[str, frozenset[str]] | None = None
+    #: close_names answers by (word, cutoff), cleared by add()
+    _close_cache: dict[tuple[str, float], list[str]] = field(default_factory=dict)
 
     # -- building ---------------------------------------------------------------------
 
@@ -123,6 +125,7 @@ class DefinitionRepository:
         self._effective_cache.clear()
         self._map_cache.clear()
         self._property_owners = None
+        self._close_cache.clear()
         versions = self._versions.setdefault(definition.name, {})
         added = 0
         for number, version in sorted(definition.versions.items()):
@@ -162,6 +165,18 @@ class DefinitionRepository:
 
     def names(self) -> list[str]:
         return sorted(self._versions)
+
+    def close_names(self, word: str, cutoff: float = 0.6) -> list[str]:
+        """The names on the search path that look like ``word`` (see
+        :func:`gadgetctl.suggest.close_names`), each word compared once: a missing type is
+        usually named by several definitions or elements."""
+        from gadgetctl.suggest import close_names
+
+        key = (word, cutoff)
+        found = self._close_cache.get(key)
+        if found is None:
+            found = self._close_cache[key] = close_names(word, self.names(), cutoff=cutoff)
+        return list(found)
 
     def __contains__(self, name: object) -> bool:
         return isinstance(name, str) and bool(self._versions.get(name))
