@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import random
 import re
+from pathlib import Path
 
 import pytest
 from lxml import etree
@@ -314,3 +315,23 @@ def test_repository_close_names_are_those_of_close_names_and_follow_additions(mo
     version = DefinitionVersion("position_proxy", 1, "", False, "", (), (), ())
     fresh.add(Definition(name="position_proxy", versions={1: version}))
     assert fresh.close_names("positon_proxy") == ["position_proxy"]  # the addition counts
+
+
+def test_real_path_text_is_the_resolved_path(tmp_path):
+    from gadgetctl.jccl.configcheck import real_path, real_path_text
+
+    real = tmp_path / "real"
+    real.mkdir()
+    (real / "a.jconf").write_text("x")
+    (tmp_path / "link").symlink_to(real)
+    (real / "b.jconf").symlink_to(real / "a.jconf")
+    for given in (
+        str(tmp_path / "link" / "a.jconf"),
+        str(tmp_path / "link" / "b.jconf"),
+        str(tmp_path / "link" / ".." / "real" / "missing.jconf"),
+    ):
+        assert real_path_text(given) == str(Path(given).resolve()) == str(real_path(given))
+    (real / "sub").mkdir()
+    (tmp_path / "deep").symlink_to(real / "sub")
+    through = str(tmp_path / "deep" / ".." / "a.jconf")  # real/a.jconf, not tmp_path/a.jconf
+    assert real_path_text(through) == str(Path(through).resolve()) == str(real / "a.jconf")

@@ -119,10 +119,10 @@ def search_path_diagnostics(repo, given: Iterable[str] = ()) -> list[Diagnostic]
 
 
 def _resolved(path: str) -> str:
-    from gadgetctl.jccl.configcheck import real_path
+    from gadgetctl.jccl.configcheck import real_path_text
 
     try:
-        return str(real_path(path))
+        return real_path_text(path)
     except OSError:
         return path
 

@@ -206,6 +206,15 @@ def real_path(path: str) -> Path:
     return Path(_real_directory(directory), name)
 
 
+def real_path_text(path: str) -> str:
+    """``str(Path(path).resolve())``, with the directory part resolved once per directory
+    (a path through ``..``, which abspath would take lexically, is resolved whole)."""
+    if os.path.islink(path) or os.pardir in path.split(os.sep):
+        return str(Path(path).resolve())
+    directory, name = os.path.split(os.path.abspath(path))
+    return os.path.join(_real_directory(directory), name)
+
+
 def _is_configuration(doc: XmlDocument) -> bool:
     if doc.root is None or doc.kind is not FileKind.CONFIGURATION:
         return False
