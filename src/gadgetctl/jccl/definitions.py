@@ -5,10 +5,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from gadgetctl.jccl.configuration import SourceLocation
 
 
 class ValueType(StrEnum):
@@ -117,9 +113,9 @@ class PropertyDefinition:
     values: tuple[ValueSlot, ...]
     allowed_types: tuple[str, ...] = ()
     enumeration: Enumeration | None = None
-    #: (validate reads the files it is given with a SourceLocation: the column is looked
-    #: up when a finding needs it)
-    location: Location | SourceLocation | None = None
+    #: (or, read by validate from a file it is given, a configuration.SourceLocation: the
+    #: same path, line and column, looked up when a finding needs them)
+    location: Location | None = None
 
     @property
     def count(self) -> int | None:
@@ -148,7 +144,7 @@ class DefinitionVersion:
     categories: tuple[str, ...]
     properties: tuple[PropertyDefinition, ...]
     upgrade_transform: bytes | None = None
-    location: Location | SourceLocation | None = None
+    location: Location | None = None  # (see PropertyDefinition.location)
 
     def own_property(self, name: str) -> PropertyDefinition | None:
         for prop in self.properties:
@@ -163,7 +159,7 @@ class Definition:
 
     name: str
     versions: dict[int, DefinitionVersion] = field(default_factory=dict)
-    location: Location | SourceLocation | None = None
+    location: Location | None = None  # (see PropertyDefinition.location)
     icon_path: str | None = None
     order: list[int] = field(default_factory=list)  # version numbers as written
 
