@@ -318,7 +318,7 @@ def test_repository_close_names_are_those_of_close_names_and_follow_additions(mo
 
 
 def test_real_path_text_is_the_resolved_path(tmp_path):
-    from gadgetctl.jccl.configcheck import real_path, real_path_text
+    from gadgetctl.files import real_path, real_path_text
 
     real = tmp_path / "real"
     real.mkdir()
@@ -335,3 +335,4 @@ def test_real_path_text_is_the_resolved_path(tmp_path):
     (tmp_path / "deep").symlink_to(real / "sub")
     through = str(tmp_path / "deep" / ".." / "a.jconf")  # real/a.jconf, not tmp_path/a.jconf
     assert real_path_text(through) == str(Path(through).resolve()) == str(real / "a.jconf")
+    assert real_path(through) == real / "a.jconf"

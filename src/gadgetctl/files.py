@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import stat
 from collections.abc import Iterable
+from functools import lru_cache
 from pathlib import Path
 
 from gadgetctl.errors import GadgetctlError
@@ -44,11 +45,30 @@ def expand_paths(paths: Iterable[Path]) -> list[Path]:
                 raise GadgetctlError(f"{path}: file is not readable")
             candidates = [path]
         for candidate in candidates:
-            key = candidate.resolve()
+            key = real_path_text(str(candidate))
             if key not in seen:
                 seen.add(key)
                 found.append(candidate)
     return found
+
+
+@lru_cache(maxsize=4096)
+def _real_directory(directory: str) -> str:
+    return os.path.realpath(directory)
+
+
+def real_path_text(path: str) -> str:
+    """``str(Path(path).resolve())``, with the directory part resolved once per directory
+    (a path through ``..``, which abspath would take lexically, is resolved whole)."""
+    if os.path.islink(path) or os.pardir in path.split(os.sep):
+        return str(Path(path).resolve())
+    directory, name = os.path.split(os.path.abspath(path))
+    return os.path.join(_real_directory(directory), name)
+
+
+def real_path(path: str) -> Path:
+    """``Path(path).resolve()``, with the directory part resolved once per directory."""
+    return Path(real_path_text(path))
 
 
 def _jccl_files(directory: Path) -> list[Path]:

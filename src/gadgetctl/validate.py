@@ -119,7 +119,7 @@ def search_path_diagnostics(repo, given: Iterable[str] = ()) -> list[Diagnostic]
 
 
 def _resolved(path: str) -> str:
-    from gadgetctl.jccl.configcheck import real_path_text
+    from gadgetctl.files import real_path_text
 
     try:
         return real_path_text(path)

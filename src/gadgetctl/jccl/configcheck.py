@@ -14,11 +14,11 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
-from functools import lru_cache
 from pathlib import Path
 
 from gadgetctl.diagnostics import Diagnostic
 from gadgetctl.envvars import expand
+from gadgetctl.files import real_path
 from gadgetctl.jccl.configuration import ConfigElement, ConfigFile, Configuration
 from gadgetctl.jccl.elementcheck import ElementChecker, at, describe
 from gadgetctl.jccl.repository import DefinitionRepository
@@ -191,28 +191,6 @@ def _path_variables(element: ConfigElement, environ: Mapping[str, str]) -> list[
                     )
                 )
     return found
-
-
-@lru_cache(maxsize=4096)
-def _real_directory(directory: str) -> str:
-    return os.path.realpath(directory)
-
-
-def real_path(path: str) -> Path:
-    """``Path(path).resolve()``, with the directory part resolved once per directory."""
-    if os.path.islink(path):
-        return Path(path).resolve()
-    directory, name = os.path.split(os.path.abspath(path))
-    return Path(_real_directory(directory), name)
-
-
-def real_path_text(path: str) -> str:
-    """``str(Path(path).resolve())``, with the directory part resolved once per directory
-    (a path through ``..``, which abspath would take lexically, is resolved whole)."""
-    if os.path.islink(path) or os.pardir in path.split(os.sep):
-        return str(Path(path).resolve())
-    directory, name = os.path.split(os.path.abspath(path))
-    return os.path.join(_real_directory(directory), name)
 
 
 def _is_configuration(doc: XmlDocument) -> bool:
