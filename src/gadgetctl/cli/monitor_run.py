@@ -324,7 +324,9 @@ def _table(session: MonitorSession, options: RunOptions, human) -> None:
     for frame in session.frames(duration=options.duration):
         notice.check()
         table.frame(frame.elapsed)
-    with collector_paused():  # the frames are over: no walk of the whole heap for the table
+    # the frames are over: no walk of the whole heap for the table, and the scheduler stands
+    # still (it would stand in for the frames while 10,000 rows are made)
+    with collector_paused(), session.manager.hold_sampling():
         table.print()
     notice.check()
 
