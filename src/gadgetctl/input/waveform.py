@@ -75,7 +75,7 @@ HAT_SEQUENCE = (HatState.CENTERED, HatState.UP, HatState.RIGHT, HatState.DOWN, H
 
 
 class _StandIn:
-    """What the scheduler may spend standing in for frames, shared by every waveform device.
+    """What the scheduler of one input manager may spend standing in for its waveform devices.
 
     Publishing is paid from a budget that fills at ``STAND_IN_SHARE`` of a second per second
     up to ``STAND_IN_BURST``: a device looked in on when it is spent is left to the next
