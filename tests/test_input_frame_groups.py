@@ -13,6 +13,7 @@ import pytest
 
 from gadgetctl.input import InputManager, ManagerOptions
 from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.samples import FEW_SLOTS
 from gadgetctl.input.testing import frames_until
 from gadgetctl.jccl.configload import load_configuration
 from gadgetctl.jccl.repository import default_repository
@@ -94,12 +95,16 @@ def _expected(device, first: int, stop: int):
 @pytest.mark.parametrize(
     "ahead", [False, True], ids=["blocks-at-the-frame", "blocks-computed-ahead"]
 )
-def test_a_group_frame_gives_each_device_exactly_its_own_samples(make, ahead):
+@pytest.mark.parametrize(
+    "poses", [4, FEW_SLOTS + 2], ids=["few-devices-one-by-one", "many-devices-with-numpy"]
+)
+def test_a_group_frame_gives_each_device_exactly_its_own_samples(make, ahead, poses):
     """With or without the next blocks computed between frames (InputManager.prepare), and
     with frames that bring nothing new (two at once), every device's frames hold exactly
-    its samples, in order, once each."""
-    m = make(_config())
-    devices = [m.device(f"Poses {i}") for i in range(4)] + [
+    its samples, in order, once each; in a group of a few devices (the usual frame taken
+    slot by slot) as in a larger one (with numpy over all of them)."""
+    m = make(_config(poses=poses))
+    devices = [m.device(f"Poses {i}") for i in range(poses)] + [
         m.device(f"Mixed {i}") for i in range(2)
     ]
     seen = {d.name: 0 for d in devices}  # the next sample number each device must deliver

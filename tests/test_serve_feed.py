@@ -156,3 +156,86 @@ def test_monitor_recorders_use_the_same_consumer_hook():
     assert len(calls) == 60
     assert session._consumers[1] is MonitorSession._write_frame  # the recorders' consumer
     assert b'"type": "sample"' in stream.getvalue() or b'"type":"sample"' in stream.getvalue()
+
+
+class _Broadcasts:
+    """A server stand-in for VrpnOutlet: names get ids, every broadcast is kept."""
+
+    def __init__(self) -> None:
+        self.names: dict[str, int] = {}
+        self.sent: list[bytes] = []
+        self.clients: list = []
+
+    def register_sender(self, name: str) -> int:
+        return self.names.setdefault(name, len(self.names))
+
+    register_type = register_sender
+
+    def broadcast(self, data: bytes, size: int, *, reliable: bool = True, flush: bool = False):
+        self.sent.append(bytes(data))
+        return len(data) // size
+
+
+WAVE = """<waveform_device name="Wave {i}" version="1"><rate>1000</rate><seed>{i}</seed>
+  <event_period>0.0</event_period><position_path>circle</position_path>
+  <position_path>spin</position_path></waveform_device>"""
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("devices", [1, 20], ids=["few-devices", "many-devices"])
+def test_a_frame_groups_shared_windows_are_served_as_its_devices_samples(tmp_path, devices):
+    """As `serve` runs them (no statistics, no recording: the frame group's shared windows
+    read at once, slot by slot for a few devices, with numpy for more), the messages served
+    are every device's own samples, each once and in order, with their times."""
+    from gadgetctl.input.kinds import DeviceKind
+    from gadgetctl.serve.outlet import VrpnOutlet
+    from gadgetctl.vrpn import codecs
+    from gadgetctl.vrpn.wire import decode_datagram
+
+    path = tmp_path / "waves.jconf"
+    path.write_text(
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="w">\n'
+        "<elements>\n" + "\n".join(WAVE.format(i=i) for i in range(devices)) + "\n"
+        "</elements>\n</configuration>\n"
+    )
+    manager, configuration = InputManager.from_files([path])
+    try:
+        session = MonitorSession(manager, configuration, rate=500.0, statistics=False)
+        session.start()
+        catalog = build_catalog(manager, session.selected)
+        server = _Broadcasts()
+        outlet = VrpnOutlet(server, catalog)
+        feed = ServeFeed(catalog, outlet, offset=1000.0)
+        session.add_consumer(feed)
+        session.add_consumer(lambda session, moment: outlet.end_frame())
+        outlet.audience = True
+        grouped = 0
+        for _ in session.frames(duration=0.6):
+            grouped += bool(getattr(session.gathered, "groups", ()))
+            outlet.audience = True
+        assert grouped > 100  # the frames were read from the group's shared windows
+        served: dict[int, list] = {}
+        for message in decode_datagram(b"".join(server.sent)):
+            report = codecs.decode(codecs.TRACKER_POS_QUAT, message.payload)
+            served.setdefault(message.sender_id, []).append(
+                (message.sec + message.usec * 1e-6, report.sensor, report.position, report.quat)
+            )
+        for entry in catalog:
+            device = manager.device(entry.element)
+            got = served[server.names[entry.vrpn_name]]
+            count = len(got) // 2
+            assert count > 200 and [s for _, s, _, _ in got] == [0, 1] * count
+            block = device.compute(0, count)
+            stamps = np.repeat(block.timestamps + 1000.0, 2)
+            np.testing.assert_allclose([t for t, _, _, _ in got], stamps, atol=2e-6)
+            matrices = block.data[DeviceKind.POSITION].reshape(-1, 4, 4)
+            positions = np.asarray([p for _, _, p, _ in got])
+            quats = np.asarray([q for _, _, _, q in got])
+            np.testing.assert_array_equal(positions, matrices[:, :3, 3])
+            np.testing.assert_allclose(
+                matrices_from_pos_quat(positions, quats), matrices, atol=1e-12
+            )
+    finally:
+        manager.shutdown()

@@ -195,14 +195,18 @@ def test_windows_of_arrays_computed_ahead_give_the_bytes_of_their_batches():
 
 
 @pytest.mark.parametrize("upcoming", [False, True], ids=["framed-at-the-frame", "framed-ahead"])
-def test_shared_windows_give_the_bytes_of_their_batches(upcoming):
+@pytest.mark.parametrize("count", [4, 18], ids=["few-slots-one-by-one", "many-slots-with-numpy"])
+def test_shared_windows_give_the_bytes_of_their_batches(upcoming, count):
     """A frame group's shared windows (every slot's window at once) frame to the same bytes
     as the same samples handed over as plain batches: across rows running out, new arrays
     (generations), windows of several samples, several sensors, a slot not in the frame,
     and a slot whose arrays are not float64 (framed with the frame's other trackers); with
-    the arrays to come offered ahead, their rows are framed between frames (prepare)."""
+    the arrays to come offered ahead, their rows are framed between frames (prepare); for a
+    few slots (cut slot by slot) as for more (one numpy gather)."""
     from gadgetctl.input.kinds import DeviceKind
-    from gadgetctl.input.samples import SampleStore, SharedWindows
+    from gadgetctl.input.samples import FEW_SLOTS, SampleStore, SharedWindows
+
+    assert (count <= FEW_SLOTS) == (count == 4)
     from gadgetctl.serve.catalog import Role, ServedElement
     from gadgetctl.serve.outlet import FRAME_AHEAD, VrpnOutlet
 
@@ -216,9 +220,9 @@ def test_shared_windows_give_the_bytes_of_their_batches(upcoming):
         matrices[..., :3, 3] = rng.normal(size=(n, sensors, 3))
         return 50.0 + np.arange(n) * 0.001, ((DeviceKind.POSITION, matrices.astype(dtype)),)
 
-    names = ["A", "B", "C", "D"]
-    sensors = {"A": 1, "B": 3, "C": 1, "D": 2}
-    dtypes = {"D": np.float32}
+    names = [chr(ord("A") + i) for i in range(count)]
+    sensors = {name: (1, 3, 1, 2)[i % 4] for i, name in enumerate(names)}
+    dtypes = {names[-1]: np.float32}  # last: framed after the others, as in the plain batches
     catalog = [ServedElement(n, n, "device", "waveform_device", (Role.TRACKER,)) for n in names]
     shared_server, batched_server = _Broadcasts(), _Broadcasts()
     shared_outlet, batched_outlet = (
@@ -237,7 +241,7 @@ def test_shared_windows_give_the_bytes_of_their_batches(upcoming):
         shared_outlet.audience = batched_outlet.audience = True
         slots, starts, stops, plain = [], [], [], []
         for slot, name in enumerate(names):
-            if name == "C" and frame % 5 == 0:
+            if name == "C" and frame % 5 == 0 or name in dtypes and frame % 3:
                 continue  # not in this frame
             times, items = arrays[name]
             start = position[name]

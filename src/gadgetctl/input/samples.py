@@ -197,6 +197,12 @@ def _window_frame(timestamps: Any, values: Any, start: int, stop: int) -> FrameS
 _new = object.__new__
 
 
+#: Up to this many slots, the writer and readers of :class:`SharedWindows` go slot by slot
+#: with Python numbers: numpy's fixed cost per call (a few dozen calls a frame) is most of the
+#: frame of a small group, e.g. one 1 kHz tracker served over VRPN.
+FEW_SLOTS = 16
+
+
 class SharedWindows:
     """The frames of a frame group's devices whose usual frame is one window of arrays they
     computed ahead, side by side (one slot per device).

@@ -18,7 +18,7 @@ from gadgetctl.input.clock import now
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.proxies import Proxy
-from gadgetctl.input.samples import FrameSamples, Sample, SampleBatch
+from gadgetctl.input.samples import FEW_SLOTS, FrameSamples, Sample, SampleBatch
 from gadgetctl.serve.catalog import Role, ServedElement, proxy_role
 
 _PRESSED = (DigitalState.ON, DigitalState.TOGGLE_ON)
@@ -134,6 +134,17 @@ class _GroupPlan:
         self.senders = np.array([entry.vrpn_name for entry in self.entries], dtype=object)
         self.generation = np.full(len(picked), -1, dtype=np.int64)
         self.poses_only = np.zeros(len(picked), dtype=bool)
+        self.slot_list: list[int] = self.slots.tolist()
+
+    def all_bulk(self, windows: Any) -> bool:
+        """Whether every slot is fresh with position data only and its arrays were checked,
+        asked slot by slot (for a few slots, cheaper than with numpy)."""
+        fresh, generation = windows.fresh, windows.generation
+        checked, poses_only = self.generation, self.poses_only
+        for index, slot in enumerate(self.slot_list):
+            if not (fresh[slot] and poses_only[index]) or checked[index] != generation[slot]:
+                return False
+        return True
 
     def recheck(self, windows: Any, indices: np.ndarray) -> None:
         for index in indices.tolist():
@@ -239,6 +250,9 @@ class ServeFeed:
         data only, at once (:meth:`SharedOutlet.tracker_shared`); the others one by one."""
         windows = plan.group.windows
         slots = plan.slots
+        if len(plan.entries) <= FEW_SLOTS and plan.all_bulk(windows):
+            self.outlet.tracker_shared(windows, slots, plan.senders, self.offset)
+            return
         taken = windows.select(slots)
         fresh = windows.fresh[taken]
         stale = plan.generation != windows.generation[taken]

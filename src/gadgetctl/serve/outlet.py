@@ -10,6 +10,7 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from gadgetctl.input.kinds import DeviceKind
+from gadgetctl.input.samples import FEW_SLOTS
 from gadgetctl.input.transforms import quaternions_xyzw
 from gadgetctl.serve.catalog import Role, ServedElement
 from gadgetctl.serve.framing import (
@@ -178,6 +179,8 @@ class VrpnOutlet:
         state = self._shared.get(id(windows))
         if state is None or state.windows is not windows:
             state = self._shared[id(windows)] = _SharedStretches(windows, len(windows.stores))
+        if len(slots) <= FEW_SLOTS and state.offset == offset and self._cut_few(state, slots):
+            return
         taken = windows.select(slots)  # a slice when they are all the slots
         starts = windows.starts[taken]
         stops = windows.stops[taken]
@@ -213,6 +216,30 @@ class VrpnOutlet:
             )
         self._pieces.append(state.records[picks].tobytes())
         self.messages += len(picks)
+
+    def _cut_few(self, state: _SharedStretches, slots: np.ndarray) -> bool:
+        """:meth:`tracker_shared` for a few slots whose windows all lie in their rows, slot by
+        slot with Python numbers: each slot's messages are one slice of its row (numpy's
+        fixed cost per call is most of the work for a few slots). False, having done
+        nothing, when some slot's row must be framed again."""
+        windows = state.windows
+        records, pieces, count = state.records, [], 0
+        for slot in slots.tolist():
+            start, stop, first = windows.starts[slot], windows.stops[slot], state.first[slot]
+            if (
+                state.generation[slot] != windows.generation[slot]
+                or start < first
+                or stop > state.last[slot]
+            ):
+                return False
+            sensors = state.sensors[slot]
+            begin = int(state.row[slot] * FRAME_AHEAD + (start - first) * sensors)
+            size = int((stop - start) * sensors)
+            pieces.append(records[begin : begin + size])
+            count += size
+        self._pieces.extend(piece.tobytes() for piece in pieces)
+        self.messages += count
+        return True
 
     def _take_spare(self, state: _SharedStretches, slot: int, start: int, stop: int) -> bool:
         """Make slot ``slot``'s spare row its row when it was framed from the slot's current
