@@ -241,7 +241,7 @@ def test_shared_windows_give_the_bytes_of_their_batches(upcoming, count):
         shared_outlet.audience = batched_outlet.audience = True
         slots, starts, stops, plain = [], [], [], []
         for slot, name in enumerate(names):
-            if name == "C" and frame % 5 == 0 or name in dtypes and frame % 3:
+            if (name == "C" and frame % 5 == 0) or (name in dtypes and frame % 3):
                 continue  # not in this frame
             times, items = arrays[name]
             start = position[name]
