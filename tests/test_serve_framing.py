@@ -126,7 +126,7 @@ class _Broadcasts:
     def __init__(self) -> None:
         self.names: dict[str, int] = {}
         self.sent: list[bytes] = []
-        self.clients: list = []
+        self.audience = False  # no client: the outlet frames only when told there is one
 
     def register_sender(self, name: str) -> int:
         return self.names.setdefault(name, len(self.names))

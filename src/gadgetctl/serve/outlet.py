@@ -22,7 +22,6 @@ from gadgetctl.serve.framing import (
     pack_poses,
 )
 from gadgetctl.vrpn import codecs
-from gadgetctl.vrpn.server import OPEN
 
 #: Messages of a window's arrays framed at once (the window and the samples after it, up to
 #: the end of the arrays): a waveform device's block of 500 samples of one sensor is framed
@@ -439,7 +438,7 @@ class VrpnOutlet:
         if pieces:
             self._pieces = []
             self.server.broadcast(b"".join(pieces), POSE_SIZE, reliable=False, flush=True)
-        self.audience = any(client.state == OPEN for client in self.server.clients)
+        self.audience = self.server.audience
 
     def _frame_poses(self) -> bytes:
         clock, self._clock_poses = self._clock_poses, []

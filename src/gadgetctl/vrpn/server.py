@@ -242,6 +242,12 @@ class VrpnServer:
             return list(self._clients.values())
 
     @property
+    def audience(self) -> bool:
+        """Whether some client is open (its handshake done): someone reads what is sent."""
+        with self._lock:
+            return any(client.state == OPEN for client in self._clients.values())
+
+    @property
     def dropped(self) -> int:
         """Messages lost to full client buffers, clients gone included."""
         with self._lock:
@@ -296,9 +302,7 @@ class VrpnServer:
                         taken += ep.queue_batch(data, size, reliable, write=flush)
                     except ConnectionDropped as exc:
                         self._close_client(client, exc.reason)
-            if not flush or any(
-                c.endpoint is not None and c.endpoint.wants_write for c in self._clients.values()
-            ):
+            if not flush or self._output_waits():
                 self._wake()  # a poll under way must watch the output left
         return taken
 
@@ -326,7 +330,13 @@ class VrpnServer:
         with self._lock:
             self._flush_all()
 
+    def _output_waits(self) -> bool:
+        """Whether some client has bytes queued that its socket did not take yet."""
+        return any(c.endpoint is not None and c.endpoint.has_output for c in self._clients.values())
+
     def _flush_all(self) -> None:
+        if not self._output_waits():
+            return  # the usual case after a frame: every socket took its bytes
         for client in list(self._clients.values()):
             ep = client.endpoint
             if ep is not None and client.state == OPEN:
@@ -578,10 +588,11 @@ class VrpnServer:
             self.counters["callback_errors"] += 1
 
     def _expire(self, now: float) -> None:
-        for client in list(self._clients.values()):
-            if client.state != OPEN and now - client.since > self.handshake_timeout:
-                self.counters["handshake_timeouts"] += 1
-                self._close_client(client, "no cookie in time")
+        timeout = self.handshake_timeout
+        late = [c for c in self._clients.values() if c.state != OPEN and now - c.since > timeout]
+        for client in late:
+            self.counters["handshake_timeouts"] += 1
+            self._close_client(client, "no cookie in time")
 
     def _close_client(self, client: ServerClient, reason: str) -> None:
         if client.closed:
