@@ -234,6 +234,12 @@ class SharedWindows:
         #: consumer may convert some of them between frames), and how many times they were set.
         self.upcoming: list[tuple[Any, tuple[tuple[DeviceKind, Any], ...]] | None] = [None] * count
         self.upcoming_generation = np.zeros(count, dtype=np.int64)
+        #: Incremented whenever some slot's upcoming arrays are set (a reader that saw this
+        #: number has seen every slot's).
+        self.upcoming_serial = 0
+        #: Of the last :meth:`publish`: how many slots are fresh, and their samples in all.
+        self.fresh_slots = 0
+        self.fresh_samples = 0
         self.stores = tuple(stores)
         #: Every slot in order: a reader that passes this very array for its slots means all
         #: of them (``select`` turns it into a slice, no gathering copy).
@@ -265,7 +271,37 @@ class SharedWindows:
         self.starts[slots] = starts
         self.stops[slots] = stops
         self.window_serial[slots] = self.serial
-        self.delivered[slots] += stops - starts
+        sizes = stops - starts
+        self.delivered[slots] += sizes
+        self.fresh_slots = len(fresh) if type(slots) is slice else len(slots)
+        self.fresh_samples = int(sizes.sum())
+
+    def publish_few(
+        self, moment: float, windows: Sequence[tuple[int, int, int]], empty: Sequence[int] = ()
+    ) -> None:
+        """:meth:`publish` for a few slots (:data:`FEW_SLOTS`), each window given as
+        ``(slot, start, stop)`` with Python numbers, element by element."""
+        self.serial += 1
+        self.moment = moment
+        fresh, emptied = self.fresh, self.emptied
+        fresh[:] = False
+        emptied[:] = False
+        for slot in empty:
+            emptied[slot] = True
+        serial, samples = self.serial, 0
+        starts, stops, window_serial, delivered = (
+            self.starts,
+            self.stops,
+            self.window_serial,
+            self.delivered,
+        )
+        for slot, start, stop in windows:
+            fresh[slot] = True
+            starts[slot], stops[slot], window_serial[slot] = start, stop, serial
+            delivered[slot] += stop - start
+            samples += stop - start
+        self.fresh_slots = len(windows)
+        self.fresh_samples = samples
 
     def select(self, slots: np.ndarray) -> np.ndarray | slice:
         """``slots`` as an index of the per-slot arrays: a slice when it is :attr:`every`."""
@@ -290,6 +326,7 @@ class SharedWindows:
         """The arrays slot ``slot``'s windows will be cut from after its current ones."""
         self.upcoming[slot] = (timestamps, items)
         self.upcoming_generation[slot] += 1
+        self.upcoming_serial += 1
 
 
 #: A channel's chunks while none waits. Waiting chunks are a list (a frame has one or a

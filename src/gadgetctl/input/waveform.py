@@ -627,9 +627,7 @@ class _FrameGroup:
         cap, alone = self.cap.tolist(), self.alone.tolist()
         usual, running = self.usual.tolist(), self.running.tolist()
         rate = self.rate.tolist()
-        published: list[int] = []
-        starts: list[int] = []
-        stops: list[int] = []
+        windows: list[tuple[int, int, int]] = []
         empty: list[int] = []
         for slot, t0 in enumerate(self.t0.tolist()):
             if not (usual[slot] and running[slot]) or alone[slot] == frame:
@@ -641,24 +639,13 @@ class _FrameGroup:
             if end <= begin:
                 empty.append(slot)
             elif first[slot] <= begin and end <= last[slot]:
-                published.append(slot)
-                starts.append(begin - first[slot])
-                stops.append(end - first[slot])
+                windows.append((slot, begin - first[slot], end - first[slot]))
             else:
                 return False
-        windows = self.windows
-        slots = (
-            windows.every if len(published) == len(nexts) else np.array(published, dtype=np.int64)
-        )
-        windows.publish(
-            moment,
-            slots,
-            np.array(starts, dtype=np.int64),
-            np.array(stops, dtype=np.int64),
-            np.array(empty, dtype=np.int64) if empty else None,
-        )
-        for slot, stop in zip(published, stops, strict=True):
-            self.next[slot] = first[slot] + stop
+        self.windows.publish_few(moment, windows, empty)
+        nexts_array = self.next
+        for slot, _, stop in windows:
+            nexts_array[slot] = first[slot] + stop
         self.moment = moment
         self.frame = frame
         return True

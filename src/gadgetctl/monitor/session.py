@@ -456,6 +456,9 @@ class MonitorSession:
             samples = self._gather(plan.own, gathered)
             for group in plan.groups:
                 windows = group.windows
+                if group.slots is windows.every and windows.fresh_slots == len(windows.every):
+                    samples += windows.fresh_samples  # every slot's window, as published
+                    continue
                 slots = windows.select(group.slots)
                 fresh = windows.fresh[slots]
                 sizes = windows.stops[slots] - windows.starts[slots]

@@ -59,6 +59,7 @@ class _SharedStretches:
         self.offset = 0.0
         self.names: list[str | None] = [None] * slots  # the sender each slot is served as
         self.upcoming_seen = np.zeros(slots, dtype=np.int64)
+        self.upcoming_serial = -1  # the windows' upcoming_serial when last looked at
         self.spare_for: list[object | None] = [None] * slots
         self.spare = np.zeros((slots, 3), dtype=np.int64)  # first, last, sensors
         self.spare_offset = np.zeros(slots)
@@ -266,10 +267,13 @@ class VrpnOutlet:
             return
         for state in self._shared.values():
             windows = state.windows
-            stale = windows.upcoming_generation != state.upcoming_seen
-            if not stale.any():
-                continue
-            for slot in np.flatnonzero(stale)[:limit].tolist():
+            serial = windows.upcoming_serial
+            if state.upcoming_serial == serial:
+                continue  # no slot's upcoming arrays were set since every one was looked at
+            stale = np.flatnonzero(windows.upcoming_generation != state.upcoming_seen)
+            if len(stale) <= limit:
+                state.upcoming_serial = serial  # all of them are looked at now
+            for slot in stale[:limit].tolist():
                 state.upcoming_seen[slot] = windows.upcoming_generation[slot]
                 upcoming, name = windows.upcoming[slot], state.names[slot]
                 if upcoming is None or name is None:
