@@ -342,6 +342,7 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         group = self.__dict__.get("_group")
         if group is not None:
             group.running[self._slot] = value is _RUNNING
+            group.prepare_after = 0.0  # a device that runs again may need a block ahead
 
     @classmethod
     def prepare_frame_group(cls, devices: Sequence[WaveformDevice]) -> None:
@@ -664,7 +665,11 @@ class _FrameGroup:
             waiting = self.usual & self.running & ~self.ahead
             soon = waiting & (left < 0)
             if not soon.any():  # nothing to do before the first of them comes near its end
-                self.prepare_after = now() + float(left[waiting].min()) if waiting.any() else 0.0
+                # (or, when every block ahead is computed, before a device's state changes:
+                # mirror() and a change of running start looking again)
+                self.prepare_after = (
+                    now() + float(left[waiting].min()) if waiting.any() else math.inf
+                )
                 return
             for slot in np.flatnonzero(soon)[:limit].tolist():
                 device = self.devices[slot]
