@@ -442,10 +442,10 @@ class MonitorSession:
         if self.started_at is None:
             self.started_at = moment
         manager = self.manager
-        configured = len(manager.devices) + len(manager.proxies)
+        arrangement = manager.arrangement  # replaced when devices or proxies come or go
         self.frame = manager.update()
         self.frame_timestamp = moment
-        if len(manager.devices) + len(manager.proxies) != configured or not self._watch:
+        if manager.arrangement is not arrangement or not self._watch:
             self._watch = self._names_with_targets()
         gathered: dict[str, Mapping[DeviceKind, FrameSamples]] = {}
         if self.statistics or self._sinks:

@@ -152,6 +152,7 @@ class VrpnServer:
         self.on_message: Callable[[ServerClient, Message], None] | None = None
         self.counters: Counter[str] = Counter()
         self._clients: dict[int, ServerClient] = {}
+        self._open_clients = 0  # of them, those whose handshake is done
         self._by_endpoint: dict[int, ServerClient] = {}
         self._next_id = 0
         self._closed_dropped = 0
@@ -244,8 +245,7 @@ class VrpnServer:
     @property
     def audience(self) -> bool:
         """Whether some client is open (its handshake done): someone reads what is sent."""
-        with self._lock:
-            return any(client.state == OPEN for client in self._clients.values())
+        return self._open_clients > 0
 
     @property
     def dropped(self) -> int:
@@ -332,7 +332,11 @@ class VrpnServer:
 
     def _output_waits(self) -> bool:
         """Whether some client has bytes queued that its socket did not take yet."""
-        return any(c.endpoint is not None and c.endpoint.has_output for c in self._clients.values())
+        for client in self._clients.values():
+            endpoint = client.endpoint
+            if endpoint is not None and endpoint.has_output:
+                return True
+        return False
 
     def _flush_all(self) -> None:
         if not self._output_waits():
@@ -566,6 +570,7 @@ class VrpnServer:
         for ident, name in self.types:
             ep.queue(pack_description(TYPE_DESCRIPTION, ident, name))
         client.state = OPEN
+        self._open_clients += 1
         self.counters["connections"] += 1
         if self.on_connect is not None:
             self._callback(self.on_connect, client)
@@ -603,6 +608,7 @@ class VrpnServer:
             client.sock.close()
             client.sock = None
         was_open = client.state == OPEN
+        self._open_clients -= was_open
         if client.endpoint is not None:
             self._by_endpoint.pop(id(client.endpoint), None)
             self._closed_dropped += client.endpoint.dropped
