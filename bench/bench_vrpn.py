@@ -26,6 +26,8 @@ fanning out to many clients. Both run `gadgetctl serve` as a separate process on
 6. C sender (``--part csender``, part of ``all``): serve fanning out 4 tracker sensors at 1 kHz
    to 8 raw clients, against a C program sending the same messages (``vrpn_csender.c``, built
    with the system's compiler), each run twice alternately; target (issue 27): at most 2x.
+   For reference, the least Python program sending the same messages
+   (``vrpn_pysender.py``): what any Python sender pays before it computes anything.
 
 Run: python bench/bench_vrpn.py [--seconds 5] [--part ingest|fanout|breakdown|flood|hostile|csender] [--devices 100] [--clients 8]
 [--walking-clients]
@@ -678,19 +680,18 @@ def against_c(
     )
     config = tmp / "sensors.jconf"
     config.write_text(sensors_config(sensors, rate))
-    c_runs, serve_runs = [], []
+    c_runs, python_runs, serve_runs = [], [], []
+    arguments = [str(clients), str(sensors), f"{rate:g}", f"{seconds + 30:g}"]
+    python_sender = [sys.executable, str(Path(__file__).with_name("vrpn_pysender.py"))]
     for _ in range(2):
-        sender = subprocess.Popen(
-            [str(binary), str(clients), str(sensors), f"{rate:g}", f"{seconds + 30:g}"],
-            stdout=subprocess.PIPE,
-            text=True,
-        )
-        try:
-            port = int(sender.stdout.readline())
-            c_runs.append(_readers_cpu(port, sender.pid, clients, seconds, rate)[0])
-        finally:
-            sender.kill()
-            sender.wait(10)
+        for command, runs in (([str(binary)], c_runs), (python_sender, python_runs)):
+            sender = subprocess.Popen([*command, *arguments], stdout=subprocess.PIPE, text=True)
+            try:
+                port = int(sender.stdout.readline())
+                runs.append(_readers_cpu(port, sender.pid, clients, seconds, rate)[0])
+            finally:
+                sender.kill()
+                sender.wait(10)
         served = Served(config)
         try:
             serve_runs.append(
@@ -698,13 +699,16 @@ def against_c(
             )
         finally:
             served.stop()
-    c_cpu, serve_cpu = min(c_runs), min(serve_runs)
+    c_cpu, python_cpu, serve_cpu = min(c_runs), min(python_runs), min(serve_runs)
     print(
         f"  {sensors} sensors at {rate:g} Hz to {clients} TCP clients, {seconds:g} s, "
         f"twice each (the lesser figure)"
     )
     report.figure("C sender: share of a core", c_cpu, "%")
+    report.figure("least Python sender (bench/vrpn_pysender.py): share of a core", python_cpu, "%")
     report.figure("serve: share of a core", serve_cpu, "%")
+    report.ratio("least Python sender / C sender (for reference)", python_cpu, c_cpu)
+    report.ratio("serve / least Python sender (for reference)", serve_cpu, python_cpu)
     report.figure("serve / C sender", serve_cpu / c_cpu, "x", target=2.0)
 
 
