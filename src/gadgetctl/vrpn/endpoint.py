@@ -488,11 +488,6 @@ class Endpoint:
     def wants_write(self) -> bool:
         return bool(self.out)
 
-    @property
-    def has_output(self) -> bool:
-        """Bytes wait to be written: by TCP (:attr:`wants_write`) or in a UDP datagram."""
-        return bool(self.out or self._udp_batch)
-
     def flush(self) -> None:
         """Write what the socket takes now, never waiting; raises :class:`ConnectionDropped`."""
         if self._udp_batch:

@@ -153,6 +153,8 @@ class VrpnServer:
         self.counters: Counter[str] = Counter()
         self._clients: dict[int, ServerClient] = {}
         self._open_clients = 0  # of them, those whose handshake is done
+        #: Output was queued without being written since the last flush of every client.
+        self._output_queued = False
         self._by_endpoint: dict[int, ServerClient] = {}
         self._next_id = 0
         self._closed_dropped = 0
@@ -294,6 +296,7 @@ class VrpnServer:
         if size <= 0 or len(data) % size or size > MAX_SEND_MESSAGE:
             raise ValueError(f"{len(data)} bytes are not whole messages of {size} bytes")
         taken = 0
+        left = not flush  # output left for a poll to write
         with self._lock:
             for client in list(self._clients.values()):
                 ep = client.endpoint
@@ -302,7 +305,9 @@ class VrpnServer:
                         taken += ep.queue_batch(data, size, reliable, write=flush)
                     except ConnectionDropped as exc:
                         self._close_client(client, exc.reason)
-            if not flush or self._output_waits():
+                        continue
+                    left = left or bool(ep.out)
+            if left:
                 self._wake()  # a poll under way must watch the output left
         return taken
 
@@ -330,17 +335,8 @@ class VrpnServer:
         with self._lock:
             self._flush_all()
 
-    def _output_waits(self) -> bool:
-        """Whether some client has bytes queued that its socket did not take yet."""
-        for client in self._clients.values():
-            endpoint = client.endpoint
-            if endpoint is not None and endpoint.has_output:
-                return True
-        return False
-
     def _flush_all(self) -> None:
-        if not self._output_waits():
-            return  # the usual case after a frame: every socket took its bytes
+        self._output_queued = False
         for client in list(self._clients.values()):
             ep = client.endpoint
             if ep is not None and client.state == OPEN:
@@ -350,6 +346,7 @@ class VrpnServer:
                     self._close_client(client, exc.reason)
 
     def _wake(self) -> None:
+        self._output_queued = True
         if not self._woken:
             self._woken = True
             try:
@@ -410,7 +407,10 @@ class VrpnServer:
                             self._close_client(client, exc.reason)
                 else:
                     self._called_back(ready)
-            self._flush_all()
+            # what was queued since the last pass (every queueing wakes the poll), and what
+            # this pass read, accepted or answered: written as far as the sockets take it
+            if self._output_queued or r or w or backlog:
+                self._flush_all()
 
     def _drain_wake(self) -> None:
         try:
