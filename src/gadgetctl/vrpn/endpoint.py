@@ -107,6 +107,8 @@ class Endpoint:
         log_mode: int = 0,
     ) -> None:
         self.sock = sock
+        #: The socket's own (for select: a built-in method, no Python frame per call).
+        self.fileno: Callable[[], int] = sock.fileno
         sock.setblocking(False)
         try:
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
@@ -156,9 +158,6 @@ class Endpoint:
         return {names[i] for i in self._later_ids if i in names}
 
     # -- reading ------------------------------------------------------------------------------
-
-    def fileno(self) -> int:
-        return self.sock.fileno()
 
     def read(self, received: float, size: int = RECV_CHUNK) -> list[Message]:
         """Read what the socket has, at most ``size`` bytes (counted in ``bytes_read``); the

@@ -361,7 +361,8 @@ class VrpnServer:
         with self._lock:
             if self._closed or self._tcp is None or self._udp is None:
                 raise RuntimeError("the server is not running")
-            self._expire(time.monotonic())
+            if self._open_clients < len(self._clients):  # some handshake is under way
+                self._expire(time.monotonic())
             readers: list = [self._tcp, self._udp, self._wake_r]
             writers: list = []
             backlog: list[ServerClient] = []  # messages read in an earlier pass wait
@@ -373,7 +374,7 @@ class VrpnServer:
                         backlog.append(client)
                     else:
                         readers.append(client.endpoint)
-                    if client.endpoint.wants_write:
+                    if client.endpoint.out:  # bytes its socket did not take yet
                         writers.append(client.endpoint)
             if backlog:
                 timeout = 0.0
