@@ -13,6 +13,7 @@ Differences from VR Juggler's C++ repository, on purpose:
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -83,39 +84,15 @@ class DefinitionRepository:
     def load_entry(self, entry: SearchPathEntry) -> None:
         """Load every ``*.jdef`` file of a directory (not recursive), in name order. A
         directory already on the search path is ignored: it would only shadow itself."""
-        from gadgetctl.jccl.defparser import read_definition
-        from gadgetctl.jccl.xmlload import load_file
-
         if any(_same_directory(entry.path, e.path) for e in self.entries):
             return
         self.entries.append(entry)
         if entry.skipped or not entry.exists:
             return
-        for path in sorted(entry.path.glob("*.jdef")):
-            if not path.is_file():
-                continue
+        for path, definition, problem in _read_directory(entry.path):
             entry.files += 1
-            try:
-                doc = load_file(path)
-            except OSError as err:
-                self.diagnostics.append(
-                    Diagnostic.make(
-                        "DEF020",
-                        f"definition file on the search path cannot be read: {err.strerror}",
-                        str(path),
-                    )
-                )
-                continue
-            definition = read_definition(doc, columns=False) if doc.root is not None else None
-            if definition is None or not definition.name:
-                first = doc.diagnostics[0].message if doc.diagnostics else "not a definition file"
-                self.diagnostics.append(
-                    Diagnostic.make(
-                        "DEF020",
-                        f"definition file on the search path was skipped: {first}",
-                        str(path),
-                    )
-                )
+            if definition is None:
+                self.diagnostics.append(Diagnostic.make("DEF020", problem, str(path)))
                 continue
             entry.contributed += self.add(definition, entry)
 
@@ -355,6 +332,66 @@ def _same_directory(one: Path, other: Path) -> bool:
         return one.resolve() == other.resolve()
     except OSError:
         return False
+
+
+#: What a definition file on the search path gave: its definition, or None and the problem.
+_FileOutcome = tuple[Path, Definition | None, str]
+
+#: The outcomes of a directory's definition files, by the directory, while its ``*.jdef``
+#: files stay the same (names, sizes, modification times, inodes): a process that builds
+#: repositories again and again (the language server, validating in-process) reads the
+#: bundled definitions once. Definitions are not changed once read, so repositories share them.
+_READ_DIRECTORIES: dict[str, tuple[tuple[tuple[str, int, int, int], ...], list[_FileOutcome]]] = {}
+_READ_DIRECTORIES_KEPT = 32
+
+
+def _read_directory(directory: Path) -> list[_FileOutcome]:
+    """Every ``*.jdef`` file of ``directory`` in name order, read (or taken from what an
+    earlier read of the same unchanged files gave)."""
+    import stat
+
+    from gadgetctl.jccl.defparser import read_definition
+    from gadgetctl.jccl.xmlload import load_file, unsaved_within
+
+    files: list[tuple[Path, os.stat_result]] = []
+    for path in sorted(directory.glob("*.jdef")):
+        try:
+            status = path.stat()
+        except OSError:
+            continue  # gone, or a dangling link: not a file
+        if stat.S_ISREG(status.st_mode):
+            files.append((path, status))
+    signature = tuple((p.name, s.st_size, s.st_mtime_ns, s.st_ino) for p, s in files)
+    key = str(directory)
+    known = _READ_DIRECTORIES.get(key)
+    # an editor's unsaved text of a file there (the language server) is read, never kept
+    unreadable = unsaved_within(directory)
+    if known is not None and known[0] == signature and not unreadable:
+        return known[1]
+    outcomes: list[_FileOutcome] = []
+    for path, _ in files:
+        try:
+            doc = load_file(path)
+        except OSError as err:
+            outcomes.append(
+                (path, None, f"definition file on the search path cannot be read: {err.strerror}")
+            )
+            unreadable = True
+            continue
+        definition = read_definition(doc, columns=False) if doc.root is not None else None
+        if definition is None or not definition.name:
+            first = doc.diagnostics[0].message if doc.diagnostics else "not a definition file"
+            outcomes.append(
+                (path, None, f"definition file on the search path was skipped: {first}")
+            )
+            continue
+        outcomes.append((path, definition, ""))
+    if not unreadable:  # a file that could not be read is tried again next time, and an
+        # unsaved text's definitions are not kept for the file
+        if len(_READ_DIRECTORIES) >= _READ_DIRECTORIES_KEPT:
+            _READ_DIRECTORIES.pop(next(iter(_READ_DIRECTORIES)))
+        _READ_DIRECTORIES[key] = (signature, outcomes)
+    return outcomes
 
 
 def load_repository(entries: Iterable[SearchPathEntry]) -> DefinitionRepository:

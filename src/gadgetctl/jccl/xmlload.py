@@ -507,6 +507,16 @@ def unsaved_text(path: str | os.PathLike[str]) -> str | None:
     return texts.get(os.path.realpath(path))
 
 
+def unsaved_within(directory: str | os.PathLike[str]) -> bool:
+    """Whether a text of the current :func:`unsaved_texts` block stands for a file directly
+    in ``directory``."""
+    texts = _UNSAVED.get()
+    if not texts:
+        return False
+    real = os.path.realpath(directory)
+    return any(os.path.dirname(path) == real for path in texts)
+
+
 def has_unsaved(path: str | os.PathLike[str]) -> bool:
     return unsaved_text(path) is not None
 
