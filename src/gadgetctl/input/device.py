@@ -96,16 +96,20 @@ class Input:
     #: SCHEDULED: period at which the shared scheduler calls sample().
     sample_interval: float = 0.0
 
+    # What a fault sets: class defaults until then, so that a device's instance dictionary
+    # stays small (a class's instances share their attribute names while they have at most
+    # 29 of them: 300 bytes each instead of 1,600, 12 MB for 10,000 waveform devices).
+    error: str | None = None
+    error_at: float | None = None  # wall-clock time (time.time()) of the last fault
+    faults: int = 0
+    restarts: int = 0
+
     def __init__(self) -> None:
         self.name = type(self).__name__
         self.element_type = self.ELEMENT_TYPE
         self.context: DeviceContext | None = None
         self.store = SampleStore(self.kinds(), DEFAULT_CAP)
         self.state = DeviceState.CONFIGURED
-        self.error: str | None = None
-        self.error_at: float | None = None  # wall-clock time (time.time()) of the last fault
-        self.faults = 0
-        self.restarts = 0
         self.diagnostics: list[Diagnostic] = []
         self._location: tuple[str | None, int | None, int | None] = (None, None, None)
         self._updated_frame = -1

@@ -198,6 +198,11 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
     ELEMENT_TYPE = "waveform_device"
     SAMPLING = SamplingMode.SCHEDULED
     sample_interval = 0.0015
+    #: The scheduler's sample() and the frames publish one at a time (one lock for all).
+    _publishing = _PUBLISHING
+    #: Per noise channel, its generator and the sample it is at; made by the first noise
+    #: block (an instance attribute only then: see :class:`~gadgetctl.input.device.Input`).
+    _noise_streams: dict[int, tuple[np.random.Generator, int]] | None = None
 
     def __init__(self) -> None:
         super().__init__()
@@ -215,9 +220,6 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         self._block: Block | None = None
         self._ahead: Block | None = None  # the next block, computed ahead between frames
         self._ahead_tried = False  # a next block was computed ahead (it may have events)
-        self._noise_streams: dict[int, tuple[np.random.Generator, int]] = {}
-        # the scheduler's sample() and the frames publish one at a time
-        self._publishing = _PUBLISHING
         self._frame_published = -math.inf  # when a frame last published (input-manager clock)
         self._stand_in = _STAND_IN  # its manager's, once it starts
 
@@ -478,13 +480,16 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
 
     def _noise(self, channel: int, start: int, count: int) -> np.ndarray:
         """Uniform [0, 1) numbers ``start`` .. ``start + count - 1`` of the channel's seeded stream."""
-        cached = self._noise_streams.get(channel)
+        streams = self._noise_streams
+        if streams is None:
+            streams = self._noise_streams = {}
+        cached = streams.get(channel)
         if cached is None or cached[1] != start:  # not where the previous block ended: seek
             bits = np.random.PCG64(np.random.SeedSequence([self.seed, channel]))
             bits.advance(start)
             cached = (np.random.Generator(bits), start)
         generator = cached[0]
-        self._noise_streams[channel] = (generator, start + count)
+        streams[channel] = (generator, start + count)
         return generator.random(count)
 
     def _path(self, spec: PositionChannel, t: np.ndarray) -> np.ndarray:
