@@ -100,7 +100,8 @@ class Recorder:
         self._pending_samples = 0
         self._writing = False
         self._owns_file = stream is None
-        self.header = HeaderRecord.now(header_info, clock=clock)
+        # the header is not kept: its info lists every element (megabytes for 10,000)
+        header = HeaderRecord.now(header_info, clock=clock)
         if stream is not None:
             self._file = stream
         else:
@@ -109,7 +110,7 @@ class Recorder:
             except WriteError as exc:
                 raise RecordingError(str(exc)) from None
         try:
-            self._write(encode_record(self.header))
+            self._write(encode_record(header))
         except BaseException:
             if self._owns_file:
                 with contextlib.suppress(OSError):  # the write error is the one to report
