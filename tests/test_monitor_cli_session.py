@@ -374,3 +374,42 @@ def test_keyboard_events_and_keyboard_proxies_are_recorded_as_json():
         if r["type"] == "sample" and r["device"] == "Sim Buttons" and r["unit"] == 0
     ]
     assert buttons[-1] == 1
+
+
+def test_a_frames_sample_records_go_out_in_parts_after_the_header(monkeypatch):
+    """Issue 27: a frame's sample records are written in parts of about ``ENCODED_PART``
+    characters as they are encoded (10,000 devices' first frame made whole was three copies
+    of megabytes of text), after the header: the same records, in the same order."""
+    from gadgetctl.monitor import session as session_module
+
+    monkeypatch.setattr(session_module, "ENCODED_PART", 200)
+    manager, session = _controlled(kinds=("digital", "analog"))
+    writes: list[bytes] = []
+
+    class Stream(io.BytesIO):
+        def write(self, data) -> int:
+            writes.append(bytes(data))
+            return super().write(data)
+
+    stream = Stream()
+    session.add_sink(lambda info: Recorder.to_stream(stream, info, clock=now))
+    try:
+        device = manager.device("Test Device")
+        session.step()  # no sample yet: the sinks wait for one (or half a second)
+        assert writes == []
+        t = now()
+        for i in range(10):
+            device.feed(DeviceKind.ANALOG, t + i * 0.001, (i / 10,))
+            device.feed(DeviceKind.DIGITAL, t + i * 0.001, (0, i % 2))
+        session.step()
+        expected, count = session.encode_samples()
+        recorder = session.recorders[0]
+    finally:
+        manager.shutdown()
+    assert json.loads(writes[0])["type"] == "header"
+    parts = [w for w in writes if b'"type":"sample"' in w]
+    assert len(parts) > 1 and all(len(p) >= 200 for p in parts[:-1])
+    assert b"".join(parts).decode() == expected and count == 30
+    assert recorder.samples == session.samples_written == 30
+    types = [json.loads(line)["type"] for line in b"".join(writes).decode().splitlines()]
+    assert types[0] == "header" and set(types[1 : types.index("sample")]) == {"status"}

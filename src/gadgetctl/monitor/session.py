@@ -72,6 +72,8 @@ SINK_WARMUP = 0.5  # seconds a session waits for every device's first sample bef
 #: (0: only when the next frame is already due; skipped work is done by a later pause, or by
 #: the frame that needs it).
 PREPARE_SLACK = 0.0
+#: Characters of sample records written at once when a frame's records go out in parts.
+ENCODED_PART = 1 << 20
 
 
 class SelectionError(GadgetctlError):
@@ -543,22 +545,28 @@ class MonitorSession:
     # -- writing ------------------------------------------------------------------------
 
     def _write_frame(self, moment: float) -> None:
-        self._check_statuses(moment)
-        poses = {s.pose for s in self._sinks if not s.per_frame}
-        if poses:
-            texts: dict[str, str] = {}
-            count = 0
-            for pose in sorted(poses):
-                texts[pose], count = self.encode_samples(pose)
-            if count:
-                self._emit("samples", texts, count)
-        poses = {s.pose for s in self._sinks if s.per_frame}
-        if poses:
-            self._emit("frame", {pose: self.frame_record(pose) for pose in sorted(poses)}, 0)
+        # the sinks open (header, then what earlier frames left buffered) before this frame's
+        # records, which then go out in parts as they are encoded: the first frame of
+        # 10,000 devices is megabytes of text, three copies of it when made whole first
         if not self._sinks_open and (
             self._warm() or moment - (self.started_at or moment) >= SINK_WARMUP
         ):
             self._open_sinks()
+        self._check_statuses(moment)
+        poses = sorted({s.pose for s in self._sinks if not s.per_frame})
+        if len(poses) == 1 and self._sinks_open:
+            for text, count in self._encoded_parts(poses[0]):
+                self._deliver("samples", {poses[0]: text}, count)
+        elif poses:
+            texts: dict[str, str] = {}
+            count = 0
+            for pose in poses:
+                texts[pose], count = self.encode_samples(pose)
+            if count:
+                self._emit("samples", texts, count)
+        poses = sorted({s.pose for s in self._sinks if s.per_frame})
+        if poses:
+            self._emit("frame", {pose: self.frame_record(pose) for pose in poses}, 0)
 
     def warm(self) -> bool:
         """Whether every watched running device has delivered a sample."""
@@ -618,17 +626,42 @@ class MonitorSession:
     def encode_samples(self, pose: str = MATRIX) -> tuple[str, int]:
         """This frame's sample records of the selected devices (and of proxies and aliases
         named by the selectors), as NDJSON text and count; positions in ``pose``."""
-        manager = self.manager
         parts: list[str] = []
         count = 0
+        for text, n in self._encoded_parts(pose, 0):
+            parts.append(text)
+            count += n
+        return "".join(parts), count
+
+    def _encoded_parts(self, pose: str, size: int | None = None) -> Iterator[tuple[str, int]]:
+        """:meth:`encode_samples` in parts of at least ``size`` characters (None:
+        :data:`ENCODED_PART`; 0: of each device and kind) and their counts, in order; none
+        that is empty."""
+        size = ENCODED_PART if size is None else size
+        parts: list[str] = []
+        length = count = 0
+        for text, n in self._encoded_pieces(pose):
+            if not text:
+                continue
+            parts.append(text)
+            length += len(text)
+            count += n
+            if length >= size:
+                yield "".join(parts) if len(parts) > 1 else text, count
+                parts.clear()
+                length = count = 0
+        if parts:
+            yield "".join(parts), count
+
+    def _encoded_pieces(self, pose: str) -> Iterator[tuple[str, int]]:
+        """The sample records of :meth:`encode_samples`, per device and kind or proxy."""
+        manager = self.manager
         stream_proxies = bool(self.selectors)
         for name in self._selected:
             track = self._current_track(name)
             if track is not None and manager.device(name) is track.device:
                 for kind, samples in track.frames.items():
-                    text, n = encode_frame(name, kind, samples, track.device, pose)
-                    parts.append(text)
-                    count += n
+                    yield encode_frame(name, kind, samples, track.device, pose)
                 continue
             if stream_proxies:
                 proxy = manager.proxy(name)
@@ -645,13 +678,8 @@ class MonitorSession:
                 )
                 raw = value if raw is None else raw
                 unit = proxy.unit if proxy.HAS_UNIT else 0
-                parts.append(
-                    encode_samples(
-                        [SampleRecord(name, proxy.KIND.value, unit, proxy.timestamp, value, raw)]
-                    )
-                )
-                count += 1
-        return "".join(parts), count
+                record = SampleRecord(name, proxy.KIND.value, unit, proxy.timestamp, value, raw)
+                yield encode_samples([record]), 1
 
     def frame_record(self, pose: str = MATRIX) -> FrameRecord:
         """What every selected element delivered this frame, with its newest values
