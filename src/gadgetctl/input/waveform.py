@@ -161,18 +161,30 @@ class PositionChannel:
     radius: float
 
 
-@dataclass
 class Block:
-    """Samples ``start`` .. ``start + len - 1`` computed ahead."""
+    """Samples ``start`` .. ``end - 1`` computed ahead: their ``timestamps``, per kind their
+    values (``items``: (kind, array) pairs) and ``events`` ((sample index, event number)).
+    Slotted, the values not kept in a dict too: every device holds one or two."""
 
-    start: int
-    timestamps: np.ndarray
-    data: dict[DeviceKind, np.ndarray]
-    events: list[tuple[int, int]]  # (sample index, event number)
+    __slots__ = ("end", "events", "items", "start", "timestamps")
 
-    def __post_init__(self) -> None:
-        self.items = tuple(self.data.items())
-        self.end = self.start + len(self.timestamps)
+    def __init__(
+        self,
+        start: int,
+        timestamps: np.ndarray,
+        data: dict[DeviceKind, np.ndarray],
+        events: list[tuple[int, int]],
+    ) -> None:
+        self.start = start
+        self.timestamps = timestamps
+        self.items = tuple(data.items())
+        self.events = events
+        self.end = start + len(timestamps)
+
+    @property
+    def data(self) -> dict[DeviceKind, np.ndarray]:
+        """The values of each kind."""
+        return dict(self.items)
 
 
 def _per_channel(access: ElementAccess, prop: str, count: int) -> list[float]:
