@@ -160,6 +160,7 @@ class MonitorSession:
         self._buffer: list[tuple[str, object, int]] = []
         self._sinks_open = False
         self._statuses: dict[str, tuple[str, str | None]] = {}
+        self._status_pairs: dict[tuple[str, str | None], tuple[str, str | None]] = {}
         self._proxy_stamps: dict[str, float | None] = {}
         self._frame_interval = 1.0 / rate
         self._last_frame_at: float | None = None
@@ -731,7 +732,8 @@ class MonitorSession:
             element, element_type, state, reason = self._status_of(name)
             current = (state, reason)
             if self._statuses.get(name) != current:
-                self._statuses[name] = current
+                # one tuple per distinct status, not per name (20,000 of them alike)
+                self._statuses[name] = self._status_pairs.setdefault(current, current)
                 changed.append(StatusRecord(moment, name, element, element_type, state, reason))
         if changed:
             self._emit("statuses", changed, 0)
