@@ -376,3 +376,16 @@ def test_a_running_device_sets_few_enough_attributes_to_share_its_classs_keys(ma
     assert device._noise_streams  # its noise channel made them
     assert len(vars(device)) <= 29
     assert (device.faults, device.restarts, device.error, device.error_at) == (0, 0, None, None)
+
+
+def test_devices_without_position_filters_share_the_empty_chain(make):
+    """Issue 27: each device and proxy without filters had a chain of its own (1.8 MB for
+    10,000 of each); the empty chain is one, and leaves positions as they are."""
+    from gadgetctl.input.filters import NO_FILTERS
+
+    body = "\n".join(WAVE.format(name=f"Shared {i}", rate=100.0, seed=i) for i in range(2))
+    m = make(body, start_devices=False)
+    chains = [m.device(f"Shared {i}").position_filters for i in range(2)]
+    assert chains[0] is chains[1] is NO_FILTERS and not NO_FILTERS
+    matrices = np.arange(32.0).reshape(2, 4, 4)
+    assert NO_FILTERS.apply(matrices) is matrices

@@ -29,7 +29,7 @@ from gadgetctl.input.events import (
     ScrollDirection,
     ScrollEvent,
 )
-from gadgetctl.input.filters import FILTERS_PROPERTY, FilterChain, build_chain
+from gadgetctl.input.filters import FILTERS_PROPERTY, NO_FILTERS, build_chain
 from gadgetctl.input.keys import MODIFIER_KEYS, Key, Modifier
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.transforms import as_matrices
@@ -133,7 +133,7 @@ class Position(Input):
 
     def __init__(self) -> None:
         super().__init__()
-        self.position_filters = FilterChain()
+        self.position_filters = NO_FILTERS
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)

@@ -101,6 +101,10 @@ class FilterChain:
         return matrices
 
 
+#: The chain without filters (immutable), shared by every device and proxy that has none.
+NO_FILTERS = FilterChain()
+
+
 def transform_filter(access: ElementAccess) -> PositionFilter:
     pre_t, pre_r = access.floats("pre_translate"), access.floats("pre_rotation")
     post_t, post_r = access.floats("post_translate"), access.floats("post_rotation")
@@ -137,9 +141,10 @@ def build_filter(element: ConfigElement, access: ElementAccess) -> PositionFilte
 
 
 def build_chain(access: ElementAccess, prop: str = FILTERS_PROPERTY) -> FilterChain:
-    """The filters of ``prop``; unusable ones are skipped with a DRV diagnostic each."""
+    """The filters of ``prop``; unusable ones are skipped with a DRV diagnostic each (none:
+    :data:`NO_FILTERS`)."""
     if not access.has(prop):
-        return FilterChain()
+        return NO_FILTERS
     filters: list[PositionFilter] = []
     diagnostics: list[Diagnostic] = []
     for element in access.children(prop):
@@ -156,4 +161,6 @@ def build_chain(access: ElementAccess, prop: str = FILTERS_PROPERTY) -> FilterCh
                     loc.column,
                 )
             )
+    if not filters and not diagnostics:
+        return NO_FILTERS
     return FilterChain(tuple(filters), tuple(diagnostics))

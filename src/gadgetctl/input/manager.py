@@ -96,7 +96,7 @@ class ManagerOptions:
     freeze_gc: bool = True  # run(): keep what exists out of full collections while frames run
 
 
-@dataclass
+@dataclass(slots=True)
 class _DeviceEntry:
     element: ConfigElement
     device: Input

@@ -29,7 +29,7 @@ from gadgetctl.input.devicetypes import (
     Rumble,
 )
 from gadgetctl.input.errors import DeviceConfigError
-from gadgetctl.input.filters import FILTERS_PROPERTY, FilterChain, build_chain
+from gadgetctl.input.filters import FILTERS_PROPERTY, NO_FILTERS, build_chain
 from gadgetctl.input.keys import Key, Modifier
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.samples import EMPTY_FRAME, FrameSamples, Sample
@@ -245,7 +245,7 @@ class PositionProxy(Proxy):
     KIND = DeviceKind.POSITION
 
     def __init__(self) -> None:
-        self.filters = FilterChain()
+        self.filters = NO_FILTERS
         super().__init__()
 
     def config(self, access: ElementAccess) -> None:

@@ -386,7 +386,6 @@ class SampleStore:
         self.cap = cap
         self._lock = threading.Lock()
         self._channels: dict[DeviceKind, _Channel] = {DeviceKind(k): _Channel() for k in kinds}
-        self._pairs = tuple(self._channels.items())
         self._swapped_at: float | None = None
         self._waiting = False  # samples were added since the last swap
         self._current: Mapping[DeviceKind, FrameSamples] = {}
@@ -611,7 +610,7 @@ class SampleStore:
     def _take(self) -> list[tuple[DeviceKind, _Channel, list[Chunk], int]]:
         self._waiting = False
         taken: list[tuple[DeviceKind, _Channel, list[Chunk], int]] = []
-        for kind, channel in self._pairs:
+        for kind, channel in self._channels.items():
             if channel.count:
                 taken.append((kind, channel, channel.ready, channel.count))
                 channel.ready = _NO_CHUNKS
