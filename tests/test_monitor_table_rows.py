@@ -80,3 +80,30 @@ def test_a_pipe_gets_every_row(session, monkeypatch):
     TableView(session, out).print()
     assert len(rows(out.getvalue())) == DEVICES
     assert "more element" not in out.getvalue()
+
+
+@pytest.mark.timeout(60)
+def test_a_long_table_is_made_a_chunk_of_views_at_a_time_at_one_instant(session, monkeypatch):
+    """Issue 27: the views of every element at once cost 10,000 devices and their proxies
+    about 30 MB; a table is made from a few elements' views at a time, all at one instant,
+    and is the same table."""
+    from gadgetctl.cli import monitor_text
+
+    whole = io.StringIO()
+    TableView(session, whole).print()
+    asked: list[tuple[float, list[str]]] = []
+    real = session.snapshot
+
+    def spy(moment=None, *, names=None, **kwargs):
+        asked.append((moment, list(names)))
+        return real(moment, names=names, **kwargs)
+
+    monkeypatch.setattr(session, "snapshot", spy)
+    monkeypatch.setattr(monitor_text, "TABLE_CHUNK", 7)
+    out = io.StringIO()
+    TableView(session, out).print()
+    assert [names for _, names in asked] == [
+        session.selected[i : i + 7] for i in range(0, DEVICES, 7)
+    ]
+    assert len({moment for moment, _ in asked}) == 1
+    assert out.getvalue() == whole.getvalue()
