@@ -39,6 +39,8 @@ class RestartPolicy:
 class _Supervision:
     """Fault and restart bookkeeping shared by both runners."""
 
+    __slots__ = ("delay", "device", "open", "policy")  # one per device
+
     def __init__(self, device: Input, policy: RestartPolicy) -> None:
         self.device = device
         self.policy = policy
@@ -161,6 +163,8 @@ _RUNNING = DeviceState.RUNNING
 
 class ScheduledRunner:
     """A device served by a :class:`SharedScheduler` every ``sample_interval`` seconds."""
+
+    __slots__ = ("_scheduler", "_sup", "device", "due", "interval")  # one per device
 
     def __init__(self, device: Input, policy: RestartPolicy, scheduler: SharedScheduler) -> None:
         self.device = device

@@ -72,6 +72,8 @@ _RUNNING = DeviceState.RUNNING
 #: frame group is updated: one lock for all of them, so that a group frame takes it once.
 _PUBLISHING = threading.Lock()
 HAT_SEQUENCE = (HatState.CENTERED, HatState.UP, HatState.RIGHT, HatState.DOWN, HatState.LEFT)
+#: The sequence as one unit's column: a block's hat values are taken from it in one array.
+_HAT_COLUMN = np.asarray(HAT_SEQUENCE, dtype=np.int8)[:, None]
 
 
 class _StandIn:
@@ -465,9 +467,7 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         events: list[tuple[int, int]] = []
         if self.event_period > 0:
             steps = np.floor(t / self.event_period).astype(np.int64)
-            data[DeviceKind.HAT] = np.asarray(HAT_SEQUENCE, dtype=np.int8)[
-                steps % len(HAT_SEQUENCE)
-            ][:, None]
+            data[DeviceKind.HAT] = _HAT_COLUMN.take(steps % len(HAT_SEQUENCE), axis=0)
             first = math.floor(start / self.rate / self.event_period) + 1
             last = math.floor((start + count - 1) / self.rate / self.event_period)
             for number in range(first, last + 1):
