@@ -71,6 +71,29 @@ def _nearest_rank(sorted_or_partitioned: np.ndarray, n: int, percent: float) -> 
 class DeviceStats:
     """Running statistics of one device's sample timestamps."""
 
+    # one per watched device: slotted
+    __slots__ = (
+        "_frame_ends",
+        "_frame_samples",
+        "_frame_start_count",
+        "_last",
+        "_max_gap",
+        "_pending",
+        "_ring",
+        "_ring_len",
+        "_ring_pos",
+        "count",
+        "dropped",
+        "faults",
+        "first_timestamp",
+        "frames",
+        "history",
+        "name",
+        "newest_timestamp",
+        "samples_per_frame",
+        "window",
+    )
+
     def __init__(
         self, name: str, *, window: float = DEFAULT_WINDOW, history: int = DEFAULT_HISTORY
     ) -> None:

@@ -23,6 +23,28 @@ STATS_REFRESH = 0.25  # seconds between recomputations of interval percentiles a
 class DeviceTrack:
     """What a session keeps about one device between frames."""
 
+    # one per watched device: slotted
+    __slots__ = (
+        "_dropped_seen",
+        "_faults_seen",
+        "_snapshot",
+        "_snapshot_at",
+        "_swapped_at",
+        "analog_history",
+        "changed",
+        "count",
+        "device",
+        "digital_state",
+        "frame_seen",
+        "frames",
+        "history_length",
+        "name",
+        "presses",
+        "statistics",
+        "stats",
+        "units",
+    )
+
     def __init__(self, name: str, device: Input, history: int, statistics: bool = True) -> None:
         self.name = name
         self.device = device
