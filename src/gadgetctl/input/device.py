@@ -35,6 +35,8 @@ from gadgetctl.wording import counted
 if TYPE_CHECKING:
     from gadgetctl.input.events import EventSource
     from gadgetctl.jccl.access import ElementAccess
+    from gadgetctl.jccl.configuration import SourceLocation
+    from gadgetctl.jccl.definitions import Location
     from gadgetctl.transport.udp import DatagramLedger
 
 
@@ -111,7 +113,8 @@ class Input:
         self.store = SampleStore(self.kinds(), DEFAULT_CAP)
         self.state = DeviceState.CONFIGURED
         self.diagnostics: list[Diagnostic] = []
-        self._location: tuple[str | None, int | None, int | None] = (None, None, None)
+        # where its element is: its column is found (a scan of the line) only for a warning
+        self._location: Location | SourceLocation | None = None
         self._updated_frame = -1
 
     @classmethod
@@ -141,8 +144,7 @@ class Input:
         """Read the element. Subclasses call ``super().config(access)`` first."""
         self.name = access.name
         self.element_type = access.element.type
-        loc = access.element.location
-        self._location = (loc.path, loc.line, loc.column)
+        self._location = access.element.location
 
     def start_sampling(self) -> None:
         """Open the device. Raise to report that it cannot start."""
@@ -171,7 +173,8 @@ class Input:
 
     def warn(self, code: str, message: str, *, hint: str | None = None) -> None:
         """Record a diagnostic about this device's configuration (shown by `config pending`)."""
-        path, line, column = self._location
+        loc = self._location
+        path, line, column = (None, None, None) if loc is None else (loc.path, loc.line, loc.column)
         self.diagnostics.append(
             Diagnostic.make(code, f"{self.name}: {message}", path, line, column, hint=hint)
         )
