@@ -107,3 +107,5 @@ def test_a_long_table_is_made_a_chunk_of_views_at_a_time_at_one_instant(session,
     ]
     assert len({moment for moment, _ in asked}) == 1
     assert out.getvalue() == whole.getvalue()
+    # written a part at a time, it is the text of one table of one snapshot of them all
+    assert out.getvalue() == monitor_text.snapshot_table(real(asked[0][0])) + "\n"

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any, TextIO
 
 import numpy as np
@@ -268,19 +268,55 @@ def table_rows(
 def format_table(
     header: Sequence[str], rows: Sequence[Sequence[str]], *, last_free: bool = True
 ) -> str:
-    rows = [[printable(cell) for cell in row] for row in rows]  # names and values from devices
+    """``rows`` under ``header`` in aligned columns (the last one unpadded with
+    ``last_free``)."""
+    return "\n".join(table_lines(header, rows, last_free=last_free))
+
+
+def table_lines(
+    header: Sequence[str],
+    rows: Sequence[Sequence[str]],
+    *,
+    last_free: bool = True,
+    consume: bool = False,
+) -> Iterator[str]:
+    """The lines of :func:`format_table`, made one at a time. With ``consume``, ``rows`` is
+    a list given up to this call: its cells are made printable in place and each row is
+    dropped once its line is made (the rows of 20,000 elements are 12 MB; a copy of them,
+    their lines and the text of the whole table at once were as much again)."""
+    table: list[Sequence[str]]
+    if consume:
+        table = rows if isinstance(rows, list) else list(rows)
+        for index, row in enumerate(table):
+            table[index] = [printable(cell) for cell in row]
+    else:
+        table = [[printable(cell) for cell in row] for row in rows]  # names and values from devices
     widths = [len(h) for h in header]
-    for row in rows:
+    for row in table:
         for i, cell in enumerate(row[:-1] if last_free else row):
             widths[i] = max(widths[i], len(cell))
-    lines = []
-    for row in [list(header), *rows]:
+
+    def line(row: Sequence[str]) -> str:
         cells = [
             cell.ljust(widths[i]) if i < len(row) - 1 or not last_free else cell
             for i, cell in enumerate(row)
         ]
-        lines.append("  ".join(cells).rstrip())
-    return "\n".join(lines)
+        return "  ".join(cells).rstrip()
+
+    return _lines(line, list(header), table, consume)
+
+
+def _lines(
+    line: Callable[[Sequence[str]], str],
+    header: Sequence[str],
+    table: list[Sequence[str]],
+    consume: bool,
+) -> Iterator[str]:
+    yield line(header)
+    for index, row in enumerate(table):
+        if consume:
+            table[index] = ()  # its line is made
+        yield line(row)
 
 
 def snapshot_table(
@@ -290,14 +326,15 @@ def snapshot_table(
     quaternion: bool = False,
     pose: str | None = None,
 ) -> str:
+    head = table_head(snapshot)
     rows = table_rows(snapshot, length_unit=length_unit, quaternion=quaternion, pose=pose)
-    return table_text(snapshot, rows, difference_lines(snapshot))
+    body = format_table(COLUMNS, rows)
+    return head + "\n" + body + "\n" + "".join(f"{line}\n" for line in difference_lines(snapshot))
 
 
-def table_text(snapshot: Snapshot, rows: Sequence[Sequence[str]], notes: Sequence[str]) -> str:
-    """The table of ``rows`` (:func:`table_rows`) under the heading of ``snapshot``, then the
-    ``notes`` (:func:`difference_lines`)."""
-    head = (
+def table_head(snapshot: Snapshot) -> str:
+    """The heading line of a table of ``snapshot``."""
+    return (
         f"[{snapshot.elapsed:7.2f} s] frame {snapshot.frame}, {snapshot.frame_rate:.1f} frames/s"
         + (
             f", {counted(snapshot.samples_written, 'sample')} written"
@@ -305,8 +342,6 @@ def table_text(snapshot: Snapshot, rows: Sequence[Sequence[str]], notes: Sequenc
             else ""
         )
     )
-    body = format_table(COLUMNS, rows)
-    return head + "\n" + body + "\n" + "".join(f"{line}\n" for line in notes)
 
 
 #: Lines of a table that are not element rows: the heading, the column names, the line
@@ -365,13 +400,21 @@ class TableView:
                 snapshot, length_unit=self.length_unit, quaternion=self.quaternion, pose=self.pose
             )
             notes += difference_lines(snapshot)
-        text = table_text(first, rows, notes)
+        # what snapshot_table makes, written a part at a time: the rows are dropped as their
+        # lines are made, and the text of the whole table is never made at once
+        write = self.stream.write
+        write(table_head(first) + "\n")
+        lines = table_lines(COLUMNS, rows, consume=True)
+        del rows
+        for part in iter(lambda: list(itertools.islice(lines, TABLE_CHUNK)), []):
+            write("".join(f"{line}\n" for line in part))
+        text = "".join(f"{line}\n" for line in notes)
         if fit < len(selected):
             text += (
                 f"… and {counted(len(selected) - fit, 'more element')} the terminal has no room "
                 "for (name or pattern them to see them; a pipe or file gets every row)\n"
             )
-        self.stream.write(text + "\n")
+        write(text + "\n")
         self.stream.flush()
 
     def rows_that_fit(self, count: int) -> int:
