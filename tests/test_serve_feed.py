@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from vrpn_peers import Broadcasts
 
 from gadgetctl.input.manager import InputManager
 from gadgetctl.input.transforms import matrices_from_pos_quat
@@ -158,24 +159,6 @@ def test_monitor_recorders_use_the_same_consumer_hook():
     assert b'"type": "sample"' in stream.getvalue() or b'"type":"sample"' in stream.getvalue()
 
 
-class _Broadcasts:
-    """A server stand-in for VrpnOutlet: names get ids, every broadcast is kept."""
-
-    def __init__(self) -> None:
-        self.names: dict[str, int] = {}
-        self.sent: list[bytes] = []
-        self.audience = False  # no client: the outlet frames only when told there is one
-
-    def register_sender(self, name: str) -> int:
-        return self.names.setdefault(name, len(self.names))
-
-    register_type = register_sender
-
-    def broadcast(self, data: bytes, size: int, *, reliable: bool = True, flush: bool = False):
-        self.sent.append(bytes(data))
-        return len(data) // size
-
-
 WAVE = """<waveform_device name="Wave {i}" version="1"><rate>1000</rate><seed>{i}</seed>
   <event_period>0.0</event_period><position_path>circle</position_path>
   <position_path>spin</position_path></waveform_device>"""
@@ -205,7 +188,7 @@ def test_a_frame_groups_shared_windows_are_served_as_its_devices_samples(tmp_pat
         session = MonitorSession(manager, configuration, rate=500.0, statistics=False)
         session.start()
         catalog = build_catalog(manager, session.selected)
-        server = _Broadcasts()
+        server = Broadcasts()
         outlet = VrpnOutlet(server, catalog)
         feed = ServeFeed(catalog, outlet, offset=1000.0)
         session.add_consumer(feed)

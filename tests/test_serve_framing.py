@@ -7,6 +7,7 @@ import socket
 
 import numpy as np
 import pytest
+from vrpn_peers import Broadcasts
 
 from gadgetctl.serve.framing import (
     CHANGE_SIZE,
@@ -120,26 +121,6 @@ def test_a_written_batch_goes_out_whole_then_queues_the_rest_and_drops_whole_mes
         b.close()
 
 
-class _Broadcasts:
-    """A server stand-in for VrpnOutlet: names get ids, broadcasts are kept."""
-
-    def __init__(self) -> None:
-        self.names: dict[str, int] = {}
-        self.sent: list[bytes] = []
-        self.audience = False  # no client: the outlet frames only when told there is one
-
-    def register_sender(self, name: str) -> int:
-        return self.names.setdefault(name, len(self.names))
-
-    register_type = register_sender
-
-    def broadcast(
-        self, data: bytes, size: int, *, reliable: bool = True, flush: bool = False
-    ) -> int:
-        self.sent.append(bytes(data))
-        return len(data) // size
-
-
 def test_windows_of_arrays_computed_ahead_give_the_bytes_of_their_batches():
     """A device publishing windows of a block (waveform) is framed a stretch ahead and cut
     per frame: every frame's bytes are those of framing its window's samples there and then,
@@ -162,7 +143,7 @@ def test_windows_of_arrays_computed_ahead_give_the_bytes_of_their_batches():
         ServedElement(name, name, "device", "waveform_device", (Role.TRACKER,))
         for name in ("One", "Three", "Single", "Batch")
     ]
-    windowed, batched = _Broadcasts(), _Broadcasts()
+    windowed, batched = Broadcasts(), Broadcasts()
     outlets = [VrpnOutlet(windowed, catalog), VrpnOutlet(batched, catalog)]
     for outlet in outlets:
         outlet.audience = True
@@ -224,7 +205,7 @@ def test_shared_windows_give_the_bytes_of_their_batches(upcoming, count):
     sensors = {name: (1, 3, 1, 2)[i % 4] for i, name in enumerate(names)}
     dtypes = {names[-1]: np.float32}  # last: framed after the others, as in the plain batches
     catalog = [ServedElement(n, n, "device", "waveform_device", (Role.TRACKER,)) for n in names]
-    shared_server, batched_server = _Broadcasts(), _Broadcasts()
+    shared_server, batched_server = Broadcasts(), Broadcasts()
     shared_outlet, batched_outlet = (
         VrpnOutlet(shared_server, catalog),
         VrpnOutlet(batched_server, catalog),

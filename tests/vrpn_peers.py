@@ -102,3 +102,24 @@ class RawServer:
                     self.script(conn, self.connections)
                 except OSError:
                     pass
+
+
+class Broadcasts:
+    """A server stand-in for :class:`gadgetctl.serve.outlet.VrpnOutlet`: names get ids, every
+    broadcast is kept; no client listens until the test says so (the outlet's ``audience``)."""
+
+    def __init__(self) -> None:
+        self.names: dict[str, int] = {}
+        self.sent: list[bytes] = []
+        self.audience = False
+
+    def register_sender(self, name: str) -> int:
+        return self.names.setdefault(name, len(self.names))
+
+    register_type = register_sender
+
+    def broadcast(
+        self, data: bytes, size: int, *, reliable: bool = True, flush: bool = False
+    ) -> int:
+        self.sent.append(bytes(data))
+        return len(data) // size
