@@ -10,21 +10,11 @@ from gadgetctl.jccl.repository import DefinitionRepository
 from gadgetctl.jccl.searchpath import SearchPathEntry
 from gadgetctl.jccl.xmlload import unsaved_texts
 
-DEFINITION = """<?xml version="1.0" encoding="UTF-8"?>
-<?org-vrjuggler-jccl-settings definition.version="3.1"?>
-<definition xmlns="http://www.vrjuggler.org/jccl/xsd/3.1/definition" name="{name}">
-   <definition_version version="1" label="{label}">
-      <abstract>false</abstract>
-      <help>A probe.</help>
-      <category>/Devices</category>
-      <property valuetype="integer" variable="false" name="{prop}">
-         <help>Samples a second.</help>
-         <value label="Rate" defaultvalue="60"/>
-      </property>
-      <upgrade_transform/>
-   </definition_version>
-</definition>
-"""
+from jccl_samples import jdef, prop
+
+
+def _definition(name: str, prop_name: str) -> str:
+    return jdef(name, prop(prop_name, "integer"))
 
 
 def _repository(directory) -> DefinitionRepository:
@@ -40,19 +30,19 @@ def _properties(repo: DefinitionRepository, name: str) -> list[str]:
 
 def test_unchanged_files_are_read_once_and_a_changed_file_again(tmp_path):
     probe = tmp_path / "probe.jdef"
-    probe.write_text(DEFINITION.format(name="probe", label="Probe", prop="rate"))
+    probe.write_text(_definition("probe", "rate"))
     (tmp_path / "broken.jdef").write_text("<definition")
     first, second = _repository(tmp_path), _repository(tmp_path)
     assert first.get("probe") is second.get("probe")  # the same definitions, shared
     assert [d.code for d in second.diagnostics] == ["DEF020"]  # the broken file, each time
     assert second.entries[0].files == 2 and second.entries[0].contributed == 1
 
-    probe.write_text(DEFINITION.format(name="probe", label="Probe", prop="depth"))
+    probe.write_text(_definition("probe", "depth"))
     stat = probe.stat()
     os.utime(probe, ns=(stat.st_atime_ns, stat.st_mtime_ns + 1_000_000))  # even within a tick
     assert _properties(_repository(tmp_path), "probe") == ["depth"]
 
-    (tmp_path / "gauge.jdef").write_text(DEFINITION.format(name="gauge", label="G", prop="x"))
+    (tmp_path / "gauge.jdef").write_text(_definition("gauge", "x"))
     assert _properties(_repository(tmp_path), "gauge") == ["x"]
     (tmp_path / "gauge.jdef").unlink()
     assert _repository(tmp_path).get("gauge") is None
@@ -60,9 +50,9 @@ def test_unchanged_files_are_read_once_and_a_changed_file_again(tmp_path):
 
 def test_an_unsaved_text_stands_for_its_file_and_is_not_kept(tmp_path):
     probe = tmp_path / "probe.jdef"
-    probe.write_text(DEFINITION.format(name="probe", label="Probe", prop="rate"))
+    probe.write_text(_definition("probe", "rate"))
     assert _properties(_repository(tmp_path), "probe") == ["rate"]
-    edited = DEFINITION.format(name="probe", label="Probe", prop="depth")
+    edited = _definition("probe", "depth")
     with unsaved_texts({probe: edited}):
         assert _properties(_repository(tmp_path), "probe") == ["depth"]
     assert _properties(_repository(tmp_path), "probe") == ["rate"]  # the file's, again
