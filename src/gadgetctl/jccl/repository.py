@@ -365,8 +365,8 @@ def _read_directory(directory: Path) -> list[_FileOutcome]:
     key = str(directory)
     known = _READ_DIRECTORIES.get(key)
     # an editor's unsaved text of a file there (the language server) is read, never kept
-    unreadable = unsaved_within(directory)
-    if known is not None and known[0] == signature and not unreadable:
+    keep = not unsaved_within(directory)
+    if keep and known is not None and known[0] == signature:
         return known[1]
     outcomes: list[_FileOutcome] = []
     for path, _ in files:
@@ -376,7 +376,7 @@ def _read_directory(directory: Path) -> list[_FileOutcome]:
             outcomes.append(
                 (path, None, f"definition file on the search path cannot be read: {err.strerror}")
             )
-            unreadable = True
+            keep = False  # tried again next time
             continue
         definition = read_definition(doc, columns=False) if doc.root is not None else None
         if definition is None or not definition.name:
@@ -386,8 +386,7 @@ def _read_directory(directory: Path) -> list[_FileOutcome]:
             )
             continue
         outcomes.append((path, definition, ""))
-    if not unreadable:  # a file that could not be read is tried again next time, and an
-        # unsaved text's definitions are not kept for the file
+    if keep:
         if len(_READ_DIRECTORIES) >= _READ_DIRECTORIES_KEPT:
             _READ_DIRECTORIES.pop(next(iter(_READ_DIRECTORIES)))
         _READ_DIRECTORIES[key] = (signature, outcomes)
