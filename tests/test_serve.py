@@ -136,6 +136,33 @@ def test_clients_read_exactly_what_was_served(tmp_path):
 
 
 @pytest.mark.timeout(60)
+@pytest.mark.parametrize("frame_rate", ["1000", "20"])
+def test_clients_are_heard_between_frames_at_any_frame_rate(tmp_path, frame_rate):
+    """At 1 kHz the waits between frames are sleeps with a pass over the sockets now and
+    then; at 20 Hz they watch the sockets throughout: either way a client that connects while
+    frames run is accepted, answered and served, and so is a second one after it."""
+    with ServeProcess(config(tmp_path), "--rate", frame_rate) as serve:
+        location = f"tcp://127.0.0.1:{serve.port}"
+        first = Collector(location, ["Lab_Tracker"])
+        try:
+            wait_until(lambda: first.pump() or len(first.poses("Lab_Tracker")) >= 30, timeout=20)
+            second = Collector(location, ["Lab_Tracker"])
+            try:
+                wait_until(
+                    lambda: second.pump() or len(second.poses("Lab_Tracker")) >= 30, timeout=20
+                )
+            finally:
+                second.client.close()
+        finally:
+            first.client.close()
+        assert serve.stop() == 0, serve.stderr
+    assert sum(e["event"] == "connected" for e in serve.events) == 2
+    for collector in (first, second):
+        times = [m.timestamp for m in collector.poses("Lab_Tracker")]
+        assert times == sorted(times)
+
+
+@pytest.mark.timeout(60)
 def test_allow_refuses_clients_outside_the_networks(tmp_path):
     with ServeProcess(config(tmp_path), "--allow", "10.0.0.0/8") as serve:
         refused = VrpnClient(f"tcp://127.0.0.1:{serve.port}", ["Lab_Tracker"])

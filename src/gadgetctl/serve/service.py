@@ -11,6 +11,7 @@ manager go on.
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -30,6 +31,15 @@ SOCKET_BUFFER = (
 )  # kernel send buffer per client: a stalled client's backlog shows as drops
 SWITCH_INTERVAL = 0.0005  # seconds: how long another thread may keep the GIL while frames run
 DEFAULT_RATE = 1000.0  # frames per second: a sample waits at most a millisecond to be sent
+#: A wait before the next frame up to this long (seconds) is a plain sleep, followed by one
+#: pass of the server's I/O that does not wait when the last pass is :data:`POLL_INTERVAL`
+#: old, much as a C++ VRPN server's main loop polls between its sleeps: at 1 kHz, waking from
+#: a sleep costs less than from a ``select`` over every client's socket, and a pass over the
+#: sockets every frame was a tenth of serve's work. Longer waits watch the sockets throughout.
+SHORT_WAIT = 0.002
+#: Seconds: how long clients may wait to be accepted, read and answered while frames run
+#: back to back (the frames' own writes go out at once, every frame).
+POLL_INTERVAL = 0.004
 
 
 @dataclass
@@ -87,6 +97,7 @@ class ServeService:
         self.feed: ServeFeed | None = None
         self.listeners: list[Callable[[ServeEvent], object]] = []
         self._closed = False
+        self._polled_at = -math.inf  # when the frame loop's waits last passed over the sockets
 
     @property
     def manager(self) -> InputManager:
@@ -142,10 +153,19 @@ class ServeService:
 
     def _wait(self, delay: float) -> None:
         """The frame loop's sleep: the server's I/O until the next frame is due."""
+        if delay <= SHORT_WAIT:
+            time.sleep(delay)
+            moment = now()
+            if moment - self._polled_at >= POLL_INTERVAL:
+                self._polled_at = moment
+                self.server.poll(0.0)
+            return
         end = now() + delay
         while True:
             self.server.poll(max(0.0, end - now()))
-            if now() >= end:
+            moment = now()
+            if moment >= end:
+                self._polled_at = moment
                 return
 
     def _connected(self, client) -> None:
