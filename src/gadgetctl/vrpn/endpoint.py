@@ -438,7 +438,7 @@ class Endpoint:
                 self._send_udp()
             return count
         if write and not self.out:
-            return self._write_batch(data, size, count)
+            return self.write_batch(data, size, count)
         room = max(0, self.out_limit - len(self.out)) // size
         taken = min(count, room)
         if taken:
@@ -449,10 +449,10 @@ class Endpoint:
             self.flush()
         return taken
 
-    def _write_batch(self, data: bytes, size: int, count: int) -> int:
-        """Send ``data`` (``count`` messages of ``size`` bytes) to an empty output buffer:
-        the rest of a message the socket took in part is queued whatever the limit, then
-        the whole messages that fit."""
+    def write_batch(self, data: bytes, size: int, count: int) -> int:
+        """Send ``data`` (``count`` messages of ``size`` bytes) by TCP when the output buffer
+        is empty (the caller checks ``out``): the rest of a message the socket took in part
+        is queued whatever the limit, then the whole messages that fit; how many were taken."""
         try:
             written = self.sock.send(data)
         except (BlockingIOError, InterruptedError):

@@ -153,6 +153,7 @@ class VrpnServer:
         self.counters: Counter[str] = Counter()
         self._clients: dict[int, ServerClient] = {}
         self._open_clients = 0  # of them, those whose handshake is done
+        self._open_pairs: tuple[tuple[ServerClient, Endpoint], ...] | None = None
         #: Output was queued without being written since the last flush of every client.
         self._output_queued = False
         self._by_endpoint: dict[int, ServerClient] = {}
@@ -295,21 +296,37 @@ class VrpnServer:
         bytes object for every client, not a copy per client)."""
         if size <= 0 or len(data) % size or size > MAX_SEND_MESSAGE:
             raise ValueError(f"{len(data)} bytes are not whole messages of {size} bytes")
+        count = len(data) // size
+        if not count:
+            return 0
         taken = 0
         left = not flush  # output left for a poll to write
         with self._lock:
-            for client in list(self._clients.values()):
-                ep = client.endpoint
-                if client.state == OPEN and ep is not None:
-                    try:
+            for client, ep in self._open_endpoints():
+                try:
+                    if flush and not ep.out and (reliable or ep.udp is None):
+                        taken += ep.write_batch(data, size, count)  # the usual: straight out
+                    else:
                         taken += ep.queue_batch(data, size, reliable, write=flush)
-                    except ConnectionDropped as exc:
-                        self._close_client(client, exc.reason)
-                        continue
-                    left = left or bool(ep.out)
+                except ConnectionDropped as exc:
+                    self._close_client(client, exc.reason)
+                    continue
+                if ep.out:
+                    left = True
             if left:
                 self._wake()  # a poll under way must watch the output left
         return taken
+
+    def _open_endpoints(self) -> tuple[tuple[ServerClient, Endpoint], ...]:
+        """The open clients and their endpoints, kept until a client opens or closes."""
+        pairs = self._open_pairs
+        if pairs is None:
+            pairs = self._open_pairs = tuple(
+                (client, client.endpoint)
+                for client in self._clients.values()
+                if client.state == OPEN and client.endpoint is not None
+            )
+        return pairs
 
     def send_to(
         self,
@@ -572,6 +589,7 @@ class VrpnServer:
             ep.queue(pack_description(TYPE_DESCRIPTION, ident, name))
         client.state = OPEN
         self._open_clients += 1
+        self._open_pairs = None
         self.counters["connections"] += 1
         if self.on_connect is not None:
             self._callback(self.on_connect, client)
@@ -610,6 +628,7 @@ class VrpnServer:
             client.sock = None
         was_open = client.state == OPEN
         self._open_clients -= was_open
+        self._open_pairs = None
         if client.endpoint is not None:
             self._by_endpoint.pop(id(client.endpoint), None)
             self._closed_dropped += client.endpoint.dropped
