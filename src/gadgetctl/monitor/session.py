@@ -456,7 +456,7 @@ class MonitorSession:
             self._gathered = GatheredFrames(gathered)
         else:  # gathering only: frame groups' shared windows are read at once
             plan = self._gather_plan()
-            samples = self._gather(plan.own, gathered)
+            samples = self._gather(plan.own, gathered) if plan.own else 0
             for group in plan.groups:
                 windows = group.windows
                 if group.slots is windows.every and windows.fresh_slots == len(windows.every):

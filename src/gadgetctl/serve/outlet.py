@@ -223,21 +223,22 @@ class VrpnOutlet:
         fixed cost per call is most of the work for a few slots). False, having done
         nothing, when some slot's row must be framed again."""
         windows = state.windows
+        starts, stops, generation = windows.starts, windows.stops, windows.generation
         records, pieces, count = state.records, [], 0
         for slot in slots.tolist():
-            start, stop, first = windows.starts[slot], windows.stops[slot], state.first[slot]
+            start, stop, first = int(starts[slot]), int(stops[slot]), int(state.first[slot])
             if (
-                state.generation[slot] != windows.generation[slot]
+                state.generation[slot] != generation[slot]
                 or start < first
                 or stop > state.last[slot]
             ):
                 return False
-            sensors = state.sensors[slot]
-            begin = int(state.row[slot] * FRAME_AHEAD + (start - first) * sensors)
-            size = int((stop - start) * sensors)
-            pieces.append(records[begin : begin + size])
+            sensors = int(state.sensors[slot])
+            begin = int(state.row[slot]) * FRAME_AHEAD + (start - first) * sensors
+            size = (stop - start) * sensors
+            pieces.append(records[begin : begin + size].tobytes())
             count += size
-        self._pieces.extend(piece.tobytes() for piece in pieces)
+        self._pieces += pieces
         self.messages += count
         return True
 
