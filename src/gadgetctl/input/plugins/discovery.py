@@ -147,10 +147,34 @@ def _plugin(
     module: str | None = None,
 ) -> PluginInfo:
     source_file = path / "__init__.py" if package else path
-    definitions = sorted(p for p in path.glob("*.jdef") if p.is_file()) if package else []
+    definitions = _definition_files(path) if package else []
     return PluginInfo(
         name, path, source, read_metadata(source_file), package, origin, module, definitions
     )
+
+
+def _definition_files(package: Path) -> list[Path]:
+    """The ``*.jdef`` files of a package folder, in name order."""
+    try:
+        with os.scandir(package) as entries:
+            names = [e.name for e in entries if e.name.endswith(".jdef") and _is_file(e)]
+    except OSError:
+        return []
+    return [package / name for name in sorted(names)]
+
+
+def _is_file(entry: os.DirEntry) -> bool:
+    try:
+        return entry.is_file()
+    except OSError:
+        return False
+
+
+def _is_dir(entry: os.DirEntry) -> bool:
+    try:
+        return entry.is_dir()
+    except OSError:
+        return False
 
 
 def scan_directory(directory: DriverDirectory) -> list[PluginInfo]:
@@ -158,18 +182,24 @@ def scan_directory(directory: DriverDirectory) -> list[PluginInfo]:
     if not directory.exists:
         return []
     found: list[PluginInfo] = []
-    for entry in sorted(directory.path.iterdir(), key=lambda p: p.name):
-        if entry.name.startswith((".", "_")):
+    origin = str(directory.path)
+    with os.scandir(directory.path) as listing:
+        entries = sorted(listing, key=lambda e: e.name)
+    for entry in entries:
+        name = entry.name
+        if name.startswith((".", "_")):
             continue
-        if entry.is_dir() and (entry / "__init__.py").is_file():
-            found.append(_plugin(entry.name, entry, True, directory.source, str(directory.path)))
+        if _is_dir(entry) and os.path.isfile(os.path.join(entry.path, "__init__.py")):
+            path = directory.path / name
+            found.append(_plugin(name, path, True, directory.source, origin))
         elif (
-            entry.is_file()
-            and entry.suffix == ".py"
-            and entry.name not in _SKIPPED_MODULES
-            and not entry.name.startswith("test_")
+            name.endswith(".py")
+            and name not in _SKIPPED_MODULES
+            and not name.startswith("test_")
+            and _is_file(entry)
         ):
-            found.append(_plugin(entry.stem, entry, False, directory.source, str(directory.path)))
+            path = directory.path / name
+            found.append(_plugin(name[: -len(".py")], path, False, directory.source, origin))
     return found
 
 
@@ -190,27 +220,52 @@ def find_module_file(module: str) -> tuple[Path, bool] | None:
 def entry_point_plugins() -> list[PluginInfo]:
     """Plug-ins of installed distributions (entry point group ``gadgetctl.drivers``)."""
     found: list[PluginInfo] = []
-    for entry in sorted(
-        importlib_metadata.entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name
-    ):
-        module = entry.value.partition(":")[0].strip()
-        dist = getattr(entry, "dist", None)
-        origin = f"{entry.name} = {entry.value}" + (
-            f" ({dist.name} {dist.version})" if dist else ""
-        )
+    for name, value, dist in _installed_entry_points():
+        module = value.partition(":")[0].strip()
+        origin = f"{name} = {value}" + (f" ({dist})" if dist else "")
         located = find_module_file(module)
         if located is None:
             meta = PluginMetadata()
             meta.problems.append(f"module {module!r} of the entry point is not on sys.path")
             found.append(
                 PluginInfo(
-                    entry.name, Path(module), PluginSource.ENTRY_POINT, meta, False, origin, module
+                    name, Path(module), PluginSource.ENTRY_POINT, meta, False, origin, module
                 )
             )
             continue
         path, package = located
-        found.append(_plugin(entry.name, path, package, PluginSource.ENTRY_POINT, origin, module))
+        found.append(_plugin(name, path, package, PluginSource.ENTRY_POINT, origin, module))
     return found
+
+
+#: The group's entry points as last read, with the sys.path they were read from and the
+#: mtime_ns of its directories (installing or removing a distribution adds or removes a
+#: folder there; importlib.metadata keeps its own directory listings the same way).
+_ENTRY_POINTS: list[tuple[tuple, list[tuple[str, str, str]]]] = []
+
+
+def _installed_entry_points() -> list[tuple[str, str, str]]:
+    """(name, value, "distribution version" or "") of each entry point of the group, in name
+    order, read again only once sys.path or one of its directories changed."""
+    signature = tuple(_directory_state(entry) for entry in sys.path)
+    if _ENTRY_POINTS and _ENTRY_POINTS[0][0] == signature:
+        return _ENTRY_POINTS[0][1]
+    found = []
+    for entry in sorted(
+        importlib_metadata.entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name
+    ):
+        dist = getattr(entry, "dist", None)
+        found.append((entry.name, entry.value, f"{dist.name} {dist.version}" if dist else ""))
+    _ENTRY_POINTS[:] = [(signature, found)]
+    return found
+
+
+def _directory_state(entry: str) -> tuple[str, int | None]:
+    """A sys.path entry as an absolute path ("" is the working directory) and its mtime_ns."""
+    try:
+        return os.path.abspath(entry or "."), os.stat(entry or ".").st_mtime_ns
+    except OSError:
+        return entry, None
 
 
 def directory_entry(

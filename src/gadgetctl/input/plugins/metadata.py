@@ -15,6 +15,7 @@ transports gives a list of such dicts.
 from __future__ import annotations
 
 import ast
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -202,15 +203,45 @@ def _read_transports(value: object, meta: PluginMetadata) -> None:
             meta.transports[element_type] = good
 
 
+#: Metadata by source file, with the file's signature (size, mtime_ns, ctime_ns, inode)
+#: when read: every validate run asks about the same plug-ins, and a file is parsed again
+#: only once it changed (a chmod changes ctime, so an unreadable file is seen too).
+_READ_METADATA: dict[str, tuple[tuple[int, int, int, int], PluginMetadata]] = {}
+_READ_METADATA_KEPT = 1024
+
+
 def read_metadata(path: Path) -> PluginMetadata:
-    """Metadata of the plug-in whose source file is ``path`` (``__init__.py`` of a package)."""
+    """Metadata of the plug-in whose source file is ``path`` (``__init__.py`` of a package).
+
+    Reads of an unchanged file share one :class:`PluginMetadata`: do not modify it."""
+    key = str(path)
+    try:
+        status = os.stat(key)
+        signature = (status.st_size, status.st_mtime_ns, status.st_ctime_ns, status.st_ino)
+    except OSError:
+        signature = None  # read_text below says why
+    known = _READ_METADATA.get(key)
+    if signature is not None and known is not None and known[0] == signature:
+        return known[1]
     try:
         source = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        meta = PluginMetadata()
-        meta.problems.append(f"cannot read {path.name}: {getattr(err, 'strerror', None) or err}")
-        return meta
-    return parse_metadata(source, str(path))
+    except OSError as err:
+        return _unreadable(path, err)  # not kept: a permission may be fixed
+    except UnicodeDecodeError as err:
+        meta = _unreadable(path, err)
+    else:
+        meta = parse_metadata(source, key)
+    if signature is not None:
+        if len(_READ_METADATA) >= _READ_METADATA_KEPT:
+            _READ_METADATA.pop(next(iter(_READ_METADATA)))
+        _READ_METADATA[key] = (signature, meta)
+    return meta
+
+
+def _unreadable(path: Path, err: OSError | UnicodeDecodeError) -> PluginMetadata:
+    meta = PluginMetadata()
+    meta.problems.append(f"cannot read {path.name}: {getattr(err, 'strerror', None) or err}")
+    return meta
 
 
 def missing_requirements(meta: PluginMetadata) -> list[str]:
