@@ -74,25 +74,48 @@ def real_path(path: str) -> Path:
 def _jccl_files(directory: Path) -> list[Path]:
     """The .jdef and .jconf files in ``directory`` and below, sorted, hidden ones (and hidden
     directories) left out, symbolic links to directories not followed. A directory below that
-    cannot be read is an error: its files would pass unchecked."""
-    found: list[Path] = []
-    refused: list[OSError] = []
-    for parent, directories, names in os.walk(directory, onerror=refused.append):
-        directories[:] = [d for d in directories if not d.startswith(".")]
-        found.extend(
-            Path(parent, name)
-            for name in names
-            if not name.startswith(".")
-            and Path(name).suffix in JCCL_SUFFIXES
-            and is_file(Path(parent, name))
-        )
-    if refused:
-        first = refused[0]
-        raise GadgetctlError(
-            f"{first.filename}: directory is not readable ({first.strerror or first}); "
-            "the files in it cannot be checked"
-        )
-    return sorted(found)
+    cannot be read is an error: its files would pass unchecked.
+
+    Walked as :func:`os.walk` walks (top down, each directory's entries in listing order),
+    with the kinds the listing gives, so that a plain file or directory costs no stat."""
+    found: list[str] = []
+    pending = [os.fspath(directory)]
+    while pending:
+        top = pending.pop()
+        try:
+            with os.scandir(top) as listing:
+                entries = list(listing)
+        except OSError as err:
+            raise GadgetctlError(
+                f"{err.filename}: directory is not readable ({err.strerror or err}); "
+                "the files in it cannot be checked"
+            ) from None
+        below = []
+        for entry in entries:
+            name = entry.name
+            if name.startswith("."):
+                continue
+            if _entry_is_dir(entry):
+                if not entry.is_symlink():
+                    below.append(entry.path)
+            elif name.endswith(JCCL_SUFFIXES) and _entry_is_file(entry):
+                found.append(entry.path)
+        pending.extend(reversed(below))
+    return sorted(Path(path) for path in found)
+
+
+def _entry_is_dir(entry: os.DirEntry) -> bool:
+    try:
+        return entry.is_dir()
+    except OSError:
+        return False
+
+
+def _entry_is_file(entry: os.DirEntry) -> bool:
+    try:
+        return entry.is_file()
+    except OSError:
+        return False
 
 
 def is_file(path: Path) -> bool:

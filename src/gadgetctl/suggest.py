@@ -17,14 +17,32 @@ from typing import Any
 CUTOFF = 0.6
 
 
+#: close_names answers by (word, candidates, n, cutoff): a check asks about the same unknown
+#: names against the same names again and again (every run of validate in one process).
+#: Kept for up to _CLOSE_NAMES_KEPT questions of at most _CLOSE_NAMES_WIDEST candidates.
+_CLOSE_NAMES: dict[tuple[str, tuple[str, ...], int, float], tuple[str, ...]] = {}
+_CLOSE_NAMES_KEPT = 1024
+_CLOSE_NAMES_WIDEST = 2048
+
+
 def close_names(
     word: str, candidates: Iterable[str], *, n: int = 3, cutoff: float = CUTOFF
 ) -> list[str]:
     """Up to ``n`` candidates that look like ``word``, the closest first."""
-    spelled: dict[str, str] = {}
-    for candidate in candidates:
-        spelled.setdefault(candidate.lower(), candidate)
-    return [spelled[m] for m in get_close_matches(word.lower(), list(spelled), n=n, cutoff=cutoff)]
+    names = tuple(candidates)
+    key = (word, names, n, cutoff)
+    found = _CLOSE_NAMES.get(key)
+    if found is None:
+        spelled: dict[str, str] = {}
+        for candidate in names:
+            spelled.setdefault(candidate.lower(), candidate)
+        matches = get_close_matches(word.lower(), list(spelled), n=n, cutoff=cutoff)
+        found = tuple(spelled[m] for m in matches)
+        if len(names) <= _CLOSE_NAMES_WIDEST:
+            if len(_CLOSE_NAMES) >= _CLOSE_NAMES_KEPT:
+                _CLOSE_NAMES.pop(next(iter(_CLOSE_NAMES)))
+            _CLOSE_NAMES[key] = found
+    return list(found)
 
 
 def did_you_mean(

@@ -1,0 +1,70 @@
+"""Work `validate` spares (issue 27 goal 4) gives the results of doing it: the directory
+walk finds what os.walk finds, and remembered suggestions are those difflib gives."""
+
+from __future__ import annotations
+
+import os
+from difflib import get_close_matches
+from pathlib import Path
+
+from gadgetctl.files import JCCL_SUFFIXES, _jccl_files, is_file
+from gadgetctl.suggest import close_names
+
+
+def _walked(directory: Path) -> list[Path]:
+    """What the walk gave before it listed directories itself (os.walk, a stat per file)."""
+    found = []
+    for parent, directories, names in os.walk(directory):
+        directories[:] = [d for d in directories if not d.startswith(".")]
+        found.extend(
+            Path(parent, name)
+            for name in names
+            if not name.startswith(".")
+            and Path(name).suffix in JCCL_SUFFIXES
+            and is_file(Path(parent, name))
+        )
+    return sorted(found)
+
+
+def test_the_walk_finds_what_os_walk_finds(tmp_path):
+    for folder in ("a", "a/b", "a-c", ".hidden", "a/.git", "z"):
+        (tmp_path / folder).mkdir()
+    for name in (
+        "a/one.jconf",
+        "a/b/two.jdef",
+        "a-c/three.jconf",
+        ".hidden/no.jconf",
+        "a/.git/no.jdef",
+        "a/.dot.jconf",
+        "z/x.jdef.bak",
+        "z/X.JCONF",
+        "z/several.dots.jconf",
+    ):
+        (tmp_path / name).write_text("<configuration/>")
+    (tmp_path / "z" / "link.jconf").symlink_to(tmp_path / "a" / "one.jconf")
+    (tmp_path / "z" / "dangling.jconf").symlink_to(tmp_path / "nowhere.jconf")
+    (tmp_path / "z" / "folder.jconf").mkdir()
+    (tmp_path / "z" / "linked").symlink_to(tmp_path / "a", target_is_directory=True)
+    os.mkfifo(tmp_path / "z" / "pipe.jconf")
+    found = _jccl_files(tmp_path)
+    assert found == _walked(tmp_path)
+    assert tmp_path / "z" / "link.jconf" in found
+    assert tmp_path / "a-c" / "three.jconf" in found and tmp_path / "a/b/two.jdef" in found
+
+
+def _difflib(word: str, names: list[str], cutoff: float = 0.6) -> list[str]:
+    spelled: dict[str, str] = {}
+    for name in names:
+        spelled.setdefault(name.lower(), name)
+    return [spelled[m] for m in get_close_matches(word.lower(), list(spelled), cutoff=cutoff)]
+
+
+def test_remembered_suggestions_are_those_of_difflib():
+    names = ["position_proxy", "digital_proxy", "analog_proxy", "Position_Proxy", "alias"]
+    for _ in range(2):  # computed, then remembered
+        assert close_names("positon_proxy", names) == _difflib("positon_proxy", names)
+        assert close_names("ANALOG_PROXI", names) == _difflib("ANALOG_PROXI", names)
+    assert close_names("positon_proxy", names)[0] == "position_proxy"
+    shorter = names[1:]  # other candidates, another answer
+    assert close_names("positon_proxy", shorter)[0] == "Position_Proxy"
+    assert close_names("digital", iter(names), cutoff=0.5) == _difflib("digital", names, 0.5)
