@@ -68,3 +68,17 @@ def test_remembered_suggestions_are_those_of_difflib():
     shorter = names[1:]  # other candidates, another answer
     assert close_names("positon_proxy", shorter)[0] == "Position_Proxy"
     assert close_names("digital", iter(names), cutoff=0.5) == _difflib("digital", names, 0.5)
+
+
+def test_a_shared_suggester_answers_as_a_fresh_one():
+    from gadgetctl.suggest import CloseNames, shared_close_names
+
+    names = ["Head Proxy", "Wand Proxy", "Head Tracker", "VJHead", "Wand"]
+    shared = shared_close_names(names)
+    assert shared_close_names(list(names)) is shared  # the same candidates: one suggester
+    assert shared_close_names(names[1:]) is not shared
+    for word in ("head proxi", "Wnd", "Head Trackr", "nothing like it"):
+        assert shared(word, n=3, cutoff=0.7) == CloseNames(names)(word, n=3, cutoff=0.7)
+        assert shared(word, n=3, cutoff=0.7) == _difflib(word, names, 0.7)
+    many = [f"element {i}" for i in range(CloseNames.EXHAUSTIVE + 1)]
+    assert shared_close_names(many) is not shared_close_names(many)  # never shared

@@ -352,6 +352,27 @@ class CloseNames:
         return cap
 
 
+#: CloseNames by their candidates, for sets small enough to be compared exhaustively.
+_SHARED_CLOSE_NAMES: dict[tuple[str, ...], CloseNames] = {}
+_SHARED_CLOSE_NAMES_KEPT = 256
+
+
+def shared_close_names(candidates: Iterable[str]) -> CloseNames:
+    """A :class:`CloseNames` over ``candidates``, shared by every caller with the same
+    candidates when there are at most ``CloseNames.EXHAUSTIVE`` of them (their answers are
+    then exactly difflib's, whatever was asked before): a process that checks the same
+    configurations again compares each unknown name once."""
+    names = tuple(candidates)
+    if len(names) > CloseNames.EXHAUSTIVE:
+        return CloseNames(names)
+    found = _SHARED_CLOSE_NAMES.get(names)
+    if found is None:
+        if len(_SHARED_CLOSE_NAMES) >= _SHARED_CLOSE_NAMES_KEPT:
+            _SHARED_CLOSE_NAMES.pop(next(iter(_SHARED_CLOSE_NAMES)))
+        found = _SHARED_CLOSE_NAMES[names] = CloseNames(names)
+    return found
+
+
 def _at_most(size: int, length: int, distance: int) -> float:
     """difflib's ratio of two strings of these lengths whose indel distance is ``distance``
     if it found their longest common subsequence (it finds no more), computed as difflib does."""

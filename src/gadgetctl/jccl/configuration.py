@@ -289,9 +289,14 @@ class ConfigElement(_Placed):
             shared = names
             if len(_SHAPES) < 4096:
                 _SHAPES[names] = names
-        items = tuple(values[0] if len(values) == 1 else values for values in props.values())
         self._names = shared
-        self._props = items[0] if len(items) == 1 else items
+        if len(names) == 1:  # (the usual element of a large configuration: one alias)
+            (values,) = props.values()
+            self._props = values[0] if len(values) == 1 else values
+            return
+        self._props = tuple(
+            [values[0] if len(values) == 1 else values for values in props.values()]
+        )
 
     def _compact_items(self) -> tuple:
         props = self._props

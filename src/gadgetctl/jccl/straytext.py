@@ -23,10 +23,14 @@ def _local(tag: str) -> str:
     return tag.rpartition("}")[2]
 
 
+#: The elements holding elements and text that is not XML white space (a superset: Python's
+#: strip() also removes other white space), compiled once rather than for every document.
+_HOLDING_TEXT = etree.XPath("descendant-or-self::*[*][text()[normalize-space()]]")
+
+
 def has_stray_text(root: etree._Element) -> bool:
-    # XPath finds the elements holding elements and text that is not XML white space (a
-    # superset: Python's strip() also removes other white space); each is then confirmed.
-    for element in root.xpath("descendant-or-self::*[*][text()[normalize-space()]]"):
+    # XPath finds the candidates; each is then confirmed.
+    for element in _HOLDING_TEXT(root):
         children = [c for c in element if isinstance(c.tag, str)]
         if not children:
             continue
@@ -110,7 +114,9 @@ class _Scanner:
 def stray_text(doc: XmlDocument) -> list[Diagnostic]:
     """XML015 for each run of non-whitespace text directly inside an element with child
     elements, at the run's first non-blank character."""
-    if doc.root is None or not has_stray_text(doc.root):
+    if doc.root is None or doc.streamed is not None:
+        return []  # (a configuration read as it was parsed holds no text that may be stray)
+    if not has_stray_text(doc.root):
         return []
     scanner = _Scanner()
     try:

@@ -26,7 +26,7 @@ from gadgetctl.jccl.elementcheck import PointerValue, at, describe
 from gadgetctl.jccl.runtime import missing_target_effect
 from gadgetctl.jccl.typeindex import TypeIndex
 from gadgetctl.perf import retain
-from gadgetctl.suggest import CloseNames
+from gadgetctl.suggest import CloseNames, shared_close_names
 from gadgetctl.wording import with_article
 
 UNHANDLED = "unhandled"
@@ -336,9 +336,8 @@ class Wiring:
         found = self._suggesters.get(embedded)
         if found is None:
             names = self.embedded if embedded else self.by_name
-            found = self._suggesters[embedded] = CloseNames(
-                names
-            )  # case ignored, as close_names does
+            # (case ignored, as close_names does)
+            found = self._suggesters[embedded] = shared_close_names(names)
         return found
 
     # -- pending ---------------------------------------------------------------------
