@@ -82,3 +82,19 @@ def test_a_shared_suggester_answers_as_a_fresh_one():
         assert shared(word, n=3, cutoff=0.7) == _difflib(word, names, 0.7)
     many = [f"element {i}" for i in range(CloseNames.EXHAUSTIVE + 1)]
     assert shared_close_names(many) is not shared_close_names(many)  # never shared
+
+
+def test_the_real_paths_found_on_the_walk_are_those_looked_up(tmp_path):
+    from gadgetctl.files import real_path_text, resolved_paths
+
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    (tmp_path / "a" / "one.jconf").write_text("<configuration/>")
+    (tmp_path / "b" / "two.jconf").symlink_to(tmp_path / "a" / "one.jconf")
+    (tmp_path / "b" / "three.jdef").write_text("<definition/>")
+    (tmp_path / "linked").symlink_to(tmp_path / "b", target_is_directory=True)
+    given = [tmp_path / "b", tmp_path / "a", tmp_path / "linked" / "three.jdef"]
+    found = resolved_paths(given)
+    assert [(p, real) for p, real in found] == [(p, real_path_text(str(p))) for p, _ in found]
+    # b/two.jconf is a/one.jconf, and linked/three.jdef is b/three.jdef: each file once
+    assert [p.name for p, _ in found] == ["three.jdef", "two.jconf"]

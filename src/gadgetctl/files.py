@@ -20,8 +20,14 @@ def expand_paths(paths: Iterable[Path]) -> list[Path]:
     nothing must not pass), raise :class:`GadgetctlError`. The result is sorted per
     argument and free of duplicates.
     """
-    found: list[Path] = []
-    seen: set[Path] = set()
+    return [path for path, _ in resolved_paths(paths)]
+
+
+def resolved_paths(paths: Iterable[Path]) -> list[tuple[Path, str]]:
+    """:func:`expand_paths`, each file with its real path (:func:`real_path_text`), which
+    tells duplicates apart: a caller that needs it again need not look it up again."""
+    found: list[tuple[Path, str]] = []
+    seen: set[str] = set()
     for path in paths:
         try:
             directory = stat.S_ISDIR(path.stat().st_mode)
@@ -34,7 +40,7 @@ def expand_paths(paths: Iterable[Path]) -> list[Path]:
         if directory:
             if not os.access(path, os.R_OK | os.X_OK):
                 raise GadgetctlError(f"{path}: directory is not readable")
-            candidates = _jccl_files(path)
+            candidates = _jccl_entries(path)
             if not candidates:
                 raise GadgetctlError(
                     f"{path}: no .jconf or .jdef files in this directory or below "
@@ -43,12 +49,12 @@ def expand_paths(paths: Iterable[Path]) -> list[Path]:
         else:
             if not os.access(path, os.R_OK):
                 raise GadgetctlError(f"{path}: file is not readable")
-            candidates = [path]
-        for candidate in candidates:
-            key = real_path_text(str(candidate))
+            candidates = [(path, None)]
+        for candidate, link in candidates:
+            key = real_path_text(str(candidate), link=link)
             if key not in seen:
                 seen.add(key)
-                found.append(candidate)
+                found.append((candidate, key))
     return found
 
 
@@ -57,10 +63,14 @@ def _real_directory(directory: str) -> str:
     return os.path.realpath(directory)
 
 
-def real_path_text(path: str) -> str:
+def real_path_text(path: str, *, link: bool | None = None) -> str:
     """``str(Path(path).resolve())``, with the directory part resolved once per directory
-    (a path through ``..``, which abspath would take lexically, is resolved whole)."""
-    if os.path.islink(path) or os.pardir in path.split(os.sep):
+    (a path through ``..``, which abspath would take lexically, is resolved whole).
+    ``link``: whether ``path`` itself is a symbolic link, when the caller knows (None:
+    looked up)."""
+    if link is None:
+        link = os.path.islink(path)
+    if link or os.pardir in path.split(os.sep):
         return str(Path(path).resolve())
     directory, name = os.path.split(os.path.abspath(path))
     return os.path.join(_real_directory(directory), name)
@@ -74,11 +84,16 @@ def real_path(path: str) -> Path:
 def _jccl_files(directory: Path) -> list[Path]:
     """The .jdef and .jconf files in ``directory`` and below, sorted, hidden ones (and hidden
     directories) left out, symbolic links to directories not followed. A directory below that
-    cannot be read is an error: its files would pass unchecked.
+    cannot be read is an error: its files would pass unchecked."""
+    return [path for path, _ in _jccl_entries(directory)]
+
+
+def _jccl_entries(directory: Path) -> list[tuple[Path, bool]]:
+    """:func:`_jccl_files`, each with whether it is a symbolic link.
 
     Walked as :func:`os.walk` walks (top down, each directory's entries in listing order),
     with the kinds the listing gives, so that a plain file or directory costs no stat."""
-    found: list[str] = []
+    found: list[tuple[Path, bool]] = []
     pending = [os.fspath(directory)]
     while pending:
         top = pending.pop()
@@ -99,9 +114,10 @@ def _jccl_files(directory: Path) -> list[Path]:
                 if not entry.is_symlink():
                     below.append(entry.path)
             elif name.endswith(JCCL_SUFFIXES) and _entry_is_file(entry):
-                found.append(entry.path)
+                found.append((Path(entry.path), entry.is_symlink()))
         pending.extend(reversed(below))
-    return sorted(Path(path) for path in found)
+    found.sort(key=lambda pair: pair[0])
+    return found
 
 
 def _entry_is_dir(entry: os.DirEntry) -> bool:

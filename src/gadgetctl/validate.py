@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 from gadgetctl.diagnostics import Diagnostic, sort_key
 from gadgetctl.errors import GadgetctlError
-from gadgetctl.files import expand_paths
+from gadgetctl.files import resolved_paths
 from gadgetctl.jccl.xmlload import DEFAULT_MAX_SIZE, FileKind, XmlDocument, load_file
 
 if TYPE_CHECKING:
@@ -75,12 +75,16 @@ def load_and_check(path: Path, options: ValidateOptions) -> XmlDocument:
     return doc
 
 
-def search_path_diagnostics(repo, given: Iterable[str] = ()) -> list[Diagnostic]:
+def search_path_diagnostics(
+    repo, given: Iterable[str] = (), real_paths: Mapping[str, str] | None = None
+) -> list[Diagnostic]:
     """Problems of user-given search-path entries (the bundled one is trusted). A file that
-    is also ``given`` is reported with the file itself, not a second time here."""
+    is also ``given`` is reported with the file itself, not a second time here.
+    ``real_paths``: the real paths of given files, where known."""
     found = list(repo.diagnostics)
     if found:
-        mine = {_resolved(path) for path in given}
+        known = real_paths or {}
+        mine = {known.get(path) or _resolved(path) for path in given}
         found = [d for d in found if d.path is None or _resolved(d.path) not in mine]
     for entry in repo.entries:
         if entry.origin == "bundled":
@@ -152,8 +156,10 @@ def _validate_paths(
         if not directory.is_dir():
             raise GadgetctlError(f"--definitions {directory}: no such directory")
     result = ValidationResult()
-    for path in expand_paths(paths):
+    real_paths: dict[str, str] = {}  # each file's real path, by its path as shown
+    for path, real in resolved_paths(paths):
         doc = load_and_check(path, options)
+        real_paths[doc.path] = real
         result.files.append(doc.path)
         result.documents.append(doc)
         result.diagnostics.extend(doc.diagnostics)
@@ -174,22 +180,26 @@ def _validate_paths(
     if base is None:
         base = default_repository(options.definition_dirs, bundled=options.bundled)
     repo = base.overlay(definitions)
-    result.diagnostics.extend(search_path_diagnostics(base, result.files))
+    result.diagnostics.extend(search_path_diagnostics(base, result.files, real_paths))
     for definition in definitions:
         result.diagnostics.extend(check_definition(definition, definition.order, repo))
     result.diagnostics.extend(check_cycles(definitions, repo))
     if options.level == "full":
-        result.diagnostics.extend(check_configurations(result, repo, options))
+        result.diagnostics.extend(check_configurations(result, repo, options, real_paths))
     result.diagnostics.sort(key=sort_key)
     return result
 
 
 def check_configurations(
-    result: ValidationResult, repo, options: ValidateOptions
+    result: ValidationResult,
+    repo,
+    options: ValidateOptions,
+    real_paths: Mapping[str, str] | None = None,
 ) -> list[Diagnostic]:
     """Configuration-level checks of the configurations among the files (see
     :mod:`gadgetctl.jccl.configcheck`): each file with its includes, or all of them as one
-    configuration with ``options.together``."""
+    configuration with ``options.together``. ``real_paths``: the files' real paths, by
+    their paths as shown, where known."""
     from gadgetctl.jccl.configcheck import check_documents
 
     # One driver search per set of driver places for the three questions below (each
@@ -203,6 +213,7 @@ def check_configurations(
         plugin_definitions=plugin_definition_finder(options.environ, searches),
         plugin_names=plugin_name_finder(options.environ, searches),
         unloaded_types=unloaded_type_finder(options.environ, searches),
+        real_paths=real_paths,
     )
 
 

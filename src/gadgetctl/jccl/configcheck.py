@@ -209,8 +209,10 @@ def check_documents(
     plugin_definitions: Callable[[Configuration], list[Path]] | None = None,
     plugin_names: Callable[[Configuration], set[str]] | None = None,
     unloaded_types: Callable[[Configuration], dict[str, str]] | None = None,
+    real_paths: Mapping[str, str] | None = None,
 ) -> list[Diagnostic]:
-    """Configuration-level findings for the configuration documents among ``documents``."""
+    """Configuration-level findings for the configuration documents among ``documents``
+    (``real_paths``: their real paths by their paths, where the caller knows them)."""
     session = Session(
         base,
         os.environ if environ is None else environ,
@@ -218,15 +220,21 @@ def check_documents(
         plugin_names=plugin_names,
         unloaded_types=unloaded_types,
     )
+    known = real_paths or {}
+
+    def resolved(doc: XmlDocument) -> Path:
+        real = known.get(doc.path)
+        return Path(real) if real is not None else real_path(doc.path)
+
     given: list[Path] = []
     for doc in documents:
         if _is_configuration(doc):
-            resolved = real_path(doc.path)
-            session.documents[resolved] = doc
-            given.append(resolved)
+            path = resolved(doc)
+            session.documents[path] = doc
+            given.append(path)
         elif doc.root is None and doc.kind is FileKind.CONFIGURATION:
             # Reported with the file itself; an include of it must not report it again.
-            session.documents[real_path(doc.path)] = doc
+            session.documents[resolved(doc)] = doc
     if not given:
         return []
     retain(session)  # (the loaded configurations: kept to the end when nothing is freed then)
