@@ -133,9 +133,23 @@ class DefinitionReader:
         )
 
     def read_property(self, node: etree._Element) -> PropertyDefinition:
+        help_node = enum_node = None
+        values: list[etree._Element] = []
+        allowed: list[etree._Element] = []
+        for child in node:  # (one pass: a definition file has dozens of properties)
+            tag = child.tag
+            if not isinstance(tag, str):
+                continue
+            local = tag.rpartition("}")[2]
+            if local == "value":
+                values.append(child)
+            elif local == "allowed_type":
+                allowed.append(child)
+            elif local == "help":
+                help_node = child if help_node is None else help_node
+            elif local == "enumeration":
+                enum_node = child if enum_node is None else enum_node
         enumeration = None
-        children = _grouped(node)
-        enum_node = _only(children, "enumeration")
         if enum_node is not None:
             enumeration = Enumeration(
                 editable=_bool(enum_node.get("editable")),
@@ -148,14 +162,9 @@ class DefinitionReader:
             name=node.get("name") or "",
             valuetype=_VALUETYPES[node.get("valuetype") or ""],
             variable=_bool(node.get("variable")),
-            help=_text(_only(children, "help")),
-            values=tuple(
-                ValueSlot(v.get("label") or "", v.get("defaultvalue"))
-                for v in children.get("value", ())
-            ),
-            allowed_types=tuple(
-                t for t in (_text(a) for a in children.get("allowed_type", ())) if t
-            ),
+            help=_text(help_node),
+            values=tuple(ValueSlot(v.get("label") or "", v.get("defaultvalue")) for v in values),
+            allowed_types=tuple(t for t in (_text(a) for a in allowed) if t),
             enumeration=enumeration,
             location=self.location(node),
         )
