@@ -93,7 +93,7 @@ def _jccl_entries(directory: Path) -> list[tuple[Path, bool]]:
 
     Walked as :func:`os.walk` walks (top down, each directory's entries in listing order),
     with the kinds the listing gives, so that a plain file or directory costs no stat."""
-    found: list[tuple[Path, bool]] = []
+    found: list[tuple[str, bool]] = []
     pending = [os.fspath(directory)]
     while pending:
         top = pending.pop()
@@ -114,10 +114,11 @@ def _jccl_entries(directory: Path) -> list[tuple[Path, bool]]:
                 if not entry.is_symlink():
                     below.append(entry.path)
             elif name.endswith(JCCL_SUFFIXES) and _entry_is_file(entry):
-                found.append((Path(entry.path), entry.is_symlink()))
+                found.append((entry.path, entry.is_symlink()))
         pending.extend(reversed(below))
-    found.sort(key=lambda pair: pair[0])
-    return found
+    # in the order of Path objects: by their parts (every path here starts alike)
+    found.sort(key=lambda pair: pair[0].split(os.sep))
+    return [(Path(path), link) for path, link in found]
 
 
 def _entry_is_dir(entry: os.DirEntry) -> bool:
