@@ -102,6 +102,9 @@ class _Placed:
         self._where, self._at = location, None  # type: ignore[attr-defined]
 
 
+_new = object.__new__
+
+
 class PropertyValue(_Placed):
     """One value of a property: the text as written, or an embedded element.
 
@@ -126,7 +129,10 @@ class PropertyValue(_Placed):
     @classmethod
     def read(cls, text: str, doc, at: int, local: str) -> PropertyValue:
         """A value read from ``doc`` at the packed position ``at`` of a ``<local>`` tag."""
-        value = cls(text, doc)
+        value = _new(cls)  # (each slot set once, without __init__: one value per tag)
+        value.text = text
+        value.element = None
+        value._where = doc
         value._at = at
         value._local = local
         return value
