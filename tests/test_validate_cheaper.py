@@ -98,3 +98,31 @@ def test_the_real_paths_found_on_the_walk_are_those_looked_up(tmp_path):
     assert [(p, real) for p, real in found] == [(p, real_path_text(str(p))) for p, _ in found]
     # b/two.jconf is a/one.jconf, and linked/three.jdef is b/three.jdef: each file once
     assert [p.name for p, _ in found] == ["three.jdef", "two.jconf"]
+
+
+def test_embedded_elements_come_depth_first_as_before(tmp_path):
+    from gadgetctl.jccl.configload import load_configuration
+
+    from conftest import write
+    from jccl_samples import jconf
+
+    def recursive(element):  # what embedded() was: nested generators
+        for values in element.property_values():
+            for value in values:
+                if value.element is not None:
+                    yield value.element
+                    yield from recursive(value.element)
+
+    def nested(name: str, depth: int) -> str:
+        inner = nested(f"{name}.{depth}", depth - 1) if depth else "<x>1</x>"
+        return f'<group name="{name}" version="1"><a>{inner}</a><b>text</b><a>{inner}</a></group>'
+
+    elements = "".join(nested(f"g{i}", depth) for i, depth in enumerate((0, 1, 3)))
+    config = load_configuration([write(tmp_path / "n.jconf", jconf(elements))])
+    for element in config.elements:
+        assert [e.name for e in element.embedded()] == [e.name for e in recursive(element)]
+    deepest = config.elements[-1]
+    assert len(list(deepest.embedded())) == 2 + 4 + 8 + 16
+    element = config.elements[-1]
+    element.properties = dict(element.properties)  # the dict form too
+    assert [e.name for e in element.embedded()] == [e.name for e in recursive(element)]

@@ -342,12 +342,29 @@ class ConfigElement(_Placed):
         return [v.stripped for v in self.values(prop)]
 
     def embedded(self) -> Iterator[ConfigElement]:
-        """Embedded elements, depth-first."""
-        for values in self.property_values():
-            for value in values:
-                if value.element is not None:
-                    yield value.element
-                    yield from value.element.embedded()
+        """Embedded elements, depth-first (each before its own embedded elements)."""
+        pending = self._embedded_children()
+        if not pending:  # (the usual element)
+            return
+        pending.reverse()
+        while pending:
+            child = pending.pop()
+            yield child
+            below = child._embedded_children()
+            if below:
+                below.reverse()
+                pending += below
+
+    def _embedded_children(self) -> list[ConfigElement]:
+        """The elements embedded directly in this one's values, in order."""
+        items = self._props.values() if self._names is None else self._compact_items()
+        children = []
+        for item in items:  # a list of values, or (compact) one value alone
+            if item.__class__ is list:
+                children += [value.element for value in item if value.element is not None]
+            elif item.element is not None:
+                children.append(item.element)
+        return children
 
 
 @dataclass
