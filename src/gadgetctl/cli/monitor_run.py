@@ -170,11 +170,15 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
                 # whole heap again for it (a second with 10,000 devices)
                 with collector_paused(), session.manager.hold_sampling():
                     try:
-                        outcome = _evaluate(session, accept_loss=options.accept_loss)
+                        statistics = _shows_statistics(mode, options)
+                        outcome = _evaluate(
+                            session, accept_loss=options.accept_loss, statistics=statistics
+                        )
                         try:
                             if broken_pipe:
                                 _silence_stdout()
-                            session.close_sinks(reason, final=outcome[0])
+                            # a sink added by the caller still gets its statistics
+                            session.close_sinks(reason, final=outcome[0] if statistics else None)
                         except RecordingError as err:
                             if not broken_pipe and "Broken pipe" not in str(err):
                                 raise GadgetctlError(str(err)) from None
@@ -249,18 +253,36 @@ def _silence_stdout() -> None:
         os.close(devnull)
 
 
-def _evaluate(session: MonitorSession, *, accept_loss: bool = True) -> tuple[dict, list[str]]:
-    """The final statistics and the problems, read before the devices are stopped."""
+def _shows_statistics(mode: OutputFormat, options: RunOptions) -> bool:
+    """Whether the run writes or prints the final statistics: a stats record (ndjson, a
+    recording), the statistics table (--stats, the live view)."""
+    return (
+        mode in (OutputFormat.ndjson, OutputFormat.live)
+        or options.record is not None
+        or options.stats
+    )
+
+
+def _evaluate(
+    session: MonitorSession, *, accept_loss: bool = True, statistics: bool = True
+) -> tuple[dict, list[str]]:
+    """The final statistics (none unless ``statistics``: nothing shows them, and 10,000
+    devices' cost a third of a second) and the problems, read before the devices are stopped."""
     from gadgetctl.cli.monitor_text import problem_lines
     from gadgetctl.monitor.loss import run_problems
 
-    final = session.final_stats()
+    final = session.final_stats() if statistics else {}
+    faults = (
+        {name: (s.get("faults"), s.get("state"), s.get("error")) for name, s in final.items()}
+        if statistics
+        else session.final_faults()
+    )
     snapshot = session.snapshot(detail=False)  # the states and reasons are what it reads
     problems = problem_lines(snapshot)
     problems += [
-        f"{name}: {counted(s['faults'], 'fault')}, last error: {s.get('error') or '-'}"
-        for name, s in final.items()
-        if s.get("faults") and s.get("state") == "running"
+        f"{name}: {counted(count, 'fault')}, last error: {error or '-'}"
+        for name, (count, state, error) in faults.items()
+        if count and state == "running"
     ]
     devices = session.manager.devices
     problems += run_problems(

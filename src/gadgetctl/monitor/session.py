@@ -177,6 +177,7 @@ class MonitorSession:
         self._consumers: list[FrameConsumer] = []
         self._gathered: Mapping[str, Mapping[DeviceKind, FrameSamples]] = NO_GATHERING
         self._plan: GatherPlan | None = None
+        self._keyboards: tuple[object, list[str]] | None = None  # (arrangement, names)
 
     # -- setting up ---------------------------------------------------------------------
 
@@ -845,6 +846,17 @@ class MonitorSession:
             result[name] = entry
         return result
 
+    def final_faults(self) -> dict[str, tuple[int, str, str | None]]:
+        """Per selected device: the ``faults``, ``state`` and ``error`` of :meth:`final_stats`,
+        without the statistics."""
+        result: dict[str, tuple[int, str, str | None]] = {}
+        for name in self._selected:
+            track = self._tracks.get(name)
+            device = self.manager.device(name)
+            if track is not None and device is not None:
+                result[name] = (track.stats.faults, device.state.value, device.error)
+        return result
+
     @property
     def samples_written(self) -> int:
         """Sample records written to the recordings so far."""
@@ -855,12 +867,18 @@ class MonitorSession:
         return 1.0 / self._frame_interval if self._frame_interval > 0 else 0.0
 
     def keyboards(self) -> list[str]:
-        """Names of keyboard/mouse devices that receive terminal keys."""
-        return [
-            name
-            for name, device in self.manager.devices.items()
-            if DeviceKind.KEYBOARD_MOUSE in device.kinds()
-        ]
+        """Names of keyboard/mouse devices that receive terminal keys (found again only when
+        the manager's devices change: a table of 10,000 devices asks once per part)."""
+        arrangement = self.manager.arrangement
+        found = self._keyboards
+        if found is None or found[0] is not arrangement:
+            names = [
+                name
+                for name, device in self.manager.devices.items()
+                if DeviceKind.KEYBOARD_MOUSE in device.kinds()
+            ]
+            found = self._keyboards = (arrangement, names)
+        return list(found[1])
 
     def snapshot(
         self,
