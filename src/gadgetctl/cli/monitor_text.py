@@ -16,7 +16,11 @@ from gadgetctl.input.clock import now
 from gadgetctl.monitor.events import FINGERS, HAT_NAMES, UNIT_SYMBOLS, number_text, pose_text
 from gadgetctl.monitor.session import MonitorSession
 from gadgetctl.monitor.stats import DeviceSnapshot
-from gadgetctl.monitor.units import euler_xyz_degrees, from_meters, quaternion_wxyz
+from gadgetctl.monitor.units import (
+    euler_xyz_degrees,
+    length_factor,
+    quaternion_wxyz,
+)
 from gadgetctl.monitor.views import ElementView, Snapshot, UnitView
 from gadgetctl.safetext import fixed, printable
 from gadgetctl.wording import counted
@@ -75,7 +79,8 @@ def position_text(
     if pose is not None:
         return pose_text(matrix, pose, length_unit)
     m = np.asarray(matrix, dtype=np.float64).reshape(4, 4)
-    x, y, z = from_meters(m[:3, 3], length_unit).tolist()
+    factor = length_factor(length_unit)  # Python floats: as from_meters, inf beyond any float
+    x, y, z = (row[3] * factor for row in m[:3].tolist())
     symbol = UNIT_SYMBOLS.get(length_unit, length_unit)
     text = f"x {fixed(x, 3, True)} y {fixed(y, 3, True)} z {fixed(z, 3, True)} {symbol}"
     try:
