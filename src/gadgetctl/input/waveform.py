@@ -462,7 +462,10 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
                 [(np.mod(t, p) < p / 2).astype(np.int8) for p in self.button_periods], axis=1
             )
         if self.positions:
-            matrices = np.stack([self._path(c, t) for c in self.positions], axis=1)
+            if len(self.positions) == 1:  # what np.stack makes of one, without its cost
+                matrices = self._path(self.positions[0], t)[:, None]
+            else:
+                matrices = np.stack([self._path(c, t) for c in self.positions], axis=1)
             data[DeviceKind.POSITION] = self.position_filters.apply(matrices)
         events: list[tuple[int, int]] = []
         if self.event_period > 0:
@@ -506,24 +509,26 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
 
     def _path(self, spec: PositionChannel, t: np.ndarray) -> np.ndarray:
         angle = 2 * np.pi * t / spec.period
-        matrices = np.zeros((len(t), 4, 4))
-        matrices[:, 0, 0] = matrices[:, 1, 1] = matrices[:, 2, 2] = matrices[:, 3, 3] = 1.0
-        cx, cy, cz = self.center
+        matrices = np.empty((len(t), 4, 4))
+        matrices[:] = self._pose_template  # identity, at the center: then what moves
+        cx, _, cz = self.center
         r = spec.radius
         if spec.path is Path.CIRCLE:
-            x, y, z = cx + r * np.cos(angle), np.full_like(t, cy), cz + r * np.sin(angle)
+            matrices[:, 0, 3], matrices[:, 2, 3] = cx + r * np.cos(angle), cz + r * np.sin(angle)
         elif spec.path is Path.FIGURE_EIGHT:
-            x, y, z = (
-                cx + r * np.sin(angle),
-                np.full_like(t, cy),
-                cz + r * np.sin(angle) * np.cos(angle),
-            )
+            sine = np.sin(angle)
+            matrices[:, 0, 3], matrices[:, 2, 3] = cx + r * sine, cz + r * sine * np.cos(angle)
         else:  # spin: turn about +Y in place
             c, s = np.cos(angle), np.sin(angle)
             matrices[:, 0, 0], matrices[:, 0, 2], matrices[:, 2, 0], matrices[:, 2, 2] = c, s, -s, c
-            x, y, z = np.full_like(t, cx), np.full_like(t, cy), np.full_like(t, cz)
-        matrices[:, 0, 3], matrices[:, 1, 3], matrices[:, 2, 3] = x, y, z
         return matrices
+
+    @property
+    def _pose_template(self) -> np.ndarray:
+        """The identity moved to :attr:`center`: every sample's matrix before it moves."""
+        template = np.eye(4)
+        template[:3, 3] = self.center
+        return template
 
 
 class _FrameGroup:
