@@ -392,8 +392,11 @@ class MonitorSession:
                 self.next_frame_due = start + (count + 1) * period
                 if count:
                     frame = self.step()
-                else:  # the first frame makes what the others reuse (tracks, sinks): kept
-                    with collector_paused():
+                else:  # the first frame makes what the others reuse (tracks, sinks): kept;
+                    # the scheduler does not stand in for its devices while it is made (it
+                    # publishes what is due itself, the next frame what came due meanwhile:
+                    # with 10,000 devices, a second's passes otherwise)
+                    with collector_paused(), self.manager.hold_sampling():
                         frame = self.step()
                     gc.freeze()
                 count += 1
