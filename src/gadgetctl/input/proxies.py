@@ -238,6 +238,10 @@ def _any_sample(frame: FrameSamples, unit: int, *, pressed: bool) -> bool:
     return False
 
 
+_IDENTITY = np.eye(4)
+_IDENTITY.flags.writeable = False
+
+
 class PositionProxy(Proxy):
     """4x4 float64 matrices in meters; ``matrix_in(LengthUnit.FEET)`` converts."""
 
@@ -255,8 +259,7 @@ class PositionProxy(Proxy):
             self.diagnostics.extend(self.filters.diagnostics)
 
     def reset(self) -> None:
-        self._matrix = np.eye(4)
-        self._matrix.flags.writeable = False
+        self._matrix = _IDENTITY  # read-only: one for every proxy not yet given a sample
 
     def take(self, value: Any, device: Input) -> None:
         matrix = self.filters.apply(value) if self.filters else np.array(value)
