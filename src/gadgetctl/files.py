@@ -110,10 +110,10 @@ def _jccl_entries(directory: Path) -> list[tuple[Path, bool]]:
             name = entry.name
             if name.startswith("."):
                 continue
-            if _entry_is_dir(entry):
+            if entry_is_dir(entry):
                 if not entry.is_symlink():
                     below.append(entry.path)
-            elif name.endswith(JCCL_SUFFIXES) and _entry_is_file(entry):
+            elif name.endswith(JCCL_SUFFIXES) and entry_is_file(entry):
                 found.append((entry.path, entry.is_symlink()))
         pending.extend(reversed(below))
     # in the order of Path objects: by their parts (every path here starts alike)
@@ -121,14 +121,16 @@ def _jccl_entries(directory: Path) -> list[tuple[Path, bool]]:
     return [(Path(path), link) for path, link in found]
 
 
-def _entry_is_dir(entry: os.DirEntry) -> bool:
+def entry_is_dir(entry: os.DirEntry) -> bool:
+    """``entry.is_dir()`` of a directory listing's entry, False when the OS refuses."""
     try:
         return entry.is_dir()
     except OSError:
         return False
 
 
-def _entry_is_file(entry: os.DirEntry) -> bool:
+def entry_is_file(entry: os.DirEntry) -> bool:
+    """``entry.is_file()`` of a directory listing's entry, False when the OS refuses."""
     try:
         return entry.is_file()
     except OSError:

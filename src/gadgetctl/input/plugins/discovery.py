@@ -27,7 +27,7 @@ from importlib import metadata as importlib_metadata
 from pathlib import Path
 
 from gadgetctl.envvars import expand
-from gadgetctl.files import is_dir, is_file
+from gadgetctl.files import entry_is_dir, entry_is_file, is_dir, is_file
 from gadgetctl.input.kinds import BASE_DEFINITIONS, DeviceKind
 from gadgetctl.input.plugins.metadata import ELEMENT_TYPES, PluginMetadata, read_metadata
 from gadgetctl.jccl.definitions import Location
@@ -157,24 +157,10 @@ def _definition_files(package: Path) -> list[Path]:
     """The ``*.jdef`` files of a package folder, in name order."""
     try:
         with os.scandir(package) as entries:
-            names = [e.name for e in entries if e.name.endswith(".jdef") and _is_file(e)]
+            names = [e.name for e in entries if e.name.endswith(".jdef") and entry_is_file(e)]
     except OSError:
         return []
     return [package / name for name in sorted(names)]
-
-
-def _is_file(entry: os.DirEntry) -> bool:
-    try:
-        return entry.is_file()
-    except OSError:
-        return False
-
-
-def _is_dir(entry: os.DirEntry) -> bool:
-    try:
-        return entry.is_dir()
-    except OSError:
-        return False
 
 
 def scan_directory(directory: DriverDirectory) -> list[PluginInfo]:
@@ -189,14 +175,14 @@ def scan_directory(directory: DriverDirectory) -> list[PluginInfo]:
         name = entry.name
         if name.startswith((".", "_")):
             continue
-        if _is_dir(entry) and os.path.isfile(os.path.join(entry.path, "__init__.py")):
+        if entry_is_dir(entry) and os.path.isfile(os.path.join(entry.path, "__init__.py")):
             path = directory.path / name
             found.append(_plugin(name, path, True, directory.source, origin))
         elif (
             name.endswith(".py")
             and name not in _SKIPPED_MODULES
             and not name.startswith("test_")
-            and _is_file(entry)
+            and entry_is_file(entry)
         ):
             path = directory.path / name
             found.append(_plugin(name[: -len(".py")], path, False, directory.source, origin))
