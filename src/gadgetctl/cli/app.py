@@ -44,7 +44,9 @@ def _version(value: bool) -> None:
         raise typer.Exit()
 
 
-def build_app() -> typer.Typer:
+def build_app(command: str | None = None) -> typer.Typer:
+    """The application with every command, or with only ``command`` (a name in
+    :data:`gadgetctl.cli.commands.COMMANDS`) when the command line names it."""
     app = typer.Typer(
         name="gadgetctl",
         cls=RootGroup,
@@ -71,5 +73,5 @@ def build_app() -> typer.Typer:
 
     from gadgetctl.cli import commands
 
-    commands.register_all(app)
+    commands.register_all(app, command)
     return app

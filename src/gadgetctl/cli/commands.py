@@ -6,29 +6,35 @@ import importlib
 
 import typer
 
-# Each module defines ``register(app)``. Order is the order of `gadgetctl --help`.
-COMMAND_MODULES = (
-    "gadgetctl.cli.validate_cmd",
-    "gadgetctl.cli.explain_cmd",
-    "gadgetctl.cli.defs_cmd",
-    "gadgetctl.cli.config_cmd",
-    "gadgetctl.cli.upgrade_cmd",
-    "gadgetctl.cli.lsp_cmd",
-    "gadgetctl.cli.drivers_cmd",
-    "gadgetctl.cli.monitor_cmd",
-    "gadgetctl.cli.replay_cmd",
-    "gadgetctl.cli.serve_cmd",
-    "gadgetctl.cli.view_cmd",
-    "gadgetctl.cli.emulate_cmd",
-    "gadgetctl.cli.doctor_cmd",
-    "gadgetctl.cli.scaffold_cmd",
-    "gadgetctl.cli.completion_cmd",
-    "gadgetctl.cli.demo_cmd",
-)
+# Each module defines ``register(app)``, which adds the command (or group) named here.
+# Order is the order of `gadgetctl --help`.
+COMMANDS = {
+    "validate": "gadgetctl.cli.validate_cmd",
+    "explain": "gadgetctl.cli.explain_cmd",
+    "defs": "gadgetctl.cli.defs_cmd",
+    "config": "gadgetctl.cli.config_cmd",
+    "upgrade": "gadgetctl.cli.upgrade_cmd",
+    "lsp": "gadgetctl.cli.lsp_cmd",
+    "drivers": "gadgetctl.cli.drivers_cmd",
+    "monitor": "gadgetctl.cli.monitor_cmd",
+    "replay": "gadgetctl.cli.replay_cmd",
+    "serve": "gadgetctl.cli.serve_cmd",
+    "view": "gadgetctl.cli.view_cmd",
+    "emulate": "gadgetctl.cli.emulate_cmd",
+    "doctor": "gadgetctl.cli.doctor_cmd",
+    "scaffold": "gadgetctl.cli.scaffold_cmd",
+    "completion": "gadgetctl.cli.completion_cmd",
+    "demo": "gadgetctl.cli.demo_cmd",
+}
+COMMAND_MODULES = tuple(COMMANDS.values())
 
 
-def register_all(app: typer.Typer) -> None:
-    for name in COMMAND_MODULES:
+def register_all(app: typer.Typer, only: str | None = None) -> None:
+    """Register every command, or only the command named ``only`` (a key of
+    :data:`COMMANDS`): a command line that names its command needs no other, and each
+    costs imports and typer's reading of its signature."""
+    names = COMMAND_MODULES if only is None else (COMMANDS[only],)
+    for name in names:
         try:
             module = importlib.import_module(name)
         except ModuleNotFoundError as err:

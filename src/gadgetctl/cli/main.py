@@ -34,6 +34,7 @@ def main(argv: list[str] | None = None) -> None:
     import typer
 
     from gadgetctl.cli.app import build_app
+    from gadgetctl.cli.commands import COMMANDS
     from gadgetctl.errors import GadgetctlError
 
     # Click's exceptions, wherever this typer keeps Click (vendored since 0.28)
@@ -42,7 +43,9 @@ def main(argv: list[str] | None = None) -> None:
     NoArgsIsHelpError = getattr(clicks, "NoArgsIsHelpError", ())
     Abort = typer.Abort
 
-    app = build_app()
+    # A command line that starts with a command's name is parsed by that command alone;
+    # anything else (a root option, a typo that gets suggestions) sees every command.
+    app = build_app(args[0] if args and args[0] in COMMANDS else None)
     try:
         code = app(args=argv, prog_name="gadgetctl", standalone_mode=False)
     except NoArgsIsHelpError as err:  # a group without its command: its help is the answer
