@@ -23,12 +23,12 @@ import sys
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
-from importlib import metadata as importlib_metadata
 from pathlib import Path
 
 from gadgetctl.envvars import expand
 from gadgetctl.files import entry_is_dir, entry_is_file, is_dir, is_file
 from gadgetctl.input.kinds import BASE_DEFINITIONS, DeviceKind
+from gadgetctl.input.plugins.distscan import may_declare
 from gadgetctl.input.plugins.metadata import ELEMENT_TYPES, PluginMetadata, read_metadata
 from gadgetctl.jccl.definitions import Location
 from gadgetctl.resources import drivers_dir
@@ -237,6 +237,11 @@ def _installed_entry_points() -> list[tuple[str, str, str]]:
     if _ENTRY_POINTS and _ENTRY_POINTS[0][0] == signature:
         return _ENTRY_POINTS[0][1]
     found = []
+    if not may_declare(ENTRY_POINT_GROUP):  # the usual case: no importlib.metadata to import
+        _ENTRY_POINTS[:] = [(signature, found)]
+        return found
+    from importlib import metadata as importlib_metadata
+
     for entry in sorted(
         importlib_metadata.entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name
     ):
