@@ -182,15 +182,14 @@ class XmlDocument:
         found = cache.get(key)
         if found is None:
             line = self.lines[line_no - 1]
-            found = cache[key] = [m.start() + 1 for m in _tag_pattern(local).finditer(line)]
+            found = cache[key] = [start + 1 for start in tag_offsets(line, local)]
         return found
 
     def _search_back(self, line_no: int, local: str) -> tuple[int | None, int | None]:
-        pattern = _tag_pattern(local)
         for back in range(line_no - 1, max(0, line_no - 200), -1):
-            found = list(pattern.finditer(self.lines[back - 1]))
+            found = tag_offsets(self.lines[back - 1], local)
             if found:
-                return back, found[-1].start() + 1
+                return back, found[-1] + 1
         return line_no, None
 
     def _rank_on_line(self, element: etree._Element) -> int:
@@ -225,17 +224,36 @@ class XmlDocument:
         self._ranks = ranks
 
 
-_TAG_PATTERNS: dict[str, re.Pattern[str]] = {}
+#: What may follow a tag's name: white space, ``/``, ``>`` (or the end of the line).
+_AFTER_NAME = frozenset("/>")
 
 
-def _tag_pattern(local: str) -> re.Pattern[str]:
-    """A start tag ``<local`` or ``<prefix:local``."""
-    pattern = _TAG_PATTERNS.get(local)
-    if pattern is None:
-        pattern = re.compile(r"<(?:[\w.-]+:)?" + re.escape(local) + r"(?=[\s/>]|$)")
-        if len(_TAG_PATTERNS) < 4096:
-            _TAG_PATTERNS[local] = pattern
-    return pattern
+def tag_offsets(line: str, local: str) -> list[int]:
+    """0-based offsets of the ``<`` of each start tag ``<local`` or ``<prefix:local`` on
+    ``line``: what ``<(?:[\\w.-]+:)?local(?=[\\s/>]|$)`` finds, without compiling a pattern
+    per tag name (most of the cost where a process locates a few tags of many names)."""
+    found: list[int] = []
+    size = len(line)
+    width = len(local)
+    if not width:
+        return found
+    at = line.find(local)
+    while at >= 0:
+        end = at + width
+        if end == size or line[end] in _AFTER_NAME or line[end].isspace():
+            before = at - 1
+            if before >= 0:
+                mark = line[before]
+                if mark == "<":
+                    found.append(before)
+                elif mark == ":":  # a prefix (word characters, dots, dashes) back to the <
+                    start = before - 1
+                    while start >= 0 and (line[start].isalnum() or line[start] in "_.-"):
+                        start -= 1
+                    if 0 <= start < before - 1 and line[start] == "<":
+                        found.append(start)
+        at = line.find(local, at + 1)
+    return found
 
 
 def guess_kind(path: Path) -> FileKind:
