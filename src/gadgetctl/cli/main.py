@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import os
 import sys
 
@@ -31,6 +32,8 @@ def main(argv: list[str] | None = None) -> None:
         from gadgetctl.cli.candidates import main as complete
 
         sys.exit(complete(args[1:]))
+    if args[:1] == ["validate"]:
+        _validate_without_typer(args[1:])  # (returns when typer must read the command line)
     import typer
 
     from gadgetctl.cli.app import build_app
@@ -66,23 +69,82 @@ def main(argv: list[str] | None = None) -> None:
         _quiet_broken_pipe()
         sys.exit(0)
     except GadgetctlError as err:
-        from gadgetctl.safetext import printable
-
-        print(f"gadgetctl: error: {printable(str(err))}", file=sys.stderr)
-        sys.exit(err.exit_code)
+        _tool_error(err)
     except KeyboardInterrupt:
         print("gadgetctl: interrupted", file=sys.stderr)
         sys.exit(130)
     except Exception as err:  # a bug of ours: one line unless debugging
-        if os.environ.get("GADGETCTL_DEBUG"):
-            raise
-        print(
-            f"gadgetctl: internal error: {type(err).__name__}: {err} "
-            "(set GADGETCTL_DEBUG=1 for a traceback)",
-            file=sys.stderr,
-        )
-        sys.exit(2)
+        _internal_error(err)
     sys.exit(code if isinstance(code, int) and not isinstance(code, bool) else 0)
+
+
+def _tool_error(err) -> None:
+    from gadgetctl.safetext import printable
+
+    print(f"gadgetctl: error: {printable(str(err))}", file=sys.stderr)
+    sys.exit(err.exit_code)
+
+
+def _internal_error(err: Exception) -> None:
+    if os.environ.get("GADGETCTL_DEBUG"):
+        raise err
+    print(
+        f"gadgetctl: internal error: {type(err).__name__}: {err} "
+        "(set GADGETCTL_DEBUG=1 for a traceback)",
+        file=sys.stderr,
+    )
+    sys.exit(2)
+
+
+def _validate_without_typer(words: list[str]) -> None:
+    """`gadgetctl validate` in gadgetctl's own process, its command line read without typer
+    when it can be (see :mod:`gadgetctl.cli.validate_fast`); the command ends the process.
+    Returns at once when typer must read the command line. What goes wrong while it runs
+    ends as it does under typer (whose command runner turns EOFError into an abort,
+    KeyboardInterrupt into exit status 130 and a closed pipe into exit status 1)."""
+    from gadgetctl.cli import exiting
+
+    if not exiting.own_process:  # in-process callers get typer's reading, as always
+        return
+    from gadgetctl.cli.validate_fast import parse
+
+    request = parse(words, os.environ)
+    if request is None:
+        return
+    from gadgetctl.cli.validate_run import run_validate
+    from gadgetctl.errors import GadgetctlError
+
+    try:
+        try:
+            run_validate(**request)
+        except EOFError:
+            print(file=sys.stderr)
+            print("gadgetctl: error: aborted", file=sys.stderr)
+            sys.exit(2)
+        except KeyboardInterrupt:
+            sys.exit(130)
+        except OSError as err:
+            if err.errno != errno.EPIPE:
+                raise
+            _pacify_broken_pipe()
+            sys.exit(1)
+    except GadgetctlError as err:
+        _tool_error(err)
+    except Exception as err:
+        _internal_error(err)
+    sys.exit(0)
+
+
+def _pacify_broken_pipe() -> None:
+    """What typer's command runner does when the reader went away: wrap stdout and stderr
+    so that their last flush says nothing."""
+    import importlib
+
+    import typer
+
+    utils = importlib.import_module(typer.BadParameter.__module__.rpartition(".")[0] + ".utils")
+    sys.stdout = utils.PacifyFlushWrapper(sys.stdout)
+    sys.stderr = utils.PacifyFlushWrapper(sys.stderr)
 
 
 def usage_error_text(err, args: list[str], app) -> str:

@@ -2,55 +2,32 @@
 
 from __future__ import annotations
 
-import os
-import sys
-from enum import StrEnum
-
 import typer
 
+from gadgetctl.cli.choices import (
+    CheckLevel,
+    ColorMode,
+    DataFormat,
+    DiagnosticFormat,
+    emit,
+    use_color,
+)
 
-class DiagnosticFormat(StrEnum):
-    text = "text"
-    json = "json"
-    github = "github"
-    sarif = "sarif"
-
-
-class CheckLevel(StrEnum):
-    xml = "xml"
-    schema = "schema"
-    definitions = "definitions"
-    full = "full"
-
-
-class DataFormat(StrEnum):
-    text = "text"
-    json = "json"
-
-
-class ColorMode(StrEnum):
-    auto = "auto"
-    always = "always"
-    never = "never"
-
-
-def use_color(mode: ColorMode, stream=None) -> bool:
-    stream = stream or sys.stdout
-    if mode is ColorMode.always:
-        return True
-    if mode is ColorMode.never or os.environ.get("NO_COLOR"):
-        return False
-    return hasattr(stream, "isatty") and stream.isatty()
-
+__all__ = [
+    "BUNDLED_OPTION",
+    "COLOR_OPTION",
+    "DEFINITIONS_OPTION",
+    "CheckLevel",
+    "ColorMode",
+    "DataFormat",
+    "DiagnosticFormat",
+    "emit",
+    "use_color",
+]
 
 COLOR_OPTION = typer.Option(
     ColorMode.auto, "--color", help="Colour the output: auto (only on a terminal), always or never."
 )
-
-
-def emit(text: str) -> None:
-    if text:
-        sys.stdout.write(text if text.endswith("\n") else text + "\n")
 
 
 DEFINITIONS_OPTION = typer.Option(
