@@ -122,6 +122,11 @@ def test_shell_completion_is_left_to_typer():
     assert parse(["a"], {COMPLETE_VAR: "bash_complete"}) is None
 
 
+def test_windows_is_left_to_typer(monkeypatch):
+    monkeypatch.setattr(os, "name", "nt")  # (Click expands wildcards there)
+    assert parse(["a"], {}) is None
+
+
 @pytest.mark.skipif(os.geteuid() == 0, reason="root reads any file")
 def test_an_unreadable_path_is_left_to_typer(tmp_path):
     secret = tmp_path / "secret.jconf"

@@ -5,9 +5,10 @@ time. A command line made only of paths and the command's own options, each writ
 whole (``--format json``, ``--format=json``, ``-f json``), is read here into what typer
 would pass to :func:`gadgetctl.cli.validate_run.run_validate`; anything else (``--help``,
 an unknown or abbreviated option, a bad value, a value or path that starts with ``-``,
-``--``, shell completion) returns None and typer reads it, errors and all.
-``tests/test_cli_validate_fast.py`` checks the options against the typer command and
-the values against typer's for many command lines.
+``--``, shell completion; any command line on Windows, where Click expands wildcards)
+returns None and typer reads it, errors and all. ``tests/test_cli_validate_fast.py``
+checks the options against the typer command and the values against typer's for many
+command lines.
 """
 
 from __future__ import annotations
@@ -51,7 +52,7 @@ COMPLETE_VAR = "_GADGETCTL_COMPLETE"
 def parse(args: Sequence[str], environ: Mapping[str, str]) -> dict[str, object] | None:
     """The arguments of :func:`run_validate` for the words after ``validate``, or None
     when typer must read them."""
-    if COMPLETE_VAR in environ:
+    if COMPLETE_VAR in environ or os.name == "nt":  # (Click expands wildcards on Windows)
         return None
     found: dict[str, object] = {
         "fmt": DEFAULT_FORMAT,
