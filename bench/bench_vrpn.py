@@ -8,7 +8,10 @@ fanning out to many clients. Both run `gadgetctl serve` as a separate process on
 2. Fan-out: 100 waveform devices at 1 kHz (100,000 pose reports/s) served to 8 raw TCP
    clients (each in its own process); targets: 0 lost on TCP, sample-to-client latency p99
    <= 2 ms. Printed: latency p50/p99 (sample time in the message header to the client's
-   receipt), the CPU of serve, messages per second per client.
+   receipt), the CPU of serve, messages per second per client; and for reference the floor of
+   the latency under the run's load: the same readers reading the C sender of 6 (as many
+   sensors as devices), whose messages are stamped as they are sent, with no frame to wait for
+   (a sample waits up to a frame period, 1 ms, for serve's next frame).
 
 3. Breakdown (``--part breakdown``, not part of ``all``): the fan-out with serve's service run
    in this process, to say where a sample's time goes: per frame, its age when the frame
@@ -415,6 +418,56 @@ def _flooder(port: int, seconds: float, rate: float, sender: str, results) -> No
     results.put({"flooded": sent, "client": f"127.0.0.1:{port_of}"})
 
 
+def c_sender(tmp: Path) -> Path | None:
+    """bench/vrpn_csender.c built in ``tmp`` with the system's C compiler (None without one)."""
+    import shutil
+
+    binary = tmp / "vrpn_csender"
+    if binary.exists():
+        return binary
+    compiler = shutil.which("cc") or shutil.which("gcc")
+    if compiler is None:
+        return None
+    subprocess.run(
+        [compiler, "-O2", "-o", str(binary), str(Path(__file__).with_name("vrpn_csender.c"))],
+        check=True,
+    )
+    return binary
+
+
+def c_sender_latency(
+    tmp: Path, seconds: float, sensors: int, clients: int, rate: float
+) -> np.ndarray | None:
+    """Send-to-receive latencies (ms) of the C sender's messages (time-stamped as they are
+    sent) read by the fan-out's readers: what the readers' own scheduling costs, with no
+    frame to wait for; None without a C compiler."""
+    binary = c_sender(tmp)
+    if binary is None:
+        return None
+    sender = subprocess.Popen(
+        [str(binary), str(clients), str(sensors), f"{rate:g}", f"{seconds + 30:g}"],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    context = multiprocessing.get_context("fork")
+    results = context.Queue()
+    try:
+        port = int(sender.stdout.readline())
+        procs = [
+            context.Process(target=_client, args=(port, seconds, rate, results))
+            for _ in range(clients)
+        ]
+        for p in procs:
+            p.start()
+        outcomes = [results.get(timeout=seconds + 60) for _ in procs]
+        for p in procs:
+            p.join(30)
+    finally:
+        sender.kill()
+        sender.wait(10)
+    return np.concatenate([o["latency"] for o in outcomes]) * 1000
+
+
 def fanout(
     report: Report,
     seconds: float,
@@ -485,6 +538,17 @@ def fanout(
     report.figure(
         "serve CPU per report per client", serve_cpu / (per_client * clients * wall) * 1e6, "us"
     )
+    if not flood:
+        # the floor of the latency figures under this run's load: the same readers reading
+        # a C sender that sends each message as it stamps it (no frame period to wait for,
+        # where a sample waits up to a frame, 1 ms, for serve's next frame)
+        floor = c_sender_latency(tmp, seconds, devices, clients, rate)
+        if floor is not None and len(floor):
+            report.figure(
+                "C sender, the same readers: send-to-receive latency p99 (the floor)",
+                float(np.percentile(floor, 99)),
+                "ms",
+            )
     return {
         "p50": float(np.percentile(latency, 50)),
         "p99": float(np.percentile(latency, 99)),
@@ -666,18 +730,11 @@ def against_c(
     readers, against a C program sending the same messages (bench/vrpn_csender.c, built
     here with the system's C compiler), measured in the same run, twice each alternately;
     target (issue 27): at most 2x."""
-    import shutil
-
     rate = 1000.0
-    compiler = shutil.which("cc") or shutil.which("gcc")
-    if compiler is None:
+    binary = c_sender(tmp)
+    if binary is None:
         print("  no C compiler: the C sender cannot be built, nothing to compare")
         return
-    binary = tmp / "vrpn_csender"
-    subprocess.run(
-        [compiler, "-O2", "-o", str(binary), str(Path(__file__).with_name("vrpn_csender.c"))],
-        check=True,
-    )
     config = tmp / "sensors.jconf"
     config.write_text(sensors_config(sensors, rate))
     c_runs, python_runs, serve_runs = [], [], []
