@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any, TextIO
 
 import numpy as np
@@ -107,6 +107,39 @@ def glove_text(angles: Any) -> str:
     return " ".join(glove_parts(angles))
 
 
+class PositionTexts:
+    """:func:`position_text` of the matrices of one table, remembering the last few: a
+    position proxy's row shows the very matrix of its device's row just before it (10,000
+    devices and their proxies: half of the 20,000 texts are made again otherwise). Kept
+    small (:attr:`MOST`), the table's rows being made a chunk at a time."""
+
+    MOST = 64
+
+    def __init__(
+        self, length_unit: str = "meters", quaternion: bool = False, pose: str | None = None
+    ) -> None:
+        self.length_unit = length_unit
+        self.quaternion = quaternion
+        self.pose = pose
+        self.made = 0  # texts made, not remembered (what a test counts)
+        self._texts: dict[bytes, str] = {}
+
+    def text(self, matrix: Any) -> str:
+        key = None
+        if type(matrix) is np.ndarray and matrix.dtype == np.float64 and matrix.size == 16:
+            key = matrix.tobytes()  # the same bytes: the same numbers, the same text
+            found = self._texts.get(key)
+            if found is not None:
+                return found
+        text = position_text(matrix, self.length_unit, self.quaternion, self.pose)
+        self.made += 1
+        if key is not None:
+            if len(self._texts) >= self.MOST:
+                self._texts.clear()
+            self._texts[key] = text
+        return text
+
+
 def unit_value_text(
     view: UnitView,
     *,
@@ -114,8 +147,10 @@ def unit_value_text(
     length_unit: str = "meters",
     quaternion: bool = False,
     pose: str | None = None,
+    positions: PositionTexts | None = None,
 ) -> str:
-    """One unit's value as text (no bar, no sparkline)."""
+    """One unit's value as text (no bar, no sparkline); ``positions`` (made with the same
+    ``length_unit``, ``quaternion`` and ``pose``) makes the text of a position."""
     kind, value = view.kind, view.value
     if kind == "analog":
         raw = "" if view.raw is None else f" (raw {number_text(view.raw)})"
@@ -127,6 +162,8 @@ def unit_value_text(
             return f"{state}{mark}" + (f" x{view.presses}" if view.presses else "")
         return TOGGLES.get(int(value), str(value)) + (f" x{view.presses}" if view.presses else "")
     if kind == "position":
+        if positions is not None:
+            return positions.text(value)
         return position_text(value, length_unit, quaternion, pose)
     if kind == "glove":
         return glove_text(value)
@@ -145,12 +182,18 @@ def values_text(
     length_unit: str = "meters",
     quaternion: bool = False,
     pose: str | None = None,
+    positions: PositionTexts | None = None,
 ) -> str:
     """Every unit of an element on one line, grouped by kind."""
     groups: dict[str, list[str]] = {}
     for unit in element.values:
         text = unit_value_text(
-            unit, element=element.element, length_unit=length_unit, quaternion=quaternion, pose=pose
+            unit,
+            element=element.element,
+            length_unit=length_unit,
+            quaternion=quaternion,
+            pose=pose,
+            positions=positions,
         )
         if element.element == "device":
             text = f"{unit.unit}: {text}"
@@ -239,6 +282,7 @@ def table_rows(
     length_unit: str = "meters",
     quaternion: bool = False,
     pose: str | None = None,
+    positions: PositionTexts | None = None,
 ) -> list[list[str]]:
     rows = []
     for element in snapshot.elements:
@@ -262,7 +306,13 @@ def table_rows(
                 str(stats.dropped) if stats and own else ("-" if own else ""),
                 ms_text(element.age) if element.age is not None else "-",
                 ms_text(stats.jitter) if stats and own else ("-" if own else ""),
-                values_text(element, length_unit=length_unit, quaternion=quaternion, pose=pose)
+                values_text(
+                    element,
+                    length_unit=length_unit,
+                    quaternion=quaternion,
+                    pose=pose,
+                    positions=positions,
+                )
                 + (f"  [{element.reason}]" if element.reason else "")
                 + (f"  health: {health}" if (health := health_text(element.health)) else ""),
             ]
@@ -322,6 +372,54 @@ def _lines(
         if consume:
             table[index] = ()  # its line is made
         yield line(row)
+
+
+#: Between the cells of a packed row (:class:`PackedRows`): :func:`printable` leaves no
+#: control character in a cell.
+_CELL = "\x00"
+
+
+class PackedRows:
+    """The rows of :func:`table_lines` with ``consume``, kept as one string each until their
+    lines are made: each row's cells made printable and joined by :data:`_CELL`, the
+    columns' widths taken as rows are added. The rows of 20,000 elements as lists of ten
+    strings were about 13 MB at once; as one string each, about a third of it. Rows have at
+    least one cell."""
+
+    def __init__(self, header: Sequence[str], *, last_free: bool = True) -> None:
+        self.header = list(header)
+        self.last_free = last_free
+        self.widths = [len(h) for h in header]
+        self.rows: list[str] = []
+
+    def add(self, rows: Iterable[Sequence[str]]) -> None:
+        widths = self.widths
+        last_free = self.last_free
+        append = self.rows.append
+        for row in rows:
+            cells = [printable(cell) for cell in row]
+            for i, cell in enumerate(cells[:-1] if last_free else cells):
+                if len(cell) > widths[i]:
+                    widths[i] = len(cell)
+            append(_CELL.join(cells))
+
+    def lines(self) -> Iterator[str]:
+        """The header's line, then each row's; a row is dropped once its line is made."""
+        widths, last_free = self.widths, self.last_free
+
+        def line(row: Sequence[str]) -> str:
+            cells = [
+                cell.ljust(widths[i]) if i < len(row) - 1 or not last_free else cell
+                for i, cell in enumerate(row)
+            ]
+            return "  ".join(cells).rstrip()
+
+        yield line(self.header)
+        rows = self.rows
+        for index, packed in enumerate(rows):
+            rows[index] = ""  # its line is made
+            yield line(packed.split(_CELL))
+        rows.clear()
 
 
 def snapshot_table(
@@ -393,7 +491,8 @@ class TableView:
         fit = self.rows_that_fit(len(selected))
         names = selected[:fit]
         moment = now()  # one instant for every row, as one snapshot of them all has
-        rows: list[list[str]] = []
+        rows = PackedRows(COLUMNS)
+        positions = PositionTexts(self.length_unit, self.quaternion, self.pose)
         notes: list[str] = []
         snapshots = (
             self.session.snapshot(moment, names=names[start : start + TABLE_CHUNK])
@@ -401,15 +500,21 @@ class TableView:
         )
         first = next(snapshots)  # its heading is the table's
         for snapshot in itertools.chain((first,), snapshots):
-            rows += table_rows(
-                snapshot, length_unit=self.length_unit, quaternion=self.quaternion, pose=self.pose
+            rows.add(
+                table_rows(
+                    snapshot,
+                    length_unit=self.length_unit,
+                    quaternion=self.quaternion,
+                    pose=self.pose,
+                    positions=positions,
+                )
             )
             notes += difference_lines(snapshot)
         # what snapshot_table makes, written a part at a time: the rows are dropped as their
         # lines are made, and the text of the whole table is never made at once
         write = self.stream.write
         write(table_head(first) + "\n")
-        lines = table_lines(COLUMNS, rows, consume=True)
+        lines = rows.lines()
         del rows
         for part in iter(lambda: list(itertools.islice(lines, TABLE_CHUNK)), []):
             write("".join(f"{line}\n" for line in part))
