@@ -29,6 +29,7 @@ due, it is not running, its block has events) is updated alone.
 
 from __future__ import annotations
 
+import bisect
 import math
 import threading
 import time
@@ -450,6 +451,34 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
 
     def compute(self, start: int, count: int) -> Block:
         """Samples ``start`` .. ``start + count - 1`` (timestamps relative to the device start)."""
+        shared = _SIGNALS.values(self, start, count)
+        if shared is not None:  # the read-only values of every device configured alike
+            t, data, events = shared
+            return Block(start, self.t0 + t, data, events)
+        return self._compute(start, count)
+
+    def signal_key(self) -> tuple | None:
+        """What its values depend on, when that is the same for every device configured
+        alike (:class:`_SharedSignals`); None for a device whose values are its own (noise
+        is seeded per device; position filters are left out)."""
+        if (
+            type(self) is not WaveformDevice
+            or self.position_filters.filters
+            or any(c.wave is Wave.NOISE for c in self.analog)
+        ):
+            return None
+        return (
+            self.rate,
+            tuple(self.analog),
+            (self.analog_min, self.analog_max) if self.analog else None,
+            tuple(self.button_periods),
+            tuple(self.positions),
+            tuple(self.center) if self.positions else None,
+            self.event_period,
+        )
+
+    def _compute(self, start: int, count: int) -> Block:
+        """:meth:`compute` for this device alone (its own arrays)."""
         k = np.arange(start, start + count, dtype=np.float64)
         t = k / self.rate
         data: dict[DeviceKind, np.ndarray] = {}
@@ -529,6 +558,67 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         template = np.eye(4)
         template[:3, 3] = self.center
         return template
+
+
+class _SharedSignals:
+    """The values of the first :data:`SHARED_SAMPLES` samples of waveform devices configured
+    alike (:meth:`WaveformDevice.signal_key`), computed once and shared read-only: a sample's
+    values depend only on its number and the configuration, so 10,000 devices of one
+    configuration had 10,000 copies of the same matrices (about 14 MB in their first
+    blocks), each computed on its own. Blocks past them, and devices whose values are their
+    own, are computed as before. At most :data:`SHARED_CONFIGURATIONS` configurations are
+    kept."""
+
+    SHARED_SAMPLES = 4096
+    SHARED_CONFIGURATIONS = 16
+
+    def __init__(self) -> None:
+        #: signal key -> (samples covered, t = k / rate, per kind the values, the events'
+        #: sample indices, the events), the arrays read-only
+        self._values: dict[
+            tuple,
+            tuple[int, np.ndarray, dict[DeviceKind, np.ndarray], list[int], list[tuple[int, int]]],
+        ] = {}
+
+    def values(
+        self, device: WaveformDevice, start: int, count: int
+    ) -> tuple[np.ndarray, dict[DeviceKind, np.ndarray], list[tuple[int, int]]] | None:
+        """``t`` (sample number / rate), the values of samples ``start`` ..
+        ``start + count - 1`` of ``device`` as views of the shared arrays, and the events
+        among them; None when they are not shared."""
+        stop = start + count
+        if stop > self.SHARED_SAMPLES or count < 1 or start < 0:
+            return None
+        key = device.signal_key()
+        if key is None:
+            return None
+        found = self._values.get(key)
+        if found is None or found[0] < stop:
+            if found is None and len(self._values) >= self.SHARED_CONFIGURATIONS:
+                return None
+            covered = min(self.SHARED_SAMPLES, max(stop, 64, 2 * found[0] if found else 0))
+            block = device._compute(0, covered)
+            data = block.data
+            for array in (*data.values(),):
+                array.flags.writeable = False
+            t = np.arange(covered, dtype=np.float64) / device.rate
+            t.flags.writeable = False
+            indices = [index for index, _ in block.events]
+            found = self._values[key] = (covered, t, data, indices, block.events)
+        _, t, data, indices, events = found
+        within = events[bisect.bisect_left(indices, start) : bisect.bisect_left(indices, stop)]
+        if within:  # the events the block's own computation finds (its numbers' bounds too)
+            period, rate = device.event_period, device.rate
+            first = math.floor(start / rate / period) + 1
+            last = math.floor((stop - 1) / rate / period)
+            within = [(index, number) for index, number in within if first <= number <= last]
+        return t[start:stop], {kind: values[start:stop] for kind, values in data.items()}, within
+
+    def clear(self) -> None:
+        self._values.clear()
+
+
+_SIGNALS = _SharedSignals()
 
 
 class _FrameGroup:

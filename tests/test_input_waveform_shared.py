@@ -1,0 +1,118 @@
+"""Waveform devices configured alike share the values of their first samples (computed once,
+read-only): every block is the one the device computes on its own, events included."""
+
+from __future__ import annotations
+
+import random
+
+import numpy as np
+import pytest
+
+from gadgetctl.input import InputManager, ManagerOptions
+from gadgetctl.input.waveform import _SIGNALS, WaveformDevice
+from gadgetctl.jccl.configload import load_configuration
+from gadgetctl.jccl.repository import default_repository
+
+HEAD = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+    '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">\n<elements>\n'
+)
+BODIES = {
+    "sticks": "<rate>200</rate><analog_waveform>sine</analog_waveform>"
+    "<analog_waveform>triangle</analog_waveform><analog_waveform>square</analog_waveform>"
+    "<analog_frequency>0.5</analog_frequency><analog_frequency>0.25</analog_frequency>"
+    "<min>-1</min><max>1</max><button_period>1.0</button_period>"
+    "<button_period>2.5</button_period><event_period>0.0</event_period>",
+    "tracker": "<rate>120</rate><position_path>circle</position_path>"
+    "<position_path>spin</position_path><position_path>figure_eight</position_path>"
+    "<position_period>4</position_period><position_period>6</position_period>"
+    "<position_period>8</position_period><position_radius>0.5</position_radius>"
+    "<position_radius>0</position_radius><position_radius>0.4</position_radius>"
+    "<event_period>2.0</event_period>",
+    "circle": "<rate>10</rate><position_path>circle</position_path>",
+    # an event whose index is a block's first sample belongs to no block (as computed alone)
+    "odd": "<rate>7.3</rate><analog_waveform>sine</analog_waveform>"
+    "<position_path>spin</position_path><button_period>0.3</button_period>",
+    "fast": "<rate>1000</rate><position_path>figure_eight</position_path>"
+    "<position_center>1</position_center><position_center>2</position_center>"
+    "<position_center>3</position_center><event_period>0.01</event_period>",
+}
+OWN = {
+    "noise": "<rate>50</rate><seed>{seed}</seed><analog_waveform>noise</analog_waveform>",
+    "filtered": "<rate>50</rate><position_path>circle</position_path><position_filters>"
+    '<position_transform_filter name="Up" version="1"><pre_translate>0</pre_translate>'
+    "<pre_translate>0.1</pre_translate><pre_translate>0</pre_translate>"
+    "</position_transform_filter></position_filters>",
+}
+
+
+@pytest.fixture
+def devices(tmp_path):
+    body = "".join(
+        f'<waveform_device name="{name}{copy}" version="1">{text.format(seed=copy)}</waveform_device>\n'
+        for name, text in {**BODIES, **OWN}.items()
+        for copy in (1, 2)
+    )
+    path = tmp_path / "w.jconf"
+    path.write_text(HEAD + body + "</elements>\n</configuration>\n")
+    manager = InputManager(
+        default_repository(),
+        ManagerOptions(start_devices=False, retry_interval=None, entry_points=False),
+    )
+    manager.configure(load_configuration([path]))
+    _SIGNALS.clear()
+    yield {name: manager.device(name) for name in manager.devices}
+    manager.shutdown()
+    _SIGNALS.clear()
+
+
+def same_block(a, b) -> None:
+    assert (a.start, a.end, a.events) == (b.start, b.end, b.events)
+    assert a.timestamps.tobytes() == b.timestamps.tobytes()
+    assert [kind for kind, _ in a.items] == [kind for kind, _ in b.items]
+    for (_, x), (_, y) in zip(a.items, b.items, strict=True):
+        assert (x.shape, x.dtype, x.tobytes()) == (y.shape, y.dtype, y.tobytes())
+
+
+def test_every_block_is_the_one_computed_alone(devices):
+    chance = random.Random(5)
+    for name in BODIES:
+        device = devices[f"{name}1"]
+        assert isinstance(device, WaveformDevice) and device.signal_key() is not None
+        for _ in range(150):
+            start = chance.randrange(0, _SIGNALS.SHARED_SAMPLES + 50)
+            count = chance.randrange(1, 120)
+            same_block(device.compute(start, count), device._compute(start, count))
+
+
+def test_devices_configured_alike_share_read_only_values(devices):
+    one, two = devices["tracker1"], devices["tracker2"]
+    a, b = one.compute(0, 20), two.compute(3, 20)
+    for (_, x), (_, y) in zip(a.items, b.items, strict=True):
+        assert np.shares_memory(x, y)
+        assert not x.flags.writeable
+        with pytest.raises(ValueError):
+            x[0] = 0
+    assert not np.shares_memory(a.timestamps, b.timestamps)  # each device's own start time
+    other = devices["circle1"].compute(0, 20)  # another configuration: values of its own
+    assert not np.shares_memory(dict(other.items)[next(iter(dict(other.items)))], a.items[0][1])
+
+
+def test_values_of_their_own_are_not_shared(devices):
+    for name in OWN:
+        one, two = devices[f"{name}1"], devices[f"{name}2"]
+        assert one.signal_key() is None
+        a, b = one.compute(0, 20), two.compute(0, 20)
+        for (_, x), (_, y) in zip(a.items, b.items, strict=True):
+            assert not np.shares_memory(x, y)
+    noise1 = devices["noise1"].compute(0, 20).items[0][1]
+    noise2 = devices["noise2"].compute(0, 20).items[0][1]
+    assert not np.array_equal(noise1, noise2)  # seeded per device
+
+
+def test_samples_past_the_shared_ones_are_computed_alone(devices):
+    device = devices["circle1"]
+    start = _SIGNALS.SHARED_SAMPLES - 5
+    block = device.compute(start, 10)
+    assert all(values.flags.writeable for _, values in block.items)
+    same_block(block, device._compute(start, 10))
