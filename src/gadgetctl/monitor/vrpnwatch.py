@@ -20,7 +20,6 @@ from collections import defaultdict
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from xml.sax.saxutils import escape, quoteattr
 
 from gadgetctl.errors import GadgetctlError
 
@@ -98,6 +97,10 @@ def resolve(arguments: list[str], *, timeout: float = 2.0) -> list[WatchedDevice
 
 def configuration_text(devices: list[WatchedDevice]) -> str:
     """A configuration with one ``vrpn`` element per device."""
+    # imported here: xml.sax.saxutils imports urllib.request (http.client, email, ssl), a
+    # third of a tenth of a second every `monitor` paid, with or without a vrpn: argument
+    from xml.sax.saxutils import escape, quoteattr
+
     lines = [
         '<?xml version="1.0" encoding="UTF-8"?>',
         '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>',
