@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import re
+from collections.abc import Container, Mapping
 
 from gadgetctl.jccl.configuration import ConfigElement
 from gadgetctl.jccl.definitions import PropertyDefinition
@@ -62,6 +63,24 @@ class ElementAccess:
     @property
     def name(self) -> str:
         return self.element.full_name
+
+    @property
+    def definitions(self) -> Mapping[str, PropertyDefinition]:
+        """The element type's properties by name (the repository's shared, read-only map: the
+        same object for every element of a type)."""
+        return self._props
+
+    def written(self, props: Container[str]) -> tuple[tuple[str, tuple[str, ...]], ...] | None:
+        """The texts written for those of ``props`` the element has, in the order written (what
+        reads of only these properties depend on, besides :attr:`definitions`); None when one
+        of them holds an embedded element."""
+        found = []
+        for name, values in self.element.property_items():
+            if name in props:
+                if any(value.element is not None for value in values):
+                    return None
+                found.append((name, tuple([value.text for value in values])))
+        return tuple(found)
 
     def definition(self, prop: str) -> PropertyDefinition:
         try:
