@@ -65,3 +65,34 @@ def test_the_collector_comes_back_on_after_bulk_work_in_a_process_that_goes_on()
     with collector_paused():
         assert not gc.isenabled()
     assert gc.isenabled()
+
+
+def test_what_is_built_to_last_is_left_out_of_later_collections():
+    import gc
+
+    from gadgetctl.perf import built_to_last
+
+    assert gc.isenabled()
+    frozen = gc.get_freeze_count()
+    try:
+        with built_to_last():
+            assert not gc.isenabled()
+            kept = [[] for _ in range(1000)]
+        assert gc.isenabled()
+        assert gc.get_freeze_count() >= frozen + len(kept)
+        assert gc.get_count()[0] < len(kept)  # not waiting for the next collection's walk
+    finally:
+        gc.unfreeze()  # (this process goes on)
+
+
+def test_a_monitor_in_process_sets_nothing_aside(tmp_path, cli):
+    import gc
+
+    path = tmp_path / "w.jconf"
+    path.write_text(
+        HEAD + '<waveform_device name="W" version="1"><rate>10</rate></waveform_device>\n' + TAIL
+    )
+    frozen = gc.get_freeze_count()
+    result = cli("monitor", str(path), "--duration", "0.1", "--format", "table")
+    assert result.exit_code == 0, result.output
+    assert gc.get_freeze_count() == frozen

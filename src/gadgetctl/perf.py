@@ -28,6 +28,20 @@ def collector_paused() -> Iterator[None]:
             gc.enable()
 
 
+@contextmanager
+def built_to_last() -> Iterator[None]:
+    """:func:`collector_paused` for work whose results live to the end of a process that ends
+    without teardown (a monitor's checked configuration, its devices and proxies): at the
+    end, every object alive is left out of the collector's later passes (``gc.freeze``)
+    before it is switched on again. The collector goes on collecting what is made
+    afterwards; it no longer walks these (10,000 devices' objects were walked by four
+    collections that followed the check and the configuration, 0.15-0.2 s in all). Only
+    for such a process: what is set aside is never freed."""
+    with collector_paused():
+        yield
+        gc.freeze()
+
+
 #: What :func:`retain` keeps, once :func:`retain_until_exit` was called (else None).
 _retained: list[object] | None = None
 

@@ -182,11 +182,15 @@ def monitor(
     )
     parsed = {}
     if check:
+        from gadgetctl.cli import exiting
         from gadgetctl.cli.preflight import check_before_running
+        from gadgetctl.perf import built_to_last
 
-        parsed = check_before_running(
-            configs, definitions=definitions, bundled=bundled, strict=strict
-        )
+        # what it parsed is what the run is built from: it lives to the end
+        with built_to_last() if exiting.own_process else contextlib.nullcontext():
+            parsed = check_before_running(
+                configs, definitions=definitions, bundled=bundled, strict=strict
+            )
     title = " ".join([*(str(p) for p in configs), *watched])  # as typed, no scratch file
     with watched_devices(configs, watched) as configs:
         code = run_monitor(
@@ -352,9 +356,11 @@ def run_monitor(
     title: str | None = None,
     parsed: Mapping[Path, XmlDocument] | None = None,
 ) -> int:
+    from gadgetctl.cli import exiting
     from gadgetctl.cli.monitor_run import RunOptions, check_record_path, choose_format, run
     from gadgetctl.input.manager import InputManager, ManagerOptions
     from gadgetctl.monitor.session import MonitorSession
+    from gadgetctl.perf import built_to_last
 
     check_options(rate, duration, interval)
     mode = choose_format(fmt, record)
@@ -371,7 +377,8 @@ def run_monitor(
     info = {"config": [str(p) for p in configs]}
     session = MonitorSession(manager, configuration, selectors=selectors, rate=rate, info=info)
     try:
-        session.start()
+        with built_to_last() if exiting.own_process else contextlib.nullcontext():
+            session.start()  # what the session is built of lives to the end
     except BaseException:
         manager.shutdown()
         raise
