@@ -109,3 +109,33 @@ def test_a_long_table_is_made_a_chunk_of_views_at_a_time_at_one_instant(session,
     assert out.getvalue() == whole.getvalue()
     # written a part at a time, it is the text of one table of one snapshot of them all
     assert out.getvalue() == monitor_text.snapshot_table(real(asked[0][0])) + "\n"
+
+
+def test_a_snapshot_of_some_states_has_the_views_of_those_elements(tmp_path):
+    from gadgetctl.cli.monitor_text import BAD_STATES, problem_lines
+
+    path = tmp_path / "mixed.jconf"
+    path.write_text(
+        HEAD + '<waveform_device name="W" version="1"><rate>10</rate>'
+        "<position_path>circle</position_path></waveform_device>\n"
+        '<position_proxy name="Good" version="1"><device>W</device><unit>0</unit></position_proxy>\n'
+        '<position_proxy name="Lost" version="1"><device>Nowhere</device><unit>0</unit>'
+        "</position_proxy>\n"
+        '<position_proxy name="Empty" version="1"><device></device><unit>0</unit></position_proxy>\n'
+        "</elements>\n</configuration>\n"
+    )
+    manager = InputManager(
+        default_repository(),
+        ManagerOptions(start_devices=False, retry_interval=None, entry_points=False),
+    )
+    session = MonitorSession(manager, load_configuration([path]))
+    try:
+        session.start()
+        every = session.snapshot(1.0, detail=False)
+        some = session.snapshot(1.0, detail=False, states=BAD_STATES)
+        assert [e.name for e in some.elements] == ["Lost", "Empty"]
+        assert some.elements == [e for e in every.elements if e.state in BAD_STATES]
+        assert problem_lines(some) == problem_lines(every) != []
+        assert session.snapshot(1.0, detail=False, states=()).elements == []
+    finally:
+        manager.shutdown()

@@ -268,7 +268,7 @@ def _evaluate(
 ) -> tuple[dict, list[str]]:
     """The final statistics (none unless ``statistics``: nothing shows them, and 10,000
     devices' cost a third of a second) and the problems, read before the devices are stopped."""
-    from gadgetctl.cli.monitor_text import problem_lines
+    from gadgetctl.cli.monitor_text import BAD_STATES, problem_lines
     from gadgetctl.monitor.loss import run_problems
 
     final = session.final_stats() if statistics else {}
@@ -277,7 +277,8 @@ def _evaluate(
         if statistics
         else session.final_faults()
     )
-    snapshot = session.snapshot(detail=False)  # the states and reasons are what it reads
+    # the states and reasons of the elements in a bad state are what it reads
+    snapshot = session.snapshot(detail=False, states=BAD_STATES)
     problems = problem_lines(snapshot)
     problems += [
         f"{name}: {counted(count, 'fault')}, last error: {error or '-'}"
