@@ -51,6 +51,16 @@ def test_the_cap_drops_the_oldest_samples_and_counts_them():
     assert store.total(A) == 8
 
 
+def test_the_most_dropped_of_any_kind():
+    store = SampleStore([A, D], cap=2)
+    assert store.most_dropped() == 0
+    store.add_batch(A, np.arange(5.0), np.zeros((5, 1)))
+    store.add_batch(D, np.arange(3.0), np.zeros((3, 1), dtype=np.int8))
+    assert (store.dropped(A), store.dropped(D)) == (3, 1)
+    assert store.most_dropped() == 3 == max(store.dropped(k) for k in store.kinds)
+    assert SampleStore([]).most_dropped() == 0
+
+
 def test_a_batch_cut_by_the_cap_keeps_its_newest_part():
     store = SampleStore([A], cap=3)
     store.add_batch(A, np.arange(10.0), np.arange(10.0).reshape(10, 1))

@@ -656,3 +656,12 @@ class SampleStore:
         if kind is not None:
             return self._channel(kind).dropped
         return sum(c.dropped for c in self._channels.values())
+
+    def most_dropped(self) -> int:
+        """The most samples :meth:`dropped` of any one kind (0 without kinds): one call a
+        frame for each of 10,000 devices, not one per kind."""
+        most = 0
+        for channel in self._channels.values():
+            if channel.dropped > most:
+                most = channel.dropped
+        return most

@@ -23,7 +23,7 @@ ACCEPT_LOSS_OPTION = "--accept-loss"
 def lost_data(name: str, device: Input) -> str | None:
     """One line saying what ``device`` lost since it was made, or None when it lost nothing."""
     store = device.store
-    capped = max((store.dropped(kind) for kind in store.kinds), default=0)
+    capped = store.most_dropped()
     kernel = device.transport_dropped()
     if not capped and not kernel:
         return None

@@ -78,9 +78,7 @@ class DeviceTrack:
     def _dropped_now(self) -> int:
         """Samples dropped by the store (the most of any kind) plus what the transport lost
         before the driver read it (kernel receive-buffer overflows)."""
-        store = self.device.store
-        most = max((store.dropped(kind) for kind in store.kinds), default=0)
-        return most + self.device.transport_dropped()
+        return self.device.store.most_dropped() + self.device.transport_dropped()
 
     def update(self) -> int:
         device = self.device
