@@ -129,3 +129,18 @@ def test_replay_summary_and_table_escape_device_names(cli, evil_recording):
     assert printable(EVIL) in table.stdout
     exact = json.loads(cli("replay", evil_recording, "--summary", "--format", "ndjson").stdout)
     assert EVIL in {d["name"] for d in exact["devices"]}
+
+
+def test_is_printable_says_whether_printable_changes_a_text():
+    from gadgetctl.safetext import is_printable, printable
+
+    for text in (
+        "plain",
+        "",
+        "x +0.500 y 1.500 m  rot +0.0°",
+        "a\nb",
+        "\x1b[2J",
+        "r\u202el",
+        "\x85",
+    ):
+        assert is_printable(text) == (printable(text) == text)

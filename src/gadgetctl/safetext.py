@@ -29,6 +29,12 @@ def _escape(match: re.Match[str]) -> str:
     return f"\\x{code:02x}" if code < 0x100 else f"\\u{code:04x}"
 
 
+def is_printable(text: str) -> bool:
+    """Whether :func:`printable` leaves ``text`` as it is (one search for the cells of a
+    whole row joined, instead of one per cell)."""
+    return not _UNSAFE.search(text)
+
+
 def printable(text: str) -> str:
     """``text`` with every control character escaped: one line, no terminal effects."""
     if not _UNSAFE.search(text):

@@ -22,7 +22,7 @@ from gadgetctl.monitor.units import (
     quaternion_wxyz,
 )
 from gadgetctl.monitor.views import ElementView, Snapshot, UnitView
-from gadgetctl.safetext import fixed, printable
+from gadgetctl.safetext import fixed, is_printable, printable
 from gadgetctl.wording import counted
 
 TOGGLES = {0: "off", 1: "on", 2: "toggle on", 3: "toggle off"}
@@ -397,7 +397,8 @@ class PackedRows:
         last_free = self.last_free
         append = self.rows.append
         for row in rows:
-            cells = [printable(cell) for cell in row]
+            # most rows need no escape: one search of the row, not one per cell
+            cells = row if is_printable("".join(row)) else [printable(c) for c in row]
             for i, cell in enumerate(cells[:-1] if last_free else cells):
                 if len(cell) > widths[i]:
                     widths[i] = len(cell)
