@@ -121,3 +121,9 @@ def test_windows_of_arrays_computed_ahead_merge_until_the_swap():
     store.swap()
     assert store.frame(A).timestamps() == [float(t) for t in range(40, 90)]
     assert store.dropped(A) == 15 and store.total(A) == 90
+
+
+def test_kinds_given_by_value_or_member():
+    assert SampleStore(["analog", D]).kinds == (A, D)
+    with pytest.raises(ValueError):
+        SampleStore(["no such kind"])

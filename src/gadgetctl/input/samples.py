@@ -385,7 +385,10 @@ class SampleStore:
             raise ValueError("the sample cap must be at least 1")
         self.cap = cap
         self._lock = threading.Lock()
-        self._channels: dict[DeviceKind, _Channel] = {DeviceKind(k): _Channel() for k in kinds}
+        # (a member is taken as it is: DeviceKind(member) costs more than the channel)
+        self._channels: dict[DeviceKind, _Channel] = {
+            (k if type(k) is DeviceKind else DeviceKind(k)): _Channel() for k in kinds
+        }
         self._swapped_at: float | None = None
         self._waiting = False  # samples were added since the last swap
         self._current: Mapping[DeviceKind, FrameSamples] = {}
