@@ -413,3 +413,31 @@ def test_a_frames_sample_records_go_out_in_parts_after_the_header(monkeypatch):
     assert recorder.samples == session.samples_written == 30
     types = [json.loads(line)["type"] for line in b"".join(writes).decode().splitlines()]
     assert types[0] == "header" and set(types[1 : types.index("sample")]) == {"status"}
+
+
+def test_the_final_statistics_made_when_read_are_those_made_at_once(waveform):
+    manager, configuration = waveform
+    session = MonitorSession(manager, configuration)
+    session.start()
+    for _ in session.frames(frames=5):
+        pass
+    with manager.hold_sampling():
+        view = session.final_stats_view()
+        at_once = {name: view[name] for name in view}  # at the view's instant, read twice
+        assert dict(view.items()) == at_once == dict(view)
+        assert list(view) == list(session.final_stats())  # the same devices, in order
+        assert session.final_faults() == {
+            name: (entry["faults"], entry["state"], entry["error"])
+            for name, entry in at_once.items()
+        }
+        assert "Wand Proxy" not in view and len(view) == len(at_once) > 0
+        with pytest.raises(KeyError):
+            view["Wand Proxy"]
+        stream = io.BytesIO()
+        session.add_sink(lambda info: Recorder.to_stream(stream, info, clock=now))
+        session.open_sinks()
+        session.close_sinks(final=view)
+    (stats,) = [
+        r for r in map(json.loads, stream.getvalue().decode().splitlines()) if r["type"] == "stats"
+    ]
+    assert stats["devices"] == json.loads(json.dumps(at_once))

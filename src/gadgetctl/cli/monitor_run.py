@@ -10,6 +10,7 @@ import contextlib
 import os
 import shutil
 import sys
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -130,7 +131,7 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
         print(f"gadgetctl: note: {note}", file=sys.stderr)
     reason = "closed"
     broken_pipe = False
-    outcome: tuple[dict, list[str]] = ({}, [])
+    outcome: tuple[Mapping, list[str]] = ({}, [])
     try:
         with raise_on_stop_signals():
             try:
@@ -174,6 +175,8 @@ def run(session: MonitorSession, options: RunOptions, *, feeder=None) -> int:
                         outcome = _evaluate(
                             session, accept_loss=options.accept_loss, statistics=statistics
                         )
+                        if _shows_statistics_text(mode, options):  # after the devices stop
+                            outcome = (dict(outcome[0]), outcome[1])
                         try:
                             if broken_pipe:
                                 _silence_stdout()
@@ -263,20 +266,22 @@ def _shows_statistics(mode: OutputFormat, options: RunOptions) -> bool:
     )
 
 
+def _shows_statistics_text(mode: OutputFormat, options: RunOptions) -> bool:
+    """Whether :func:`_finish` prints the statistics table (after the devices are stopped)."""
+    return mode is not OutputFormat.ndjson and (options.stats or mode is OutputFormat.live)
+
+
 def _evaluate(
     session: MonitorSession, *, accept_loss: bool = True, statistics: bool = True
-) -> tuple[dict, list[str]]:
+) -> tuple[Mapping, list[str]]:
     """The final statistics (none unless ``statistics``: nothing shows them, and 10,000
     devices' cost a third of a second) and the problems, read before the devices are stopped."""
     from gadgetctl.cli.monitor_text import BAD_STATES, problem_lines
     from gadgetctl.monitor.loss import run_problems
 
-    final = session.final_stats() if statistics else {}
-    faults = (
-        {name: (s.get("faults"), s.get("state"), s.get("error")) for name, s in final.items()}
-        if statistics
-        else session.final_faults()
-    )
+    # made a device at a time where they are written (a stats record), not held all at once
+    final = session.final_stats_view() if statistics else {}
+    faults = session.final_faults()  # the faults, states and errors of the final statistics
     # the states and reasons of the elements in a bad state are what it reads
     snapshot = session.snapshot(detail=False, states=BAD_STATES)
     problems = problem_lines(snapshot)
@@ -297,7 +302,7 @@ def _finish(
     session: MonitorSession,
     mode: OutputFormat,
     options: RunOptions,
-    final: dict,
+    final: Mapping,
     problems: list[str],
     *,
     human=None,
@@ -305,7 +310,7 @@ def _finish(
     from gadgetctl.cli.monitor_text import frames_text, stats_text
 
     human = human or sys.stdout
-    if mode is not OutputFormat.ndjson and (options.stats or mode is OutputFormat.live):
+    if _shows_statistics_text(mode, options):
         # after the live view (which leaves the screen as it was) always, as demo does
         width = None
         if mode is OutputFormat.live and human.isatty():  # the statistics stay unwrapped

@@ -113,6 +113,34 @@ RATE_CHECK_AFTER = 1.0
 RATE_CHECK_MIN = 0.25
 
 
+class FinalStats(Mapping[str, dict[str, object]]):
+    """:meth:`MonitorSession.final_stats` made one device at a time when read (see
+    :meth:`MonitorSession.final_stats_view`)."""
+
+    def __init__(self, session: MonitorSession, moment: float) -> None:
+        self._session = session
+        self._moment = moment
+        tracks, device = session._tracks, session.manager.device
+        self._names = [
+            name
+            for name in session._selected
+            if tracks.get(name) is not None and device(name) is not None
+        ]
+        self._known = frozenset(self._names)
+
+    def __getitem__(self, name: str) -> dict[str, object]:
+        entry = self._session._final_entry(name, self._moment) if name in self._known else None
+        if entry is None:
+            raise KeyError(name)
+        return entry
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._names)
+
+    def __len__(self) -> int:
+        return len(self._names)
+
+
 class MonitorSession:
     """Runs an input manager for monitoring; see the module documentation.
 
@@ -763,16 +791,18 @@ class MonitorSession:
         reason: str = "closed",
         *,
         stats: bool = True,
-        final: dict[str, dict[str, object]] | None = None,
+        final: Mapping[str, Mapping[str, object]] | None = None,
     ) -> None:
-        """Write the final statistics record (``final``, :meth:`final_stats` when not given)
-        and the end record of every sink."""
+        """Write the final statistics record (``final``, :meth:`final_stats_view` when not
+        given) and the end record of every sink."""
         if self._sinks and not self._sinks_open:
             self._open_sinks()
         if not stats:
             final = None
         elif final is None and self._sinks:
-            final = self.final_stats()
+            final = self.final_stats_view()
+        if isinstance(final, FinalStats) and len(self._sinks) > 1:
+            final = dict(final)  # made once for every sink
         moment = now()
         for sink in self._sinks:
             recorder = sink.recorder
@@ -826,28 +856,36 @@ class MonitorSession:
         keeps its source's own timestamps (a ``remote_clock``, e.g. VRPN), ``source_clock``:
         ``offset`` (the least local receive time minus source time: clock offset plus the
         least transport latency), ``latency`` (the mean above that least) and ``samples``."""
-        moment = now()
-        result: dict[str, dict[str, object]] = {}
-        for name in self._selected:
-            track = self._tracks.get(name)
-            device = self.manager.device(name)
-            if track is None or device is None:
-                continue
-            snap = track.stats.snapshot(moment)
-            entry = snap.to_dict()
-            entry.pop("name", None)
-            entry["samples"] = snap.count
-            entry["state"] = device.state.value
-            entry["error"] = device.error
-            entry["type"] = device.element_type
-            entry["kinds"] = [k.value for k in device.kinds()]
-            entry["units"] = dict(track.units)
-            entry["health"] = device.health()
-            clock = getattr(device, "remote_clock", None)  # devices that keep their source's times
-            if clock is not None and getattr(clock, "count", 0):
-                entry["source_clock"] = clock.to_dict()
-            result[name] = entry
-        return result
+        return dict(self.final_stats_view())
+
+    def final_stats_view(self) -> FinalStats:
+        """:meth:`final_stats` as a mapping whose entries are made when read, each time, at
+        the instant of this call: a consumer that encodes them one at a time (a stats
+        record) never holds them all (10,000 devices' were about 15 MB). Read it while the
+        statistics stand still (no frames, the scheduler held)."""
+        return FinalStats(self, now())
+
+    def _final_entry(self, name: str, moment: float) -> dict[str, object] | None:
+        """The :meth:`final_stats` entry of ``name`` at ``moment`` (None: not a device
+        with a track)."""
+        track = self._tracks.get(name)
+        device = self.manager.device(name)
+        if track is None or device is None:
+            return None
+        snap = track.stats.snapshot(moment)
+        entry = snap.to_dict()
+        entry.pop("name", None)
+        entry["samples"] = snap.count
+        entry["state"] = device.state.value
+        entry["error"] = device.error
+        entry["type"] = device.element_type
+        entry["kinds"] = [k.value for k in device.kinds()]
+        entry["units"] = dict(track.units)
+        entry["health"] = device.health()
+        clock = getattr(device, "remote_clock", None)  # devices that keep their source's times
+        if clock is not None and getattr(clock, "count", 0):
+            entry["source_clock"] = clock.to_dict()
+        return entry
 
     def final_faults(self) -> dict[str, tuple[int, str, str | None]]:
         """Per selected device: the ``faults``, ``state`` and ``error`` of :meth:`final_stats`,
