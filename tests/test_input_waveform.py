@@ -1,6 +1,7 @@
 """The waveform device: exact schedule, deterministic signals, batches, configuration
 errors; and every built-in device class agreeing with its definition."""
 
+import itertools
 import math
 import time
 from pathlib import Path
@@ -389,3 +390,38 @@ def test_devices_without_position_filters_share_the_empty_chain(make):
     assert chains[0] is chains[1] is NO_FILTERS and not NO_FILTERS
     matrices = np.arange(32.0).reshape(2, 4, 4)
     assert NO_FILTERS.apply(matrices) is matrices
+
+
+@pytest.mark.parametrize(
+    "rate, period", [(10.0, 1.0), (1000.0, 0.25), (7.3, 0.3), (120.0, 2.0), (3.0, 1.0 / 3.0)]
+)
+def test_every_event_is_in_exactly_one_block_however_the_samples_are_split(make, rate, period):
+    """Event n falls on the first sample at or after n * event_period; split into blocks
+    anywhere (a block may start on an event's sample: rate 10, period 1, a block from sample
+    10 holds event 1), the blocks hold every event once, at its sample."""
+    body = (
+        f'<waveform_device name="E" version="1"><rate>{rate}</rate>'
+        f"<event_period>{period}</event_period></waveform_device>"
+    )
+    device = make(body, start_devices=False).device("E")
+    total = int(rate * period * 12) + 5
+    expected = [
+        (math.ceil(n * period * rate - 1e-9), n)
+        for n in range(1, total)
+        if math.ceil(n * period * rate - 1e-9) < total
+    ]
+    assert expected  # the oracle is the definition above, not the device's own arithmetic
+    for cuts in (
+        [],
+        [expected[0][0]],  # a block starting on the first event's sample
+        [index for index, _ in expected],  # every block starting on an event's sample
+        [index + 1 for index, _ in expected],  # every block starting just after one
+        list(range(1, total)),  # one sample a block
+    ):
+        bounds = [0, *sorted(set(c for c in cuts if 0 < c < total)), total]
+        found = [
+            event
+            for start, stop in itertools.pairwise(bounds)
+            for event in device.compute(start, stop - start).events
+        ]
+        assert found == expected, cuts

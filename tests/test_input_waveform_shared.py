@@ -30,7 +30,6 @@ BODIES = {
     "<position_radius>0</position_radius><position_radius>0.4</position_radius>"
     "<event_period>2.0</event_period>",
     "circle": "<rate>10</rate><position_path>circle</position_path>",
-    # an event whose index is a block's first sample belongs to no block (as computed alone)
     "odd": "<rate>7.3</rate><analog_waveform>sine</analog_waveform>"
     "<position_path>spin</position_path><button_period>0.3</button_period>",
     "fast": "<rate>1000</rate><position_path>figure_eight</position_path>"

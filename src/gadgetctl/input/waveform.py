@@ -549,10 +549,15 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         if self.event_period > 0:
             steps = np.floor(t / self.event_period).astype(np.int64)
             data[DeviceKind.HAT] = _HAT_COLUMN.take(steps % len(HAT_SEQUENCE), axis=0)
-            first = math.floor(start / self.rate / self.event_period) + 1
-            last = math.floor((start + count - 1) / self.rate / self.event_period)
+            # event n falls on the first sample at or after its time, n * event_period: the
+            # numbers that may fall in these samples, one more either side (rounding), and
+            # those whose sample is among them (an event on a block's first sample belongs to
+            # that block: with + 1 on the first number it belonged to none, and was lost)
+            per_event = self.rate * self.event_period
+            first = max(1, math.floor(start / per_event))
+            last = math.floor((start + count - 1) / per_event) + 1
             for number in range(first, last + 1):
-                index = math.ceil(number * self.event_period * self.rate - 1e-9)
+                index = math.ceil(number * per_event - 1e-9)
                 if start <= index < start + count:
                     events.append((index, number))
         return Block(start, self.t0 + t, data, events)
@@ -656,11 +661,6 @@ class _SharedSignals:
             found = self._values[key] = (covered, t, data, indices, block.events)
         _, t, data, indices, events = found
         within = events[bisect.bisect_left(indices, start) : bisect.bisect_left(indices, stop)]
-        if within:  # the events the block's own computation finds (its numbers' bounds too)
-            period, rate = device.event_period, device.rate
-            first = math.floor(start / rate / period) + 1
-            last = math.floor((stop - 1) / rate / period)
-            within = [(index, number) for index, number in within if first <= number <= last]
         return t[start:stop], {kind: values[start:stop] for kind, values in data.items()}, within
 
     def clear(self) -> None:
