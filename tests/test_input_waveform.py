@@ -239,7 +239,8 @@ def test_without_frames_the_scheduler_still_publishes_and_nothing_is_lost(make):
 def test_waveform_devices_are_updated_together_at_one_instant_and_fault_alone(make):
     """The manager updates the waveform devices of a frame as one group (one clock reading
     for all of them): each swaps once per frame at the same instant with every sample due by
-    then; one whose update raises is faulted while the others go on delivering."""
+    then; one whose own frame update raises (its frame is its own when an event comes due)
+    is faulted while the others go on delivering."""
     body = "\n".join(WAVE.format(name=f"Group {i}", rate=1000.0, seed=i) for i in range(4))
     m = make(body)
     devices = [m.device(f"Group {i}") for i in range(4)]
@@ -264,6 +265,12 @@ def test_waveform_devices_are_updated_together_at_one_instant_and_fault_alone(ma
                 assert before - 1e-3 - 1e-9 < frame_samples.newest.timestamp <= instant
                 checked += 1
     assert checked >= 60
+    # its frame is its own (where the update raises) when its next event comes due, within an
+    # event period (0.25 s): frames go on until then
+    deadline = now() + 5.0
+    while devices[3].state.value != "faulted" and now() < deadline:
+        time.sleep(0.003)
+        m.update()
     assert devices[3].state.value == "faulted" and "broken on purpose" in devices[3].error
     assert all(d.state.value == "running" for d in devices[:3])
 
@@ -425,3 +432,43 @@ def test_every_event_is_in_exactly_one_block_however_the_samples_are_split(make,
             for event in device.compute(start, stop - start).events
         ]
         assert found == expected, cuts
+
+
+def test_with_an_event_period_a_frame_is_a_devices_own_only_when_an_event_comes_due(make):
+    """The group's usual frame (its shared windows) takes every window without an event; a
+    device's frame is its own when one of its events comes due, and then publishes it: every
+    event once, in order, none lost, while most frames stay the group's (a block holding an
+    event made every frame of that block the device's own)."""
+    body = "\n".join(
+        f'<waveform_device name="Ev {i}" version="1"><rate>1000</rate>'
+        f"<position_path>circle</position_path><event_period>0.05</event_period>"
+        f"</waveform_device>"
+        for i in range(3)
+    )
+    m = make(body)
+    devices = [m.device(f"Ev {i}") for i in range(3)]
+    own = dict.fromkeys(range(3), 0)
+    for index, device in enumerate(devices):
+        update = device._update_at
+
+        def counted(moment, update=update, index=index):
+            own[index] += 1
+            update(moment)
+
+        device._update_at = counted
+    received: dict[int, list[int]] = {i: [] for i in range(3)}
+    frames = 0
+    deadline = now() + 10.0
+    while min(len(r) for r in received.values()) < 8 and now() < deadline:
+        time.sleep(0.002)
+        m.update()
+        frames += 1
+        for index, device in enumerate(devices):
+            for sample in device.store.frame(DeviceKind.COMMAND):
+                received[index].append(int(sample.values[0]))
+    for index in range(3):
+        events = received[index]
+        assert len(events) >= 8
+        assert events == list(range(1, len(events) + 1))  # each once, in order, none lost
+        # a frame of its own for each event (and a few more: a block's end, the first frame)
+        assert own[index] < frames / 2, (own, frames)

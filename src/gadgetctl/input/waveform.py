@@ -24,7 +24,9 @@ one clock reading, then, with numpy over all of them at once, each device's wind
 block that came due; those windows go to the group's
 :class:`~gadgetctl.input.samples.SharedWindows` (each store makes its frame from it when
 read). Only a device whose frame is not that usual one (its block runs out, no sample came
-due, it is not running, its block has events) is updated alone.
+due, it is not running, its window holds an event) is updated alone: with an event period,
+a device's frame is its own only when one of its events comes due, not for the whole block
+that holds one.
 """
 
 from __future__ import annotations
@@ -164,6 +166,10 @@ class PositionChannel:
     radius: float
 
 
+#: The sample index of "no event to come" (past every sample a block can hold).
+NO_EVENT = np.iinfo(np.int64).max
+
+
 class Block:
     """Samples ``start`` .. ``end - 1`` computed ahead: their ``timestamps``, per kind their
     values (``items``: (kind, array) pairs) and ``events`` ((sample index, event number)).
@@ -183,6 +189,15 @@ class Block:
         self.items = tuple(data.items())
         self.events = events
         self.end = start + len(timestamps)
+
+    def event_after(self, index: int) -> int:
+        """The sample index of the first event at or after sample ``index`` (:data:`NO_EVENT`
+        when there is none): a window that ends at or before it holds no event."""
+        events = self.events
+        if not events:
+            return NO_EVENT
+        found = bisect.bisect_left(events, (index,))  # (events are in the order of their samples)
+        return events[found][0] if found < len(events) else NO_EVENT
 
     @property
     def data(self) -> dict[DeviceKind, np.ndarray]:
@@ -419,12 +434,12 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
 
     def _compute_ahead(self) -> None:
         """The block after the current one, starting some samples before its end (the caller
-        holds the publishing lock); kept only without events."""
+        holds the publishing lock)."""
         block = self._block
         size = max(1, math.ceil(self.rate * BLOCK_SECONDS))
         overlap = min(size - 1, max(64, math.ceil(self.rate * 0.05)))
         ahead = self.compute(max(block.start, block.end - overlap), size)
-        self._ahead, self._ahead_tried = (None if ahead.events else ahead), True
+        self._ahead, self._ahead_tried = ahead, True
 
     def _take_ahead(self) -> None:
         """Make the block computed ahead the current one (the caller holds the publishing
@@ -450,7 +465,11 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
             end = int((moment - self.t0) * self.rate) + 1  # samples whose time has come
             first = self.next_index
             block = self._block
-            if block is not None and block.start <= first < end <= block.end and not block.events:
+            if (
+                block is not None
+                and block.start <= first < end <= block.end
+                and end <= block.event_after(first)
+            ):
                 # the usual frame: one more window of the current block, and the swap
                 self.next_index = end
                 self.store.add_slices_and_swap(
@@ -694,6 +713,9 @@ class _FrameGroup:
             self.ahead_first = np.zeros(count, dtype=np.int64)  # the block computed ahead's
             self.ahead_last = np.zeros(count, dtype=np.int64)
             self.ahead = np.zeros(count, dtype=bool)  # a next block was computed (or tried)
+            # the sample of the current block's next event (a window that reaches it is the
+            # device's own frame, which publishes the event; the others stay usual)
+            self.event_next = np.full(count, NO_EVENT, dtype=np.int64)
             self.cap = np.array([d.store.cap for d in devices], dtype=np.int64)
             self.usual = np.zeros(count, dtype=bool)  # the usual frame may be taken
             self.running = np.zeros(count, dtype=bool)
@@ -723,10 +745,11 @@ class _FrameGroup:
         else:
             self.ahead_first[slot] = self.ahead_last[slot] = 0
         block = device._block
-        if block is None or block.events or store._waiting:
+        if block is None or store._waiting:
             self.usual[slot] = False
             return
         self.first[slot], self.last[slot] = block.start, block.end
+        self.event_next[slot] = block.event_after(device.next_index)
         self.windows.set_arrays(slot, block.timestamps, block.items)
         self.usual[slot] = True
 
@@ -754,6 +777,8 @@ class _FrameGroup:
                     for slot in np.flatnonzero(switch).tolist():
                         devices[slot]._take_ahead()
                     usual |= switch
+            usual &= ends <= self.event_next  # a window with an event: the device's own frame
+            if not (usual | empty).all():
                 for slot in np.flatnonzero(~(usual | empty)).tolist():
                     device = devices[slot]
                     if device._updated_frame == frame:
@@ -788,7 +813,7 @@ class _FrameGroup:
         first, last, nexts = self.first.tolist(), self.last.tolist(), self.next.tolist()
         cap, alone = self.cap.tolist(), self.alone.tolist()
         usual, running = self.usual.tolist(), self.running.tolist()
-        rate = self.rate.tolist()
+        rate, events = self.rate.tolist(), self.event_next.tolist()
         windows: list[tuple[int, int, int]] = []
         empty: list[int] = []
         for slot, t0 in enumerate(self.t0.tolist()):
@@ -800,7 +825,7 @@ class _FrameGroup:
                 return False
             if end <= begin:
                 empty.append(slot)
-            elif first[slot] <= begin and end <= last[slot]:
+            elif first[slot] <= begin and end <= last[slot] and end <= events[slot]:
                 windows.append((slot, begin - first[slot], end - first[slot]))
             else:
                 return False

@@ -48,6 +48,21 @@ KIND_ROLES: dict[DeviceKind, Role] = {
     DeviceKind.STRING: Role.TEXT,
     DeviceKind.COMMAND: Role.TEXT,
 }
+
+
+def served_positions(items: tuple[tuple[DeviceKind, object], ...]) -> object | None:
+    """The position values among a window's ``items`` ((kind, values) pairs) when position is
+    the only kind of them that is served (a waveform device's hat values are not), else None:
+    such a window is served as tracker reports alone."""
+    positions = None
+    for kind, values in items:
+        if kind is DeviceKind.POSITION:
+            positions = values
+        elif kind in KIND_ROLES:
+            return None
+    return positions
+
+
 PROXY_ROLES: tuple[tuple[type[Proxy], Role], ...] = (
     (PositionProxy, Role.TRACKER),
     (DigitalProxy, Role.BUTTON),

@@ -19,7 +19,7 @@ from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.proxies import Proxy
 from gadgetctl.input.samples import FEW_SLOTS, FrameSamples, Sample, SampleBatch
-from gadgetctl.serve.catalog import Role, ServedElement, proxy_role
+from gadgetctl.serve.catalog import Role, ServedElement, proxy_role, served_positions
 
 _PRESSED = (DigitalState.ON, DigitalState.TOGGLE_ON)
 
@@ -150,11 +150,7 @@ class _GroupPlan:
         for index in indices.tolist():
             slot = int(self.slots[index])
             arrays = windows.arrays[slot]
-            self.poses_only[index] = (
-                arrays is not None
-                and len(arrays[1]) == 1
-                and arrays[1][0][0] is DeviceKind.POSITION
-            )
+            self.poses_only[index] = arrays is not None and served_positions(arrays[1]) is not None
             self.generation[index] = windows.generation[slot]
 
 

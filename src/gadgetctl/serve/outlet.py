@@ -9,10 +9,9 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
-from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.samples import FEW_SLOTS
 from gadgetctl.input.transforms import quaternions_xyzw
-from gadgetctl.serve.catalog import Role, ServedElement
+from gadgetctl.serve.catalog import Role, ServedElement, served_positions
 from gadgetctl.serve.framing import (
     CHANGE_SIZE,
     POSE_SIZE,
@@ -280,15 +279,14 @@ class VrpnOutlet:
                 if upcoming is None or name is None:
                     continue
                 times, items = upcoming
-                if len(items) == 1 and items[0][0] is DeviceKind.POSITION:
-                    matrices = items[0][1]
-                    if _framable(matrices):
-                        first, last, sensors = self._frame_into(
-                            state, int(state.row[slot] ^ 1), name, times, matrices, 0
-                        )
-                        state.spare[slot] = first, last, sensors
-                        state.spare_for[slot] = times
-                        state.spare_offset[slot] = state.offset
+                matrices = served_positions(items)
+                if _framable(matrices):
+                    first, last, sensors = self._frame_into(
+                        state, int(state.row[slot] ^ 1), name, times, matrices, 0
+                    )
+                    state.spare[slot] = first, last, sensors
+                    state.spare_for[slot] = times
+                    state.spare_offset[slot] = state.offset
                 limit -= 1
             if limit <= 0:
                 return
@@ -300,10 +298,11 @@ class VrpnOutlet:
         :meth:`Outlet.tracker` would)."""
         windows = state.windows
         times, items = windows.arrays[slot]
-        matrices = items[0][1]
+        matrices = served_positions(items)
         name = state.names[slot]
         if not _framable(matrices) or (stop - start) * matrices.shape[1] > FRAME_AHEAD:
-            self._other_window(self.senders[name], times, matrices, start, stop, state.offset)
+            if matrices is not None:
+                self._other_window(self.senders[name], times, matrices, start, stop, state.offset)
             state.generation[slot] = -1
             return False
         first, last, sensors = self._frame_into(
