@@ -119,6 +119,24 @@ def cli(capsys, monkeypatch):
     return run
 
 
+def modules_after_validate(directory: Path) -> set[str]:
+    """The modules a fresh `gadgetctl validate DIRECTORY -f json` process has imported when
+    the command ends (run through the CLI's main, in a Python process of its own)."""
+    import subprocess
+
+    code = (
+        "import sys\nfrom gadgetctl.cli.main import main\n"
+        "try:\n    main(['validate', sys.argv[1], '-f', 'json'])\n"
+        "except SystemExit:\n    pass\n"
+        "sys.stderr.write(' '.join(sorted(sys.modules)))"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code, str(directory)], capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0, done.stderr
+    return set(done.stderr.split())
+
+
 def write(path: Path, text: str) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(text, encoding="utf-8")

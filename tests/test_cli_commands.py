@@ -4,14 +4,13 @@ the other command modules."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import pytest
 import typer.main
 
 from gadgetctl.cli.app import build_app
 from gadgetctl.cli.commands import COMMANDS
+
+from conftest import modules_after_validate
 
 
 def test_the_full_application_has_every_command_and_no_other():
@@ -30,13 +29,5 @@ def test_each_name_registers_its_own_command_only(name):
 @pytest.mark.timeout(60)
 def test_validate_does_not_import_the_other_commands(tmp_path):
     (tmp_path / "a.jconf").write_text("<configuration/>", encoding="utf-8")
-    code = (
-        "import sys\nfrom gadgetctl.cli.main import main\n"
-        "try:\n    main(['validate', sys.argv[1], '-f', 'json'])\n"
-        "except SystemExit:\n    pass\n"
-        "sys.stderr.write(' '.join(sorted(m for m in sys.modules if m.endswith('_cmd'))))"
-    )
-    done = subprocess.run(
-        [sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True, timeout=60
-    )
-    assert done.stderr == "gadgetctl.cli.validate_cmd"
+    modules = modules_after_validate(tmp_path)
+    assert {m for m in modules if m.endswith("_cmd")} == {"gadgetctl.cli.validate_cmd"}
