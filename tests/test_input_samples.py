@@ -127,3 +127,28 @@ def test_kinds_given_by_value_or_member():
     assert SampleStore(["analog", D]).kinds == (A, D)
     with pytest.raises(ValueError):
         SampleStore(["no such kind"])
+
+
+def test_a_kind_has_a_channel_only_once_a_sample_of_it_came():
+    store = SampleStore([A, D, DeviceKind.POSITION])
+    assert store.channels_made == ()
+    # a declared kind without samples reads as empty, as before
+    assert store.frame(D).count == 0 and store.latest(D) is None
+    assert (store.total(D), store.dropped(D), store.total(), store.most_dropped()) == (0, 0, 0, 0)
+    store.add("analog", 1.0, (0.5,))  # by value: the channel is the member's
+    store.add_batch(DeviceKind.POSITION, np.array([2.0]), np.zeros((1, 1, 4, 4)))
+    store.swap()
+    assert store.channels_made == (A, DeviceKind.POSITION)
+    assert store.kinds == (A, D, DeviceKind.POSITION)
+    assert store.frame(A).timestamps() == [1.0] and store.latest(A).timestamp == 1.0
+    assert store.total() == 2 and store.total(D) == 0
+    assert store.frame(D).count == 0  # still no digital channel, nothing shared was changed
+    assert store.channels_made == (A, DeviceKind.POSITION)
+    with pytest.raises(KeyError, match="no hat data"):
+        store.frame(DeviceKind.HAT)
+    with pytest.raises(KeyError, match="no hat data"):
+        store.add_slices(np.array([3.0]), ((DeviceKind.HAT, np.zeros((1, 1))),), 0, 1)
+
+
+def test_stores_of_the_same_kinds_share_one_tuple_of_them():
+    assert SampleStore([A, D]).kinds is SampleStore(["analog", "digital"]).kinds

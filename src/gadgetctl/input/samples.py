@@ -377,6 +377,13 @@ class _Channel:
         self.count = min(self.count, cap)
 
 
+#: The channel a declared kind reads as before its first sample (never added to).
+_UNUSED = _Channel()
+
+#: The tuples of declared kinds, one for each set (10,000 devices alike share one).
+_KINDS: dict[tuple[DeviceKind, ...], tuple[DeviceKind, ...]] = {}
+
+
 class SampleStore:
     """The sample buffers of one device, one per kind it provides, behind one lock."""
 
@@ -386,9 +393,12 @@ class SampleStore:
         self.cap = cap
         self._lock = threading.Lock()
         # (a member is taken as it is: DeviceKind(member) costs more than the channel)
-        self._channels: dict[DeviceKind, _Channel] = {
-            (k if type(k) is DeviceKind else DeviceKind(k)): _Channel() for k in kinds
-        }
+        declared = tuple(k if type(k) is DeviceKind else DeviceKind(k) for k in kinds)
+        self._kinds = _KINDS.setdefault(declared, declared)  # one tuple per set of kinds
+        # a kind's channel is made when its first sample comes: a waveform device with one
+        # position path declares six kinds and fills one (five channels and a larger dict,
+        # 5 MB for 10,000 devices); a kind without one reads as _UNUSED
+        self._channels: dict[DeviceKind, _Channel] = {}
         self._swapped_at: float | None = None
         self._waiting = False  # samples were added since the last swap
         self._current: Mapping[DeviceKind, FrameSamples] = {}
@@ -450,10 +460,10 @@ class SampleStore:
             if not fresh and not shared.emptied[slot]:
                 return
             timestamps, items = shared.arrays[slot]
-            channels = self._channels
             if counted:
+                writable = self._writable
                 for kind, _ in items:
-                    channels[kind].total += counted
+                    writable(kind).total += counted
             window = int(shared.window_serial[slot])
             if fresh or window > self._applied:  # a window not made current yet comes first
                 self._applied = window
@@ -466,19 +476,38 @@ class SampleStore:
 
     @property
     def kinds(self) -> tuple[DeviceKind, ...]:
-        return tuple(self._channels)
+        return self._kinds
 
     def _channel(self, kind: DeviceKind) -> _Channel:
-        try:
-            return self._channels[kind]
-        except KeyError:
-            raise KeyError(f"this device provides no {kind} data") from None
+        """The channel of ``kind`` to read (:data:`_UNUSED` when none has come yet)."""
+        channel = self._channels.get(kind)
+        if channel is not None:
+            return channel
+        if kind in self._kinds:
+            return _UNUSED
+        raise KeyError(f"this device provides no {kind} data")
+
+    def _writable(self, kind: DeviceKind) -> _Channel:
+        """The channel of ``kind`` to add to, made on the first sample of the kind."""
+        channel = self._channels.get(kind)
+        if channel is None:
+            kinds = self._kinds
+            if kind not in kinds:
+                raise KeyError(f"this device provides no {kind} data")
+            kind = kinds[kinds.index(kind)]  # the member, also when given by value
+            channel = self._channels[kind] = _Channel()
+        return channel
+
+    @property
+    def channels_made(self) -> tuple[DeviceKind, ...]:
+        """The kinds whose channel was made (that had a sample), in the order they came."""
+        return tuple(self._channels)
 
     # -- sampling side ----------------------------------------------------------------
 
     def add(self, kind: DeviceKind, timestamp: float, values: Any) -> None:
         """Append one sample."""
-        channel = self._channel(kind)
+        channel = self._writable(kind)
         if self._shared is not None:
             self.sync()
         with self._lock:
@@ -502,11 +531,8 @@ class SampleStore:
         if not size:
             return
         pairs = values.items() if isinstance(values, dict) else values
-        channels = self._channels
-        try:
-            chunks = [(channels[kind], SampleBatch(timestamps, data)) for kind, data in pairs]
-        except KeyError as err:
-            raise KeyError(f"this device provides no {err.args[0]} data") from None
+        writable = self._writable
+        chunks = [(writable(kind), SampleBatch(timestamps, data)) for kind, data in pairs]
         cap = self.cap
         if self._shared is not None:
             self.sync()
@@ -538,7 +564,7 @@ class SampleStore:
         cap = self.cap
         self._waiting = True
         for kind, data in values:
-            channel = channels[kind]
+            channel = channels.get(kind) or self._writable(kind)
             ready = channel.ready
             last = ready[-1] if ready else None
             if type(last) is SampleBatch and last.extends(data, start):
@@ -583,7 +609,7 @@ class SampleStore:
             if not self._waiting and 0 < size <= self.cap:
                 channels = self._channels
                 for kind, _ in values:
-                    channels[kind].total += size
+                    (channels.get(kind) or self._writable(kind)).total += size
                 self._window_frames(timestamps, values, start, stop)
                 return
             if size > 0:
@@ -599,7 +625,7 @@ class SampleStore:
         current = {}
         channels = self._channels
         for kind, data in values:
-            channel = channels[kind]
+            channel = channels.get(kind) or self._writable(kind)
             channel.frame = current[kind] = _window_frame(timestamps, data, start, stop)
             channel.latest = None  # the frame's newest, computed when asked
         for kind in self._current:  # kinds that had samples and have none now
