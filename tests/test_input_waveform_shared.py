@@ -115,3 +115,43 @@ def test_samples_past_the_shared_ones_are_computed_alone(devices):
     block = device.compute(start, 10)
     assert all(values.flags.writeable for _, values in block.items)
     same_block(block, device._compute(start, 10))
+
+
+def test_the_shared_values_are_read_only_where_they_are_owned(devices):
+    block = devices["tracker1"].compute(0, 20)
+    for _, values in block.items:
+        owner = values if values.base is None else values.base
+        assert not owner.flags.writeable  # no view anywhere can write them
+
+
+def test_a_position_proxy_keeps_a_view_of_shared_values_and_copies_writable_ones(tmp_path):
+    from gadgetctl.input.proxies import PositionProxy
+
+    body = (
+        '<waveform_device name="W" version="1"><rate>10</rate><position_path>circle</position_path>'
+        '</waveform_device><position_proxy name="P" version="1"><device>W</device><unit>0</unit>'
+        "</position_proxy>"
+    )
+    path = tmp_path / "p.jconf"
+    path.write_text(HEAD + body + "</elements>\n</configuration>\n")
+    manager = InputManager(default_repository(), ManagerOptions(retry_interval=None))
+    try:
+        manager.configure(load_configuration([path]))
+        device, proxy = manager.device("W"), manager.proxy("P")
+        block = device.compute(0, 4)
+        shared = dict(block.items)[next(iter(dict(block.items)))]
+        proxy.take(shared[2][0], device)
+        assert np.shares_memory(proxy.matrix, shared)  # a view, not a copy
+        assert not proxy.matrix.flags.writeable
+        np.testing.assert_array_equal(proxy.matrix, shared[2][0])
+        assert isinstance(proxy, PositionProxy)
+        mine = np.eye(4)  # the caller may change it afterwards: copied, read-only
+        proxy.take(mine, device)
+        mine[0, 3] = 5.0
+        assert proxy.matrix[0, 3] == 0.0 and not proxy.matrix.flags.writeable
+        view = mine[None][0]  # read-only itself, writable where it is owned: copied too
+        view.flags.writeable = False
+        proxy.take(view, device)
+        assert not np.shares_memory(proxy.matrix, mine)
+    finally:
+        manager.shutdown()

@@ -242,6 +242,15 @@ _IDENTITY = np.eye(4)
 _IDENTITY.flags.writeable = False
 
 
+def _frozen(value: Any) -> bool:
+    """Whether ``value`` is a read-only array whose memory is read-only where it is owned too
+    (no one can write the numbers it shows)."""
+    if type(value) is not np.ndarray or value.flags.writeable:
+        return False
+    base = value.base
+    return base is None or (type(base) is np.ndarray and not base.flags.writeable)
+
+
 class PositionProxy(Proxy):
     """4x4 float64 matrices in meters; ``matrix_in(LengthUnit.FEET)`` converts."""
 
@@ -262,6 +271,11 @@ class PositionProxy(Proxy):
         self._matrix = _IDENTITY  # read-only: one for every proxy not yet given a sample
 
     def take(self, value: Any, device: Input) -> None:
+        if not self.filters and _frozen(value):
+            # a view of samples nothing can change (a waveform's shared signals): kept as it
+            # is, not copied (a copy each was 2.5 MB for 10,000 proxies)
+            self._matrix = value
+            return
         matrix = self.filters.apply(value) if self.filters else np.array(value)
         matrix.flags.writeable = False
         self._matrix = matrix

@@ -672,7 +672,9 @@ class _SharedSignals:
             covered = min(self.SHARED_SAMPLES, max(stop, 64, 2 * found[0] if found else 0))
             block = device._compute(0, covered)
             data = block.data
-            for array in (*data.values(),):
+            for kind, array in (*data.items(),):
+                if array.base is not None:  # owned here, so that nothing can write it
+                    array = data[kind] = array.copy()
                 array.flags.writeable = False
             t = np.arange(covered, dtype=np.float64) / device.rate
             t.flags.writeable = False
