@@ -4,6 +4,7 @@ its running statistics, button presses, analog histories and the values a view s
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -11,11 +12,14 @@ from gadgetctl.input.clock import now
 from gadgetctl.input.device import Input
 from gadgetctl.input.devicetypes import Analog
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.samples import FrameSamples, Sample
+from gadgetctl.input.samples import NO_CURRENT, FrameSamples, Sample
 from gadgetctl.monitor.encoding import plain_value
 from gadgetctl.monitor.gather import as_rows, frame_timestamps
 from gadgetctl.monitor.stats import DeviceSnapshot, DeviceStats
 from gadgetctl.monitor.views import UnitView
+
+#: A track's analog histories while it has none (shared).
+_NO_HISTORY: tuple[()] = ()
 
 STATS_REFRESH = 0.25  # seconds between recomputations of interval percentiles and jitter
 
@@ -51,7 +55,7 @@ class DeviceTrack:
         self.statistics = statistics
         self.stats = DeviceStats(name)
         self.history_length = history
-        self.frames: dict[DeviceKind, FrameSamples] = {}
+        self.frames: Mapping[DeviceKind, FrameSamples] = NO_CURRENT  # (shared, read-only)
         self.count = 0
         self.frame_seen = -1  # the manager frame whose samples ``frames`` holds
         self.units: dict[str, int] = {}
@@ -62,7 +66,8 @@ class DeviceTrack:
         self.digital_state: np.ndarray | None = None
         self.presses: np.ndarray | None = None
         self.changed: np.ndarray | None = None
-        self.analog_history: list[deque[float]] = []
+        # one history per analog unit, made at its first value (most devices have none)
+        self.analog_history: list[deque[float]] | tuple[()] = _NO_HISTORY
         self._snapshot: DeviceSnapshot | None = None
         self._snapshot_at = -1.0
         self._swapped_at: float | None = None
@@ -87,7 +92,7 @@ class DeviceTrack:
         fresh = swapped_at != self._swapped_at  # a failed update_data leaves the old frame
         self._swapped_at = swapped_at
         # the kinds with samples this frame, as the swap found them (a read-only mapping)
-        self.frames = frames = store.current if fresh else {}
+        self.frames = frames = store.current if fresh else NO_CURRENT
         if not self.statistics:  # gathering only (serve): no rates, presses or histories
             if not frames:
                 self.count = 0
@@ -156,6 +161,8 @@ class DeviceTrack:
             return
         values = newest.values
         histories = self.analog_history
+        if type(histories) is tuple:
+            histories = self.analog_history = []
         while len(histories) < len(values):
             histories.append(deque(maxlen=self.history_length))
         device = self.device
