@@ -321,3 +321,17 @@ def test_a_device_s_timestamp_ring_grows_with_what_it_was_given():
         assert jitter == pytest.approx(float(np.std(intervals)))
         assert stats.max_gap == max(np.diff(fed))
     assert len(stats._ring) == 300
+
+
+def test_timestamps_of_every_form_wait_as_doubles_and_come_out_in_order():
+    stats = DeviceStats("d", history=8)
+    stats.add_timestamp(1)
+    stats.add_timestamps([2, 2.5])  # ints and floats
+    stats.add_timestamps(np.array([3.25, 4.0], dtype=np.float32))
+    stats.add_timestamps(np.array([5.0, 6.0]))
+    assert stats._pending.typecode == "d" and stats._pending.itemsize == 8
+    assert stats.recent_timestamps().tolist() == [1.0, 2.0, 2.5, 3.25, 4.0, 5.0, 6.0]
+    assert len(stats._pending) == 0 and stats.count == 7
+    stats.add_timestamps(np.arange(7.0, 12.0))  # past ``history``: consolidated as it comes
+    assert stats.recent_timestamps().tolist() == [4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0]
+    assert stats.max_gap == 1.0

@@ -15,6 +15,7 @@ recording.
 from __future__ import annotations
 
 import math
+from array import array
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, fields
 
@@ -121,7 +122,8 @@ class DeviceStats:
         # (time, count) of recent frame ends: a list (a deque is 600 bytes even empty, 6 MB
         # for 10,000 devices; a window holds tens of frames, dropped from the front at once)
         self._frame_ends: list[tuple[float, int]] = []
-        self._pending: list[float] = []
+        # doubles, not a list of Python floats (32 bytes each, 8 here)
+        self._pending = array("d")
         self._ring_len = 0
         self._ring_pos = 0
         self._last: float | None = None
@@ -145,7 +147,7 @@ class DeviceStats:
         if n == 0:
             return
         if isinstance(timestamps, np.ndarray):
-            self._pending.extend(timestamps.astype(np.float64, copy=False).ravel().tolist())
+            self._pending.frombytes(timestamps.astype(np.float64, copy=False).ravel().tobytes())
         else:
             self._pending.extend(timestamps)
         self.count += n
@@ -185,7 +187,7 @@ class DeviceStats:
         if not self._pending:
             return
         batch = np.array(self._pending, dtype=np.float64)
-        self._pending.clear()
+        del self._pending[:]
         # np.diff's numbers by slicing (np.diff itself cost more than its arithmetic)
         if self._last is not None:
             intervals = np.concatenate(((batch[0] - self._last,), batch[1:] - batch[:-1]))
