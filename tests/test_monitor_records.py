@@ -250,3 +250,31 @@ def test_a_statistics_record_in_parts_is_the_record_in_one_piece():
     assert "".join(encode_stats_parts(empty)) == encode_record(empty)
     with pytest.raises(ValueError):
         list(encode_stats_parts(StatsRecord(float("nan"), devices)))
+
+
+def test_status_records_in_one_batch_are_each_record_as_encode_record_writes_it():
+    """Issue 27: a session's start writes a status record per element (20,000 for 10,000
+    devices and their proxies) with each distinct timestamp and status encoded once; the text
+    is exactly encode_record's, record by record, whatever the names, states and timestamps."""
+    from gadgetctl.monitor.records import StatusRecord, encode_statuses
+
+    class Kind(StrEnum):
+        DEVICE = "device"
+
+    records = [
+        StatusRecord(12.5, "W0", "device", "waveform_device", "running", None),
+        StatusRecord(12.5, "P0", "proxy", "position_proxy", "active", None),
+        StatusRecord(12.5, 'Wand "é☃"\n', Kind.DEVICE, "waveform_device", "running", None),
+        StatusRecord(12.5, "Gone", None, "", "removed", "no longer configured"),
+        StatusRecord(13.0, "W0", "device", "waveform_device", "faulted", 'port "x" \u00e9'),
+        StatusRecord(13, "Int", "device", "waveform_device", "running", None),  # an int time
+        StatusRecord(1e-300, "Tiny", "alias", "alias", "stupefied", "its proxy 'p'"),
+    ]
+    rng = random.Random(5)
+    records += [rng.choice(records[:5]) for _ in range(200)]
+    assert encode_statuses(records) == "".join(encode_record(r) for r in records)
+    assert [decode_line(line) for line in encode_statuses(records).splitlines()] == records
+    assert encode_statuses([]) == ""
+    for bad in (float("nan"), float("inf")):
+        with pytest.raises(ValueError):
+            encode_statuses([StatusRecord(bad, "W0", "device", "t", "running")])

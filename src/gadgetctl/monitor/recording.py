@@ -37,6 +37,7 @@ from gadgetctl.monitor.records import (
     encode_record,
     encode_samples,
     encode_stats_parts,
+    encode_statuses,
 )
 from gadgetctl.safewrite import WriteError, create_new
 
@@ -228,7 +229,7 @@ class Recorder:
         writes of one line each cost seconds while another thread held the GIL)."""
         self.flush()
         if records:
-            self._write("".join(encode_record(r) for r in records))
+            self._write(encode_statuses(records))
 
     def write_stats(
         self, devices: Mapping[str, Mapping[str, object]], timestamp: float | None = None

@@ -336,10 +336,14 @@ class MonitorSession:
                 }
                 track = self._tracks.get(name)
                 units = dict(track.units) if track is not None else {}
-                for kind in device.store.kinds:
-                    latest = device.store.latest(kind)
-                    if latest is not None and kind.value not in units:
-                        units[kind.value] = len(latest.values)
+                store = device.store
+                store.sync()
+                made = store.channels_made  # a kind without a channel never had a sample
+                for kind in store.kinds:
+                    if kind in made and kind.value not in units:
+                        latest = store.latest(kind)
+                        if latest is not None:
+                            units[kind.value] = len(latest.values)
                 entry["units"] = units
                 if isinstance(device, Analog):
                     entry["min"], entry["max"] = device.analog_min, device.analog_max
