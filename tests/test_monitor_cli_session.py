@@ -6,6 +6,7 @@ from __future__ import annotations
 import io
 import json
 import math
+import time
 from pathlib import Path
 
 import numpy as np
@@ -441,3 +442,31 @@ def test_the_final_statistics_made_when_read_are_those_made_at_once(waveform):
         r for r in map(json.loads, stream.getvalue().decode().splitlines()) if r["type"] == "stats"
     ]
     assert stats["devices"] == json.loads(json.dumps(at_once))
+
+
+def test_the_figures_at_the_end_are_those_of_the_latest_frame(waveform):
+    """A monitor whose frames are slower than its devices' samples (10,000 devices make about
+    one frame a second) has not read what came after its latest frame. The final statistics
+    and the table describe that frame's instant: read a second later, a 120 Hz tracker's
+    window rate had fallen to 0 Hz and its age had grown by the second, while it sampled on."""
+    from gadgetctl.cli.monitor_text import TableView
+
+    manager, configuration = waveform
+    session = MonitorSession(manager, configuration, selectors=["Waveform Tracker"])
+    session.start()
+    list(session.frames(duration=0.4))
+    looked = session.last_look
+    deadline = looked + 10.0
+    while now() < looked + 1.2:  # a frame's worth of silence longer than the 1 s window
+        assert now() < deadline
+        time.sleep(0.05)  # the devices sample on (the scheduler stands in); no frame reads them
+    with manager.hold_sampling():
+        entry = session.final_stats()["Waveform Tracker"]
+        table = io.StringIO()
+        TableView(session, table).print()
+    assert session.last_look == looked
+    assert 80.0 < entry["window_rate"] < 160.0  # 120 Hz, as at the latest frame
+    assert entry["age"] < 0.1
+    row = next(line for line in table.getvalue().splitlines() if line.startswith("Waveform"))
+    rate = float(row.split()[row.split().index("running") + 1])
+    assert 80.0 < rate < 160.0

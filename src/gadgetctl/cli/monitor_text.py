@@ -12,7 +12,6 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from gadgetctl.input.clock import now
 from gadgetctl.monitor.events import FINGERS, HAT_NAMES, UNIT_SYMBOLS, number_text, pose_text
 from gadgetctl.monitor.session import MonitorSession
 from gadgetctl.monitor.stats import DeviceSnapshot
@@ -491,7 +490,9 @@ class TableView:
         selected = self.session.selected
         fit = self.rows_that_fit(len(selected))
         names = selected[:fit]
-        moment = now()  # one instant for every row, as one snapshot of them all has
+        # one instant for every row, as one snapshot of them all has: the latest frame's
+        # (what came after it was not read: later, slow frames made devices look slow)
+        moment = self.session.last_look
         rows = PackedRows(COLUMNS)
         positions = PositionTexts(self.length_unit, self.quaternion, self.pose)
         notes: list[str] = []

@@ -456,6 +456,16 @@ class MonitorSession:
             if self.rate_shortfall is None and self.run_seconds >= RATE_CHECK_MIN:
                 self._check_rate(count, self.run_seconds)
 
+    @property
+    def last_look(self) -> float:
+        """When the latest frame gathered the devices' samples (now, before the first frame):
+        the instant the figures at the end of a run describe. What came after it was never
+        read; at a later instant, a device read by frames slower than its samples (10,000
+        devices make about one frame a second) looked as if it were slowing down: its window
+        rate fell (a 10 Hz device showed 1 Hz) and its age grew while it sampled on."""
+        last = self._last_frame_at
+        return now() if last is None else last
+
     def has_slack(self) -> bool:
         """Whether the next frame is due in more than :data:`PREPARE_SLACK` of a frame period
         (or no frames run): time for work done ahead (it waits for a later pause otherwise)."""
@@ -864,10 +874,10 @@ class MonitorSession:
 
     def final_stats_view(self) -> FinalStats:
         """:meth:`final_stats` as a mapping whose entries are made when read, each time, at
-        the instant of this call: a consumer that encodes them one at a time (a stats
+        the instant of the latest frame (:attr:`last_look`): a consumer that encodes them one at a time (a stats
         record) never holds them all (10,000 devices' were about 15 MB). Read it while the
         statistics stand still (no frames, the scheduler held)."""
-        return FinalStats(self, now())
+        return FinalStats(self, self.last_look)
 
     def _final_entry(self, name: str, moment: float) -> dict[str, object] | None:
         """The :meth:`final_stats` entry of ``name`` at ``moment`` (None: not a device
