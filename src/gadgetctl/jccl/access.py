@@ -30,9 +30,28 @@ class UnknownProperty(KeyError):
 _LONG_MAX = 2**63 - 1
 
 
+#: Texts read before and what they read as: configurations write the same few numbers again
+#: and again (20,000 elements read "0", "1.0" and "-1.0" tens of thousands of times).
+_READ_INTS: dict[str, int] = {}
+_READ_FLOATS: dict[str, float] = {}
+#: At most this many texts are remembered per kind of number (short ones only).
+_READ_MOST = 4096
+_READ_LONGEST = 32
+
+
 def read_int(text: str) -> int:
     """The leading integer of ``text`` as C's ``strtol`` reads it (0 without one), saturated
     to the range of a 64-bit long, so thousands of digits never reach ``int()``'s limit."""
+    known = _READ_INTS.get(text)
+    if known is not None:
+        return known
+    value = _read_int(text)
+    if len(text) <= _READ_LONGEST and len(_READ_INTS) < _READ_MOST:
+        _READ_INTS[text] = value
+    return value
+
+
+def _read_int(text: str) -> int:
     match = _LEADING_INT.match(text.strip())
     if not match:
         return 0
@@ -44,8 +63,15 @@ def read_int(text: str) -> int:
 
 
 def read_float(text: str) -> float:
+    """The leading number of ``text`` as a C++ stream reads it (0.0 without one)."""
+    known = _READ_FLOATS.get(text)
+    if known is not None:
+        return known
     match = _LEADING_FLOAT.match(text.strip())
-    return float(match.group(0)) if match else 0.0
+    value = float(match.group(0)) if match else 0.0
+    if len(text) <= _READ_LONGEST and len(_READ_FLOATS) < _READ_MOST:
+        _READ_FLOATS[text] = value
+    return value
 
 
 def read_bool(text: str) -> bool:
