@@ -169,3 +169,26 @@ def test_emulate_duration_is_seconds(tmp_path, udp_port, driver: str) -> None:
     elapsed = time.monotonic() - started
     assert result.returncode == 0, result.stderr
     assert elapsed >= 0.5
+
+
+@pytest.mark.parametrize(
+    ("achieved", "said"),
+    [
+        (250.4, "about 250 frames per second"),
+        (1.2, "about 1 frame per second"),
+        (0.4, "about one frame every 2.5 seconds"),
+    ],
+)
+def test_the_shortfall_note_says_the_pace_in_words_that_fit(achieved, said) -> None:
+    """10,000 devices make less than a frame a second: the note said "about 0 frames"."""
+    from types import SimpleNamespace
+
+    from gadgetctl.cli.monitor_run import RateNotice
+
+    told: list[str] = []
+    notice = RateNotice(SimpleNamespace(rate_shortfall=(60.0, achieved)), tell=told.append)
+    notice.check()
+    notice.check()
+    assert told == [
+        f"the frame rate of 60 Hz is not reached: {said} (--duration counts seconds all the same)"
+    ]

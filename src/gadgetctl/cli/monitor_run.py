@@ -243,9 +243,13 @@ class RateNotice:
             return
         self.told = True
         requested, achieved = shortfall
+        if round(achieved) >= 1:
+            pace = f"about {counted(round(achieved), 'frame')} per second"
+        else:  # 10,000 devices: "about 0 frames per second" said nothing
+            pace = f"about one frame every {1 / max(achieved, 1e-3):.1f} seconds"
         self.tell(
-            f"the frame rate of {requested:g} Hz is not reached: about {achieved:.0f} frames "
-            "per second (--duration counts seconds all the same)"
+            f"the frame rate of {requested:g} Hz is not reached: {pace} "
+            "(--duration counts seconds all the same)"
         )
 
 
