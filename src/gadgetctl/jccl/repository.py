@@ -20,6 +20,7 @@ from pathlib import Path
 from types import MappingProxyType
 
 from gadgetctl.diagnostics import Diagnostic
+from gadgetctl.jccl import defcache
 from gadgetctl.jccl.definitions import Definition, DefinitionVersion, Location, PropertyDefinition
 from gadgetctl.jccl.searchpath import SearchPathEntry
 
@@ -89,7 +90,9 @@ class DefinitionRepository:
         self.entries.append(entry)
         if entry.skipped or not entry.exists:
             return
-        for path, definition, problem in _read_directory(entry.path):
+        for path, definition, problem in _read_directory(
+            entry.path, lasting=entry.origin == "bundled"
+        ):
             entry.files += 1
             if definition is None:
                 self.diagnostics.append(Diagnostic.make("DEF020", problem, str(path)))
@@ -334,8 +337,7 @@ def _same_directory(one: Path, other: Path) -> bool:
         return False
 
 
-#: What a definition file on the search path gave: its definition, or None and the problem.
-_FileOutcome = tuple[Path, Definition | None, str]
+_FileOutcome = defcache.FileOutcome
 
 #: The outcomes of a directory's definition files, by the directory, while its ``*.jdef``
 #: files stay the same (names, sizes, modification times, inodes): a process that builds
@@ -345,9 +347,10 @@ _READ_DIRECTORIES: dict[str, tuple[tuple[tuple[str, int, int, int], ...], list[_
 _READ_DIRECTORIES_KEPT = 32
 
 
-def _read_directory(directory: Path) -> list[_FileOutcome]:
+def _read_directory(directory: Path, *, lasting: bool = False) -> list[_FileOutcome]:
     """Every ``*.jdef`` file of ``directory`` in name order, read (or taken from what an
-    earlier read of the same unchanged files gave)."""
+    earlier read of the same unchanged files gave, in this process or, ``lasting``, in an
+    earlier one: see :mod:`gadgetctl.jccl.defcache`)."""
     import stat
 
     from gadgetctl.jccl.defparser import read_definition
@@ -368,6 +371,11 @@ def _read_directory(directory: Path) -> list[_FileOutcome]:
     keep = not unsaved_within(directory)
     if keep and known is not None and known[0] == signature:
         return known[1]
+    lasting = lasting and keep
+    cached = defcache.load(directory, files) if lasting else None
+    if cached is not None:
+        _keep_read(key, signature, cached)
+        return cached
     outcomes: list[_FileOutcome] = []
     for path, _ in files:
         try:
@@ -387,10 +395,16 @@ def _read_directory(directory: Path) -> list[_FileOutcome]:
             continue
         outcomes.append((path, definition, ""))
     if keep:
-        if len(_READ_DIRECTORIES) >= _READ_DIRECTORIES_KEPT:
-            _READ_DIRECTORIES.pop(next(iter(_READ_DIRECTORIES)))
-        _READ_DIRECTORIES[key] = (signature, outcomes)
+        _keep_read(key, signature, outcomes)
+        if lasting:
+            defcache.store(directory, files, outcomes)
     return outcomes
+
+
+def _keep_read(key: str, signature: tuple, outcomes: list[_FileOutcome]) -> None:
+    if len(_READ_DIRECTORIES) >= _READ_DIRECTORIES_KEPT:
+        _READ_DIRECTORIES.pop(next(iter(_READ_DIRECTORIES)))
+    _READ_DIRECTORIES[key] = (signature, outcomes)
 
 
 def load_repository(entries: Iterable[SearchPathEntry]) -> DefinitionRepository:
