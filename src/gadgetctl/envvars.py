@@ -18,6 +18,8 @@ _REFERENCE = re.compile(r"\$\{([^}]*)\}|\$\(([^)]*)\)")
 
 @dataclass(frozen=True, slots=True)
 class Expansion:
+    """A text with its variables expanded, and the names of those that were not set."""
+
     text: str
     undefined: tuple[str, ...] = ()
 

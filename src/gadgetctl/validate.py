@@ -26,6 +26,8 @@ LEVELS = ("xml", "schema", "definitions", "full")
 
 @dataclass
 class ValidateOptions:
+    """What `gadgetctl validate` checks, how far, and against which definitions."""
+
     max_size: int = DEFAULT_MAX_SIZE
     level: str = "full"  # how far to go: xml, schema, definitions or full
     bundled: bool = True
@@ -44,6 +46,8 @@ class ValidateOptions:
 
 @dataclass
 class ValidationResult:
+    """The files checked, their findings, and their loaded documents."""
+
     files: list[str] = field(default_factory=list)
     diagnostics: list[Diagnostic] = field(default_factory=list)
     documents: list[XmlDocument] = field(default_factory=list)

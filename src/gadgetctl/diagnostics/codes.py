@@ -17,6 +17,8 @@ CATALOG_MODULES = ("xml", "schema", "definition", "config", "driver")
 
 @dataclass(frozen=True, slots=True)
 class Code:
+    """A diagnostic code of the catalog: its category, default severity and explanation."""
+
     code: str
     category: Category
     severity: Severity

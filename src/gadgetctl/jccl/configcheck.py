@@ -280,11 +280,15 @@ def _unique(diagnostics: list[Diagnostic]) -> list[Diagnostic]:
     return result
 
 
-@dataclass
 class OpenedConfiguration:
-    configuration: Configuration
-    index: TypeIndex
-    session: Session
+    """A configuration, the index of the types it is judged by, and its session."""
+
+    __slots__ = ("configuration", "index", "session")
+
+    def __init__(self, configuration: Configuration, index: TypeIndex, session: Session) -> None:
+        self.configuration = configuration
+        self.index = index
+        self.session = session
 
 
 def open_configuration(

@@ -11,7 +11,6 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
 from pathlib import Path
 
 from lxml import etree
@@ -272,13 +271,15 @@ def _needs_whole_tree(data: bytes) -> bool:
     return False
 
 
-@dataclass
 class StreamedBlock:
     """The elements of one ``<elements>`` block, read while the file was parsed."""
 
-    node: etree._Element
-    elements: list[ConfigElement] = field(default_factory=list)
-    embedded: int = 0
+    __slots__ = ("elements", "embedded", "node")
+
+    def __init__(self, node: etree._Element) -> None:
+        self.node = node
+        self.elements: list[ConfigElement] = []
+        self.embedded = 0
 
 
 def parse_configuration(data: bytes, path: str, kind: FileKind = FileKind.UNKNOWN) -> XmlDocument:

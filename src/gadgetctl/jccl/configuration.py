@@ -369,6 +369,8 @@ class ConfigElement(_Placed):
 
 @dataclass
 class ConfigFile:
+    """One configuration file as read: its includes, definition paths and elements."""
+
     path: Path
     display: str
     includes: list[tuple[str, Location]] = field(default_factory=list)

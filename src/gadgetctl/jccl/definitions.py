@@ -48,6 +48,8 @@ def parse_value(valuetype: ValueType, text: str) -> tuple[bool, object]:
 
 @dataclass(frozen=True, slots=True)
 class Location:
+    """A place in a file: its path, and its line and column where known."""
+
     path: str
     line: int | None = None
     column: int | None = None
@@ -63,18 +65,24 @@ class Location:
 
 @dataclass(frozen=True, slots=True)
 class ValueSlot:
+    """One value of a property: its label and default."""
+
     label: str
     default: str | None
 
 
 @dataclass(frozen=True, slots=True)
 class EnumChoice:
+    """One choice of an enumeration: the label written and the value it stands for."""
+
     label: str
     value: str
 
 
 @dataclass(frozen=True, slots=True)
 class Enumeration:
+    """The choices of a property's value, and whether others may be written."""
+
     editable: bool
     choices: tuple[EnumChoice, ...]
 
@@ -106,6 +114,8 @@ class Enumeration:
 
 @dataclass(frozen=True, slots=True)
 class PropertyDefinition:
+    """A property of a definition version: its type, values, and what it allows."""
+
     name: str
     valuetype: ValueType
     variable: bool
@@ -135,6 +145,8 @@ class PropertyDefinition:
 
 @dataclass(slots=True)
 class DefinitionVersion:
+    """One version of an element type: its parents, categories and properties."""
+
     name: str
     version: int
     label: str

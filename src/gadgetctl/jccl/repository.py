@@ -44,6 +44,8 @@ class EffectiveProperty:
 
 @dataclass(frozen=True, slots=True)
 class Shadowing:
+    """A definition version ignored because an earlier entry of the search path has it."""
+
     name: str
     version: int
     winner: Location | None
@@ -51,13 +53,9 @@ class Shadowing:
 
 
 @dataclass
-class _Source:
-    definition: Definition
-    entry: SearchPathEntry | None
-
-
-@dataclass
 class DefinitionRepository:
+    """Every version of every definition on a search path (see the module)."""
+
     entries: list[SearchPathEntry] = field(default_factory=list)
     diagnostics: list[Diagnostic] = field(default_factory=list)
     shadowed: list[Shadowing] = field(default_factory=list)

@@ -28,6 +28,8 @@ VJ_DEFINITIONS = Path("share") / "vrjuggler" / "data" / "definitions"
 
 @dataclass
 class SearchPathEntry:
+    """A directory of the definition search path, where it came from, and what it gave."""
+
     raw: str
     path: Path
     origin: str
@@ -89,6 +91,8 @@ def make_entry(
 
 @dataclass
 class SearchPathOptions:
+    """What the definition search path is made of."""
+
     bundled: bool = True
     extra_dirs: list[Path] = field(default_factory=list)
     environ: Mapping[str, str] | None = None

@@ -10,7 +10,6 @@ which lxml does not keep).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from xml.parsers import expat
 
 from lxml import etree
@@ -39,18 +38,26 @@ def has_stray_text(root: etree._Element) -> bool:
     return False
 
 
-@dataclass
 class _Run:
-    line: int
-    column: int  # 0-based, as expat gives it
-    text: str
+    """A run of text: where it starts and what it holds."""
+
+    __slots__ = ("column", "line", "text")
+
+    def __init__(self, line: int, column: int, text: str) -> None:
+        self.line = line
+        self.column = column  # 0-based, as expat gives it
+        self.text = text
 
 
-@dataclass
 class _Open:
-    name: str
-    has_children: bool = False
-    runs: list[_Run] | None = None
+    """An element whose end is still to come."""
+
+    __slots__ = ("has_children", "name", "runs")
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.has_children = False
+        self.runs: list[_Run] | None = None
 
 
 class _Scanner:

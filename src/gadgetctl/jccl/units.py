@@ -29,6 +29,8 @@ PROXY_KINDS = {
 
 @dataclass(frozen=True, slots=True)
 class UnitRange:
+    """How many units of a kind a device element has, and what sets that count."""
+
     kind: str
     count: int
     source: str  # what sets the count, for messages: "button_count 14", "3 key_pair bindings"

@@ -23,6 +23,8 @@ MAX_CHOICES_SHOWN = 10
 
 @dataclass(frozen=True, slots=True)
 class ValueProblem:
+    """What is wrong with a value: a diagnostic code, its message and hint."""
+
     code: str
     message: str
     hint: str | None = None

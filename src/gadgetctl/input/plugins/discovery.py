@@ -49,6 +49,8 @@ class PluginSource(StrEnum):
 
 @dataclass
 class DriverDirectory:
+    """A directory searched for driver plug-ins, and where it was named."""
+
     path: Path
     source: PluginSource
     raw: str = ""

@@ -50,6 +50,8 @@ TRANSPORT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 
 @dataclass
 class PluginMetadata:
+    """What a driver plug-in declares about itself, read without importing it."""
+
     api_version: int | None = None
     plugin_name: str | None = None
     element_types: dict[str, tuple[DeviceKind, ...]] = field(default_factory=dict)
