@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass, field
 from pathlib import Path
 
 from gadgetctl.diagnostics import Diagnostic
@@ -31,23 +30,32 @@ from gadgetctl.jccl.xmlload import FileKind, XmlDocument
 from gadgetctl.perf import retain
 
 
-@dataclass
 class Session:
     """Shared state of one run: parsed documents, read files, per-repository checkers."""
 
-    base: DefinitionRepository
-    environ: Mapping[str, str] = field(default_factory=lambda: os.environ)
-    documents: dict[Path, XmlDocument] = field(default_factory=dict)
-    files: dict[Path, ConfigFile] = field(default_factory=dict)
-    #: Definition folders of driver plug-ins usable by a configuration (their own element
-    #: types); consulted only when the configuration uses a type the repository lacks.
-    plugin_definitions: Callable[[Configuration], list[Path]] | None = None
-    #: Names of the driver plug-ins a configuration can load (exact spelling).
-    plugin_names: Callable[[Configuration], set[str]] | None = None
-    #: Element types whose driver plug-in the configuration never loads -> why (DRV030).
-    unloaded_types: Callable[[Configuration], dict[str, str]] | None = None
-    _repos: dict[tuple[Path, ...], DefinitionRepository] = field(default_factory=dict)
-    _checkers: dict[int, ElementChecker] = field(default_factory=dict)
+    def __init__(
+        self,
+        base: DefinitionRepository,
+        environ: Mapping[str, str] | None = None,
+        *,
+        plugin_definitions: Callable[[Configuration], list[Path]] | None = None,
+        plugin_names: Callable[[Configuration], set[str]] | None = None,
+        unloaded_types: Callable[[Configuration], dict[str, str]] | None = None,
+    ) -> None:
+        self.base = base
+        self.environ: Mapping[str, str] = os.environ if environ is None else environ
+        self.documents: dict[Path, XmlDocument] = {}
+        self.files: dict[Path, ConfigFile] = {}
+        #: Definition folders of driver plug-ins usable by a configuration (their own
+        #: element types); consulted only when the configuration uses a type the repository
+        #: lacks.
+        self.plugin_definitions = plugin_definitions
+        #: Names of the driver plug-ins a configuration can load (exact spelling).
+        self.plugin_names = plugin_names
+        #: Element types whose driver plug-in the configuration never loads -> why (DRV030).
+        self.unloaded_types = unloaded_types
+        self._repos: dict[tuple[Path, ...], DefinitionRepository] = {}
+        self._checkers: dict[int, ElementChecker] = {}
 
     def load(self, paths: Iterable[Path]) -> Configuration:
         from gadgetctl.jccl.configload import load_configuration

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 
@@ -52,24 +52,22 @@ class Shadowing:
     loser: Location | None
 
 
-@dataclass
 class DefinitionRepository:
     """Every version of every definition on a search path (see the module)."""
 
-    entries: list[SearchPathEntry] = field(default_factory=list)
-    diagnostics: list[Diagnostic] = field(default_factory=list)
-    shadowed: list[Shadowing] = field(default_factory=list)
-    _versions: dict[str, dict[int, DefinitionVersion]] = field(default_factory=dict)
-    _origins: dict[tuple[str, int], SearchPathEntry | None] = field(default_factory=dict)
-    _ancestor_cache: dict[str, tuple[str, ...]] = field(default_factory=dict)
-    #: effective_properties and property_map by (name, version), cleared by add()
-    _effective_cache: dict[tuple[str, int | None], tuple[EffectiveProperty, ...]] = field(
-        default_factory=dict
-    )
-    _map_cache: dict[str, Mapping[str, PropertyDefinition]] = field(default_factory=dict)
-    _property_owners: dict[str, frozenset[str]] | None = None
-    #: close_names answers by (word, cutoff), cleared by add()
-    _close_cache: dict[tuple[str, float], list[str]] = field(default_factory=dict)
+    def __init__(self, entries: list[SearchPathEntry] | None = None) -> None:
+        self.entries: list[SearchPathEntry] = [] if entries is None else entries
+        self.diagnostics: list[Diagnostic] = []
+        self.shadowed: list[Shadowing] = []
+        self._versions: dict[str, dict[int, DefinitionVersion]] = {}
+        self._origins: dict[tuple[str, int], SearchPathEntry | None] = {}
+        self._ancestor_cache: dict[str, tuple[str, ...]] = {}
+        #: effective_properties and property_map by (name, version), cleared by add()
+        self._effective_cache: dict[tuple[str, int | None], tuple[EffectiveProperty, ...]] = {}
+        self._map_cache: dict[str, Mapping[str, PropertyDefinition]] = {}
+        self._property_owners: dict[str, frozenset[str]] | None = None
+        #: close_names answers by (word, cutoff), cleared by add()
+        self._close_cache: dict[tuple[str, float], list[str]] = {}
 
     # -- building ---------------------------------------------------------------------
 
