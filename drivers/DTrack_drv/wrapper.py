@@ -25,8 +25,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from gadgetctl.input import Analog, DeviceConfigError, Digital, Position
+from gadgetctl.input.receiving import ReceiverSampling
 from gadgetctl.jccl.access import ElementAccess
-from gadgetctl.transport.udp import DatagramLedger
 
 from .standalone import (
     DEFAULT_LIMITS,
@@ -45,18 +45,14 @@ def _udp_port(access: ElementAccess, prop: str) -> int:
     return port
 
 
-class DTrackDevice(Position, Digital, Analog):
+class DTrackDevice(ReceiverSampling[DTrackStandalone], Position, Digital, Analog):
     """An A.R.T. DTrack tracker (element type ``dtrack``)."""
 
     ELEMENT_TYPE = "dtrack"
-    sample_interval = 0.0  # sample() waits for datagrams itself
+    DISCONNECTED = DTrackDisconnected
+    DATA_NAME = "DTrack data"
+    PORT_ATTRIBUTE = "receive_port"
 
-    #: Seconds one sample() call waits for a datagram.
-    receive_timeout = 0.1
-    #: After a loss, seconds a restart waits for the tracker's first datagram.
-    probe_timeout = 0.25
-    #: Datagrams read by one sample() call at most, so samples flow even under overload.
-    batch_limit = 100
     #: When datagrams queue up (a fast tracker), seconds to let the next batch gather: a batch
     #: costs far less per datagram than datagrams one by one. A slow tracker never waits.
     batch_pause = 0.001
@@ -74,9 +70,6 @@ class DTrackDevice(Position, Digital, Analog):
         self.server_name = ""
         self.command_port = 5001
         self._peer_timeout = 2.0
-        self._driver: DTrackStandalone | None = None
-        self._open = False
-        self._started = False
         self._units = DTrackUnits(extra_units=True, limits=self.limits)
         self._last_stamp = -math.inf
 
@@ -88,8 +81,8 @@ class DTrackDevice(Position, Digital, Analog):
     @peer_timeout.setter
     def peer_timeout(self, seconds: float) -> None:
         self._peer_timeout = seconds
-        if self._driver is not None:
-            self._driver.peer_timeout = seconds
+        if self._receiver is not None:
+            self._receiver.peer_timeout = seconds
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)  # name, position filters, min and max
@@ -99,63 +92,22 @@ class DTrackDevice(Position, Digital, Analog):
 
     # -- sampling ---------------------------------------------------------------------------
 
-    def _receiver(self) -> DTrackStandalone:
-        """One receiver for the device's life, so its counters add up over reconnections."""
-        if self._driver is None:
-            self._driver = DTrackStandalone(
-                self.receive_port,
-                server_name=self.server_name,
-                command_port=self.command_port,
-                receive_timeout=self.receive_timeout,
-                peer_timeout=self._peer_timeout,
-                receive_buffer=self.receive_buffer,
-                start_delay=self.start_delay,
-                limits=self.limits,
-            )
-        return self._driver
+    def _new_receiver(self) -> DTrackStandalone:
+        return DTrackStandalone(
+            self.receive_port,
+            server_name=self.server_name,
+            command_port=self.command_port,
+            receive_timeout=self.receive_timeout,
+            peer_timeout=self._peer_timeout,
+            receive_buffer=self.receive_buffer,
+            start_delay=self.start_delay,
+            limits=self.limits,
+        )
 
-    def start_sampling(self) -> None:
-        driver = self._receiver()
-        driver.open()
-        self._open = True
-        if isinstance(driver.receive_port, int) and driver.receive_port == 0:
-            driver.receive_port = driver.port  # an OS-chosen port is kept for restarts
-        if self._started:
-            self._probe(driver)
-        self._started = True
-
-    def _probe(self, driver: DTrackStandalone) -> None:
-        """After a loss, succeed only when the tracker sends again."""
-        driver.receive_timeout = self.probe_timeout
-        try:
-            frames = driver.sample_all(self.batch_limit)
-            if not frames:
-                why = driver.ledger.undecodable()
-                raise DTrackDisconnected(
-                    f"still no DTrack data on UDP port {driver.port}"
-                    + (f" (undecodable: {why})" if why else "")
-                )
-        except BaseException:
-            self.stop_sampling()
-            raise
-        finally:
-            driver.receive_timeout = self.receive_timeout
-        self._add(frames)
-
-    def sample(self) -> None:
-        driver = self._driver
-        if driver is None or not self._open:
-            raise DTrackDisconnected("the receiver is closed")
-        frames = driver.sample_all(self.batch_limit)
-        if frames:
-            self._add(frames)
-            if len(frames) > 1:
-                time.sleep(self.batch_pause)
-
-    def stop_sampling(self) -> None:
-        if self._driver is not None and self._open:
-            self._open = False
-            self._driver.close()  # with remote control: "stop sending", "cameras off"
+    def _after_sample(self, frames: Sequence[DTrackFrame]) -> None:
+        """Frames queue up: let the next batch gather (:attr:`batch_pause`)."""
+        if len(frames) > 1:
+            time.sleep(self.batch_pause)
 
     # -- samples ----------------------------------------------------------------------------
 
@@ -185,14 +137,14 @@ class DTrackDevice(Position, Digital, Analog):
     @property
     def port(self) -> int | None:
         """The UDP port the device receives on, once it has started."""
-        driver = self._driver
+        driver = self._receiver
         return driver.port if driver is not None and driver.is_open else None
 
     @property
     def counters(self) -> dict[str, int]:
         """What the receiver counted since the device was made, reconnections included:
         its ledger's (:meth:`datagram_ledger`) and the DTrack-specific ones."""
-        driver = self._driver
+        driver = self._receiver
         if driver is None:
             return {}
         return {
@@ -201,8 +153,3 @@ class DTrackDevice(Position, Digital, Analog):
             "truncated_datagrams": driver.truncated_datagrams,
             "missed_frames": driver.missed_frames,
         }
-
-    def datagram_ledger(self) -> DatagramLedger | None:
-        """The receiver's account of its datagrams: decoded, bad, dropped by the kernel."""
-        driver = self._driver
-        return driver.ledger if driver is not None else None

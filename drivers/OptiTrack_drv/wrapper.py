@@ -28,9 +28,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from gadgetctl.input import DeviceConfigError, Position
+from gadgetctl.input.receiving import ReceiverSampling
 from gadgetctl.jccl.access import ElementAccess
 from gadgetctl.jccl.configuration import ConfigElement
-from gadgetctl.transport.udp import DatagramLedger
 
 from .natnet import Version, parse_version
 from .standalone import (
@@ -46,20 +46,14 @@ from .standalone import (
 )
 
 
-class OptiTrackDevice(Position):
+class OptiTrackDevice(ReceiverSampling[NatNetReceiver], Position):
     """A NaturalPoint OptiTrack NatNet server (element type ``optitrack``)."""
 
     ELEMENT_TYPE = "optitrack"
-    sample_interval = 0.0  # sample() waits for datagrams itself
+    DISCONNECTED = NatNetDisconnected
 
     #: The interface the multicast group is joined on ("0.0.0.0": every interface).
     multicast_interface = "0.0.0.0"
-    #: Seconds one sample() call waits for a datagram.
-    receive_timeout = 0.1
-    #: After a loss, seconds a restart waits for the server's first frame.
-    probe_timeout = 0.25
-    #: Frames read by one sample() call at most.
-    batch_limit = 100
     limits = DEFAULT_LIMITS
 
     def __init__(self) -> None:
@@ -73,10 +67,7 @@ class OptiTrackDevice(Position):
         self.peer_timeout = 2.0
         self.body_ids: list[int] = []
         self.marker_ids: list[int] = []
-        self._receiver: NatNetReceiver | None = None
         self._units = NatNetUnits([], [])
-        self._open = False
-        self._started = False
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)  # name, position filters
@@ -116,63 +107,26 @@ class OptiTrackDevice(Position):
 
     # -- sampling ---------------------------------------------------------------------------
 
-    def _driver(self) -> NatNetReceiver:
-        """One receiver for the device's life, so its counters add up over reconnections."""
-        if self._receiver is None:
-            self._receiver = NatNetReceiver(
-                self.port,
-                group=None if self.unicast else self.multicast_group,
-                interface=self.multicast_interface,
-                unicast=self.unicast,
-                server=self.server_address or None,
-                command_port=self.command_port,
-                version=self.natnet_version,
-                receive_timeout=self.receive_timeout,
-                peer_timeout=self.peer_timeout,
-                limits=self.limits,
-            )
-        self._receiver.peer_timeout = self.peer_timeout
-        return self._receiver
+    def _new_receiver(self) -> NatNetReceiver:
+        return NatNetReceiver(
+            self.port,
+            group=None if self.unicast else self.multicast_group,
+            interface=self.multicast_interface,
+            unicast=self.unicast,
+            server=self.server_address or None,
+            command_port=self.command_port,
+            version=self.natnet_version,
+            receive_timeout=self.receive_timeout,
+            peer_timeout=self.peer_timeout,
+            limits=self.limits,
+        )
 
-    def start_sampling(self) -> None:
-        driver = self._driver()
-        driver.open()
-        self._open = True
-        if driver.requested_port == 0:
-            driver.requested_port = driver.port  # an OS-chosen port is kept for restarts
-        if self._started:
-            self._probe(driver)
-        self._started = True
-
-    def _probe(self, driver: NatNetReceiver) -> None:
-        """After a loss, succeed only when the server sends again."""
-        driver.receive_timeout = self.probe_timeout
-        try:
-            frames = driver.sample_all(self.batch_limit)
-            if not frames:
-                undecodable = driver.undecodable_reason()
-                if undecodable is not None:
-                    raise NatNetUndecodable(undecodable)
-                raise NatNetDisconnected(f"still no NatNet frames on UDP port {driver.port}")
-        except BaseException:
-            self.stop_sampling()
-            raise
-        finally:
-            driver.receive_timeout = self.receive_timeout
-        self._add(frames)
-
-    def sample(self) -> None:
-        driver = self._receiver
-        if driver is None or not self._open:
-            raise NatNetDisconnected("the receiver is closed")
-        frames = driver.sample_all(self.batch_limit)
-        if frames:
-            self._add(frames)
-
-    def stop_sampling(self) -> None:
-        if self._receiver is not None and self._open:
-            self._open = False
-            self._receiver.close()
+    def _silence(self, driver: NatNetReceiver) -> Exception:
+        """Undecodable when datagrams came but did not decode, else disconnected."""
+        undecodable = driver.undecodable_reason()
+        if undecodable is not None:
+            return NatNetUndecodable(undecodable)
+        return NatNetDisconnected(f"still no NatNet frames on UDP port {driver.port}")
 
     def _add(self, frames: Sequence[NatNetFrame]) -> None:
         if not self._units.matrices.shape[0]:
@@ -203,10 +157,6 @@ class OptiTrackDevice(Position):
             "join_failures": r.join_failures,
             "kernel_dropped": r.kernel_dropped,
         }
-
-    def datagram_ledger(self) -> DatagramLedger | None:
-        """The receiver's account of its datagrams (kernel drops, decoded, bad)."""
-        return self._receiver.ledger if self._receiver is not None else None
 
 
 def _is_multicast(address: str) -> bool:
