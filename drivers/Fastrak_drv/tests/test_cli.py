@@ -5,10 +5,8 @@ from __future__ import annotations
 import pytest
 
 from gadgetctl.input.testing.commands import (
-    doctor_finds_no_port,
-    emulated_types,
-    reported,
-    run_gadgetctl,
+    emulated_and_serial_port_diagnosed,
+    validate_reports_units_beyond,
 )
 from gadgetctl.input.testing.configs import configuration
 
@@ -25,18 +23,10 @@ CONFIG = configuration(
 
 
 def test_units_beyond_four_stations_and_one_stylus_are_reported(tmp_path) -> None:
-    path = tmp_path / "t.jconf"
-    path.write_text(CONFIG.format(port="/dev/null"))
-    out = run_gadgetctl("validate", str(path))
-    problems = reported(out, "CFG034")
-    assert out.returncode == 1 and len(problems) == 2, out.stdout
-    assert (
-        "'P4' reads position unit 4" in problems[0] and "'B1' reads digital unit 1" in problems[1]
+    validate_reports_units_beyond(
+        CONFIG, tmp_path, ("'P4' reads position unit 4",), ("'B1' reads digital unit 1",)
     )
 
 
 def test_emulate_lists_it_and_doctor_knows_its_serial_port(tmp_path) -> None:
-    assert emulated_types("Fastrak_drv") == ["fastrak"]
-    path = tmp_path / "t.jconf"
-    path.write_text(CONFIG.format(port=tmp_path / "no-such-tty"))
-    doctor_finds_no_port(path, "Fastrak_drv", "no-such-tty")
+    emulated_and_serial_port_diagnosed(CONFIG, tmp_path, "Fastrak_drv", ["fastrak"])

@@ -10,7 +10,7 @@ from Fastrak_drv.emulator import FastrakEmulator
 
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import hangs_up, reads_past_garbage, resumes_within, wait_until
+from gadgetctl.input.testing import reads_past_garbage, serial_line_lost_then_resumes, wait_until
 from gadgetctl.input.testing.configs import pending_reasons, rewritten
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
 
@@ -81,13 +81,7 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
     link = tmp_path / "fastrak"
     emu = emulator("disconnect", disconnect_after=15, link=link)
     manager = managers(element("F", str(link)))
-    device = manager.device("F")
-    hangs_up(manager, "F", emu)
-    assert "serial line lost" in (manager.status("F").reason or "")
-    assert device.records == 15
-    emu.stop()
-    resumes_within(manager, "F", lambda: emulator("motion", link=link), lambda: device.records)
-    assert device.restarts >= 1
+    serial_line_lost_then_resumes(manager, "F", emu, lambda: emulator("motion", link=link), 15)
 
 
 def test_configuration_errors_leave_the_element_pending(tmp_path, managers) -> None:

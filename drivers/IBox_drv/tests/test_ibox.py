@@ -17,7 +17,12 @@ from IBox_drv.standalone import (
 
 from gadgetctl.input.devicetypes import DigitalState
 from gadgetctl.input.kinds import DeviceKind
-from gadgetctl.input.testing import gather, hangs_up, reads_past_garbage, resumes_within, wait_until
+from gadgetctl.input.testing import (
+    gather,
+    reads_past_garbage,
+    serial_line_lost_then_resumes,
+    wait_until,
+)
 from gadgetctl.input.testing.commands import monitor_ndjson, run_gadgetctl, samples_of
 from gadgetctl.input.testing.configs import corpus_copy
 from gadgetctl.input.testing.fixtures import emulator_fixture, managers_fixture
@@ -118,15 +123,9 @@ def test_lost_line_faults_then_resumes_within_two_seconds(tmp_path, emulator, ma
     link = tmp_path / "ibox"
     emu = emulator("disconnect", disconnect_after=20, link=link)
     manager = managers(ibox_element("IB", str(link)))
-    device = manager.device("IB")
-    hangs_up(manager, "IB", emu)
-    reason = manager.status("IB").reason or ""
-    # the line went, or (once the manager retried) the hung-up pty behind the link is gone
-    assert "serial line lost" in reason or "cannot open" in reason, reason
-    assert device.records == 20
-    emu.stop()
-    resumes_within(manager, "IB", lambda: emulator("motion", link=link), lambda: device.records)
-    assert device.restarts >= 1
+    serial_line_lost_then_resumes(
+        manager, "IB", emu, lambda: emulator("motion", link=link), 20, reopened=True
+    )
 
 
 def corpus_powerwall(tmp_path: Path, flock_port: str, ibox_port: str) -> Path:

@@ -5,10 +5,8 @@ from __future__ import annotations
 import pytest
 
 from gadgetctl.input.testing.commands import (
-    doctor_finds_no_port,
-    emulated_types,
-    reported,
-    run_gadgetctl,
+    emulated_and_serial_port_diagnosed,
+    validate_reports_units_beyond,
 )
 from gadgetctl.input.testing.configs import configuration
 
@@ -28,18 +26,13 @@ CONFIG = configuration(
 
 
 def test_units_beyond_the_stations_are_reported(tmp_path) -> None:
-    path = tmp_path / "t.jconf"
-    path.write_text(CONFIG.format(port="/dev/null"))
-    out = run_gadgetctl("validate", str(path))
-    assert out.returncode == 1
-    problems = reported(out, "CFG034")
-    assert len(problems) == 2, out.stdout
-    assert "'B4' reads digital unit 4" in problems[0] and "units 0-3" in problems[0]
-    assert "'P1' reads position unit 1" in problems[1] and "(1 station)" in problems[1]
+    validate_reports_units_beyond(
+        CONFIG,
+        tmp_path,
+        ("'B4' reads digital unit 4", "units 0-3"),
+        ("'P1' reads position unit 1", "(1 station)"),
+    )
 
 
 def test_emulate_lists_it_and_doctor_knows_its_serial_port(tmp_path) -> None:
-    assert emulated_types("IS900_drv") == ["intersense"]
-    path = tmp_path / "t.jconf"
-    path.write_text(CONFIG.format(port=tmp_path / "no-such-tty"))
-    doctor_finds_no_port(path, "IS900_drv", "no-such-tty")
+    emulated_and_serial_port_diagnosed(CONFIG, tmp_path, "IS900_drv", ["intersense"])

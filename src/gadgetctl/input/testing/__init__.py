@@ -139,6 +139,30 @@ def resumes_within(
     assert manager.status(name).state == "running"
 
 
+def serial_line_lost_then_resumes(
+    manager: InputManager,
+    name: str,
+    emulator: Any,
+    restart: Callable[[], object],
+    records: int,
+    *,
+    reopened: bool = False,
+) -> None:
+    """The emulator hangs up after sending what makes ``records`` records: device ``name``
+    faults, its reason "serial line lost" (with ``reopened``, "cannot open" too: the manager
+    retried and the hung-up pty behind the link is gone), and has read every record; once
+    ``restart()`` brings a new emulator up behind the same link, it :func:`resumes_within` the
+    usual 2 s and counts the restart."""
+    device = manager.device(name)
+    hangs_up(manager, name, emulator)
+    reason = manager.status(name).reason or ""
+    assert "serial line lost" in reason or (reopened and "cannot open" in reason), reason
+    assert device.records == records
+    emulator.stop()
+    resumes_within(manager, name, restart, lambda: device.records)
+    assert device.restarts >= 1
+
+
 def faults_then_resumes(
     manager: InputManager,
     name: str,

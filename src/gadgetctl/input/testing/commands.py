@@ -76,3 +76,29 @@ def doctor_finds_no_port(path: Path, plugin: str, port: str) -> subprocess.Compl
     assert len(problem) == 1 and f"{port} does not exist" in problem[0], out.stdout
     assert f"gadgetctl emulate {plugin}" in out.stdout
     return out
+
+
+def validate_reports_units_beyond(config: str, tmp_path: Path, *expected: tuple[str, ...]) -> None:
+    """``gadgetctl validate`` on ``config`` (its ``{port}`` /dev/null) fails with one CFG034
+    line (a proxy reads a unit the device does not have) per ``expected``, in order, each
+    holding every text of its tuple."""
+    path = tmp_path / "t.jconf"
+    path.write_text(config.format(port="/dev/null"))
+    out = run_gadgetctl("validate", str(path))
+    problems = reported(out, "CFG034")
+    assert out.returncode == 1 and len(problems) == len(expected), out.stdout
+    for line, texts in zip(problems, expected, strict=True):
+        for text in texts:
+            assert text in line, (text, line)
+
+
+def emulated_and_serial_port_diagnosed(
+    config: str, tmp_path: Path, plugin: str, element_types: list[str]
+) -> None:
+    """``gadgetctl emulate --list`` says the emulator of ``plugin`` serves ``element_types``, and
+    ``gadgetctl doctor`` on ``config`` whose ``{port}`` does not exist says so and hints at that
+    emulator (:func:`doctor_finds_no_port`)."""
+    assert emulated_types(plugin) == element_types
+    path = tmp_path / "t.jconf"
+    path.write_text(config.format(port=tmp_path / "no-such-tty"))
+    doctor_finds_no_port(path, plugin, "no-such-tty")
