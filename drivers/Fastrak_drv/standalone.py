@@ -31,7 +31,7 @@ import numpy as np
 import serial
 
 from gadgetctl.transport.records import ResyncScanner, ScannedDevice
-from gadgetctl.transport.serialline import LineDriver, LineSettings, SerialLine, SerialLineLost
+from gadgetctl.transport.serialline import LineDriver, LineSettings, SerialLine
 
 STATIONS = 4
 OUTPUT_LIST = "2,11,16,1"
@@ -143,7 +143,7 @@ class RecordScanner(ResyncScanner[FastrakRecord]):
         return decode_record(record, self.scale)
 
 
-class Fastrak(ScannedDevice, LineDriver):
+class Fastrak(LineDriver, ScannedDevice):
     """A Polhemus Fastrak on a serial line, streaming.
 
     ``port`` is a device path, a pyserial URL or an open ``serial.Serial``-like object (used,
@@ -154,6 +154,7 @@ class Fastrak(ScannedDevice, LineDriver):
     LOST = FastrakDisconnected
     CLOSED = FastrakError
     CLOSED_TEXT = "the tracker is not open"
+    FAREWELL = b"c"  # stop the stream for whoever opens the port next
 
     def __init__(
         self,
@@ -188,31 +189,7 @@ class Fastrak(ScannedDevice, LineDriver):
         The C++ driver sent its set-up in config(), before startSampling() opened the port
         (and ``u`` before that), so none of it reached the tracker; here the port is opened
         first and nothing is flushed right after a command, so no reply is lost."""
-        if self._line is not None:
-            return
-        line = SerialLine(self.port_spec, LineSettings(self.baud), poll_interval=self.poll_interval)
-        try:
-            self._line = line.open()
-        except SerialLineLost as exc:
-            raise FastrakDisconnected(str(exc)) from exc
-        try:
-            self._setup()
-        except BaseException:
-            self.close()
-            raise
-
-    def close(self) -> None:
-        line, self._line = self._line, None
-        if line is not None:
-            try:
-                line.write(b"c")  # stop the stream for whoever opens the port next
-            except SerialLineLost:
-                pass
-            line.close()
-
-    @property
-    def is_open(self) -> bool:
-        return self._line is not None
+        self._open_line(self.port_spec, LineSettings(self.baud), self._setup)
 
     # -- data ---------------------------------------------------------------------------
 

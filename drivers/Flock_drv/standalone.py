@@ -347,29 +347,10 @@ class Flock(ScannedDevice):
 
     def open(self) -> None:
         """Reset the birds, learn the bus, configure every sensor and start streaming."""
-        if self.line.is_open:
-            return
-        try:
-            self.line.open()
-            self._reset()
-            self._discover()
-            self._configure()
-            self._write(self.report_rate.encode("ascii") + bytes((STREAM,)))
-            self._heard_at = time.monotonic()
-        except SerialLineLost as exc:
-            self.line.close()
-            raise FlockDisconnected(str(exc)) from exc
-        except BaseException:
-            self.line.close()
-            raise
+        self.line.open_with(self._start, FlockDisconnected)
 
     def close(self) -> None:
-        if self.line.is_open:
-            try:
-                self.line.write(bytes((STREAM_STOP,)))
-            except SerialLineLost:
-                pass
-        self.line.close()
+        self.line.close(farewell=bytes((STREAM_STOP,)))
 
     # -- counters ---------------------------------------------------------------------------
 
@@ -391,6 +372,13 @@ class Flock(ScannedDevice):
         return records
 
     # -- start-up ---------------------------------------------------------------------------
+
+    def _start(self) -> None:
+        self._reset()
+        self._discover()
+        self._configure()
+        self._write(self.report_rate.encode("ascii") + bytes((STREAM,)))
+        self._heard_at = time.monotonic()
 
     def _reset(self) -> None:
         """RTS high resets the birds; a line without RTS (a pty) skips the pulse."""

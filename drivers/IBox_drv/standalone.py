@@ -166,26 +166,10 @@ class IBox(ScannedDevice):
     # -- life cycle -------------------------------------------------------------------------
 
     def open(self) -> None:
-        if self.line.is_open:
-            return
-        try:
-            self.line.open()
-            self._sign_on()
-            self._heard_at = time.monotonic()
-        except SerialLineLost as exc:
-            self.line.close()
-            raise IBoxDisconnected(str(exc)) from exc
-        except BaseException:
-            self.line.close()
-            raise
+        self.line.open_with(self._sign_on, IBoxDisconnected)
 
     def close(self) -> None:
-        if self.line.is_open:
-            try:
-                self.line.write(b"END")
-            except SerialLineLost:
-                pass
-        self.line.close()
+        self.line.close(farewell=b"END")
 
     # -- data -------------------------------------------------------------------------------
 
@@ -236,6 +220,7 @@ class IBox(ScannedDevice):
             self.info[name] = self._info(command)
         self.scanner.feed(bytes(self._pending))  # nothing, unless the box sent data already
         self._pending.clear()
+        self._heard_at = time.monotonic()
 
     def _info(self, command: int) -> str:
         for _ in range(2):  # one retry, as the C++

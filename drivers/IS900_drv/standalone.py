@@ -32,7 +32,7 @@ import numpy as np
 import serial
 
 from gadgetctl.transport.records import ResyncScanner, ScannedDevice
-from gadgetctl.transport.serialline import LineDriver, LineSettings, SerialLine, SerialLineLost
+from gadgetctl.transport.serialline import LineDriver, LineSettings, SerialLine
 
 RECORD_HEAD = ord("0")
 CRLF = b"\r\n"
@@ -173,7 +173,7 @@ class StationSetup:
     enabled: bool = True
 
 
-class IS900(ScannedDevice, LineDriver):
+class IS900(LineDriver, ScannedDevice):
     """An InterSense IS-900 on a serial line, polled.
 
     ``port`` is a device path, a pyserial URL or an open ``serial.Serial``-like object (used,
@@ -221,28 +221,8 @@ class IS900(ScannedDevice, LineDriver):
 
     def open(self) -> None:
         """Open the port, stop continuous output, read the system records, set up stations."""
-        if self._line is not None:
-            return
         # One call for every setting: a pty ignores later changes (and is always 8N1).
-        line = SerialLine(self.port_spec, LineSettings(self.baud), poll_interval=self.poll_interval)
-        try:
-            self._line = line.open()
-        except SerialLineLost as exc:
-            raise IS900Disconnected(str(exc)) from exc
-        try:
-            self._handshake()
-        except BaseException:
-            self.close()
-            raise
-
-    def close(self) -> None:
-        line, self._line = self._line, None
-        if line is not None:
-            line.close()
-
-    @property
-    def is_open(self) -> bool:
-        return self._line is not None
+        self._open_line(self.port_spec, LineSettings(self.baud), self._handshake)
 
     # -- counters -----------------------------------------------------------------------
 

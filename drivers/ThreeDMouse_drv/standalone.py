@@ -25,7 +25,7 @@ import numpy as np
 import serial
 
 from gadgetctl.transport.records import ResyncScanner, ScannedDevice
-from gadgetctl.transport.serialline import LineDriver, LineSettings, SerialLine, SerialLineLost
+from gadgetctl.transport.serialline import LineDriver, LineSettings, SerialLine
 
 REPORT_SIZE = 16
 FLAG = 0x80
@@ -133,7 +133,7 @@ class ReportScanner(ResyncScanner[MouseReport]):
         return decode_report(record)
 
 
-class ThreeDMouse(ScannedDevice, LineDriver):
+class ThreeDMouse(LineDriver, ScannedDevice):
     """A Logitech 3D mouse / head tracker on a serial line, polled with ``*d``.
 
     ``port`` is a device path, a pyserial URL or an open ``serial.Serial``-like object (used,
@@ -178,32 +178,8 @@ class ThreeDMouse(ScannedDevice, LineDriver):
 
     def open(self) -> None:
         """Open the port, reset and check the mouse, choose head-tracker and Euler modes."""
-        if self._line is not None:
-            return
         # A line that cannot do two stop bits (a pty) still carries the reports at 8N1.
-        line = SerialLine(
-            self.port_spec, LineSettings(self.baud, stopbits=2), poll_interval=self.poll_interval
-        )
-        try:
-            self._line = line.open()
-        except SerialLineLost as exc:
-            raise ThreeDMouseDisconnected(str(exc)) from exc
-        if line.degraded:
-            self.character_format = "8N1"
-        try:
-            self._start()
-        except BaseException:
-            self.close()
-            raise
-
-    def close(self) -> None:
-        line, self._line = self._line, None
-        if line is not None:
-            line.close()
-
-    @property
-    def is_open(self) -> bool:
-        return self._line is not None
+        self._open_line(self.port_spec, LineSettings(self.baud, stopbits=2), self._start)
 
     def read(self) -> list[MouseReport]:
         """Poll when the last poll was answered (or ``poll_timeout`` passed) and return the
@@ -227,6 +203,8 @@ class ThreeDMouse(ScannedDevice, LineDriver):
     # -- internals ------------------------------------------------------------------------
 
     def _start(self) -> None:
+        if self._line_or_fail().degraded:
+            self.character_format = "8N1"
         self._write(b"*D")
         time.sleep(self.demand_wait)
         self._write(b"*R")

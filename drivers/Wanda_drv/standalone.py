@@ -158,23 +158,16 @@ class Wanda(ScannedDevice):
         self.heard_at = 0.0
 
     def open(self) -> None:
-        if self.line.is_open:
-            return
-        try:
-            self.line.open()
-            reset = self.line.set_lines(rts=False)
-            if reset:
-                time.sleep(self.reset_time)
-                self.line.set_lines(rts=True)
-                time.sleep(self.reset_time)
-            self._hello(reset)
-            self.heard_at = time.monotonic()
-        except SerialLineLost as exc:
-            self.line.close()
-            raise WandaDisconnected(str(exc)) from exc
-        except BaseException:
-            self.line.close()
-            raise
+        self.line.open_with(self._start, WandaDisconnected)
+
+    def _start(self) -> None:
+        reset = self.line.set_lines(rts=False)
+        if reset:
+            time.sleep(self.reset_time)
+            self.line.set_lines(rts=True)
+            time.sleep(self.reset_time)
+        self._hello(reset)
+        self.heard_at = time.monotonic()
 
     def close(self) -> None:
         self.line.close()

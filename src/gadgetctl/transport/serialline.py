@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import serial
@@ -118,7 +119,29 @@ class SerialLine:
         self._port, self._owns = port, True
         return self
 
-    def close(self) -> None:
+    def open_with(self, setup: Callable[[], object], lost: type[Exception]) -> None:
+        """Open the line unless it is open, then ``setup()`` the device on it; if either fails
+        the line is closed again, and a lost line is raised as ``lost``."""
+        if self.is_open:
+            return
+        try:
+            self.open()
+            setup()
+        except SerialLineLost as exc:
+            self.close()
+            raise lost(str(exc)) from exc
+        except BaseException:
+            self.close()
+            raise
+
+    def close(self, farewell: bytes = b"") -> None:
+        """Close the port, writing ``farewell`` first if it is open (to stop a stream for
+        whoever opens the port next; a line lost by then is no error)."""
+        if farewell and self._port is not None:
+            try:
+                self.write(farewell)
+            except SerialLineLost:
+                pass
         port, self._port = self._port, None
         if port is not None and self._owns:
             try:
@@ -197,15 +220,47 @@ class SerialLine:
 
 class LineDriver:
     """For a standalone driver that holds its :class:`SerialLine` in ``_line`` (None while
-    closed): reads, writes and flushes that turn a lost line into the driver's own
-    :attr:`LOST` exception, and a closed one into :attr:`CLOSED` with :attr:`CLOSED_TEXT`."""
+    closed): opening it and starting the device (:meth:`_open_line`), closing it
+    (:meth:`close`, :attr:`is_open`), and reads, writes and flushes that turn a lost line into
+    the driver's own :attr:`LOST` exception, and a closed one into :attr:`CLOSED` with
+    :attr:`CLOSED_TEXT`."""
 
     LOST: type[Exception] = SerialLineLost
     CLOSED: type[Exception] = SerialLineLost
     CLOSED_TEXT = "the device is not open"
+    #: Written just before the line closes (see :meth:`SerialLine.close`).
+    FAREWELL = b""
 
     _line: SerialLine | None = None
     poll_interval: float = 0.01
+
+    def _open_line(
+        self, port: str | serial.SerialBase, settings: LineSettings, start: Callable[[], object]
+    ) -> None:
+        """Open ``port`` with ``settings`` into ``_line`` unless it is open already (a port that
+        cannot be opened raises :attr:`LOST`), then ``start()`` the device, closing the line
+        again if that fails."""
+        if self._line is not None:
+            return
+        line = SerialLine(port, settings, poll_interval=self.poll_interval)
+        try:
+            self._line = line.open()
+        except SerialLineLost as exc:
+            raise self.LOST(str(exc)) from exc
+        try:
+            start()
+        except BaseException:
+            self.close()
+            raise
+
+    def close(self) -> None:
+        line, self._line = self._line, None
+        if line is not None:
+            line.close(self.FAREWELL)
+
+    @property
+    def is_open(self) -> bool:
+        return self._line is not None
 
     def _line_or_fail(self) -> SerialLine:
         if self._line is None:
