@@ -5,6 +5,7 @@ line), so that a mistyped property is seen before the device silently uses its d
 from __future__ import annotations
 
 import sys
+from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -49,6 +50,7 @@ def check_before_running(
         for doc in result.documents
         if doc.root is not None and doc.kind is FileKind.CONFIGURATION
     }
+    forget_check_reports(parsed.values())
     found = [d for d in result.diagnostics if d.severity in (Severity.ERROR, Severity.WARNING)]
     if not found:
         return parsed
@@ -68,6 +70,20 @@ def check_before_running(
     if strict and any(d.severity is Severity.ERROR for d in found):
         raise StrictStop("configuration errors found (--strict); not starting")
     return parsed
+
+
+def forget_check_reports(documents: Iterable[XmlDocument]) -> None:
+    """Drop the checks' per-element reports (``ConfigElement.report``: findings, pointers,
+    the view judged by) from the elements of ``documents`` read while they were parsed,
+    which the run is built from: it never reads them, and 10,000 devices with their proxies
+    kept 20,000 of them (about 4 MB) alive to the end. The findings themselves are in the
+    diagnostics already."""
+    for doc in documents:
+        for block in doc.streamed or ():
+            for element in block.elements:
+                element.report = None
+                for embedded in element.embedded():
+                    embedded.report = None
 
 
 class StrictStop(GadgetctlError):
