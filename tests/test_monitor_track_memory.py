@@ -63,3 +63,39 @@ def test_a_track_shares_empties_until_it_has_samples(device):
     device.store.swap()  # a frame without samples
     track.update()
     assert len(track.frames) == 0
+
+
+def test_statistics_make_their_ring_at_the_first_timestamps_they_consolidate():
+    """Issue 27 goal 3: no ring per device before its statistics are read (10,000 devices'
+    rings of 16 were 2 MB held through a run whose statistics are read at its end); the
+    figures are those of a ring made at once, as it grows past its first size."""
+    from gadgetctl.monitor.stats import INITIAL_RING, DeviceStats
+
+    stats = DeviceStats("W", history=64)
+    assert stats._ring.size == 0 and not stats._ring.flags.writeable
+    assert DeviceStats("X")._ring is stats._ring  # one shared empty ring
+    assert stats.recent_timestamps().size == 0 and stats.interval_stats() == (None, None, None)
+    stats.add_timestamps([0.0, 0.1, 0.25])
+    assert stats.recent_timestamps().tolist() == [0.0, 0.1, 0.25]
+    assert stats._ring.size == INITIAL_RING
+    stamps = [0.25 + 0.1 * i for i in range(1, 40)]
+    stats.add_timestamps(stamps)
+    assert stats.recent_timestamps().tolist() == [0.0, 0.1, 0.25, *stamps]
+    stats.add_timestamps([10.0 + i for i in range(64)])
+    assert stats.recent_timestamps().tolist() == [10.0 + i for i in range(64)]
+    assert stats.max_gap == pytest.approx(10.0 - stamps[-1])
+
+
+def test_a_waveform_device_keeps_no_instance_dict_and_its_blocks_share_no_events(device):
+    """A waveform device's attributes stay in the instance's compact values (reading its
+    ``__dict__`` made Python build a dict for each of 10,000 devices), and a block without
+    events shares one empty tuple."""
+    import gc
+
+    from gadgetctl.input.device import DeviceState
+
+    device.state = DeviceState.RUNNING  # what read the instance dict
+    assert not any(type(r) is dict for r in gc.get_referents(device))
+    block = device.compute(0, 8)
+    assert block.events == () and device.compute(1, 8).events is block.events
+    assert device.compute(8, 8).events == [(10, 1)]  # (its event period: a block with one)

@@ -166,6 +166,10 @@ class PositionChannel:
     radius: float
 
 
+#: The events of a block without any (shared: an empty list for each block of 10,000
+#: devices was half a megabyte).
+_NO_EVENTS: tuple[tuple[int, int], ...] = ()
+
 #: The sample index of "no event to come" (past every sample a block can hold).
 NO_EVENT = np.iinfo(np.int64).max
 
@@ -187,7 +191,7 @@ class Block:
         self.start = start
         self.timestamps = timestamps
         self.items = tuple(data.items())
-        self.events = events
+        self.events = events if events else _NO_EVENTS  # (most blocks have none)
         self.end = start + len(timestamps)
 
     def event_after(self, index: int) -> int:
@@ -255,6 +259,10 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
     #: Per noise channel, its generator and the sample it is at; made by the first noise
     #: block (an instance attribute only then: see :class:`~gadgetctl.input.device.Input`).
     _noise_streams: dict[int, tuple[np.random.Generator, int]] | None = None
+    #: The frame group updating it (an instance attribute from ``__init__`` on; read through
+    #: the class while ``Input.__init__`` sets the first state: reading the instance's
+    #: ``__dict__`` there made Python build a dict for each of 10,000 devices).
+    _group: _FrameGroup | None = None
 
     def __init__(self) -> None:
         super().__init__()
@@ -420,7 +428,7 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
     @state.setter
     def state(self, value: DeviceState) -> None:
         self._state = value
-        group = self.__dict__.get("_group")
+        group = self._group  # (the class's None while Input.__init__ sets the first state)
         if group is not None:
             group.running[self._slot] = value is _RUNNING
             group.prepare_after = 0.0  # a device that runs again may need a block ahead

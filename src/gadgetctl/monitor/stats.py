@@ -32,6 +32,9 @@ DEFAULT_HISTORY = 4096
 INITIAL_RING = 16
 #: Intervals up to which the percentiles come from a sorted Python list (np.partition beyond).
 SORTED_INTERVALS = 256
+#: Every device's ring before its first timestamps are consolidated (read-only, shared).
+_NO_RING = np.empty(0, dtype=np.float64)
+_NO_RING.flags.writeable = False
 
 
 @dataclass(frozen=True, slots=True)
@@ -103,9 +106,11 @@ class DeviceStats:
         self.name = name
         self.window = window
         self.history = history
-        # grown as timestamps come, up to ``history``: a 10 Hz device of a short run holds a
-        # few, not 4096 (32 KB for each of 10,000 devices)
-        self._ring = np.empty(min(history, INITIAL_RING), dtype=np.float64)
+        # made at the first timestamps consolidated and grown as more come, up to
+        # ``history``: a 10 Hz device of a short run holds a few, not 4096 (32 KB for each
+        # of 10,000 devices); none before then (a ring of 16 for each of 10,000 devices was
+        # 2 MB held through a whole run whose statistics are read only at its end)
+        self._ring = _NO_RING
         self.reset()
 
     def reset(self) -> None:
@@ -208,7 +213,9 @@ class DeviceStats:
         size = len(self._ring)
         if size < cap and self._ring_len + len(batch) > size:
             # below ``history`` the ring never wraps: its timestamps are [0, ring_len)
-            grown = np.empty(min(cap, max(2 * size, self._ring_len + len(batch))), np.float64)
+            grown = np.empty(
+                min(cap, max(INITIAL_RING, 2 * size, self._ring_len + len(batch))), np.float64
+            )
             grown[: self._ring_len] = self._ring[: self._ring_len]
             self._ring = grown
         end = self._ring_pos + len(batch)
