@@ -470,3 +470,51 @@ def test_the_figures_at_the_end_are_those_of_the_latest_frame(waveform):
     row = next(line for line in table.getvalue().splitlines() if line.startswith("Waveform"))
     rate = float(row.split()[row.split().index("running") + 1])
     assert 80.0 < rate < 160.0
+
+
+def test_devices_alike_share_one_header_entry_written_as_before(tmp_path):
+    """Issue 27 goal 3: the header's entries of devices alike (type, kinds, units, limits)
+    are one dict, not one each (10,000 devices' were about 6 MB held while the header was
+    encoded); the header reads as entries made one by one, and a device that differs in
+    anything, -0.0 for 0.0 included, has its own."""
+    body = "".join(
+        f'<waveform_device name="W{i}" version="1"><rate>10</rate>'
+        f"<analog_waveform>sine</analog_waveform>{limit}</waveform_device>\n"
+        for i, limit in enumerate(["", "", "<min>-0.0</min>", "<min>0.0</min>", ""])
+    )
+    path = tmp_path / "alike.jconf"
+    path.write_text(
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
+        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">\n'
+        f"<elements>\n{body}</elements>\n</configuration>\n"
+    )
+    manager, configuration = InputManager.from_files([path])
+    try:
+        session = MonitorSession(manager, configuration)
+        session.start()
+        for _ in session.frames(duration=0.3):
+            pass
+        info = session.header_info()
+    finally:
+        manager.shutdown()
+    entries = info["elements"]
+    assert entries["W0"] is entries["W1"] is entries["W4"]
+    assert len({id(entries[f"W{i}"]) for i in range(5)}) == 3
+    expected = {
+        "element": "device",
+        "type": "waveform_device",
+        "kinds": [k.value for k in manager.device("W0").kinds()],
+        "units": entries["W0"]["units"],
+        "min": -1.0,
+        "max": 1.0,
+    }
+    assert entries["W0"] == expected and entries["W0"]["units"]["analog"] == 1
+    assert entries["W3"] == {**expected, "min": 0.0} == entries["W2"]
+    assert math.copysign(1.0, entries["W2"]["min"]) == -1.0
+    assert math.copysign(1.0, entries["W3"]["min"]) == 1.0
+    text = encode_record(HeaderRecord.now(info))
+    unshared = {**info, "elements": {n: json.loads(json.dumps(e)) for n, e in entries.items()}}
+    assert '"min":-0.0' in text
+    assert json.loads(text)["info"] == json.loads(encode_record(HeaderRecord.now(unshared)))["info"]
+    assert text.split('"info":')[1] == encode_record(HeaderRecord.now(unshared)).split('"info":')[1]
