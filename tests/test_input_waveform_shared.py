@@ -155,3 +155,22 @@ def test_a_position_proxy_keeps_a_view_of_shared_values_and_copies_writable_ones
         assert not np.shares_memory(proxy.matrix, mine)
     finally:
         manager.shutdown()
+
+
+def test_devices_alike_share_the_cuts_their_blocks_are_made_of(devices, monkeypatch):
+    """Issue 27 goal 3: blocks of devices alike over the same samples share their (kind,
+    view) pairs and events, not only the arrays under them; each keeps its own timestamps.
+    The cuts kept are bounded, and a block made after they were dropped is the same."""
+    one, two = devices["tracker1"], devices["tracker2"]
+    a, b = one.compute(0, 20), two.compute(0, 20)
+    assert a.items is b.items and a.events is b.events
+    assert a.timestamps is not b.timestamps
+    c = two.compute(3, 20)
+    assert c.items is not a.items
+    same_block(c, two._compute(3, 20))
+    monkeypatch.setattr(_SIGNALS, "SHARED_CUTS", 4)
+    _SIGNALS.clear()
+    for start in range(10):
+        one.compute(start, 5)
+    assert len(_SIGNALS._cuts) <= 4
+    same_block(two.compute(0, 20), two._compute(0, 20))

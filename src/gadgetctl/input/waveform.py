@@ -185,12 +185,13 @@ class Block:
         self,
         start: int,
         timestamps: np.ndarray,
-        data: dict[DeviceKind, np.ndarray],
-        events: list[tuple[int, int]],
+        data: dict[DeviceKind, np.ndarray] | tuple[tuple[DeviceKind, np.ndarray], ...],
+        events: Sequence[tuple[int, int]],
     ) -> None:
         self.start = start
         self.timestamps = timestamps
-        self.items = tuple(data.items())
+        # (the pairs themselves when given as such: blocks of devices alike share them)
+        self.items = data if type(data) is tuple else tuple(data.items())
         self.events = events if events else _NO_EVENTS  # (most blocks have none)
         self.end = start + len(timestamps)
 
@@ -529,8 +530,8 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         """Samples ``start`` .. ``start + count - 1`` (timestamps relative to the device start)."""
         shared = _SIGNALS.values(self, start, count)
         if shared is not None:  # the read-only values of every device configured alike
-            t, data, events = shared
-            return Block(start, self.t0 + t, data, events)
+            t, items, events = shared
+            return Block(start, self.t0 + t, items, events)
         return self._compute(start, count)
 
     def signal_key(self) -> tuple | None:
@@ -648,10 +649,16 @@ class _SharedSignals:
     configuration had 10,000 copies of the same matrices (about 14 MB in their first
     blocks), each computed on its own. Blocks past them, and devices whose values are their
     own, are computed as before. At most :data:`SHARED_CONFIGURATIONS` configurations are
-    kept."""
+    kept.
+
+    The cuts of those values a block is made of (its ``t``, its per-kind views and events)
+    are shared too, by configuration and sample range, up to :data:`SHARED_CUTS` of them:
+    10,000 devices alike cut their blocks at a few hundred ranges, and the views and tuples
+    of each block were about 400 bytes a device, one or two blocks each."""
 
     SHARED_SAMPLES = 4096
     SHARED_CONFIGURATIONS = 16
+    SHARED_CUTS = 4096
 
     def __init__(self) -> None:
         #: signal key -> (samples covered, t = k / rate, per kind the values, the events'
@@ -660,19 +667,23 @@ class _SharedSignals:
             tuple,
             tuple[int, np.ndarray, dict[DeviceKind, np.ndarray], list[int], list[tuple[int, int]]],
         ] = {}
+        #: (signal key, start, stop) -> what :meth:`values` gives for it (read-only)
+        self._cuts: dict[tuple, _Cut] = {}
 
-    def values(
-        self, device: WaveformDevice, start: int, count: int
-    ) -> tuple[np.ndarray, dict[DeviceKind, np.ndarray], list[tuple[int, int]]] | None:
+    def values(self, device: WaveformDevice, start: int, count: int) -> _Cut | None:
         """``t`` (sample number / rate), the values of samples ``start`` ..
-        ``start + count - 1`` of ``device`` as views of the shared arrays, and the events
-        among them; None when they are not shared."""
+        ``start + count - 1`` of ``device`` as (kind, view of the shared array) pairs, and
+        the events among them; None when they are not shared. Devices alike get the same
+        objects for the same samples: none of them may be changed."""
         stop = start + count
         if stop > self.SHARED_SAMPLES or count < 1 or start < 0:
             return None
         key = device.signal_key()
         if key is None:
             return None
+        cut = self._cuts.get((key, start, stop))
+        if cut is not None:
+            return cut
         found = self._values.get(key)
         if found is None or found[0] < stop:
             if found is None and len(self._values) >= self.SHARED_CONFIGURATIONS:
@@ -688,12 +699,26 @@ class _SharedSignals:
             t.flags.writeable = False
             indices = [index for index, _ in block.events]
             found = self._values[key] = (covered, t, data, indices, block.events)
+            self._cuts.clear()  # (cut from the arrays just replaced)
         _, t, data, indices, events = found
         within = events[bisect.bisect_left(indices, start) : bisect.bisect_left(indices, stop)]
-        return t[start:stop], {kind: values[start:stop] for kind, values in data.items()}, within
+        cut = (
+            t[start:stop],
+            tuple([(kind, values[start:stop]) for kind, values in data.items()]),
+            within if within else _NO_EVENTS,
+        )
+        if len(self._cuts) >= self.SHARED_CUTS:
+            self._cuts.clear()
+        self._cuts[(key, start, stop)] = cut
+        return cut
 
     def clear(self) -> None:
         self._values.clear()
+        self._cuts.clear()
+
+
+#: What :meth:`_SharedSignals.values` gives: ``t``, the (kind, values) pairs, the events.
+_Cut = tuple[np.ndarray, tuple[tuple[DeviceKind, np.ndarray], ...], Sequence[tuple[int, int]]]
 
 
 _SIGNALS = _SharedSignals()
