@@ -67,8 +67,9 @@ def test_a_track_shares_empties_until_it_has_samples(device):
 
 def test_statistics_make_their_ring_at_the_first_timestamps_they_consolidate():
     """Issue 27 goal 3: no ring per device before its statistics are read (10,000 devices'
-    rings of 16 were 2 MB held through a run whose statistics are read at its end); the
-    figures are those of a ring made at once, as it grows past its first size."""
+    rings of 16 were 2 MB held through a run whose statistics are read at its end), then
+    the first batch consolidated is the ring; the figures are those of a ring made at once,
+    as it grows, and once it is full and wraps."""
     from gadgetctl.monitor.stats import INITIAL_RING, DeviceStats
 
     stats = DeviceStats("W", history=64)
@@ -77,13 +78,21 @@ def test_statistics_make_their_ring_at_the_first_timestamps_they_consolidate():
     assert stats.recent_timestamps().size == 0 and stats.interval_stats() == (None, None, None)
     stats.add_timestamps([0.0, 0.1, 0.25])
     assert stats.recent_timestamps().tolist() == [0.0, 0.1, 0.25]
+    assert stats._ring.size == 3  # the first batch itself
+    stats.add_timestamps([0.3])
+    assert stats.recent_timestamps().tolist() == [0.0, 0.1, 0.25, 0.3]
     assert stats._ring.size == INITIAL_RING
-    stamps = [0.25 + 0.1 * i for i in range(1, 40)]
+    stamps = [0.3 + 0.1 * i for i in range(1, 40)]
     stats.add_timestamps(stamps)
-    assert stats.recent_timestamps().tolist() == [0.0, 0.1, 0.25, *stamps]
+    assert stats.recent_timestamps().tolist() == [0.0, 0.1, 0.25, 0.3, *stamps]
     stats.add_timestamps([10.0 + i for i in range(64)])
     assert stats.recent_timestamps().tolist() == [10.0 + i for i in range(64)]
-    assert stats.max_gap == pytest.approx(10.0 - stamps[-1])
+    stats.add_timestamps([80.0 + i for i in range(10)])  # the full ring wraps
+    assert stats.recent_timestamps().tolist() == [
+        *(10.0 + i for i in range(10, 64)),
+        *(80.0 + i for i in range(10)),
+    ]
+    assert stats.max_gap == pytest.approx(80.0 - 73.0)
 
 
 def test_a_waveform_device_keeps_no_instance_dict_and_its_blocks_share_no_events(device):

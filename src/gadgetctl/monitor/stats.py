@@ -106,7 +106,7 @@ class DeviceStats:
         self.name = name
         self.window = window
         self.history = history
-        # made at the first timestamps consolidated and grown as more come, up to
+        # the first timestamps consolidated, grown as more come, up to
         # ``history``: a 10 Hz device of a short run holds a few, not 4096 (32 KB for each
         # of 10,000 devices); none before then (a ring of 16 for each of 10,000 devices was
         # 2 MB held through a whole run whose statistics are read only at its end)
@@ -124,9 +124,11 @@ class DeviceStats:
         self.samples_per_frame: int | None = None
         self._frame_start_count = 0
         self._frame_samples = 0
-        # (time, count) of recent frame ends: a list (a deque is 600 bytes even empty, 6 MB
-        # for 10,000 devices; a window holds tens of frames, dropped from the front at once)
-        self._frame_ends: list[tuple[float, int]] = []
+        # time, count, time, count ... of recent frame ends, as doubles (a list of (time,
+        # count) tuples held 80 bytes a frame, 2 MB for 10,000 devices after three frames;
+        # a deque is 600 bytes even empty); a window holds tens of frames, dropped from the
+        # front at once
+        self._frame_ends = array("d")
         # doubles, not a list of Python floats (32 bytes each, 8 here)
         self._pending = array("d")
         self._ring_len = 0
@@ -179,12 +181,13 @@ class DeviceStats:
         self.frames += 1
         if at is not None:
             ends = self._frame_ends
-            ends.append((float(at), self.count))
+            ends.append(float(at))
+            ends.append(self.count)  # (exact as a double below 2**53)
             old = 0  # keep one frame before the window
-            while old + 1 < len(ends) and ends[old + 1][0] <= at - self.window:
+            while 2 * old + 2 < len(ends) and ends[2 * old + 2] <= at - self.window:
                 old += 1
             if old:
-                del ends[:old]
+                del ends[: 2 * old]
 
     # ---------------------------------------------------------------- numpy side
 
@@ -211,6 +214,10 @@ class DeviceStats:
             self._ring_pos, self._ring_len = 0, cap
             return
         size = len(self._ring)
+        if not size:  # the first timestamps: the batch itself is the ring (no copy of it)
+            self._ring, self._ring_len = batch, len(batch)
+            self._ring_pos = len(batch)  # (below ``history``: it does not wrap)
+            return
         if size < cap and self._ring_len + len(batch) > size:
             # below ``history`` the ring never wraps: its timestamps are [0, ring_len)
             grown = np.empty(
@@ -279,20 +286,22 @@ class DeviceStats:
         """Samples per frame over the frames that ended in the last ``window`` seconds before
         ``now`` (the window of :meth:`window_rate`); 0 when frames went on without samples,
         None without timed frames in it."""
-        ends = self._frame_ends
+        ends = self._frame_ends  # time, count, time, count ...
         if not ends:
             return None
-        end = ends[-1][0] if now is None else max(now, ends[-1][0])
+        end = ends[-2] if now is None else max(now, ends[-2])
         start = end - self.window
+        count = len(ends) // 2
         first = 0  # the first frame end inside the window (ends are pruned to about one before it)
-        while first < len(ends) and ends[first][0] <= start:
+        while first < count and ends[2 * first] <= start:
             first += 1
-        frames = len(ends) - first
+        frames = count - first
         if frames == 0:
             return None
+        last = int(ends[-1])
         if first == 0:  # no frame end before the window: count from the first one in it
-            return (ends[-1][1] - ends[0][1]) / (frames - 1) if frames > 1 else None
-        return (ends[-1][1] - ends[first - 1][1]) / frames
+            return (last - int(ends[1])) / (frames - 1) if frames > 1 else None
+        return (last - int(ends[2 * first - 1])) / frames
 
     def interval_stats(self) -> tuple[float | None, float | None, float | None]:
         """(p50, p99, jitter) of the recent intervals: nearest-rank percentiles and the
