@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import resource
+import shutil
 import subprocess
 import sys
 import time
@@ -191,3 +193,42 @@ def test_unreadable_places_are_one_line_each(tmp_path, command):
             assert (result.returncode, result.stderr) == (2, f"gadgetctl: error: {line}\n")
     finally:
         closed.chmod(0o755)
+
+
+def test_a_folder_removed_while_the_walk_is_under_way_is_skipped(tmp_path, monkeypatch):
+    """A build's temporary folder can be gone between listing its parent and reading it: it
+    holds nothing to check, and the walk goes on (it stopped the whole run before)."""
+    from gadgetctl.files import expand_paths
+
+    write(tmp_path / "kept" / "a.jconf", jconf())
+    doomed = tmp_path / "tmp-build"
+    write(doomed / "b.jconf", jconf())
+    real_scandir = os.scandir
+
+    def scandir_then_remove(path):
+        if path != os.fspath(tmp_path):
+            return real_scandir(path)
+        with real_scandir(path) as listing:
+            entries = list(listing)
+        shutil.rmtree(doomed)  # the parent is listed: the folder goes before it is read
+        return contextlib.nullcontext(entries)
+
+    monkeypatch.setattr(os, "scandir", scandir_then_remove)
+    assert expand_paths([tmp_path]) == [tmp_path / "kept" / "a.jconf"]
+
+
+def test_the_folder_named_itself_still_has_to_be_readable(tmp_path, monkeypatch):
+    from gadgetctl.errors import GadgetctlError
+    from gadgetctl.files import expand_paths
+
+    write(tmp_path / "a.jconf", jconf())
+    real_scandir = os.scandir
+
+    def gone(path):
+        if path == os.fspath(tmp_path):
+            raise FileNotFoundError(2, "No such file or directory", os.fspath(path))
+        return real_scandir(path)
+
+    monkeypatch.setattr(os, "scandir", gone)
+    with pytest.raises(GadgetctlError, match="directory is not readable"):
+        expand_paths([tmp_path])

@@ -84,7 +84,8 @@ def real_path(path: str) -> Path:
 def _jccl_files(directory: Path) -> list[Path]:
     """The .jdef and .jconf files in ``directory`` and below, sorted, hidden ones (and hidden
     directories) left out, symbolic links to directories not followed. A directory below that
-    cannot be read is an error: its files would pass unchecked."""
+    cannot be read is an error: its files would pass unchecked; one that is gone by the time
+    it is read (a build's temporary folder) had none."""
     return [path for path, _ in _jccl_entries(directory)]
 
 
@@ -94,13 +95,16 @@ def _jccl_entries(directory: Path) -> list[tuple[Path, bool]]:
     Walked as :func:`os.walk` walks (top down, each directory's entries in listing order),
     with the kinds the listing gives, so that a plain file or directory costs no stat."""
     found: list[tuple[str, bool]] = []
-    pending = [os.fspath(directory)]
+    root = os.fspath(directory)
+    pending = [root]
     while pending:
         top = pending.pop()
         try:
             with os.scandir(top) as listing:
                 entries = list(listing)
         except OSError as err:
+            if top is not root and isinstance(err, (FileNotFoundError, NotADirectoryError)):
+                continue  # removed (or replaced by a file) since its parent was listed
             raise GadgetctlError(
                 f"{err.filename}: directory is not readable ({err.strerror or err}); "
                 "the files in it cannot be checked"
