@@ -142,6 +142,16 @@ def test_rate_zero_of_monitor_and_serve(cli, command):
     )
 
 
+@pytest.mark.parametrize("command", ["monitor", "serve"])
+@pytest.mark.parametrize("duration", ["-1", "nan"])
+def test_a_duration_that_is_not_a_length_of_time(cli, command, duration):
+    result = cli(command, REPO / "examples" / "waveform.jconf", "--duration", duration)
+    assert result.exit_code == 2
+    assert result.stderr.strip() == (
+        f"gadgetctl: error: --duration is a number of seconds, 0 or more, not {duration}"
+    )
+
+
 # --- /FRAME and RATE over the same window ------------------------------------------------------
 
 

@@ -294,7 +294,7 @@ def check_options(rate: float, duration: float | None, interval: float) -> None:
             f"--rate must be more than 0 and at most 10000 frames per second, not {rate:g}"
         )
     if duration is not None and not duration >= 0:
-        raise GadgetctlError(f"--duration must not be negative, not {duration:g}")
+        raise GadgetctlError(f"--duration is a number of seconds, 0 or more, not {duration:g}")
     if not interval > 0:
         raise GadgetctlError(f"--interval must be positive, not {interval:g}")
 

@@ -134,7 +134,7 @@ def serve(
     if duration is not None and not duration >= 0:
         from gadgetctl.errors import GadgetctlError
 
-        raise GadgetctlError(f"--duration must not be negative, not {duration:g}")
+        raise GadgetctlError(f"--duration is a number of seconds, 0 or more, not {duration:g}")
     manager, configuration = InputManager.from_files(
         configs,
         definitions=list(definitions),
