@@ -86,3 +86,78 @@ def test_tcp_serves_one_client_on_loopback():
             server.kill()
             server.wait(timeout=30)
         server.stderr.close()
+
+
+def _lsp_on_stdin(data: bytes) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "gadgetctl", "lsp"], input=data, capture_output=True, timeout=60
+    )
+
+
+def test_a_message_announcing_gigabytes_ends_the_session_in_one_line():
+    """pygls reads as many bytes as Content-Length says: 100 GB ended in a MemoryError."""
+    done = _lsp_on_stdin(b"Content-Length: 99999999999\r\n\r\n{}")
+    assert done.returncode == 2
+    assert done.stderr.decode() == (
+        "gadgetctl: error: lsp: a message announces 99999999999 bytes, over the limit of "
+        "64 MiB; the session ends\n"
+    )
+    digits = _lsp_on_stdin(b"Content-Length: " + b"9" * 500 + b"\r\n\r\n{}")
+    assert digits.returncode == 2
+    assert b"announces a number of 500 digits" in digits.stderr
+    assert digits.stderr.count(b"\n") == 1
+
+
+def test_a_header_line_without_end_ends_the_session_in_one_line():
+    done = _lsp_on_stdin(b"Content-Length: 2" + b" " * 100_000)
+    assert done.returncode == 2
+    assert done.stderr.decode() == (
+        "gadgetctl: error: lsp: a header line is longer than 1024 bytes; the session ends\n"
+    )
+
+
+def test_a_message_that_is_not_json_is_logged_in_one_line_and_the_session_goes_on():
+    broken = b'Content-Length: 5\r\n\r\n{"a":'
+    done = _lsp_on_stdin(
+        broken
+        + _message(
+            {
+                "jsonrpc": "2.0",
+                "id": 1,
+                "method": "initialize",
+                "params": {"processId": None, "rootUri": None, "capabilities": {}},
+            }
+        )
+    )
+    assert done.returncode == 0
+    assert done.stderr.decode().splitlines() == [
+        "gadgetctl lsp: error: Unable to handle message "
+        "(JSONDecodeError: Expecting value: line 1 column 6 (char 5))"
+    ]
+    assert b'"id": 1' in done.stdout and b"hoverProvider" in done.stdout  # answered after it
+
+
+def test_a_tcp_client_announcing_gigabytes_is_not_buffered():
+    """On --tcp anyone on the machine may connect: a client announcing 1 GiB and sending it
+    was buffered whole; the session ends at the announcement."""
+    server = subprocess.Popen(
+        [sys.executable, "-m", "gadgetctl", "lsp", "--tcp", "0"],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+    try:
+        said = server.stderr.readline().decode()
+        port = int(said.rsplit(":", 1)[1])
+        with socket.create_connection(("127.0.0.1", port), timeout=30) as peer:
+            peer.sendall(b"Content-Length: %d\r\n\r\n" % (1 << 30) + b"x" * 65536)
+            assert server.wait(timeout=30) == 2
+        assert server.stderr.read().decode() == (
+            "gadgetctl: error: lsp: a message announces 1073741824 bytes, over the limit of "
+            "64 MiB; the session ends\n"
+        )
+    finally:
+        if server.poll() is None:
+            server.kill()
+            server.wait(timeout=30)
+        server.stderr.close()

@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from pathlib import Path
 
 from lsprotocol import types
@@ -20,6 +22,7 @@ from pygls.uris import from_fs_path
 
 from gadgetctl.lsp.analysis import JCCL_SUFFIXES, Engine, EngineOptions
 from gadgetctl.lsp.findings import SEVERITIES, findings
+from gadgetctl.lsp.framing import BoundedStdinReader, BoundedStreamReader, FramingError
 from gadgetctl.lsp.text import LineIndex
 from gadgetctl.lsp.uris import is_jccl as _jccl
 from gadgetctl.lsp.uris import path_of as _path
@@ -221,11 +224,43 @@ def create_server(options: EngineOptions | None = None) -> JcclServer:
 
 
 def serve(*, tcp_port: int | None = None, options: EngineOptions | None = None) -> None:
+    """Run the server on standard input/output, or for one client of ``tcp_port``; a client
+    whose messages break the framing limits (:mod:`gadgetctl.lsp.framing`) ends the session
+    with :class:`~gadgetctl.lsp.framing.FramingError`."""
     server = create_server(options)
-    if tcp_port is None:
-        server.start_io()
-    else:
-        serve_tcp(server, tcp_port)
+    with logged_in_one_line():
+        if tcp_port is None:
+            serve_stdio(server)
+        else:
+            serve_tcp(server, tcp_port)
+
+
+def serve_stdio(server: JcclServer) -> None:
+    """pygls's ``start_io``, reading through :class:`BoundedStdinReader`."""
+    import sys
+    from threading import Event
+
+    from pygls.io_ import StdoutWriter, run_async
+
+    server._stop_event = Event()
+    server.protocol.set_writer(StdoutWriter(sys.stdout.buffer))
+    reader = BoundedStdinReader(sys.stdin.buffer, server.thread_pool)
+    try:
+        asyncio.run(
+            run_async(
+                stop_event=server._stop_event,
+                reader=reader,
+                protocol=server.protocol,
+                logger=log,
+                error_handler=server.report_server_error,
+            )
+        )
+    except BrokenPipeError:
+        log.error("the client has gone (its end of standard output is closed)")
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.shutdown()
 
 
 def serve_tcp(server: JcclServer, port: int) -> None:
@@ -242,17 +277,22 @@ def serve_tcp(server: JcclServer, port: int) -> None:
     shown = listener.getsockname()[1]
     print(f"gadgetctl lsp: listening on 127.0.0.1:{shown}", file=sys.stderr, flush=True)
     server._stop_event = stop = Event()
+    broken: list[FramingError] = []
 
     async def connection(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         server.protocol.set_writer(writer)
-        await run_async(
-            stop_event=stop,
-            reader=reader,
-            protocol=server.protocol,
-            logger=log,
-            error_handler=server.report_server_error,
-        )
-        server.shutdown()
+        try:
+            await run_async(
+                stop_event=stop,
+                reader=BoundedStreamReader(reader),
+                protocol=server.protocol,
+                logger=log,
+                error_handler=server.report_server_error,
+            )
+        except FramingError as error:
+            broken.append(error)
+        finally:
+            server.shutdown()
 
     async def listen() -> None:
         server._server = await asyncio.start_server(connection, sock=listener)
@@ -263,3 +303,38 @@ def serve_tcp(server: JcclServer, port: int) -> None:
         asyncio.run(listen())
     except asyncio.CancelledError:
         pass
+    if broken:
+        raise broken[0]
+
+
+class _OneLine(logging.Formatter):
+    """``gadgetctl lsp: LEVEL: message (Error: what)``: what the server logs (pygls's
+    messages it could not handle, a handler that failed) without a traceback, unless
+    ``GADGETCTL_DEBUG`` is set."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        import os
+
+        text = f"gadgetctl lsp: {record.levelname.lower()}: {record.getMessage()}"
+        if record.exc_info and record.exc_info[1] is not None:
+            if os.environ.get("GADGETCTL_DEBUG"):
+                return f"{text}\n{self.formatException(record.exc_info)}"
+            error = record.exc_info[1]
+            text += f" ({type(error).__name__}: {error})"
+        return " ".join(text.split())
+
+
+@contextmanager
+def logged_in_one_line() -> Iterator[None]:
+    """Warnings and errors of the server's loggers on standard error, one line each."""
+    import sys
+
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setLevel(logging.WARNING)
+    handler.setFormatter(_OneLine())
+    root = logging.getLogger()
+    root.addHandler(handler)
+    try:
+        yield
+    finally:
+        root.removeHandler(handler)
