@@ -34,7 +34,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from gadgetctl.emulation import emulator_parser, run
-from gadgetctl.emulation.network import LOOPBACK, STANDARD_SCENARIOS, Peers, UdpFrameSender, ended
+from gadgetctl.emulation.command import ended
+from gadgetctl.emulation.network import LOOPBACK, STANDARD_SCENARIOS, Peers, UdpFrameSender
 from gadgetctl.transport.udp import bind_named
 
 SCENARIOS = STANDARD_SCENARIOS

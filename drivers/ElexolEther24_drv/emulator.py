@@ -23,7 +23,8 @@ import threading
 import time
 
 from gadgetctl.emulation import Console, emulator_parser, run
-from gadgetctl.emulation.network import LOOPBACK, STANDARD_SCENARIOS, Peers, ended
+from gadgetctl.emulation.command import ended
+from gadgetctl.emulation.network import LOOPBACK, STANDARD_SCENARIOS, Peers
 from gadgetctl.transport.udp import bind_named
 
 SCENARIOS = STANDARD_SCENARIOS

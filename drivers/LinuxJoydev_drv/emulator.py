@@ -31,7 +31,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from gadgetctl.emulation import Console, Fifo, emulator_parser, run
+from gadgetctl.emulation import Console, Fifo, emulator_parser, ended, run
 
 EVENT_FORMAT = "=IhBB"  # native byte order, standard sizes, no padding
 JS_EVENT_BUTTON = 0x01
@@ -346,13 +346,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"Point the linux_joydev element at it: <port_name>{emulator.address}</port_name>")
         print("Press Ctrl-C to stop.", flush=True)
 
-    def check() -> int | None:
-        if emulator.error is not None:
-            print(f"emulator failed: {emulator.error}", file=sys.stderr)
-            return 1
-        return None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run(emulator, duration=args.duration, announce=announce, check=ended(emulator))
 
 
 if __name__ == "__main__":

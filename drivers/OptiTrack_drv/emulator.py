@@ -40,7 +40,8 @@ import sys
 import threading
 
 from gadgetctl.emulation import emulator_parser, run
-from gadgetctl.emulation.network import LOOPBACK, STANDARD_SCENARIOS, UdpFrameSender, ended
+from gadgetctl.emulation.command import ended
+from gadgetctl.emulation.network import LOOPBACK, STANDARD_SCENARIOS, UdpFrameSender
 from gadgetctl.transport.udp import bind_named
 
 SCENARIOS = STANDARD_SCENARIOS

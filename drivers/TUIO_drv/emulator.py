@@ -29,7 +29,8 @@ import struct
 import sys
 
 from gadgetctl.emulation import emulator_parser, run
-from gadgetctl.emulation.network import STANDARD_SCENARIOS, UdpFrameSender, ended
+from gadgetctl.emulation.command import ended
+from gadgetctl.emulation.network import STANDARD_SCENARIOS, UdpFrameSender
 
 SCENARIOS = STANDARD_SCENARIOS
 ADDRESS = "/tuio/2Dcur"

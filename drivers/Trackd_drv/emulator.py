@@ -22,7 +22,7 @@ import math
 import sys
 import threading
 
-from gadgetctl.emulation import Console, emulator_parser, run
+from gadgetctl.emulation import Console, emulator_parser, ended, run
 
 from .standalone import _sysv_ipc, encode_controller, encode_tracker
 
@@ -268,13 +268,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"trackd_controller: <shared_memory_key>{args.controller_key}</shared_memory_key>")
         print("Press Ctrl-C to stop.", flush=True)
 
-    def check() -> int | None:
-        if emulator.error is not None:
-            print(f"emulator failed: {emulator.error}", file=sys.stderr)
-            return 1
-        return None
-
-    return run(emulator, duration=args.duration, announce=announce, check=check)
+    return run(emulator, duration=args.duration, announce=announce, check=ended(emulator))
 
 
 if __name__ == "__main__":

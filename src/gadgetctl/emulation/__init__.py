@@ -11,7 +11,8 @@ manager, as Gadgeteer drivers depend on VPR only:
 * :mod:`~gadgetctl.emulation.signals`: SIGTERM and SIGHUP stop an emulator cleanly, as
   Ctrl-C does (:func:`stop_on_signals`, :class:`StopRequested`);
 * :mod:`~gadgetctl.emulation.command`: the shared command line (``--scenario``, ``--rate``,
-  ``--duration`` in wall-clock seconds) and the run loop (:func:`run`);
+  ``--duration`` in wall-clock seconds), the run loop (:func:`run`) and its end once the
+  emulator failed or finished (:func:`ended`);
 * :mod:`~gadgetctl.emulation.console`: the lines an emulator prints when a client connects
   or disconnects and when its scenario stops sending (:class:`Console`);
 * :mod:`~gadgetctl.emulation.clients`: who opens and closes a device file (:class:`OpenWatch`);
@@ -19,15 +20,14 @@ manager, as Gadgeteer drivers depend on VPR only:
   life cycle, commands, records at a rate, pause, hang-up) and its command line
   (:func:`pty_parser`, :func:`run_pty`);
 * :mod:`~gadgetctl.emulation.network`: frames sent over loopback UDP at a rate
-  (:class:`UdpFrameSender`), UDP peers heard from (:class:`Peers`) and the run loop's end
-  of a network emulator (:func:`ended`).
+  (:class:`UdpFrameSender`) and UDP peers heard from (:class:`Peers`).
 """
 
 from __future__ import annotations
 
 from gadgetctl.emulation.beacon import Beacon, is_held
 from gadgetctl.emulation.clients import OpenWatch
-from gadgetctl.emulation.command import duration_seconds, emulator_parser, run
+from gadgetctl.emulation.command import duration_seconds, emulator_parser, ended, run
 from gadgetctl.emulation.console import Console
 from gadgetctl.emulation.device import (
     STANDARD_SCENARIOS,
@@ -36,7 +36,7 @@ from gadgetctl.emulation.device import (
     run_pty,
 )
 from gadgetctl.emulation.endpoints import Fifo, PseudoTerminal, UnixSocket
-from gadgetctl.emulation.network import Peers, UdpFrameSender, ended
+from gadgetctl.emulation.network import Peers, UdpFrameSender
 from gadgetctl.emulation.signals import StopRequested, stop_on_signals
 
 __all__ = [

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
+import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import NoReturn, Protocol
@@ -122,6 +124,24 @@ def emulator_parser(
         help="stop after this many seconds of wall clock (default: until Ctrl-C, SIGTERM or SIGHUP)",
     )
     return parser
+
+
+class Ending(Protocol):
+    error: BaseException | None
+
+
+def ended(emulator: Ending) -> Callable[[], int | None]:
+    """A ``check`` for :func:`run`: exit status 1 (the reason on standard error, one line)
+    once the emulator failed, 0 once it has finished (when it has a ``finished`` event)."""
+    finished: threading.Event | None = getattr(emulator, "finished", None)
+
+    def check() -> int | None:
+        if emulator.error is not None:
+            print(f"emulator failed: {emulator.error}", file=sys.stderr)
+            return 1
+        return 0 if finished is not None and finished.is_set() else None
+
+    return check
 
 
 def run(

@@ -1,5 +1,5 @@
 """What the network emulators share: sending frames over loopback UDP at a rate, and the
-run loop's end (:func:`ended`).
+run loop's end is :func:`~gadgetctl.emulation.command.ended`.
 
 :class:`UdpFrameSender` owns the sending socket (unicast to ``127.0.0.1:port``, or a
 multicast group kept on the loopback interface), a thread that sends one frame per
@@ -12,11 +12,10 @@ frames back, :meth:`~UdpFrameSender.may_send`).
 from __future__ import annotations
 
 import socket
-import sys
 import threading
 import time
 from collections.abc import Callable
-from typing import ClassVar, Protocol, TypeVar
+from typing import ClassVar, TypeVar
 
 from gadgetctl.emulation.command import STANDARD_SCENARIOS, check_settings
 from gadgetctl.emulation.console import Console
@@ -24,24 +23,6 @@ from gadgetctl.emulation.console import Console
 LOOPBACK = "127.0.0.1"
 
 Self = TypeVar("Self", bound="UdpFrameSender")
-
-
-class Ending(Protocol):
-    error: BaseException | None
-    finished: threading.Event
-
-
-def ended(emulator: Ending) -> Callable[[], int | None]:
-    """A ``check`` for :func:`~gadgetctl.emulation.command.run`: exit status 1 (the reason on
-    standard error, one line) once the emulator failed, 0 once it has finished."""
-
-    def check() -> int | None:
-        if emulator.error is not None:
-            print(f"emulator failed: {emulator.error}", file=sys.stderr)
-            return 1
-        return 0 if emulator.finished.is_set() else None
-
-    return check
 
 
 class UdpFrameSender:
