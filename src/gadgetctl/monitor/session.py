@@ -39,6 +39,7 @@ from gadgetctl.input.proxies import (
 from gadgetctl.input.samples import FrameSamples, SharedWindows
 from gadgetctl.input.status import UNKNOWN_TYPE, ElementKind, ElementStatus
 from gadgetctl.jccl.configuration import Configuration
+from gadgetctl.monitor.batchstats import snapshot_rows, snapshots
 from gadgetctl.monitor.encoding import encode_frame, json_value, plain_json, proxy_value
 from gadgetctl.monitor.gather import (
     NO_GATHERING,
@@ -113,9 +114,15 @@ RATE_CHECK_AFTER = 1.0
 RATE_CHECK_MIN = 0.25
 
 
+#: Devices whose final statistics are computed together (numpy over all their timestamps);
+#: the figures of one such part are held while its entries are read.
+FINAL_PART = 512
+
+
 class FinalStats(Mapping[str, dict[str, object]]):
     """:meth:`MonitorSession.final_stats` made one device at a time when read (see
-    :meth:`MonitorSession.final_stats_view`)."""
+    :meth:`MonitorSession.final_stats_view`), from statistics computed for
+    :data:`FINAL_PART` devices at a time."""
 
     def __init__(self, session: MonitorSession, moment: float) -> None:
         self._session = session
@@ -126,13 +133,32 @@ class FinalStats(Mapping[str, dict[str, object]]):
             for name in session._selected
             if tracks.get(name) is not None and device(name) is not None
         ]
-        self._known = frozenset(self._names)
+        self._position = {name: i for i, name in enumerate(self._names)}
+        self._part = -1
+        self._rows: dict[str, dict[str, object]] = {}
 
     def __getitem__(self, name: str) -> dict[str, object]:
-        entry = self._session._final_entry(name, self._moment) if name in self._known else None
+        position = self._position.get(name)
+        entry = None
+        if position is not None:
+            if position // FINAL_PART != self._part:
+                self._read_part(position // FINAL_PART)
+            entry = self._session._final_entry(name, self._moment, self._rows.get(name))
         if entry is None:
             raise KeyError(name)
         return entry
+
+    def _read_part(self, part: int) -> None:
+        self._rows = {}  # (the previous part's figures go first)
+        tracks = self._session._tracks
+        found = [
+            (name, track)
+            for name in self._names[part * FINAL_PART : (part + 1) * FINAL_PART]
+            if (track := tracks.get(name)) is not None
+        ]
+        rows = snapshot_rows([track.stats for _, track in found], self._moment)
+        self._rows = {name: row for (name, _), row in zip(found, rows, strict=True)}
+        self._part = part
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._names)
@@ -888,21 +914,24 @@ class MonitorSession:
     def final_stats_view(self) -> FinalStats:
         """:meth:`final_stats` as a mapping whose entries are made when read, each time, at
         the instant of the latest frame (:attr:`last_look`): a consumer that encodes them one at a time (a stats
-        record) never holds them all (10,000 devices' were about 15 MB). Read it while the
-        statistics stand still (no frames, the scheduler held)."""
+        record) never holds them all (10,000 devices' were about 15 MB). Their statistics are
+        computed for :data:`FINAL_PART` devices together, at the first read of one of them.
+        Read it while the statistics stand still (no frames, the scheduler held)."""
         return FinalStats(self, self.last_look)
 
-    def _final_entry(self, name: str, moment: float) -> dict[str, object] | None:
+    def _final_entry(
+        self, name: str, moment: float, figures: Mapping[str, object] | None = None
+    ) -> dict[str, object] | None:
         """The :meth:`final_stats` entry of ``name`` at ``moment`` (None: not a device
-        with a track)."""
+        with a track), with its statistics' ``figures`` when they were computed (with
+        other devices': :func:`~gadgetctl.monitor.batchstats.snapshot_rows`)."""
         track = self._tracks.get(name)
         device = self.manager.device(name)
         if track is None or device is None:
             return None
-        snap = track.stats.snapshot(moment)
-        entry = snap.to_dict()
+        entry = dict(track.stats.snapshot(moment).to_dict() if figures is None else figures)
         entry.pop("name", None)
-        entry["samples"] = snap.count
+        entry["samples"] = entry["count"]
         entry["state"] = device.state.value
         entry["error"] = device.error
         entry["type"] = device.element_type
@@ -964,6 +993,9 @@ class MonitorSession:
         chosen = self._selected if names is None else names
         if states is not None:
             chosen = [name for name in chosen if self._status_of(name)[2] in states]
+        if detail:
+            chosen = list(chosen)
+            self._refresh_stats(chosen, moment)
         views = [self.element_view(name, moment, detail=detail) for name in chosen]
         return Snapshot(
             self.frame,
@@ -976,6 +1008,19 @@ class MonitorSession:
             self._samples_written,
             self.finished,
         )
+
+    def _refresh_stats(self, names: Iterable[str], moment: float) -> None:
+        """Compute together the statistics at ``moment`` of the devices among ``names`` whose
+        views would compute them (:meth:`DeviceTrack.snapshot`), one device after another."""
+        stale = [
+            track
+            for name in names
+            if (track := self._current_track(name)) is not None and track.stale(moment)
+        ]
+        if len(stale) > 1:
+            found = snapshots([track.stats for track in stale], moment)
+            for track, snapshot in zip(stale, found, strict=True):
+                track.keep_snapshot(snapshot, moment)
 
     def element_view(
         self, name: str, moment: float | None = None, *, detail: bool = True

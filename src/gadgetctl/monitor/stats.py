@@ -248,7 +248,35 @@ class DeviceStats:
             return self._ring[: self._ring_len]
         return np.concatenate((self._ring[self._ring_pos :], self._ring[: self._ring_pos]))
 
+    def recent_parts(self) -> tuple[tuple[np.ndarray, ...], int, float | None]:
+        """What :func:`gadgetctl.monitor.batchstats.snapshot_rows` needs of this device,
+        without consolidating: the :meth:`recent_timestamps` in pieces, oldest first (views:
+        read them before more timestamps come); how many of the newest intervals are not in
+        the largest gap yet (those of the timestamps not consolidated, the one before the
+        first of them included when there was an earlier one); and that largest gap."""
+        pending = self._pending
+        if len(pending) >= self.history:  # (not left so by adding; consolidated as before)
+            self._consolidate()
+        fresh = len(pending)
+        ring_len = self._ring_len
+        if ring_len < self.history:
+            parts: tuple[np.ndarray, ...] = (self._ring[:ring_len],) if ring_len else ()
+        else:
+            pos = self._ring_pos
+            parts = (self._ring[pos:], self._ring[:pos]) if pos else (self._ring,)
+        if fresh:
+            parts += (np.frombuffer(pending, dtype=np.float64),)
+            if ring_len + fresh > self.history:
+                parts = (np.concatenate(parts)[-self.history :],)
+        unseen = fresh if self._last is not None else max(0, fresh - 1)
+        return parts, unseen, self._max_gap
+
     # ---------------------------------------------------------------- figures
+
+    @property
+    def mean_samples_per_frame(self) -> float | None:
+        """Samples per frame over the run (None before the first frame)."""
+        return self._frame_samples / self.frames if self.frames else None
 
     @property
     def mean_rate(self) -> float:
@@ -352,7 +380,7 @@ class DeviceStats:
             age=None if now is None else self.age(now),
             frames=self.frames,
             samples_per_frame=self.samples_per_frame,
-            mean_samples_per_frame=self._frame_samples / self.frames if self.frames else None,
+            mean_samples_per_frame=self.mean_samples_per_frame,
             window_samples_per_frame=self.window_samples_per_frame(now),
         )
 

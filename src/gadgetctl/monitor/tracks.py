@@ -171,10 +171,18 @@ class DeviceTrack:
             histories[unit].append(normalize(float(raw)))
 
     def snapshot(self, moment: float) -> DeviceSnapshot:
-        if self._snapshot is None or moment - self._snapshot_at >= STATS_REFRESH:
-            self._snapshot = self.stats.snapshot(moment)
-            self._snapshot_at = moment
-        return self._snapshot
+        if self.stale(moment):
+            self.keep_snapshot(self.stats.snapshot(moment), moment)
+        return self._snapshot  # type: ignore[return-value]
+
+    def stale(self, moment: float) -> bool:
+        """Whether :meth:`snapshot` at ``moment`` computes the figures again."""
+        return self._snapshot is None or moment - self._snapshot_at >= STATS_REFRESH
+
+    def keep_snapshot(self, snapshot: DeviceSnapshot, moment: float) -> None:
+        """The figures :meth:`snapshot` at ``moment`` computes (computed with other devices')."""
+        self._snapshot = snapshot
+        self._snapshot_at = moment
 
     # -- values -------------------------------------------------------------------------
 
