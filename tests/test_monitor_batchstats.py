@@ -149,3 +149,31 @@ def test_known_figures_of_a_few_devices():
     assert rows[2]["p50_interval"] is None and rows[2]["max_gap"] is None
     assert rows[2]["age"] is None and rows[2]["window_rate"] == 0.0
     assert not math.isnan(rows[0]["jitter"])
+
+
+@pytest.mark.parametrize("count", [0, 1, 127, 128, 129, 300])
+def test_a_stats_record_encoded_by_batches_of_devices_is_encode_record_s_text(count):
+    """encode_stats_parts encodes STATS_BATCH devices to one encoder call; joined, the parts
+    are the record encode_record writes, whatever mappings the entries are."""
+    from types import MappingProxyType
+
+    from gadgetctl.monitor.records import (
+        STATS_BATCH,
+        StatsRecord,
+        encode_record,
+        encode_stats_parts,
+    )
+
+    assert STATS_BATCH == 128
+    devices = {
+        f'W"{i}\u00e9': (MappingProxyType if i % 3 else dict)(
+            {"count": i, "jitter": i / 7 if i % 2 else None, "units": {"position": 1}}
+        )
+        for i in range(count)
+    }
+    record = StatsRecord(3.25, devices)
+    parts = list(encode_stats_parts(record, size=2_000))
+    assert "".join(parts) == encode_record(
+        StatsRecord(3.25, {name: dict(values) for name, values in devices.items()})
+    )
+    assert all(parts) and (count < 300 or len(parts) >= 3)  # parts of a few batches
