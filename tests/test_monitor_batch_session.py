@@ -112,3 +112,17 @@ def test_the_table_of_statistics_computed_together_is_the_one_device_by_device(m
         TableView(session, one_by_one).print()
     assert together.getvalue() == one_by_one.getvalue()
     assert together.getvalue().count("W1") >= 1 and "Hz" in together.getvalue()
+
+
+def test_health_s_dropped_is_the_device_stats_dropped(many, monkeypatch):
+    """health() counts ``dropped`` as Input.stats does (the store's drops and the
+    transport's), without counting the samples."""
+    manager, configuration = many
+    session = MonitorSession(manager, configuration, selectors=["W1"])
+    session.start()
+    list(session.frames(frames=2))
+    device = manager.device("W1")
+    assert device.health()["dropped"] == device.stats.dropped == 0
+    monkeypatch.setattr(type(device), "transport_dropped", lambda self: 7)
+    monkeypatch.setattr(type(device.store), "dropped", lambda self, kind=None: 4)
+    assert device.health()["dropped"] == device.stats.dropped == 11

@@ -292,7 +292,9 @@ class Input:
             found.update(ledger.counters())
             if ledger.first_error is not None:
                 found["decode_error"] = ledger.first_error
-        found.update(faults=self.faults, reconnects=self.restarts, dropped=self.stats.dropped)
+        # (the ``dropped`` of :attr:`stats`, without counting the samples as it does too)
+        dropped = self.store.dropped() + self.transport_dropped()
+        found.update(faults=self.faults, reconnects=self.restarts, dropped=dropped)
         if self.error:
             found["last_fault"] = self.error
             if self.error_at is not None:
