@@ -110,10 +110,23 @@ def test_the_varied_devices_cover_what_the_batch_tells_apart():
     assert any(s.count == 0 for s in snaps) and any(s.count == 1 for s in snaps)
     intervals = [s.count - 1 for s in snaps if s.count > 1]
     assert min(intervals) < 8 and max(intervals) > 4096  # summed one by one and pairwise
+    assert any(8 <= n <= 128 for n in intervals) and any(128 < n < 4096 for n in intervals)
     assert any(s.jitter for s in snaps) and any(s.jitter == 0.0 for s in snaps)
     assert any(s.window_rate == 0.0 and s.count > 2 for s in snaps)
     assert any(s.dropped for s in snaps) and any(s.faults for s in snaps)
     assert any(s.window_samples_per_frame is None and s.frames for s in snaps)
+
+
+def test_segment_sums_are_numpy_s_sums_bit_for_bit():
+    from gadgetctl.monitor.batchstats import _sums
+
+    rng = np.random.default_rng(7)
+    counts = np.array([n for n in range(0, 300) for _ in range(3)], dtype=np.int64)
+    values = rng.random(int(counts.sum())) * 10.0 ** rng.uniform(-4, 3, int(counts.sum()))
+    firsts = np.cumsum(counts) - counts
+    totals = _sums(values, firsts, counts)
+    expected = [values[f : f + n].sum() if n else 0.0 for f, n in zip(firsts, counts, strict=True)]
+    assert [_bits(float(t)) for t in totals] == [_bits(float(e)) for e in expected]
 
 
 def test_reading_them_together_changes_nothing_and_feeding_goes_on():
@@ -127,6 +140,15 @@ def test_reading_them_together_changes_nothing_and_feeding_goes_on():
     assert [row["count"] for row in after] == [s.count for s in devices]
     assert all(row["newest_timestamp"] == 3001.0 for row in after)
     assert [_exact(row) for row in after] == [_exact(s.snapshot().to_dict()) for s in devices]
+
+
+def test_rows_have_the_snapshot_s_fields_in_order():
+    from dataclasses import fields
+
+    from gadgetctl.monitor.stats import DeviceSnapshot
+
+    (row,) = snapshot_rows([DeviceStats("x")])
+    assert list(row) == [f.name for f in fields(DeviceSnapshot)]
 
 
 def test_snapshots_are_device_snapshots():

@@ -4,10 +4,10 @@ segment with numpy, rather than a dozen numpy calls for each device (the final s
 of 10,000 devices, and a table of them, were mostly those calls).
 
 The numbers are the same, bit for bit: percentiles are picked from the same intervals, a
-mean is summed in the order numpy sums a device's few intervals (one at a time below eight;
-numpy's own sum beyond), and the jitter's sum of squares is numpy's dot of each device's
-deviations, as :meth:`DeviceStats.snapshot` computes them. Nothing is consolidated: the
-statistics read stay as they were.
+mean is summed in the order numpy sums a device's intervals (eight running sums joined
+pairwise, up to 128 of them; numpy's own sum beyond), and the jitter's sum of squares is
+numpy's dot of each device's deviations, as :meth:`DeviceStats.snapshot` computes them.
+Nothing is consolidated: the statistics read stay as they were.
 """
 
 from __future__ import annotations
@@ -17,12 +17,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from gadgetctl.monitor.stats import _SNAPSHOT_FIELDS, DeviceSnapshot, DeviceStats
+from gadgetctl.monitor.stats import DeviceSnapshot, DeviceStats
 
 __all__ = ["snapshot_rows", "snapshots"]
 
-#: Intervals up to which numpy sums one after the other (pairwise, 8 at a time, beyond).
-_SEQUENTIAL_SUM = 7
+#: Values numpy sums with eight running sums (it splits longer runs in halves first).
+_PAIRWISE_BLOCK = 128
 
 
 def snapshots(devices: Sequence[DeviceStats], now: float | None = None) -> list[DeviceSnapshot]:
@@ -113,26 +113,28 @@ def snapshot_rows(
         if fresh and (gap is None or newer > gap):
             gap = newer
         newest_timestamp = stats.newest_timestamp
-        values = (
-            stats.name,
-            stats.count,
-            stats.first_timestamp,
-            newest_timestamp,
-            stats.mean_rate,
-            rated,
-            middle if known else None,
-            high if known else None,
-            gap,
-            spread if known else None,
-            stats.dropped,
-            stats.faults,
-            None if now is None or newest_timestamp is None else now - newest_timestamp,
-            stats.frames,
-            stats.samples_per_frame,
-            stats.mean_samples_per_frame,
-            stats.window_samples_per_frame(now),
+        # (DeviceSnapshot's fields, in order: a test holds them to it)
+        rows.append(
+            {
+                "name": stats.name,
+                "count": stats.count,
+                "first_timestamp": stats.first_timestamp,
+                "newest_timestamp": newest_timestamp,
+                "mean_rate": stats.mean_rate,
+                "window_rate": rated,
+                "p50_interval": middle if known else None,
+                "p99_interval": high if known else None,
+                "max_gap": gap,
+                "jitter": spread if known else None,
+                "dropped": stats.dropped,
+                "faults": stats.faults,
+                "age": None if now is None or newest_timestamp is None else now - newest_timestamp,
+                "frames": stats.frames,
+                "samples_per_frame": stats.samples_per_frame,
+                "mean_samples_per_frame": stats.mean_samples_per_frame,
+                "window_samples_per_frame": stats.window_samples_per_frame(now),
+            }
         )
-        rows.append(dict(zip(_SNAPSHOT_FIELDS, values, strict=True)))
     return rows
 
 
@@ -174,14 +176,40 @@ def _reduce(
 
 
 def _sums(values: np.ndarray, firsts: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """Each segment's ``values[first : first + count].sum()``, summed as numpy sums it: the
-    short segments a value at a time for all of them together, the others one by one."""
+    """Each segment's ``values[first : first + count].sum()``, added up as numpy adds them:
+    up to :data:`_PAIRWISE_BLOCK` values, eight running sums (one value at a time below
+    eight) joined pairwise, then the rest one at a time; computed for all the segments of
+    one length together. Longer segments are summed by numpy one by one."""
     totals = np.zeros(len(counts))
-    short = counts <= _SEQUENTIAL_SUM
-    for step in range(min(_SEQUENTIAL_SUM, int(counts.max(initial=0)))):
-        rows = np.flatnonzero(short & (counts > step))
-        totals[rows] = totals[rows] + values[firsts[rows] + step]
-    for i in np.flatnonzero(~short).tolist():
-        first = int(firsts[i])
-        totals[i] = values[first : first + int(counts[i])].sum()
+    for length in np.unique(counts).tolist():
+        rows = np.flatnonzero(counts == length)
+        if length == 0:
+            continue
+        if length > _PAIRWISE_BLOCK:
+            for i in rows.tolist():
+                first = int(firsts[i])
+                totals[i] = values[first : first + length].sum()
+            continue
+        block = values[firsts[rows][:, None] + np.arange(length)]
+        totals[rows] = 0.0 + _pairwise(block)
     return totals
+
+
+def _pairwise(block: np.ndarray) -> np.ndarray:
+    """numpy's sum of each row of ``block`` (at most :data:`_PAIRWISE_BLOCK` columns)."""
+    length = block.shape[1]
+    if length < 8:
+        total = np.zeros(len(block))
+        for column in range(length):
+            total = total + block[:, column]
+        return total
+    sums = [block[:, j] for j in range(8)]
+    whole = length - length % 8
+    for start in range(8, whole, 8):
+        sums = [sums[j] + block[:, start + j] for j in range(8)]
+    total = ((sums[0] + sums[1]) + (sums[2] + sums[3])) + (
+        (sums[4] + sums[5]) + (sums[6] + sums[7])
+    )
+    for column in range(whole, length):
+        total = total + block[:, column]
+    return total
