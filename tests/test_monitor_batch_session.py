@@ -70,6 +70,12 @@ def test_final_statistics_by_parts_are_those_device_by_device(many, monkeypatch)
             assert entry is not view[name]
         assert any(entry["count"] > 100 for entry in one_by_one.values())
         assert one_by_one["W3"]["dropped"] == 5 and one_by_one["W4"]["faults"] == 2
+        kinds = [kind.value for kind in manager.device("W0").kinds()]
+        assert one_by_one["W0"]["kinds"] == one_by_one["W1"]["kinds"] == kinds
+        assert "position" in kinds
+        mine = view["W0"]
+        mine["kinds"].append("mine")  # each entry's list is its own
+        assert view["W0"]["kinds"] == view["W1"]["kinds"] == kinds
         stream = io.BytesIO()
         session.add_sink(lambda info: Recorder.to_stream(stream, info))
         session.open_sinks()

@@ -114,6 +114,19 @@ RATE_CHECK_AFTER = 1.0
 RATE_CHECK_MIN = 0.25
 
 
+#: The values of the kinds of a device class (its kinds() is one tuple per class).
+_KIND_VALUES: dict[tuple[DeviceKind, ...], tuple[str, ...]] = {}
+
+
+def _kind_values(kinds: tuple[DeviceKind, ...]) -> tuple[str, ...]:
+    if type(kinds) is not tuple:  # (a driver's own kinds(), whatever it returns)
+        return tuple(kind.value for kind in kinds)
+    values = _KIND_VALUES.get(kinds)
+    if values is None:
+        values = _KIND_VALUES[kinds] = tuple(kind.value for kind in kinds)
+    return values
+
+
 #: Devices whose final statistics are computed together (numpy over all their timestamps);
 #: the figures of one such part are held while its entries are read.
 FINAL_PART = 512
@@ -935,7 +948,7 @@ class MonitorSession:
         entry["state"] = device.state.value
         entry["error"] = device.error
         entry["type"] = device.element_type
-        entry["kinds"] = [k.value for k in device.kinds()]
+        entry["kinds"] = list(_kind_values(device.kinds()))
         entry["units"] = dict(track.units)
         entry["health"] = device.health()
         clock = getattr(device, "remote_clock", None)  # devices that keep their source's times
