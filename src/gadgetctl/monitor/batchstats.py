@@ -1,43 +1,46 @@
-"""The figures of :meth:`DeviceStats.snapshot <gadgetctl.monitor.stats.DeviceStats.snapshot>`
-for many devices at once: their recent timestamps gathered in one array and reduced by
-segment with numpy, rather than a dozen numpy calls for each device (the final statistics
-of 10,000 devices, and a table of them, were mostly those calls).
+"""The figures of device statistics, computed for many devices at once: their recent
+timestamps one after the other in one array, reduced by segment with numpy (a device's
+figures are the same alone or with others: each segment is reduced on its own).
 
-The numbers are the same, bit for bit: percentiles are picked from the same intervals, a
-mean is summed in the order numpy sums a device's intervals (eight running sums joined
-pairwise, up to 128 of them; numpy's own sum beyond), and the jitter's sum of squares is
-numpy's dot of each device's deviations, as :meth:`DeviceStats.snapshot` computes them.
-Nothing is consolidated: the statistics read stay as they were.
+:class:`~gadgetctl.monitor.stats.DeviceStats` gathers its timestamps for it; this module
+knows only arrays.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 
-from gadgetctl.monitor.stats import DeviceSnapshot, DeviceStats
-
-__all__ = ["snapshot_rows", "snapshots"]
-
-#: Values numpy sums with eight running sums (it splits longer runs in halves first).
-_PAIRWISE_BLOCK = 128
+__all__ = ["Figures", "figures"]
 
 
-def snapshots(devices: Sequence[DeviceStats], now: float | None = None) -> list[DeviceSnapshot]:
-    """``[stats.snapshot(now) for stats in devices]``, computed together."""
-    return [DeviceSnapshot(**row) for row in snapshot_rows(devices, now)]
+class Figures(NamedTuple):
+    """Per device (one entry each): whether it has an interval, the nearest-rank 50th and
+    99th percentile intervals, the jitter (population standard deviation of the intervals),
+    the largest of its newest ``unseen`` intervals, and the window rate."""
+
+    known: np.ndarray
+    p50: np.ndarray
+    p99: np.ndarray
+    jitter: np.ndarray
+    fresh_gap: np.ndarray
+    rate: np.ndarray
 
 
-def snapshot_rows(
-    devices: Sequence[DeviceStats], now: float | None = None
-) -> list[dict[str, object]]:
-    """``[stats.snapshot(now).to_dict() for stats in devices]``, computed together."""
-    count = len(devices)
-    if not count:
-        return []
-    stamps, lengths, unseen, gaps = _gather(devices)
+def figures(
+    stamps: np.ndarray,
+    lengths: np.ndarray,
+    unseen: np.ndarray,
+    newest: np.ndarray,
+    window: np.ndarray,
+    now: float | None,
+) -> Figures:
+    """The :class:`Figures` of devices whose recent timestamps are ``stamps`` one device after
+    another (``lengths`` each, oldest first); ``unseen``: how many of each device's newest
+    intervals are to be searched for a gap; ``newest``: each device's newest timestamp (0 for
+    none); ``window``: each device's window in seconds, ending at ``now`` or its newest."""
+    count = len(lengths)
     starts = np.cumsum(lengths) - lengths
     intervals_of = np.maximum(lengths - 1, 0)
 
@@ -48,37 +51,31 @@ def snapshot_rows(
     keep[heads - 1] = False
     intervals = steps[keep]
     firsts = np.cumsum(intervals_of) - intervals_of  # where each device's intervals begin
-    has = intervals_of > 0
-    owner = np.repeat(np.arange(count), intervals_of)
+    known = intervals_of > 0
 
     p50 = np.zeros(count)
     p99 = np.zeros(count)
     jitter = np.zeros(count)
     if len(intervals):
+        owner = np.repeat(np.arange(count), intervals_of)
         ordered = intervals[np.lexsort((intervals, owner))]
         n = intervals_of.astype(np.float64)
         for p, into in ((50, p50), (99, p99)):
             ranks = np.maximum(0, np.ceil(p / 100.0 * n).astype(np.int64) - 1)
-            into[has] = ordered[(firsts + ranks)[has]]
-        totals = _sums(intervals, firsts, intervals_of)
-        means = totals[has] / intervals_of[has]
-        deviations = intervals - np.repeat(means, intervals_of[has])
-        begins, ends = firsts.tolist(), (firsts + intervals_of).tolist()
-        for i in np.flatnonzero(has).tolist():
-            mine = deviations[begins[i] : ends[i]]
-            jitter[i] = math.sqrt(float(np.dot(mine, mine)) / (ends[i] - begins[i]))
+            into[known] = ordered[(firsts + ranks)[known]]
+        begins, ends, sizes = firsts[known], (firsts + intervals_of)[known], n[known]
+        means = _reduce(np.add, intervals, begins, ends) / sizes
+        deviations = intervals - np.repeat(means, intervals_of[known])
+        jitter[known] = np.sqrt(_reduce(np.add, deviations * deviations, begins, ends) / sizes)
 
-    # the largest of the intervals not yet in a device's largest gap (its newest ones)
+    # the largest of each device's newest ``unseen`` intervals
     fresh_gap = np.zeros(count)
     with_fresh = np.flatnonzero(unseen > 0)
     if len(with_fresh):
         ends = firsts[with_fresh] + intervals_of[with_fresh]
-        found = _reduce(np.maximum, intervals, ends - unseen[with_fresh], ends)
-        fresh_gap[with_fresh] = found
+        fresh_gap[with_fresh] = _reduce(np.maximum, intervals, ends - unseen[with_fresh], ends)
 
     # the window rate: the timestamps in the window ending at the newest (or ``now``)
-    newest = np.array([s.newest_timestamp or 0.0 for s in devices], dtype=np.float64)
-    window = np.array([s.window for s in devices], dtype=np.float64)
     end = newest if now is None else np.maximum(now, newest)
     rate = np.zeros(count)
     several = lengths >= 2
@@ -86,81 +83,15 @@ def snapshot_rows(
         inside = stamps > np.repeat(end - window, lengths)
         at = starts[several]
         ends = at + lengths[several]
-        within = _reduce(np.add, inside.astype(np.int64), at, ends)
+        within = np.zeros(count, dtype=np.int64)
+        within[several] = _reduce(np.add, inside.astype(np.int64), at, ends)
         position = np.where(inside, np.arange(len(stamps)), len(stamps))
-        first = _reduce(np.minimum, position, at, ends)
-        within_all = np.zeros(count, dtype=np.int64)
-        within_all[several] = within
-        first_all = np.zeros(count, dtype=np.int64)
-        first_all[several] = np.minimum(first, len(stamps) - 1)
-        span = end - stamps[first_all]
-        counted = (within_all >= 2) & (span > 0)
-        rate[counted] = (within_all[counted] - 1) / span[counted]
-
-    rows: list[dict[str, object]] = []
-    for stats, gap, fresh, known, middle, high, spread, rated, newer in zip(
-        devices,
-        gaps,
-        unseen.tolist(),
-        has.tolist(),
-        p50.tolist(),
-        p99.tolist(),
-        jitter.tolist(),
-        rate.tolist(),
-        fresh_gap.tolist(),
-        strict=True,
-    ):
-        if fresh and (gap is None or newer > gap):
-            gap = newer
-        newest_timestamp = stats.newest_timestamp
-        # (DeviceSnapshot's fields, in order: a test holds them to it)
-        rows.append(
-            {
-                "name": stats.name,
-                "count": stats.count,
-                "first_timestamp": stats.first_timestamp,
-                "newest_timestamp": newest_timestamp,
-                "mean_rate": stats.mean_rate,
-                "window_rate": rated,
-                "p50_interval": middle if known else None,
-                "p99_interval": high if known else None,
-                "max_gap": gap,
-                "jitter": spread if known else None,
-                "dropped": stats.dropped,
-                "faults": stats.faults,
-                "age": None if now is None or newest_timestamp is None else now - newest_timestamp,
-                "frames": stats.frames,
-                "samples_per_frame": stats.samples_per_frame,
-                "mean_samples_per_frame": stats.mean_samples_per_frame,
-                "window_samples_per_frame": stats.window_samples_per_frame(now),
-            }
-        )
-    return rows
-
-
-def _gather(
-    devices: Sequence[DeviceStats],
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[float | None]]:
-    """The devices' recent timestamps one after the other, how many each has, how many of
-    its newest intervals are not in its largest gap yet, and that gap."""
-    pieces: list[np.ndarray] = []
-    lengths: list[int] = []
-    unseen: list[int] = []
-    gaps: list[float | None] = []
-    for stats in devices:
-        parts, fresh, gap = stats.recent_parts()
-        lengths.append(sum(map(len, parts)))
-        pieces.extend(parts)
-        unseen.append(fresh)
-        gaps.append(gap)
-    # (a copy: the pieces view the devices' pending timestamps, which must stay free to grow)
-    stamps = np.concatenate(pieces) if pieces else np.empty(0, dtype=np.float64)
-    return (
-        stamps,
-        np.array(lengths, dtype=np.int64),
-        np.array(unseen, dtype=np.int64),
-        gaps,
-    )
+        first = np.zeros(count, dtype=np.int64)
+        first[several] = np.minimum(_reduce(np.minimum, position, at, ends), len(stamps) - 1)
+        span = end - stamps[first]
+        counted = (within >= 2) & (span > 0)
+        rate[counted] = (within[counted] - 1) / span[counted]
+    return Figures(known, p50, p99, jitter, fresh_gap, rate)
 
 
 def _reduce(
@@ -173,43 +104,3 @@ def _reduce(
     if bounds[-1] == len(values):  # (the last one runs to the end)
         bounds = bounds[:-1]
     return ufunc.reduceat(values, bounds)[0::2]
-
-
-def _sums(values: np.ndarray, firsts: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """Each segment's ``values[first : first + count].sum()``, added up as numpy adds them:
-    up to :data:`_PAIRWISE_BLOCK` values, eight running sums (one value at a time below
-    eight) joined pairwise, then the rest one at a time; computed for all the segments of
-    one length together. Longer segments are summed by numpy one by one."""
-    totals = np.zeros(len(counts))
-    for length in np.unique(counts).tolist():
-        rows = np.flatnonzero(counts == length)
-        if length == 0:
-            continue
-        if length > _PAIRWISE_BLOCK:
-            for i in rows.tolist():
-                first = int(firsts[i])
-                totals[i] = values[first : first + length].sum()
-            continue
-        block = values[firsts[rows][:, None] + np.arange(length)]
-        totals[rows] = 0.0 + _pairwise(block)
-    return totals
-
-
-def _pairwise(block: np.ndarray) -> np.ndarray:
-    """numpy's sum of each row of ``block`` (at most :data:`_PAIRWISE_BLOCK` columns)."""
-    length = block.shape[1]
-    if length < 8:
-        total = np.zeros(len(block))
-        for column in range(length):
-            total = total + block[:, column]
-        return total
-    sums = [block[:, j] for j in range(8)]
-    whole = length - length % 8
-    for start in range(8, whole, 8):
-        sums = [sums[j] + block[:, start + j] for j in range(8)]
-    total = ((sums[0] + sums[1]) + (sums[2] + sums[3])) + (
-        (sums[4] + sums[5]) + (sums[6] + sums[7])
-    )
-    for column in range(whole, length):
-        total = total + block[:, column]
-    return total

@@ -39,7 +39,6 @@ from gadgetctl.input.proxies import (
 from gadgetctl.input.samples import FrameSamples, SharedWindows
 from gadgetctl.input.status import UNKNOWN_TYPE, ElementKind, ElementStatus
 from gadgetctl.jccl.configuration import Configuration
-from gadgetctl.monitor.batchstats import snapshot_rows, snapshots
 from gadgetctl.monitor.encoding import encode_frame, json_value, plain_json, proxy_value
 from gadgetctl.monitor.gather import (
     NO_GATHERING,
@@ -58,7 +57,7 @@ from gadgetctl.monitor.records import (
     StatusRecord,
     encode_samples,
 )
-from gadgetctl.monitor.stats import DeviceSnapshot
+from gadgetctl.monitor.stats import DeviceSnapshot, snapshot_rows, snapshots
 from gadgetctl.monitor.tracks import DeviceTrack
 from gadgetctl.monitor.views import ElementView, Frame, Snapshot, UnitView
 from gadgetctl.perf import collector_paused
@@ -937,7 +936,7 @@ class MonitorSession:
     ) -> dict[str, object] | None:
         """The :meth:`final_stats` entry of ``name`` at ``moment`` (None: not a device
         with a track), with its statistics' ``figures`` when they were computed (with
-        other devices': :func:`~gadgetctl.monitor.batchstats.snapshot_rows`)."""
+        other devices': :func:`~gadgetctl.monitor.stats.snapshot_rows`)."""
         track = self._tracks.get(name)
         device = self.manager.device(name)
         if track is None or device is None:
