@@ -174,3 +174,71 @@ def test_devices_alike_share_the_cuts_their_blocks_are_made_of(devices, monkeypa
         one.compute(start, 5)
     assert len(_SIGNALS._cuts) <= 4
     same_block(two.compute(0, 20), two._compute(0, 20))
+
+
+def test_devices_alike_share_windows_past_the_first_samples(devices):
+    """Issue 27 goal 2: past the first SHARED_SAMPLES samples, devices alike share the values
+    in windows (a hundred 1 kHz devices alike computed a hundred copies of every block);
+    every block is still the one the device computes on its own, events included."""
+    chance = random.Random(7)
+    past = _SIGNALS.SHARED_SAMPLES
+    for name in BODIES:
+        one, two = devices[f"{name}1"], devices[f"{name}2"]
+        for _ in range(60):
+            start = chance.randrange(past - 30, 4 * past)
+            count = chance.randrange(1, _SIGNALS.WINDOW_STRIDE + 1)
+            a, b = one.compute(start, count), two.compute(start, count)
+            same_block(a, one._compute(start, count))
+            same_block(b, two._compute(start, count))
+    one, two = devices["fast1"], devices["fast2"]
+    a, b = one.compute(past + 100, 500), two.compute(past + 100, 500)
+    assert a.items is b.items  # the same cut of one window
+    for _, values in a.items:
+        assert not values.flags.writeable and not values.base.flags.writeable
+    assert a.timestamps is not b.timestamps
+
+
+def test_a_device_alone_computes_its_own_blocks_past_the_first_samples(devices):
+    device = devices["tracker1"]
+    start = 3 * _SIGNALS.SHARED_SAMPLES
+    for _ in range(3):  # asked again and again, by itself only: no window is made
+        block = device.compute(start, 10)
+        assert all(values.flags.writeable for _, values in block.items)
+    assert not _SIGNALS._windows
+
+
+def test_windows_are_bounded_and_blocks_beyond_the_bounds_are_computed_alone(devices, monkeypatch):
+    real = WaveformDevice._compute
+    one, two = devices["fast1"], devices["fast2"]
+    past, stride = _SIGNALS.SHARED_SAMPLES, _SIGNALS.WINDOW_STRIDE
+    one.compute(past, 10)  # first asker
+    for step in range(12):
+        two.compute(past + step * stride, 10)
+        kept = [first for key, first in _SIGNALS._windows if key == two.signal_key()]
+        assert len(kept) <= _SIGNALS.WINDOWS_KEPT
+    two.compute(past + 4 * stride, 10)  # in a window kept: used last, dropped last
+    two.compute(past + 12 * stride, 10)
+    kept = [first for key, first in _SIGNALS._windows if key == two.signal_key()]
+    assert past + 4 * stride in kept and past + 5 * stride not in kept
+    assert _SIGNALS._window_bytes == sum(
+        t.nbytes + sum(v.nbytes for v in data.values())
+        for _, t, data, _, _ in _SIGNALS._windows.values()
+    )
+    # a block that reaches past the end of the window its first sample is in
+    block = two.compute(past + stride - 1, stride + 2)
+    assert all(values.flags.writeable for _, values in block.items)
+    same_block(block, two._compute(past + stride - 1, stride + 2))
+    monkeypatch.setattr(_SIGNALS, "WINDOW_BYTES", 1000)  # no window fits
+    _SIGNALS.clear()
+    one.compute(10 * past, 10)
+    block = two.compute(10 * past, 10)
+    assert all(values.flags.writeable for _, values in block.items)
+    assert not _SIGNALS._windows and _SIGNALS._window_bytes == 0
+    same_block(block, two._compute(10 * past, 10))
+    computed = []
+    monkeypatch.setattr(
+        WaveformDevice, "_compute", lambda self, *a: computed.append(a) or real(self, *a)
+    )
+    block = two.compute(10 * past + 20, 10)  # no window computed again just to be dropped
+    assert computed == [(10 * past + 20, 10)]
+    same_block(block, real(two, 10 * past + 20, 10))

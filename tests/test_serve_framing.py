@@ -258,3 +258,29 @@ def test_shared_windows_give_the_bytes_of_their_batches(upcoming, count):
     assert shared_outlet.messages == batched_outlet.messages
     assert FRAME_AHEAD < 300 * 3  # rows ran out within an array
     assert any(spares) == upcoming  # rows framed ahead were used when arrays were offered
+
+
+def test_shared_rotations_are_converted_once_with_the_same_bytes():
+    """Issue 27 goal 2: the quaternions of read-only matrices devices share (a waveform
+    configuration's values) are converted once for every stretch cut from them, with the
+    bytes of a conversion of the stretch itself; other arrays are converted as before."""
+    from gadgetctl.input.transforms import quaternions_xyzw
+    from gadgetctl.serve.outlet import _SharedRotations
+
+    rng = np.random.default_rng(3)
+    angles = rng.uniform(-np.pi, np.pi, size=(300, 2))  # rotations of every size: all branches
+    owner = np.zeros((300, 2, 4, 4))
+    owner[:] = np.eye(4)
+    c, s = np.cos(angles), np.sin(angles)
+    owner[:, :, 0, 0], owner[:, :, 0, 1], owner[:, :, 1, 0], owner[:, :, 1, 1] = c, -s, s, c
+    owner[:, :, :3, 3] = rng.normal(size=(300, 2, 3))
+    owner.flags.writeable = False
+    rotations = _SharedRotations()
+    for start, stop in ((0, 300), (17, 18), (40, 299), (123, 260)):
+        flat = owner[start:stop].reshape(-1, 4, 4)
+        assert rotations.quaternions(flat).tobytes() == quaternions_xyzw(flat).tobytes()
+    assert len(rotations._kept) == 1  # one conversion for every stretch
+    mine = np.array(owner)  # writable: converted on its own, not kept
+    flat = mine[5:50].reshape(-1, 4, 4)
+    assert rotations.quaternions(flat).tobytes() == quaternions_xyzw(flat).tobytes()
+    assert len(rotations._kept) == 1

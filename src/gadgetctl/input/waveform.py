@@ -647,9 +647,15 @@ class _SharedSignals:
     alike (:meth:`WaveformDevice.signal_key`), computed once and shared read-only: a sample's
     values depend only on its number and the configuration, so 10,000 devices of one
     configuration had 10,000 copies of the same matrices (about 14 MB in their first
-    blocks), each computed on its own. Blocks past them, and devices whose values are their
-    own, are computed as before. At most :data:`SHARED_CONFIGURATIONS` configurations are
-    kept.
+    blocks), each computed on its own. Past them, the values of a configuration that more
+    than one device asked for are shared in windows of :data:`SHARED_SAMPLES` samples, one
+    beginning every :data:`WINDOW_STRIDE` (so a block of up to that many samples lies in one
+    window), the :data:`WINDOWS_KEPT` used last of a configuration and at most
+    :data:`WINDOW_BYTES` in all (a configuration whose window would not fit is not shared):
+    a hundred 1 kHz devices alike computed a hundred copies of each half-second block, and
+    their server converted each copy's rotations to quaternions on its own. Other blocks,
+    and devices whose values are their own, are computed as before. At most
+    :data:`SHARED_CONFIGURATIONS` configurations are kept.
 
     The cuts of those values a block is made of (its ``t``, its per-kind views and events)
     are shared too, by configuration and sample range, up to :data:`SHARED_CUTS` of them:
@@ -659,6 +665,9 @@ class _SharedSignals:
     SHARED_SAMPLES = 4096
     SHARED_CONFIGURATIONS = 16
     SHARED_CUTS = 4096
+    WINDOW_STRIDE = SHARED_SAMPLES // 2
+    WINDOWS_KEPT = 8
+    WINDOW_BYTES = 32 << 20
 
     def __init__(self) -> None:
         #: signal key -> (samples covered, t = k / rate, per kind the values, the events'
@@ -669,6 +678,13 @@ class _SharedSignals:
         ] = {}
         #: (signal key, start, stop) -> what :meth:`values` gives for it (read-only)
         self._cuts: dict[tuple, _Cut] = {}
+        #: (signal key, first sample) -> a window past the first samples: (first sample,
+        #: t, per kind the values, the events' sample indices, the events), oldest first
+        self._windows: dict[tuple, tuple] = {}
+        self._window_bytes = 0
+        #: signal key -> the id of the one device that asked for it, True once another did,
+        #: False when its window does not fit :data:`WINDOW_BYTES`
+        self._askers: dict[tuple, int | bool] = {}
 
     def values(self, device: WaveformDevice, start: int, count: int) -> _Cut | None:
         """``t`` (sample number / rate), the values of samples ``start`` ..
@@ -676,7 +692,7 @@ class _SharedSignals:
         the events among them; None when they are not shared. Devices alike get the same
         objects for the same samples: none of them may be changed."""
         stop = start + count
-        if stop > self.SHARED_SAMPLES or count < 1 or start < 0:
+        if count < 1 or start < 0:
             return None
         key = device.signal_key()
         if key is None:
@@ -684,6 +700,12 @@ class _SharedSignals:
         cut = self._cuts.get((key, start, stop))
         if cut is not None:
             return cut
+        if stop > self.SHARED_SAMPLES:
+            window = self._window(device, key, start, stop)
+            if window is None:
+                return None
+            first, t, data, indices, events = window
+            return self._cut(key, start, stop, first, t, data, indices, events)
         found = self._values.get(key)
         if found is None or found[0] < stop:
             if found is None and len(self._values) >= self.SHARED_CONFIGURATIONS:
@@ -701,10 +723,25 @@ class _SharedSignals:
             found = self._values[key] = (covered, t, data, indices, block.events)
             self._cuts.clear()  # (cut from the arrays just replaced)
         _, t, data, indices, events = found
+        return self._cut(key, start, stop, 0, t, data, indices, events)
+
+    def _cut(
+        self,
+        key: tuple,
+        start: int,
+        stop: int,
+        first: int,
+        t: np.ndarray,
+        data: dict[DeviceKind, np.ndarray],
+        indices: list[int],
+        events: list[tuple[int, int]],
+    ) -> _Cut:
+        """Samples ``start`` .. ``stop - 1`` of values whose first sample is ``first``."""
         within = events[bisect.bisect_left(indices, start) : bisect.bisect_left(indices, stop)]
+        begin, end = start - first, stop - first
         cut = (
-            t[start:stop],
-            tuple([(kind, values[start:stop]) for kind, values in data.items()]),
+            t[begin:end],
+            tuple([(kind, values[begin:end]) for kind, values in data.items()]),
             within if within else _NO_EVENTS,
         )
         if len(self._cuts) >= self.SHARED_CUTS:
@@ -712,9 +749,58 @@ class _SharedSignals:
         self._cuts[(key, start, stop)] = cut
         return cut
 
+    def _window(self, device: WaveformDevice, key: tuple, start: int, stop: int) -> tuple | None:
+        """The window past the first samples that holds ``start`` .. ``stop - 1``, computed
+        when missing; None when no other device asked for this configuration, the samples
+        lie in no window, or the window would not fit :data:`WINDOW_BYTES`."""
+        asker = self._askers.get(key)
+        if asker is not True:
+            if asker is False or (asker is None and len(self._askers) >= self.SHARED_CUTS):
+                return None
+            if asker is None or asker == id(device):
+                self._askers[key] = id(device)
+                return None  # a device alone computes its own blocks, as before
+            self._askers[key] = True
+        size = self.SHARED_SAMPLES
+        first = start // self.WINDOW_STRIDE * self.WINDOW_STRIDE
+        if stop > first + size:
+            return None
+        window = self._windows.pop((key, first), None)
+        if window is not None:
+            self._windows[(key, first)] = window  # the most recently used last
+            return window
+        if sum(1 for kept in self._windows if kept[0] == key) >= self.WINDOWS_KEPT:
+            self._drop(next(kept for kept in self._windows if kept[0] == key))
+        block = device._compute(first, size)
+        data = block.data
+        for kind, array in (*data.items(),):
+            if array.base is not None:  # owned here, so that nothing can write it
+                array = data[kind] = array.copy()
+            array.flags.writeable = False
+        t = np.arange(first, first + size, dtype=np.float64) / device.rate
+        t.flags.writeable = False
+        nbytes = t.nbytes + sum(array.nbytes for array in data.values())
+        if nbytes > self.WINDOW_BYTES:
+            self._askers[key] = False  # not computed again for every block
+            return None
+        while self._windows and self._window_bytes + nbytes > self.WINDOW_BYTES:
+            self._drop(next(iter(self._windows)))
+        indices = [index for index, _ in block.events]
+        window = self._windows[(key, first)] = (first, t, data, indices, block.events)
+        self._window_bytes += nbytes
+        return window
+
+    def _drop(self, kept: tuple) -> None:
+        _, t, data, _, _ = self._windows.pop(kept)
+        self._window_bytes -= t.nbytes + sum(array.nbytes for array in data.values())
+        self._cuts.clear()  # (some were cut from the window dropped)
+
     def clear(self) -> None:
         self._values.clear()
         self._cuts.clear()
+        self._windows.clear()
+        self._window_bytes = 0
+        self._askers.clear()
 
 
 #: What :meth:`_SharedSignals.values` gives: ``t``, the (kind, values) pairs, the events.

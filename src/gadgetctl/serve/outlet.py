@@ -64,6 +64,43 @@ class _SharedStretches:
         self.spare_offset = np.zeros(slots)
 
 
+class _SharedRotations:
+    """The quaternions of read-only arrays of matrices that devices share (a waveform device
+    configuration's values, :class:`~gadgetctl.input.waveform._SharedSignals`), converted
+    once for every device whose windows are cut from them: at most :data:`KEPT` arrays of
+    at most :data:`MOST` matrices each."""
+
+    KEPT = 8
+    MOST = 1 << 16
+
+    def __init__(self) -> None:
+        self._kept: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def quaternions(self, flat: np.ndarray) -> np.ndarray:
+        """:func:`quaternions_xyzw` of ``flat`` (n, 4, 4), from the shared conversion when
+        ``flat`` is a stretch of a read-only owner's matrices."""
+        owner = flat.base
+        if (
+            not isinstance(owner, np.ndarray)
+            or owner.flags.writeable
+            or owner.dtype != np.float64
+            or owner.size > 16 * self.MOST
+            or owner.shape[-2:] != (4, 4)
+            or not owner.flags.c_contiguous
+            or not flat.flags.c_contiguous
+        ):
+            return quaternions_xyzw(flat)
+        skip, rest = divmod(flat.ctypes.data - owner.ctypes.data, 128)
+        if rest or skip < 0 or skip + len(flat) > owner.size // 16:
+            return quaternions_xyzw(flat)
+        kept = self._kept.get(id(owner))
+        if kept is None or kept[0] is not owner:
+            if len(self._kept) >= self.KEPT:
+                self._kept.pop(next(iter(self._kept)))
+            kept = self._kept[id(owner)] = (owner, quaternions_xyzw(owner.reshape(-1, 4, 4)))
+        return kept[1][skip : skip + len(flat)]
+
+
 def _framable(matrices: object) -> bool:
     """Whether ``matrices`` is a float64 array of (samples, sensors, 4, 4), sensors > 0."""
     shape = getattr(matrices, "shape", None)
@@ -106,6 +143,7 @@ class VrpnOutlet:
         self._framed: dict[int, tuple[np.ndarray, int, int, memoryview, int, float]] = {}
         self._pieces: list[memoryview | bytes] = []
         self._shared: dict[int, _SharedStretches] = {}  # by id of the shared windows
+        self._rotations = _SharedRotations()
         # whether a client is connected (refreshed every frame and on connection): with
         # nobody to send to, reports are not framed at all
         self.audience = False
@@ -326,7 +364,7 @@ class VrpnOutlet:
             np.repeat(np.asarray(times[start:last], dtype=np.float64) + state.offset, sensors),
             np.tile(np.arange(sensors), last - start),
             flat[:, :3, 3],
-            quaternions_xyzw(flat),
+            self._rotations.quaternions(flat),
         )
         base = row * FRAME_AHEAD
         state.records[base : base + len(flat)] = np.frombuffer(data, dtype=_RECORD)
