@@ -241,6 +241,61 @@ def test_events_are_the_recorded_samples_by_the_documented_rule(tmp_path):
     assert seen == expected
 
 
+def test_position_events_are_the_recorded_poses_by_the_documented_rule(tmp_path):
+    """A pose is reported when it moved more than --pose-threshold meters, or turned more
+    than --angle-threshold degrees, from the pose last reported: checked against the
+    recorded matrices with plain arithmetic (the events scan them a block at a time)."""
+    path = tmp_path / "run.ndjson"
+    result = gadgetctl(
+        "monitor",
+        WAVEFORM,
+        "Waveform Tracker",
+        "--duration",
+        "1.5",
+        "--format",
+        "events",
+        "--pose",
+        "matrix",
+        "--record",
+        path,
+        "--pose-threshold",
+        "0.02",
+        "--angle-threshold",
+        "4.2",  # (the spin turns 0.5 degrees a sample: 4 would be a rounding's toss)
+    )
+    assert result.returncode == 0, result.stderr
+    seen: dict[int, list[float]] = {}
+    for time, _, unit, kind, _ in parse(result.stdout):
+        if kind == "position":
+            seen.setdefault(unit, []).append(time)
+    header = read_recording(path)
+    records = sorted(
+        (r for r in header.records if isinstance(r, SampleRecord) and r.kind == "position"),
+        key=lambda r: r.timestamp,
+    )
+    origin = min(r.timestamp for r in records)
+    expected: dict[int, list[float]] = {}
+    last: dict[int, list[list[float]]] = {}
+    for record in records:
+        pose = record.value
+        before = last.get(record.unit)
+        if before is None:
+            last[record.unit] = pose
+            continue
+        moved = math.dist([row[3] for row in pose[:3]], [row[3] for row in before[:3]])
+        trace = sum(before[i][j] * pose[i][j] for i in range(3) for j in range(3))
+        turned = math.degrees(math.acos(max(-1.0, min(1.0, (trace - 1.0) / 2.0))))
+        if moved > 0.02 or turned > 4.2:
+            expected.setdefault(record.unit, []).append(record.timestamp)
+            last[record.unit] = pose
+    assert sum(map(len, expected.values())) > 30
+    assert set(seen) == set(expected)
+    for unit, times in expected.items():  # the same samples (times on another origin)
+        shift = seen[unit][0] - times[0]
+        assert seen[unit] == pytest.approx([t + shift for t in times], abs=2e-6)
+    assert origin <= min(expected[0])
+
+
 def test_events_thresholds_are_options():
     result = gadgetctl(
         "monitor",

@@ -210,19 +210,15 @@ class EventPrinter:
         self.lines = 0  # written so far
 
     def __call__(self, session: MonitorSession, moment: float) -> None:
-        from gadgetctl.monitor.events import event_line
+        from gadgetctl.monitor.events import event_lines
 
         if self.origin is None:  # when the session started its devices: no sample is older
             self.origin = session.configured_at or session.started_at or moment
         events = self.detector.frame(session, moment)
         if events:
             self.lines += len(events)
-            self.stream.write(
-                "".join(
-                    event_line(e, self.origin, pose=self.pose, length_unit=self.length_unit) + "\n"
-                    for e in events
-                )
-            )
+            lines = event_lines(events, self.origin, pose=self.pose, length_unit=self.length_unit)
+            self.stream.write("\n".join(lines) + "\n")
             self.stream.flush()
 
 

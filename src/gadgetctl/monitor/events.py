@@ -12,7 +12,7 @@ keeps what it last reported per device, kind and unit; it reports
   differs from the previous one (commands and strings from the first one on);
 * keyboard and mouse events; a device's status when it is not running or changes; markers.
 
-:func:`event_line` writes one :class:`ChangeEvent` as a line,
+:func:`event_line` writes one :class:`ChangeEvent` as a line (:func:`event_lines` many),
 ``TIME  NAME[UNIT]  KIND  VALUE...`` (fields separated by two spaces; see docs/monitor.md).
 Nothing here prints or imports typer or rich.
 """
@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
@@ -98,6 +99,11 @@ class ChangeDetector:
         self.thresholds = thresholds or Thresholds()
         self._devices: dict[str, _DeviceMemory] = {}
         self._markers_seen = 0
+        self._scans = {
+            DeviceKind.DIGITAL: self._digital,
+            DeviceKind.ANALOG: self._analog,
+            DeviceKind.POSITION: self._positions,
+        }
 
     def frame(self, session: MonitorSession, moment: float) -> list[ChangeEvent]:
         """The changes of the session's current frame (its watched devices and its new
@@ -111,10 +117,10 @@ class ChangeDetector:
             memory = self._devices.setdefault(name, _DeviceMemory())
             self._status(events, name, device, memory, moment)
             for kind, samples in session.frame_samples(name).items():
-                if kind in (DeviceKind.DIGITAL, DeviceKind.ANALOG):
+                scan = self._scans.get(kind)
+                if scan is not None:
                     arrays = _arrays(samples)
                     if arrays is not None:  # the hot path: whole columns at a time
-                        scan = self._digital if kind is DeviceKind.DIGITAL else self._analog
                         scan(events, name, device, memory, *arrays)
                         continue
                 for sample in samples:
@@ -320,8 +326,25 @@ class ChangeDetector:
             start = 0
             if last is None:
                 last, start = float(column[0]), 1
+            # each sample's move from the one before: a run of samples that each moved
+            # beyond the band right after a reported one is reported at once (a noisy
+            # channel: every sample)
+            stepped = np.abs(column[1:] - column[:-1]) > band
             block = _BLOCK
             while start < count:
+                if start and last == column[start - 1] and stepped[start - 1]:
+                    ahead = stepped[start - 1 :]
+                    run = int(np.argmin(ahead))
+                    stop = count if ahead[run] else start + run  # (all of them: argmin 0)
+                    for stamp, moved, raw in zip(
+                        stamps[start:stop].tolist(),
+                        column[start:stop].tolist(),
+                        values[start:stop, unit],
+                        strict=True,
+                    ):
+                        events.append(ChangeEvent(stamp, name, "analog", unit, moved, raw))
+                    last, start, block = float(column[stop - 1]), stop, _BLOCK
+                    continue
                 window = column[start : start + block]
                 beyond = np.abs(window - last) > band
                 if not beyond.any():
@@ -338,12 +361,61 @@ class ChangeDetector:
                 start, block = index + 1, _BLOCK
             memory.last[key] = last
 
+    def _positions(
+        self,
+        events: list[ChangeEvent],
+        name: str,
+        device: Any,
+        memory: _DeviceMemory,
+        stamps: np.ndarray,
+        values: np.ndarray,
+    ) -> None:
+        """Each unit's moves beyond the distance or angle from the pose last reported (the
+        same as :meth:`_sample`), looked for a block of samples at a time."""
+        count, width = values.shape
+        if width % 16:
+            for index in range(count):  # not whole matrices: sample by sample, as it says
+                self._sample(
+                    events, name, device, memory, DeviceKind.POSITION, stamps[index], values[index]
+                )
+            return
+        for unit in range(width // 16):
+            key = (DeviceKind.POSITION, unit)
+            poses = values[:, 16 * unit : 16 * unit + 16].reshape(count, 4, 4)
+            last = memory.last.get(key)
+            start = 0
+            if last is None:
+                last, start = poses[0].copy(), 1
+            block = _BLOCK
+            while start < count:
+                window = poses[start : start + block]
+                beyond = self._moved(last, window)
+                if not beyond.any():
+                    start += block
+                    block = min(block * 2, _MAX_BLOCK)
+                    continue
+                index = start + int(np.argmax(beyond))
+                last = poses[index].copy()
+                events.append(ChangeEvent(float(stamps[index]), name, "position", unit, last))
+                start, block = index + 1, _BLOCK
+            memory.last[key] = last
+
     def _pose_moved(self, before: np.ndarray, after: np.ndarray) -> bool:
-        if float(np.linalg.norm(after[:3, 3] - before[:3, 3])) > self.thresholds.distance:
-            return True
-        relative = before[:3, :3].T @ after[:3, :3]
-        cosine = float(np.clip((np.trace(relative) - 1.0) / 2.0, -1.0, 1.0))
-        return math.degrees(math.acos(cosine)) > self.thresholds.angle
+        return bool(self._moved(before, after[None])[0])
+
+    def _moved(self, before: np.ndarray, after: np.ndarray) -> np.ndarray:
+        """Whether each pose of ``after`` (n, 4, 4) moved more than the distance, or turned
+        more than the angle, from ``before`` (4, 4): the angle of the rotation between them,
+        whose cosine is (trace(Rb^T Ra) - 1) / 2, the trace being the sum of the products
+        of their rotations' elements."""
+        offset = after[:, :3, 3] - before[:3, 3]
+        distance = np.sqrt(np.einsum("ij,ij->i", offset, offset))
+        trace = np.einsum("ij,nij->n", before[:3, :3], after[:, :3, :3])
+        cosine = np.clip((trace - 1.0) / 2.0, -1.0, 1.0)
+        with np.errstate(invalid="ignore"):  # (a pose of nan moves nowhere, as before)
+            return (distance > self.thresholds.distance) | (
+                np.degrees(np.arccos(cosine)) > self.thresholds.angle
+            )
 
 
 _BLOCK = 16  # samples an analog scan looks at first after an event
@@ -401,16 +473,32 @@ def number_text(value: Any) -> str:
 def pose_text(matrix: Any, pose: str = EULER, length_unit: str = "meters") -> str:
     """A transform as ``x X y Y z Z UNIT`` followed by ``rot X Y Z deg`` (Euler XYZ),
     ``q W X Y Z`` (quaternion) or the matrix's 16 values row by row (``m ...``)."""
-    m = np.asarray(matrix, dtype=np.float64).reshape(4, 4)
+    return pose_texts(np.asarray(matrix, dtype=np.float64).reshape(1, 4, 4), pose, length_unit)[0]
+
+
+def pose_texts(matrices: np.ndarray, pose: str = EULER, length_unit: str = "meters") -> list[str]:
+    """:func:`pose_text` of each of ``matrices`` (n, 4, 4), their rotations converted at once."""
     if pose == MATRIX:
-        return "m " + " ".join(fixed(v, 4, True) for v in m.ravel().tolist())
-    x, y, z = (fixed(float(from_meters(v, length_unit)), 4, True) for v in m[:3, 3])
-    text = f"x {x} y {y} z {z} {UNIT_SYMBOLS.get(length_unit, length_unit)}"
+        return [
+            "m " + " ".join(fixed(v, 4, True) for v in values)
+            for values in matrices.reshape(len(matrices), 16).tolist()
+        ]
+    symbol = UNIT_SYMBOLS.get(length_unit, length_unit)
+    places = from_meters(matrices[:, :3, 3], length_unit).tolist()
     if pose == QUATERNION:
-        w, qx, qy, qz = quaternions_wxyz(m[None])[0].tolist()
-        return text + f"  q {w:+.4f} {qx:+.4f} {qy:+.4f} {qz:+.4f}"
-    ax, ay, az = euler_xyz_degrees_batch(m[None])[0].tolist()
-    return text + f"  rot {ax:+.1f} {ay:+.1f} {az:+.1f} deg"
+        turns = [
+            f"  q {w:+.4f} {qx:+.4f} {qy:+.4f} {qz:+.4f}"
+            for w, qx, qy, qz in quaternions_wxyz(matrices).tolist()
+        ]
+    else:
+        turns = [
+            f"  rot {ax:+.1f} {ay:+.1f} {az:+.1f} deg"
+            for ax, ay, az in euler_xyz_degrees_batch(matrices).tolist()
+        ]
+    return [
+        f"x {fixed(x, 4, True)} y {fixed(y, 4, True)} z {fixed(z, 4, True)} {symbol}{turn}"
+        for (x, y, z), turn in zip(places, turns, strict=True)
+    ]
 
 
 def _value_text(event: ChangeEvent, pose: str, length_unit: str) -> str:
@@ -459,6 +547,35 @@ def event_line(
 ) -> str:
     """``TIME  NAME[UNIT]  KIND  VALUE...``: TIME in seconds since ``origin`` (6 decimals),
     the unit in brackets for data of a unit, fields separated by two spaces."""
-    where = printable(event.name) + (f"[{event.unit}]" if event.unit is not None else "")
-    text = _value_text(event, pose, length_unit)
-    return f"{event.timestamp - origin:.6f}  {where}  {event.kind}  {printable(text)}"
+    return event_lines([event], origin, pose=pose, length_unit=length_unit)[0]
+
+
+def event_lines(
+    events: Sequence[ChangeEvent],
+    origin: float,
+    *,
+    pose: str = EULER,
+    length_unit: str = "meters",
+) -> list[str]:
+    """:func:`event_line` of each of ``events``, the poses among them written at once."""
+    posed = [i for i, event in enumerate(events) if event.kind == "position"]
+    texts: dict[int, str] = {}
+    if posed:
+        matrices = np.array(
+            [np.asarray(events[i].value, dtype=np.float64).reshape(4, 4) for i in posed]
+        )
+        texts = dict(zip(posed, pose_texts(matrices, pose, length_unit), strict=True))
+    lines = []
+    for i, event in enumerate(events):
+        where = printable(event.name) + (f"[{event.unit}]" if event.unit is not None else "")
+        text = texts.get(i)
+        if text is None:
+            text = _value_text(event, pose, length_unit)
+            if event.kind not in _NUMBERS_ONLY:
+                text = printable(text)
+        lines.append(f"{event.timestamp - origin:.6f}  {where}  {event.kind}  {text}")
+    return lines
+
+
+#: Kinds whose value text is made of numbers and words of ours only (nothing to escape).
+_NUMBERS_ONLY = frozenset(("digital", "analog", "position"))
