@@ -313,7 +313,7 @@ class ChangeDetector:
             normal = (
                 np.zeros(values.shape)
                 if high <= low
-                else (np.clip(values, low, high) - low) / (high - low)
+                else (np.minimum(np.maximum(values, low), high) - low) / (high - low)
             )
         else:
             normal = values
@@ -411,7 +411,7 @@ class ChangeDetector:
         offset = after[:, :3, 3] - before[:3, 3]
         distance = np.sqrt(np.einsum("ij,ij->i", offset, offset))
         trace = np.einsum("ij,nij->n", before[:3, :3], after[:, :3, :3])
-        cosine = np.clip((trace - 1.0) / 2.0, -1.0, 1.0)
+        cosine = np.minimum(np.maximum((trace - 1.0) / 2.0, -1.0), 1.0)  # (np.clip's numbers)
         with np.errstate(invalid="ignore"):  # (a pose of nan moves nowhere, as before)
             return (distance > self.thresholds.distance) | (
                 np.degrees(np.arccos(cosine)) > self.thresholds.angle
@@ -566,14 +566,23 @@ def event_lines(
         )
         texts = dict(zip(posed, pose_texts(matrices, pose, length_unit), strict=True))
     lines = []
+    names: dict[tuple[str, int | None], str] = {}
     for i, event in enumerate(events):
-        where = printable(event.name) + (f"[{event.unit}]" if event.unit is not None else "")
-        text = texts.get(i)
-        if text is None:
-            text = _value_text(event, pose, length_unit)
-            if event.kind not in _NUMBERS_ONLY:
-                text = printable(text)
-        lines.append(f"{event.timestamp - origin:.6f}  {where}  {event.kind}  {text}")
+        where = names.get((event.name, event.unit))
+        if where is None:
+            where = names[event.name, event.unit] = printable(event.name) + (
+                f"[{event.unit}]" if event.unit is not None else ""
+            )
+        kind = event.kind
+        if kind == "analog":  # (most lines of a busy run: _value_text's, inline)
+            text = f"{fixed(event.value, 4)} raw {number_text(event.raw)}"
+        else:
+            text = texts.get(i)
+            if text is None:
+                text = _value_text(event, pose, length_unit)
+                if kind not in _NUMBERS_ONLY:
+                    text = printable(text)
+        lines.append(f"{event.timestamp - origin:.6f}  {where}  {kind}  {text}")
     return lines
 
 
