@@ -339,3 +339,54 @@ def test_raise_on_stop_signals_restores_handlers():
             signal.raise_signal(signal.SIGTERM)
     assert signal.getsignal(signal.SIGINT) is before_int
     assert signal.getsignal(signal.SIGTERM) is before_term
+
+
+def test_a_large_header_and_statistics_are_written_as_their_whole_lines(tmp_path):
+    """Issue 27 goal 3: the header, the status records and the statistics of a large session
+    go out in parts; the file holds each as the one line encode_record makes of it."""
+    from gadgetctl.monitor.records import StatusRecord, decode_line, encode_record
+
+    path = tmp_path / "large.ndjson"
+    names = [f"W{i}" for i in range(30_000)]  # more than a megabyte of header and statistics
+    info = {
+        "devices": names,
+        "elements": {n: {"element": "device", "kinds": ["position"]} for n in names},
+    }
+    statuses = [StatusRecord(10.0, n, "device", "waveform_device", "running") for n in names]
+    stats = {n: {"count": i, "mean_rate": i / 7} for i, n in enumerate(names)}
+    with Recorder(path, info) as recorder:
+        recorder.write_statuses(statuses)
+        recorder.write_stats(stats, timestamp=11.0)
+    lines = path.read_bytes().decode().splitlines(keepends=True)
+    assert len(lines) == 1 + len(names) + 2
+    header = decode_line(lines[0])
+    assert header.info == info and encode_record(header) == lines[0]
+    assert lines[1:-2] == [encode_record(s) for s in statuses]
+    assert lines[-2] == encode_record(StatsRecord(11.0, stats))
+    assert len(lines[0]) > 1 << 20 and len(lines[-2]) > 1 << 20
+
+
+def test_statistics_that_fail_while_written_leave_a_line_close_ends(tmp_path):
+    """The statistics are written as they are encoded: an entry that cannot be made after a
+    megabyte went out leaves that line cut short, which close() ends; the reader reports and
+    skips it, and reads the end record. A timestamp that cannot be encoded writes nothing."""
+
+    class Failing(dict):
+        def items(self):
+            for i, item in enumerate(super().items()):
+                if i == 20_000:
+                    raise RuntimeError("statistics that cannot be read")
+                yield item
+
+    path = tmp_path / "cut.ndjson"
+    stats = Failing({f"W{i}": {"count": i, "mean_rate": i / 7} for i in range(30_000)})
+    with Recorder(path, {"devices": ["W0"]}) as recorder:
+        with pytest.raises(ValueError):
+            recorder.write_stats(stats, timestamp=float("nan"))
+        assert path.read_bytes().count(b"\n") == 1  # the header alone
+        with pytest.raises(RuntimeError):
+            recorder.write_stats(stats, timestamp=11.0)
+    recording, records = read_all(path)
+    assert [type(r) for r in records] == [EndRecord]
+    assert records[0].reason == "closed"
+    assert [p.line for p in recording.problems] == [2]  # the cut line, skipped

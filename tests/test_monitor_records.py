@@ -278,3 +278,51 @@ def test_status_records_in_one_batch_are_each_record_as_encode_record_writes_it(
     for bad in (float("nan"), float("inf")):
         with pytest.raises(ValueError):
             encode_statuses([StatusRecord(bad, "W0", "device", "t", "running")])
+
+
+def test_status_records_in_parts_are_the_records_in_one_piece():
+    """Issue 27 goal 3: a session's status records are written a megabyte of them at a time;
+    each part holds whole lines, and joined they are encode_statuses' text."""
+    from gadgetctl.monitor.records import StatusRecord, encode_status_parts, encode_statuses
+
+    records = [
+        StatusRecord(12.5 + i // 700, f"W\u00e9{i}", "device", "waveform_device", "running")
+        for i in range(2000)
+    ] + [StatusRecord(13, "Int", "device", "waveform_device", "faulted", 'port "x"')]
+    parts = list(encode_status_parts(records, size=10_000))
+    assert len(parts) > 10 and all(p.endswith("\n") for p in parts)
+    assert "".join(parts) == encode_statuses(records)
+    assert "".join(parts) == "".join(encode_record(r) for r in records)
+    assert len(list(encode_status_parts(records[:5], 0))) == 5  # 0: a line each
+    assert list(encode_status_parts([])) == []
+
+
+def test_a_header_record_in_parts_is_the_record_in_one_piece():
+    """Issue 27 goal 3: a session's header (an entry per element: megabytes for 10,000
+    devices and their proxies) is encoded a part at a time; joined, the parts are exactly the
+    line encode_record writes, whatever the info holds (keys json converts, empty dicts,
+    escapes, non-finite numbers, values it writes through its default)."""
+    from gadgetctl.monitor.records import HeaderRecord, encode_header_parts
+
+    elements = {
+        f'W \u00e9"{i}': {"element": "device", "kinds": ["position"], "units": {"position": 1}}
+        for i in range(2000)
+    }
+    elements["A"] = {"element": "device", "min": -0.0, "max": float("inf")}
+    infos = [
+        {"config": ["a.jconf"], "devices": list(elements), "elements": elements},
+        {"elements": {}, "frame_rate": 60.0, "selection": [], "pose": "euler"},
+        {"numbered": {1: "one", "two": (2, 2)}, "array": np.arange(3)},
+        {},
+    ]
+    for info in infos:
+        record = HeaderRecord("2026-01-01T00:00:00.000000Z", 1.5, 2.25, "gadgetctl 0", info)
+        whole = encode_record(record)
+        for size in (1, 300, 10_000, 1 << 20):
+            parts = list(encode_header_parts(record, size))
+            assert all(parts) and "".join(parts) == whole
+        assert decode_line(whole).info.keys() == info.keys()
+    record = HeaderRecord("c", 1.0, 2.0, "g", {3: "int key"})  # json makes it "3"
+    assert "".join(encode_header_parts(record)) == encode_record(record)
+    parts = list(encode_header_parts(HeaderRecord("c", 1.0, 2.0, "g", infos[0]), 10_000))
+    assert len(parts) > 10

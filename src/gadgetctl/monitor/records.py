@@ -13,7 +13,7 @@ import json
 import re
 import time
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from typing import Any
 
@@ -427,27 +427,42 @@ def encode_statuses(records: Iterable[StatusRecord]) -> str:
     """Status records as NDJSON lines, each what :func:`encode_record` makes of it, with each
     distinct timestamp and (element, type, state, reason) encoded once: a session's start
     writes one record per element, 20,000 alike for 10,000 devices and their proxies."""
+    return "".join(encode_status_parts(records, 0))
+
+
+def encode_status_parts(records: Iterable[StatusRecord], size: int = 1 << 20) -> Iterator[str]:
+    """The lines of :func:`encode_statuses` joined in parts of about ``size`` characters
+    (0: a line each), in order: the 20,000 records of a large session's start are megabytes
+    of text, and as one string they were made from as many again in pieces."""
     parts: list[str] = []
+    length = 0
     stamps: dict[float, str] = {}
     tails: dict[tuple[object, ...], str] = {}
     for r in records:
         moment = r.timestamp
         if type(moment) is not float or type(r.name) is not str:
-            parts.append(encode_record(r))  # the general path checks and encodes the rest
-            continue
-        stamp = stamps.get(moment)
-        if stamp is None:
-            stamp = stamps[moment] = _timestamp(moment)  # raises for a non-finite one
-        key = (r.element, r.element_type, r.state, r.reason)
-        tail = tails.get(key)
-        if tail is None:
-            tail = tails[key] = (
-                f',"element":{_dumps(r.element)},"element_type":{_dumps(r.element_type)}'
-                f',"state":{_dumps(r.state)},"reason":{_dumps(r.reason)}}}\n'
-            )
-        parts.append(f'{{"v":{FORMAT_VERSION},"type":"status","timestamp":{stamp}')
-        parts.append(f',"name":{_dumps(r.name)}{tail}')
-    return "".join(parts)
+            line = encode_record(r)  # the general path checks and encodes the rest
+        else:
+            stamp = stamps.get(moment)
+            if stamp is None:
+                stamp = stamps[moment] = _timestamp(moment)  # raises for a non-finite one
+            key = (r.element, r.element_type, r.state, r.reason)
+            tail = tails.get(key)
+            if tail is None:
+                tail = tails[key] = (
+                    f',"element":{_dumps(r.element)},"element_type":{_dumps(r.element_type)}'
+                    f',"state":{_dumps(r.state)},"reason":{_dumps(r.reason)}}}\n'
+                )
+            line = f'{{"v":{FORMAT_VERSION},"type":"status","timestamp":{stamp}'
+            line += f',"name":{_dumps(r.name)}{tail}'
+        parts.append(line)
+        length += len(line)
+        if length >= size:
+            yield "".join(parts) if len(parts) > 1 else line
+            parts.clear()
+            length = 0
+    if parts:
+        yield "".join(parts)
 
 
 def encode_stats_parts(record: StatsRecord, size: int = 1 << 20) -> Iterator[str]:
@@ -478,6 +493,46 @@ def encode_stats_parts(record: StatsRecord, size: int = 1 << 20) -> Iterator[str
             parts, length = [], 0
     parts.append("}}\n")
     yield "".join(parts)
+
+
+def encode_header_parts(record: HeaderRecord, size: int = 1 << 20) -> Iterator[str]:
+    """The text of :func:`encode_record` for ``record`` in parts of about ``size``
+    characters: its info an entry at a time, and a dict in it with string keys (a session's
+    ``elements``, one entry per element) an entry of that at a time. The header of 10,000
+    devices and their proxies is a line of megabytes, which as one string was made of as
+    many again in pieces."""
+    info = record.info
+    if type(info) is not dict or not all(type(k) is str for k in info):
+        yield encode_record(record)  # keys json would convert, or not a dict: as ever
+        return
+    head = encode_record(replace(record, info={}))
+    parts = [head[: -len("{}}\n")] + "{"]  # up to the info's opening brace
+    length = len(parts[0])
+    comma = ""
+    for key, value in info.items():
+        for text in _item_parts(comma + _dumps(key) + ":", value):
+            parts.append(text)
+            length += len(text)
+            if length >= size:
+                yield "".join(parts)
+                parts, length = [], 0
+        comma = ","
+    parts.append("}}\n")
+    yield "".join(parts)
+
+
+def _item_parts(lead: str, value: object) -> Iterator[str]:
+    """``lead`` and ``value`` as :func:`_dumps` writes them, a dict with string keys an entry
+    at a time."""
+    if type(value) is not dict or not all(type(k) is str for k in value):
+        yield lead + _dumps(value)
+        return
+    yield lead + "{"
+    comma = ""
+    for name, entry in value.items():
+        yield comma + _dumps(name) + ":" + _dumps(entry)
+        comma = ","
+    yield "}"
 
 
 # --------------------------------------------------------------------------- decoding
