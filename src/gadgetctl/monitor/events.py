@@ -319,6 +319,25 @@ class ChangeDetector:
             normal = values
         band = self.thresholds.dead_band
         count = len(stamps)
+        if count <= _SHORT_FRAME:  # a frame's few samples: a loop costs less than numpy calls
+            times = stamps.tolist()
+            for unit, (column, raws) in enumerate(
+                zip(normal.T.tolist(), values.T.tolist(), strict=True)
+            ):
+                key = (DeviceKind.ANALOG, unit)
+                last = memory.last.get(key)
+                start = 0
+                if last is None:
+                    last, start = column[0], 1
+                for index in range(start, count):
+                    moved = column[index]
+                    if abs(moved - last) > band:
+                        events.append(
+                            ChangeEvent(times[index], name, "analog", unit, moved, raws[index])
+                        )
+                        last = moved
+                memory.last[key] = last
+            return
         for unit in range(values.shape[1]):
             key = (DeviceKind.ANALOG, unit)
             column = normal[:, unit]
@@ -419,6 +438,7 @@ class ChangeDetector:
 
 
 _BLOCK = 16  # samples an analog scan looks at first after an event
+_SHORT_FRAME = 64  # samples of a unit up to which an analog scan is a plain loop
 _MAX_BLOCK = 4096
 
 
