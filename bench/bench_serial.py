@@ -316,7 +316,11 @@ def _ibox_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
 def _wanda_emulator(link: str, rate: float) -> object:
     from Wanda_drv.emulator import WandaEmulator
 
-    return WandaEmulator("motion", rate, link=link).start()
+    # the joystick held off centre all along: a packet every step, the line's fastest rate
+    # (``motion`` lets the ball go a quarter of the time, and a Wanda at rest is silent: it
+    # sent 33 packets a second, which the rate figure read as a driver falling behind); the
+    # ``disconnect`` scenario moves without rest, and never hangs up here
+    return WandaEmulator("disconnect", rate, disconnect_after=1 << 30, link=link).start()
 
 
 def _wanda_decoder() -> tuple[Callable[[], object], Callable[[], object], int]:
