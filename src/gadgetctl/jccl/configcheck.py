@@ -27,7 +27,7 @@ from gadgetctl.jccl.typeindex import TypeIndex
 from gadgetctl.jccl.units import proxy_unit_problems
 from gadgetctl.jccl.wiring import Scope, check_wiring
 from gadgetctl.jccl.xmlload import FileKind, XmlDocument
-from gadgetctl.perf import retain
+from gadgetctl.perf import collector_paused, retain
 
 
 class Session:
@@ -320,12 +320,13 @@ def open_configuration(
     for directory in definition_dirs:
         if not directory.is_dir():
             raise GadgetctlError(f"--definitions {directory}: no such directory")
-    session = Session(
-        default_repository(definition_dirs, bundled=bundled),
-        os.environ if environ is None else environ,
-        plugin_definitions=plugin_definitions,
-    )
-    config = session.load(paths)
-    require_loadable(config)
-    repo, _ = session.repository(config)
-    return OpenedConfiguration(config, session.checker(repo).index, session)
+    with collector_paused():  # bulk work whose objects all live on (see gadgetctl.perf)
+        session = Session(
+            default_repository(definition_dirs, bundled=bundled),
+            os.environ if environ is None else environ,
+            plugin_definitions=plugin_definitions,
+        )
+        config = session.load(paths)
+        require_loadable(config)
+        repo, _ = session.repository(config)
+        return OpenedConfiguration(config, session.checker(repo).index, session)

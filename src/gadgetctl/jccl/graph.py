@@ -17,6 +17,7 @@ from gadgetctl.jccl.configuration import ConfigElement, Configuration
 from gadgetctl.jccl.definitions import ValueType
 from gadgetctl.jccl.resolve import judged_view
 from gadgetctl.jccl.typeindex import TypeIndex
+from gadgetctl.perf import collector_paused
 from gadgetctl.safetext import printable
 from gadgetctl.wording import counted
 
@@ -231,7 +232,8 @@ def build_graph(
 ) -> WiringGraph:
     """The wiring of ``config``; ``built_in`` are the element types that need no plug-in,
     ``plugins`` maps the others to the plug-in that handles them."""
-    return GraphBuilder(config, index, built_in, plugins).build()
+    with collector_paused():  # a node and edges for every element: no garbage cycles
+        return GraphBuilder(config, index, built_in, plugins).build()
 
 
 # -- rendering ---------------------------------------------------------------------------
