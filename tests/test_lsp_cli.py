@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import socket
 import subprocess
 import sys
+from collections.abc import Iterator
 
 
 def test_without_pygls_the_command_says_which_extra_to_install():
@@ -43,7 +45,9 @@ def _read_message(stream) -> dict:
     return json.loads(stream.read(length))
 
 
-def test_tcp_serves_one_client_on_loopback():
+@contextlib.contextmanager
+def _tcp_server() -> Iterator[tuple[subprocess.Popen, int]]:
+    """`gadgetctl lsp --tcp 0` and the port it says it listens on; killed if still running."""
     server = subprocess.Popen(
         [sys.executable, "-m", "gadgetctl", "lsp", "--tcp", "0"],
         stdin=subprocess.DEVNULL,
@@ -53,7 +57,16 @@ def test_tcp_serves_one_client_on_loopback():
     try:
         said = server.stderr.readline().decode()
         assert said.startswith("gadgetctl lsp: listening on 127.0.0.1:"), said
-        port = int(said.rsplit(":", 1)[1])
+        yield server, int(said.rsplit(":", 1)[1])
+    finally:
+        if server.poll() is None:
+            server.kill()
+            server.wait(timeout=30)
+        server.stderr.close()
+
+
+def test_tcp_serves_one_client_on_loopback():
+    with _tcp_server() as (server, port):
         with socket.create_connection(("127.0.0.1", port), timeout=30) as peer:
             stream = peer.makefile("rwb")
             stream.write(
@@ -81,11 +94,6 @@ def test_tcp_serves_one_client_on_loopback():
             stream.write(_message({"jsonrpc": "2.0", "method": "exit"}))
             stream.flush()
         assert server.wait(timeout=30) == 0
-    finally:
-        if server.poll() is None:
-            server.kill()
-            server.wait(timeout=30)
-        server.stderr.close()
 
 
 def _lsp_on_stdin(data: bytes) -> subprocess.CompletedProcess:
@@ -140,15 +148,7 @@ def test_a_message_that_is_not_json_is_logged_in_one_line_and_the_session_goes_o
 def test_a_tcp_client_announcing_gigabytes_is_not_buffered():
     """On --tcp anyone on the machine may connect: a client announcing 1 GiB and sending it
     was buffered whole; the session ends at the announcement."""
-    server = subprocess.Popen(
-        [sys.executable, "-m", "gadgetctl", "lsp", "--tcp", "0"],
-        stdin=subprocess.DEVNULL,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-    )
-    try:
-        said = server.stderr.readline().decode()
-        port = int(said.rsplit(":", 1)[1])
+    with _tcp_server() as (server, port):
         with socket.create_connection(("127.0.0.1", port), timeout=30) as peer:
             peer.sendall(b"Content-Length: %d\r\n\r\n" % (1 << 30) + b"x" * 65536)
             assert server.wait(timeout=30) == 2
@@ -156,8 +156,3 @@ def test_a_tcp_client_announcing_gigabytes_is_not_buffered():
             "gadgetctl: error: lsp: a message announces 1073741824 bytes, over the limit of "
             "64 MiB; the session ends\n"
         )
-    finally:
-        if server.poll() is None:
-            server.kill()
-            server.wait(timeout=30)
-        server.stderr.close()
