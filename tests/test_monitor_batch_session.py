@@ -15,6 +15,8 @@ from gadgetctl.monitor import session as session_module
 from gadgetctl.monitor.recording import Recorder
 from gadgetctl.monitor.session import MonitorSession
 
+from jccl_samples import jconf
+
 pytestmark = pytest.mark.timeout(60)
 
 RATES = [1, 10, 60, 250, 1000]
@@ -30,12 +32,7 @@ def many(tmp_path):
         for i in range(23)
     )
     path = tmp_path / "many.jconf"
-    path.write_text(
-        '<?xml version="1.0" encoding="UTF-8"?>\n'
-        '<?org-vrjuggler-jccl-settings configuration.version="3.0"?>\n'
-        '<configuration xmlns="http://www.vrjuggler.org/jccl/xsd/3.0/configuration" name="t">\n'
-        f"<elements>\n{body}</elements>\n</configuration>\n"
-    )
+    path.write_text(jconf(body))
     manager, configuration = InputManager.from_files([path])
     yield manager, configuration
     manager.shutdown()
