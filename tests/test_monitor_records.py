@@ -252,11 +252,18 @@ def test_a_statistics_record_in_parts_is_the_record_in_one_piece():
         list(encode_stats_parts(StatsRecord(float("nan"), devices)))
 
 
+def encode_statuses(records) -> str:
+    """Status records as one text: their parts of the default size, joined."""
+    from gadgetctl.monitor.records import encode_status_parts
+
+    return "".join(encode_status_parts(records))
+
+
 def test_status_records_in_one_batch_are_each_record_as_encode_record_writes_it():
     """Issue 27: a session's start writes a status record per element (20,000 for 10,000
     devices and their proxies) with each distinct timestamp and status encoded once; the text
     is exactly encode_record's, record by record, whatever the names, states and timestamps."""
-    from gadgetctl.monitor.records import StatusRecord, encode_statuses
+    from gadgetctl.monitor.records import StatusRecord
 
     class Kind(StrEnum):
         DEVICE = "device"
@@ -282,8 +289,8 @@ def test_status_records_in_one_batch_are_each_record_as_encode_record_writes_it(
 
 def test_status_records_in_parts_are_the_records_in_one_piece():
     """Issue 27 goal 3: a session's status records are written a megabyte of them at a time;
-    each part holds whole lines, and joined they are encode_statuses' text."""
-    from gadgetctl.monitor.records import StatusRecord, encode_status_parts, encode_statuses
+    each part holds whole lines, and joined they are the text in one piece."""
+    from gadgetctl.monitor.records import StatusRecord, encode_status_parts
 
     records = [
         StatusRecord(12.5 + i // 700, f"W\u00e9{i}", "device", "waveform_device", "running")

@@ -423,17 +423,12 @@ def encode_record(record: Record) -> str:
     return _dumps(obj) + "\n"
 
 
-def encode_statuses(records: Iterable[StatusRecord]) -> str:
-    """Status records as NDJSON lines, each what :func:`encode_record` makes of it, with each
-    distinct timestamp and (element, type, state, reason) encoded once: a session's start
-    writes one record per element, 20,000 alike for 10,000 devices and their proxies."""
-    return "".join(encode_status_parts(records, 0))
-
-
 def encode_status_parts(records: Iterable[StatusRecord], size: int = 1 << 20) -> Iterator[str]:
-    """The lines of :func:`encode_statuses` joined in parts of about ``size`` characters
-    (0: a line each), in order: the 20,000 records of a large session's start are megabytes
-    of text, and as one string they were made from as many again in pieces."""
+    """Status records as NDJSON lines, each what :func:`encode_record` makes of it, with each
+    distinct timestamp and (element, type, state, reason) encoded once (a session's start
+    writes one record per element, 20,000 alike for 10,000 devices and their proxies), joined
+    in parts of about ``size`` characters (0: a line each), in order: as one string they were
+    megabytes of text made from as many again in pieces."""
     parts: list[str] = []
     length = 0
     stamps: dict[float, str] = {}
