@@ -275,3 +275,46 @@ def test_defs_tree_and_list_filters(cli):
 def test_defs_show_unknown_type_suggests(cli):
     result = cli("defs", "show", "dtrak")
     assert result.exit_code == 2 and "dtrack" in result.stderr
+
+
+def test_pointer_properties_are_a_types_pointers_and_follow_definitions_added(tmp_path):
+    first, second = tmp_path / "first", tmp_path / "second"
+    first.mkdir()
+    second.mkdir()
+    base = prop("target", "configelementpointer") + prop("label")
+    write(first / "base.jdef", jdef("base", base))
+    leaf = prop("other", "configelementpointer") + prop("n", "integer")
+    write(first / "leaf.jdef", jdef("leaf", leaf, parents="<parent>base</parent>"))
+    repo = repo_of(first)
+    assert repo.pointer_properties("leaf") == ("other", "target")  # own first, then inherited
+    assert repo.pointer_properties("base") == ("target",)
+    assert repo.pointer_properties("ghost") == ()
+    # a newer version of leaf without a pointer of its own: the answer is the newest's
+    write(
+        second / "leaf.jdef",
+        jdef("leaf", prop("n", "integer"), version=2, parents="<parent>base</parent>"),
+    )
+    repo.load_entry(make_entry(str(second), "test"))
+    assert repo.versions("leaf") == [1, 2]
+    assert repo.pointer_properties("leaf") == ("target",)
+
+
+def test_a_default_is_read_from_the_definition_of_each_repository(tmp_path):
+    from gadgetctl.jccl.access import ElementAccess
+    from gadgetctl.jccl.configuration import ConfigElement, PropertyValue
+
+    enum = '         <enumeration><enum label="Fast" value="2"/></enumeration>\n'
+    repos = []
+    for default in ("7", " Fast "):
+        folder = tmp_path / str(len(repos))
+        folder.mkdir()
+        values = f'<value label="n" defaultvalue="{default}"/>'
+        write(folder / "thing.jdef", jdef("thing", prop("n", values=values, extra=enum)))
+        repos.append(repo_of(folder))
+    element = ConfigElement("thing", "T", "1", None)
+    for _ in range(2):  # the first read, then the one remembered
+        assert ElementAccess(element, repos[0]).string("n") == "7"
+        assert ElementAccess(element, repos[1]).string("n") == "2"  # trimmed, then substituted
+        assert ElementAccess(element, repos[1]).integer("n", 3) == 0  # no such slot: ""
+    written = ConfigElement("thing", "T", "1", None, {"n": [PropertyValue(" Fast ")]})
+    assert ElementAccess(written, repos[0]).string("n") == "2"

@@ -152,3 +152,14 @@ def test_a_kind_has_a_channel_only_once_a_sample_of_it_came():
 
 def test_stores_of_the_same_kinds_share_one_tuple_of_them():
     assert SampleStore([A, D]).kinds is SampleStore(["analog", "digital"]).kinds
+
+
+def test_a_tuple_of_kinds_given_again_reads_as_the_first_time():
+    given = (A, D)
+    first = SampleStore(given).kinds
+    assert SampleStore(given).kinds is first  # (taken from what the first store made)
+    assert SampleStore(("analog", "digital")).kinds is first
+    other = ("digital", "analog")  # another tuple, other kinds in another order
+    assert SampleStore(other).kinds == (D, A)
+    assert SampleStore(other).kinds is SampleStore([D, A]).kinds
+    assert all(type(k) is DeviceKind for k in SampleStore(other).kinds)

@@ -22,6 +22,12 @@ CASES = [
     ("1_000", 1, 1.0),
     ("9" * 30, 2**63 - 1, float("9" * 30)),
     ("-" + "9" * 30, -(2**63), float("-" + "9" * 30)),
+    ("0" * 25 + "42", 42, 42.0),  # plain digits: leading zeros count for nothing
+    ("9" * 18, int("9" * 18), float("9" * 18)),
+    ("1" * 19, int("1" * 19), float("1" * 19)),
+    ("9" * 19, 2**63 - 1, float("9" * 19)),
+    ("9" * 20, 2**63 - 1, float("9" * 20)),  # beyond a long: saturated
+    ("9223372036854775808", 2**63 - 1, 9223372036854775808.0),
 ]
 
 
@@ -39,6 +45,11 @@ def test_a_remembered_read_is_the_read(text: str):
     first_int, first_float = read_int(text), read_float(text)
     assert read_int(text) == first_int and read_float(text) == first_float
     assert access._read_int(text) == first_int  # the uncached reading
+
+
+@given(st.text(alphabet="0123456789", min_size=1, max_size=40))
+def test_plain_digits_read_as_strtol_reads_them(text: str):
+    assert read_int(text) == access._read_int(text) == min(int(text), 2**63 - 1)
 
 
 def test_what_is_remembered_is_bounded():

@@ -5,7 +5,6 @@ dependency checker."""
 from __future__ import annotations
 
 from gadgetctl.jccl.configuration import ConfigElement
-from gadgetctl.jccl.definitions import ValueType
 from gadgetctl.jccl.repository import DefinitionRepository
 
 
@@ -13,7 +12,6 @@ def pointer_targets(element: ConfigElement, repo: DefinitionRepository) -> list[
     """``(property, target name)`` for every non-empty pointer value, in order."""
     result: list[tuple[str, str]] = []
     for current in (element, *element.embedded()):
-        for prop in repo.effective_properties(current.type):
-            if prop.definition.valuetype is ValueType.POINTER:
-                result.extend((prop.name, text) for text in current.texts(prop.name) if text)
+        for name in repo.pointer_properties(current.type):
+            result.extend((name, text) for text in current.texts(name) if text)
     return result

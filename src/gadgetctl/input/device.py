@@ -35,8 +35,7 @@ from gadgetctl.wording import counted
 if TYPE_CHECKING:
     from gadgetctl.input.events import EventSource
     from gadgetctl.jccl.access import ElementAccess
-    from gadgetctl.jccl.configuration import SourceLocation
-    from gadgetctl.jccl.definitions import Location
+    from gadgetctl.jccl.configuration import ConfigElement
     from gadgetctl.transport.udp import DatagramLedger
 
 
@@ -113,8 +112,9 @@ class Input:
         self.store = SampleStore(self.kinds(), DEFAULT_CAP)
         self.state = DeviceState.CONFIGURED
         self.diagnostics: list[Diagnostic] = []
-        # where its element is: its column is found (a scan of the line) only for a warning
-        self._location: Location | SourceLocation | None = None
+        # its element, whose location (a line and column looked up in the file) is made only
+        # for a warning: most devices never warn (10,000 location objects made for nothing)
+        self._element: ConfigElement | None = None
         self._updated_frame = -1
 
     @classmethod
@@ -144,7 +144,7 @@ class Input:
         """Read the element. Subclasses call ``super().config(access)`` first."""
         self.name = access.name
         self.element_type = access.element.type
-        self._location = access.element.location
+        self._element = access.element
 
     def start_sampling(self) -> None:
         """Open the device. Raise to report that it cannot start."""
@@ -173,7 +173,7 @@ class Input:
 
     def warn(self, code: str, message: str, *, hint: str | None = None) -> None:
         """Record a diagnostic about this device's configuration (shown by `config pending`)."""
-        loc = self._location
+        loc = None if self._element is None else self._element.location
         path, line, column = (None, None, None) if loc is None else (loc.path, loc.line, loc.column)
         self.diagnostics.append(
             Diagnostic.make(code, f"{self.name}: {message}", path, line, column, hint=hint)

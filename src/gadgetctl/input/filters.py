@@ -143,8 +143,8 @@ def build_filter(element: ConfigElement, access: ElementAccess) -> PositionFilte
 def build_chain(access: ElementAccess, prop: str = FILTERS_PROPERTY) -> FilterChain:
     """The filters of ``prop``; unusable ones are skipped with a DRV diagnostic each (none:
     :data:`NO_FILTERS`)."""
-    if not access.has(prop):
-        return NO_FILTERS
+    if not access.has(prop) or not access.count(prop):
+        return NO_FILTERS  # (the usual element: no filters written)
     filters: list[PositionFilter] = []
     diagnostics: list[Diagnostic] = []
     for element in access.children(prop):

@@ -355,7 +355,10 @@ class InputManager:
         progress = True
         while progress:
             progress = False
-            order = sorted(self._pending.values(), key=lambda e: e.type != INPUT_MANAGER)
+            # input managers first (they load the drivers), the rest in their order
+            entries = list(self._pending.values())
+            order = [e for e in entries if e.element.type == INPUT_MANAGER]
+            order += [e for e in entries if e.element.type != INPUT_MANAGER]
             for entry in order:
                 name = entry.name
                 if name not in self._pending:

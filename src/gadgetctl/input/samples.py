@@ -385,6 +385,24 @@ _UNUSED = _Channel()
 _KINDS: dict[tuple[DeviceKind, ...], tuple[DeviceKind, ...]] = {}
 
 
+#: _declared's answers by the id of a tuple given: (that tuple, the shared tuple). Each
+#: device class gives its one tuple of kinds (Input.kinds), for each of 10,000 devices.
+_KINDS_GIVEN: dict[int, tuple[tuple, tuple[DeviceKind, ...]]] = {}
+
+
+def _declared(kinds: Iterable[DeviceKind]) -> tuple[DeviceKind, ...]:
+    """The shared tuple of ``kinds`` (see :data:`_KINDS`)."""
+    given = _KINDS_GIVEN.get(id(kinds)) if type(kinds) is tuple else None
+    if given is not None and given[0] is kinds:
+        return given[1]  # (the entry keeps the tuple given: its id is its own)
+    # (a member is taken as it is: DeviceKind(member) costs more than the channel)
+    declared = tuple(k if type(k) is DeviceKind else DeviceKind(k) for k in kinds)
+    shared = _KINDS.setdefault(declared, declared)
+    if type(kinds) is tuple and len(_KINDS_GIVEN) < 256:
+        _KINDS_GIVEN[id(kinds)] = (kinds, shared)
+    return shared
+
+
 #: A store's current frame before its first swap, and any frame without samples (read-only,
 #: as every current frame is; shared by every store and track that has no samples).
 NO_CURRENT: Mapping[DeviceKind, FrameSamples] = MappingProxyType({})
@@ -414,9 +432,7 @@ class SampleStore:
             raise ValueError("the sample cap must be at least 1")
         self.cap = cap
         self._lock = threading.Lock()
-        # (a member is taken as it is: DeviceKind(member) costs more than the channel)
-        declared = tuple(k if type(k) is DeviceKind else DeviceKind(k) for k in kinds)
-        self._kinds = _KINDS.setdefault(declared, declared)  # one tuple per set of kinds
+        self._kinds = _declared(kinds)  # one tuple per set of kinds
         # a kind's channel is made when its first sample comes: a waveform device with one
         # position path declares six kinds and fills one (five channels and a larger dict,
         # 5 MB for 10,000 devices); a kind without one reads as _UNUSED

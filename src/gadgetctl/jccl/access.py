@@ -45,6 +45,8 @@ def read_int(text: str) -> int:
     known = _READ_INTS.get(text)
     if known is not None:
         return known
+    if text.isascii() and text.isdigit() and len(text) <= 18:
+        return int(text)  # (plain digits, such as 10,000 seeds: the same as _read_int)
     value = _read_int(text)
     if len(text) <= _READ_LONGEST and len(_READ_INTS) < _READ_MOST:
         _READ_INTS[text] = value
@@ -72,6 +74,28 @@ def read_float(text: str) -> float:
     if len(text) <= _READ_LONGEST and len(_READ_FLOATS) < _READ_MOST:
         _READ_FLOATS[text] = value
     return value
+
+
+#: default_text answers by (id of the definition, slot): (the definition, the text). Definitions
+#: are never changed once read; the entry keeps its definition, so the id stays its own.
+_DEFAULT_TEXTS: dict[tuple[int, int], tuple[PropertyDefinition, str]] = {}
+_DEFAULT_TEXTS_MOST = 4096
+
+
+def default_text(definition: PropertyDefinition, index: int) -> str:
+    """What a slot not written reads as: the definition's default for slot ``index``, trimmed,
+    an enumeration label replaced by its value ("" without a default). Worked out once per
+    definition and slot: 10,000 elements of a type read the same defaults."""
+    key = (id(definition), index)
+    found = _DEFAULT_TEXTS.get(key)
+    if found is not None and found[0] is definition:
+        return found[1]
+    text = (definition.default(index) or "").strip()
+    if definition.enumeration is not None:
+        text = definition.enumeration.substitute(text)
+    if len(_DEFAULT_TEXTS) < _DEFAULT_TEXTS_MOST:
+        _DEFAULT_TEXTS[key] = (definition, text)
+    return text
 
 
 def read_bool(text: str) -> bool:
@@ -103,9 +127,12 @@ class ElementAccess:
         found = []
         for name, values in self.element.property_items():
             if name in props:
-                if any(value.element is not None for value in values):
-                    return None
-                found.append((name, tuple([value.text for value in values])))
+                texts = []
+                for value in values:
+                    if value.element is not None:
+                        return None
+                    texts.append(value.text)
+                found.append((name, tuple(texts)))
         return tuple(found)
 
     def definition(self, prop: str) -> PropertyDefinition:
@@ -122,16 +149,16 @@ class ElementAccess:
         return len(self.element.values(prop))
 
     def string(self, prop: str, index: int = 0) -> str:
-        definition = self.definition(prop)
+        try:
+            definition = self._props[prop]
+        except KeyError:
+            raise UnknownProperty(f"{self.element.type} has no property {prop!r}") from None
         values = self.element.values(prop)
-        if index < len(values):
-            text = values[index].text
-        else:
-            text = definition.default(index) or ""
-        text = text.strip()
-        if definition.enumeration is not None:
-            text = definition.enumeration.substitute(text)
-        return text
+        if index >= len(values):
+            return default_text(definition, index)
+        text = values[index].text.strip()
+        enumeration = definition.enumeration
+        return text if enumeration is None else enumeration.substitute(text)
 
     def integer(self, prop: str, index: int = 0) -> int:
         return read_int(self.string(prop, index))

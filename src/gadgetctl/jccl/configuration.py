@@ -333,10 +333,10 @@ class ConfigElement(_Placed):
                 return []
             item = self._props
             return item if item.__class__ is list else [item]  # type: ignore[return-value]
-        for name, item in zip(names, self._props, strict=True):  # type: ignore[arg-type]
-            if name == prop:
-                return item if item.__class__ is list else [item]
-        return []
+        if prop not in names:
+            return []
+        item = self._props[names.index(prop)]  # type: ignore[index]  (the first of that name)
+        return item if item.__class__ is list else [item]
 
     def texts(self, prop: str) -> list[str]:
         return [v.stripped for v in self.values(prop)]

@@ -21,7 +21,13 @@ from types import MappingProxyType
 
 from gadgetctl.diagnostics import Diagnostic
 from gadgetctl.jccl import defcache
-from gadgetctl.jccl.definitions import Definition, DefinitionVersion, Location, PropertyDefinition
+from gadgetctl.jccl.definitions import (
+    Definition,
+    DefinitionVersion,
+    Location,
+    PropertyDefinition,
+    ValueType,
+)
 from gadgetctl.jccl.searchpath import SearchPathEntry
 
 
@@ -65,6 +71,8 @@ class DefinitionRepository:
         #: effective_properties and property_map by (name, version), cleared by add()
         self._effective_cache: dict[tuple[str, int | None], tuple[EffectiveProperty, ...]] = {}
         self._map_cache: dict[str, Mapping[str, PropertyDefinition]] = {}
+        #: pointer_properties by name, cleared by add()
+        self._pointer_cache: dict[str, tuple[str, ...]] = {}
         self._property_owners: dict[str, frozenset[str]] | None = None
         #: close_names answers by (word, cutoff), cleared by add()
         self._close_cache: dict[tuple[str, float], list[str]] = {}
@@ -100,6 +108,7 @@ class DefinitionRepository:
         self._ancestor_cache.clear()
         self._effective_cache.clear()
         self._map_cache.clear()
+        self._pointer_cache.clear()
         self._property_owners = None
         self._close_cache.clear()
         versions = self._versions.setdefault(definition.name, {})
@@ -246,6 +255,19 @@ class DefinitionRepository:
         if cached is None:
             cached = self._map_cache[name] = MappingProxyType(
                 {p.name: p.definition for p in self.effective_properties(name)}
+            )
+        return cached
+
+    def pointer_properties(self, name: str) -> tuple[str, ...]:
+        """The names of the newest version's effective properties that hold pointers
+        (``configelementpointer``), in :meth:`effective_properties` order (worked out once per
+        type: configuring 10,000 elements of one type asks 10,000 times)."""
+        cached = self._pointer_cache.get(name)
+        if cached is None:
+            cached = self._pointer_cache[name] = tuple(
+                p.name
+                for p in self.effective_properties(name)
+                if p.definition.valuetype is ValueType.POINTER
             )
         return cached
 
