@@ -80,6 +80,10 @@ def forget_check_reports(documents: Iterable[XmlDocument]) -> None:
     diagnostics already."""
     for doc in documents:
         for block in doc.streamed or ():
+            if not block.embedded:  # (the usual block: no element of it embeds one)
+                for element in block.elements:
+                    element.report = None
+                continue
             for element in block.elements:
                 element.report = None
                 for embedded in element.embedded():

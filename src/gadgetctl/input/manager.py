@@ -383,7 +383,10 @@ class InputManager:
         processed = 0
         ready = [name]
         while ready:
-            for waiter in sorted(self._waiters.pop(ready.pop(), ())):
+            waiting = self._waiters.pop(ready.pop(), None)
+            if not waiting:
+                continue  # (the usual element: nothing waited for it)
+            for waiter in sorted(waiting):
                 entry = self._pending.get(waiter)
                 if entry is None or entry.kind not in CHEAP_TO_RETRY:
                     continue
@@ -700,7 +703,9 @@ class InputManager:
         self._devices[name] = _DeviceEntry(element, device, runner)
         self._device_objects[name] = device
         self._frame_order = None
-        self._refresh_proxies(self._proxies_of.get(name, ()))  # only its own: O(1), not O(proxies)
+        names = self._proxies_of.get(name)
+        if names:
+            self._refresh_proxies(names)  # only its own: O(1), not O(proxies)
         return None
 
     def _runner(self, device: Input) -> Runner:
@@ -714,9 +719,13 @@ class InputManager:
     def _refresh_proxies(self, names: Iterable[str] | None = None) -> None:
         """Rebind (or stupefy) the proxies called ``names``, or every proxy."""
         proxies = self._proxies
+        devices = self._device_objects
         chosen = proxies.values() if names is None else (proxies[n] for n in names if n in proxies)
         for proxy in chosen:
-            proxy.refresh(self._device_objects, self._why_missing(proxy.device_name))
+            bound = proxy.device
+            if bound is not None and devices.get(proxy.device_name) is bound:
+                continue  # bound to its device still: refresh() would leave it as it is
+            proxy.refresh(devices, self._why_missing(proxy.device_name))
 
     # -- removal ----------------------------------------------------------------------------
 
