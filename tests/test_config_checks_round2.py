@@ -248,6 +248,49 @@ def test_fixed_counts_and_key_lists(tmp_path):
     assert bundled_check(tmp_path, waves.replace("<unit>1</unit>", "<unit>0</unit>"))[0] == []
 
 
+def test_counts_from_stations_scaled_counts_and_embedded_bodies(tmp_path):
+    station = (
+        '<stations><intersense_station name="S{0}" version="1"><digital_first>{1}</digital_first>'
+        "<digital_count>{2}</digital_count></intersense_station></stations>"
+    )
+    text = (
+        '      <intersense name="IS" version="1"><port>/dev/ttyS0</port>'
+        f"{station.format(0, 0, 4)}{station.format(1, 4, 2)}</intersense>\n"
+        '      <digital_proxy name="Button 6" version="1"><device>IS</device><unit>6</unit></digital_proxy>\n'
+        '      <digital_proxy name="Button 5" version="1"><device>IS</device><unit>5</unit></digital_proxy>\n'
+        '      <position_proxy name="Station 2" version="1"><device>IS</device><unit>2</unit></position_proxy>\n'
+        '      <TUIO_drv name="T" version="1"><points>2</points></TUIO_drv>\n'
+        '      <analog_proxy name="Touch 4" version="1"><device>T</device><unit>4</unit></analog_proxy>\n'
+        '      <analog_proxy name="Touch 3" version="1"><device>T</device><unit>3</unit></analog_proxy>\n'
+        '      <optitrack name="O" version="2"><rigid_body><optitrack_rigid_body name="B" version="1">'
+        "<body_index>1</body_index></optitrack_rigid_body></rigid_body></optitrack>\n"
+        '      <position_proxy name="Body 1" version="1"><device>O</device><unit>1</unit></position_proxy>\n'
+    )
+    found, _ = bundled_check(tmp_path, text)
+    assert [(d.message.split("'")[1], d.message.split(" has ")[1], d.hint) for d in found] == [
+        (
+            "Button 6",
+            "units 0-5 (stations' digital_first + digital_count); the proxy only ever reads default data",
+            "Raise a station's digital_count to cover the unit.",
+        ),
+        (
+            "Station 2",
+            "units 0-1 (2 stations); the proxy only ever reads default data",
+            "Add an intersense_station for each position unit the proxies read.",
+        ),
+        (
+            "Touch 4",
+            "units 0-3 (2 per points (2)); the proxy only ever reads default data",
+            "Units 2i and 2i+1 are the x and y of touch slot i.",
+        ),
+        (
+            "Body 1",
+            "unit 0 (1 embedded bodies and markers); the proxy only ever reads default data",
+            "Add a rigid_body or marker for each unit.",
+        ),
+    ]
+
+
 def test_config_pending_applies_the_same_rule(tmp_path, cli):
     _, path = bundled_check(tmp_path, sim_buttons(2))
     result = cli("config", "pending", path, "--format", "json")

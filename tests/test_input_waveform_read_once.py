@@ -107,6 +107,10 @@ def test_written_texts_of_some_properties(tmp_path):
     )
     assert access.written(set()) == ()
     assert access.definitions is access.repo.property_map("waveform_device")
+    compact = access.written({"rate", "analog_waveform", "seed"})
+    assert "rate" in element.properties  # (asked for, the compact form becomes a dict)
+    assert element._names is None
+    assert access.written({"rate", "analog_waveform", "seed"}) == compact
 
 
 def test_no_written_texts_for_an_embedded_element(tmp_path):
@@ -119,5 +123,8 @@ def test_no_written_texts_for_an_embedded_element(tmp_path):
     )
     (element,) = load_configuration([path]).elements
     access = ElementAccess(element, default_repository())
+    assert access.written({"rate", "position_filters"}) is None
+    assert access.written({"rate"}) == (("rate", ("5",)),)
+    assert "rate" in element.properties  # (the dict form)
     assert access.written({"rate", "position_filters"}) is None
     assert access.written({"rate"}) == (("rate", ("5",)),)

@@ -124,16 +124,7 @@ class ElementAccess:
         """The texts written for those of ``props`` the element has, in the order written (what
         reads of only these properties depend on, besides :attr:`definitions`); None when one
         of them holds an embedded element."""
-        found = []
-        for name, values in self.element.property_items():
-            if name in props:
-                texts = []
-                for value in values:
-                    if value.element is not None:
-                        return None
-                    texts.append(value.text)
-                found.append((name, tuple(texts)))
-        return tuple(found)
+        return self.element.written_texts(props)
 
     def definition(self, prop: str) -> PropertyDefinition:
         try:

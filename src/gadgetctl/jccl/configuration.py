@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+from collections.abc import Container, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -337,6 +337,33 @@ class ConfigElement(_Placed):
             return []
         item = self._props[names.index(prop)]  # type: ignore[index]  (the first of that name)
         return item if item.__class__ is list else [item]
+
+    def written_texts(
+        self, props: Container[str]
+    ) -> tuple[tuple[str, tuple[str, ...]], ...] | None:
+        """(name, texts as written) of those of ``props`` the element has, in the order
+        written; None when one of them holds an embedded element (read from the compact form
+        as it is, without the lists :meth:`property_items` makes)."""
+        if self._names is None:
+            pairs: Iterable = self._props.items()  # type: ignore[union-attr]
+        else:
+            pairs = zip(self._names, self._compact_items(), strict=True)
+        found = []
+        for name, item in pairs:
+            if name not in props:
+                continue
+            if item.__class__ is not list:  # (compact: one value alone)
+                if item.element is not None:
+                    return None
+                found.append((name, (item.text,)))
+                continue
+            texts = []
+            for value in item:
+                if value.element is not None:
+                    return None
+                texts.append(value.text)
+            found.append((name, tuple(texts)))
+        return tuple(found)
 
     def texts(self, prop: str) -> list[str]:
         return [v.stripped for v in self.values(prop)]

@@ -37,26 +37,37 @@ class UnitRange:
     hint: str | None = None
 
 
-def _stated(prop: str, hint: str) -> Callable[[ElementAccess, str], UnitRange | None]:
+@dataclass(frozen=True, slots=True)
+class _Rule:
+    """How a device element's units of a kind are counted: ``count`` gives the number alone
+    (None: not known before run time), ``describe`` the :class:`UnitRange` of that number,
+    made only for a finding (checking 10,000 proxies against their devices needs the
+    numbers only)."""
+
+    count: Callable[[ElementAccess], int | None]
+    describe: Callable[[ElementAccess, str, int], UnitRange]
+
+
+def _stated(prop: str, hint: str) -> _Rule:
     """A count the configuration states in an integer property (or its default)."""
 
-    def count(access: ElementAccess, kind: str) -> UnitRange | None:
-        if not access.has(prop):
-            return None
-        value = access.integer(prop)
+    def count(access: ElementAccess) -> int | None:
+        return access.integer(prop) if access.has(prop) else None
+
+    def describe(access: ElementAccess, kind: str, value: int) -> UnitRange:
         shown = f"{prop} {value}" if access.count(prop) else f"{prop} {value} (the default)"
         return UnitRange(kind, value, shown, hint.format(prop=prop))
 
-    return count
+    return _Rule(count, describe)
 
 
-def _listed(prop: str, what: str) -> Callable[[ElementAccess, str], UnitRange | None]:
+def _listed(prop: str, what: str) -> _Rule:
     """One unit per value of a variable property."""
 
-    def count(access: ElementAccess, kind: str) -> UnitRange | None:
-        if not access.has(prop):
-            return None
-        written = access.count(prop)
+    def count(access: ElementAccess) -> int | None:
+        return access.count(prop) if access.has(prop) else None
+
+    def describe(access: ElementAccess, kind: str, written: int) -> UnitRange:
         return UnitRange(
             kind,
             written,
@@ -64,68 +75,74 @@ def _listed(prop: str, what: str) -> Callable[[ElementAccess, str], UnitRange | 
             f"Add a {prop} for each unit the proxies read.",
         )
 
-    return count
+    return _Rule(count, describe)
 
 
-def _scaled(prop: str, per: int, hint: str) -> Callable[[ElementAccess, str], UnitRange | None]:
+def _scaled(prop: str, per: int, hint: str) -> _Rule:
     """``per`` units for each of the count an integer property states."""
 
-    def count(access: ElementAccess, kind: str) -> UnitRange | None:
-        if not access.has(prop):
-            return None
-        value = access.integer(prop)
-        return UnitRange(kind, per * value, f"{per} per {prop} ({value})", hint)
+    def count(access: ElementAccess) -> int | None:
+        return per * access.integer(prop) if access.has(prop) else None
 
-    return count
+    def describe(access: ElementAccess, kind: str, units: int) -> UnitRange:
+        return UnitRange(kind, units, f"{per} per {prop} ({access.integer(prop)})", hint)
+
+    return _Rule(count, describe)
 
 
-def _children(
-    props: tuple[str, ...], what: str
-) -> Callable[[ElementAccess, str], UnitRange | None]:
+def _children(props: tuple[str, ...], what: str) -> _Rule:
     """One unit per value of each of several variable properties, together."""
 
-    def count(access: ElementAccess, kind: str) -> UnitRange | None:
+    def count(access: ElementAccess) -> int | None:
         if not all(access.has(p) for p in props):
             return None
-        written = sum(access.count(p) for p in props)
+        return sum(access.count(p) for p in props)
+
+    def describe(access: ElementAccess, kind: str, written: int) -> UnitRange:
         return UnitRange(
             kind, written, f"{written} {what}", f"Add a {' or '.join(props)} for each unit."
         )
 
-    return count
+    return _Rule(count, describe)
 
 
-def _fixed(
-    number: int, hint: str | None = None
-) -> Callable[[ElementAccess, str], UnitRange | None]:
-    def count(access: ElementAccess, kind: str) -> UnitRange | None:
-        return UnitRange(kind, number, f"a {access.element.type} has {number}", hint)
+def _fixed(number: int, hint: str | None = None) -> _Rule:
+    def count(access: ElementAccess) -> int | None:
+        return number
 
-    return count
+    def describe(access: ElementAccess, kind: str, units: int) -> UnitRange:
+        return UnitRange(kind, units, f"a {access.element.type} has {units}", hint)
+
+    return _Rule(count, describe)
 
 
-def _station_spans(kind: str) -> Callable[[ElementAccess, str], UnitRange | None]:
+def _station_spans(kind: str) -> _Rule:
     """An intersense element's units: one position unit per station child; digital (analog)
     units up to the largest ``<kind>_first + <kind>_count`` of its stations."""
 
-    def count(access: ElementAccess, _kind: str) -> UnitRange | None:
+    def count(access: ElementAccess) -> int | None:
         stations = [ElementAccess(c, access.repo) for c in access.children("stations")]
+        if kind == "position":
+            return len(stations)
+        ends = [s.integer(f"{kind}_first") + s.integer(f"{kind}_count") for s in stations]
+        return max(ends, default=0)
+
+    def describe(access: ElementAccess, _kind: str, units: int) -> UnitRange:
         if kind == "position":
             return UnitRange(
                 kind,
-                len(stations),
-                f"{len(stations)} station{'s' * (len(stations) != 1)}",
+                units,
+                f"{units} station{'s' * (units != 1)}",
                 "Add an intersense_station for each position unit the proxies read.",
             )
-        ends = [s.integer(f"{kind}_first") + s.integer(f"{kind}_count") for s in stations]
         return UnitRange(
             kind,
-            max(ends, default=0),
+            units,
             f"stations' {kind}_first + {kind}_count",
             f"Raise a station's {kind}_count to cover the unit.",
         )
 
-    return count
+    return _Rule(count, describe)
 
 
 _PINCH = (
@@ -136,7 +153,7 @@ _PINCH = (
 _SERVER = "Use a unit below the count, or raise {prop} if the server provides more."
 
 #: Element type -> kind -> how its unit count is found.
-UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]]] = {
+UNIT_RULES: dict[str, dict[str, _Rule]] = {
     "vrpn": {
         "position": _stated("tracker_count", _SERVER),
         "digital": _stated("button_count", _SERVER),
@@ -199,12 +216,26 @@ UNIT_RULES: dict[str, dict[str, Callable[[ElementAccess, str], UnitRange | None]
 
 
 def unit_range(device: ConfigElement, kind: str, repo: DefinitionRepository) -> UnitRange | None:
-    """The number of ``kind`` units ``device`` has, when known before run time."""
+    """The number of ``kind`` units ``device`` has, when known before run time, and what
+    sets it."""
+    rule = UNIT_RULES.get(device.type, {}).get(kind)
+    if rule is None or device.type not in repo:
+        return None
+    access = ElementAccess(device, repo)
+    try:
+        count = rule.count(access)
+        return None if count is None else rule.describe(access, kind, count)
+    except UnknownProperty:
+        return None
+
+
+def unit_count(device: ConfigElement, kind: str, repo: DefinitionRepository) -> int | None:
+    """:attr:`UnitRange.count` of :func:`unit_range` alone (None when not known)."""
     rule = UNIT_RULES.get(device.type, {}).get(kind)
     if rule is None or device.type not in repo:
         return None
     try:
-        return rule(ElementAccess(device, repo), kind)
+        return rule.count(ElementAccess(device, repo))
     except UnknownProperty:
         return None
 
@@ -217,12 +248,15 @@ def proxy_unit_problem(
     kind = PROXY_KINDS.get(proxy.type)
     if kind is None or device is None:
         return None
-    units = unit_range(device, kind, repo)
-    if units is None:
+    count = unit_count(device, kind, repo)
+    if count is None:
         return None
     values = proxy.values("unit")
     unit = read_int(values[0].stripped) if values else 0
-    if 0 <= unit < units.count:
+    if 0 <= unit < count:
+        return None
+    units = unit_range(device, kind, repo)  # (that count, and what sets it)
+    if units is None:
         return None
     valid = (
         f"units 0-{units.count - 1}"
