@@ -200,6 +200,40 @@ def test_start_failure_is_pending_with_the_error_and_retried(make):
     assert not m.pending() and not m.proxy("P").stupefied
 
 
+def test_what_a_type_is_follows_definitions_and_drivers_added_later(config, managers):
+    """What the manager knows of an element type (its kind, its definition's versions) is
+    worked out once per type and kept while neither the repository nor the registry
+    changes: a definition added, then a driver registered, are seen at the next retry."""
+    repo = default_repository()
+    registry = DeviceRegistry.with_builtins()
+    m = InputManager(
+        repo, ManagerOptions(retry_interval=None, entry_points=False), registry=registry
+    )
+    managers.append(m)
+    m.configure(
+        config(
+            '<button_device name="B" version="1"/><button_device name="C" version="1"/>'
+            '<digital_proxy name="P" version="1"><device>B</device></digital_proxy>'
+        )
+    )
+    assert {name for name, (code, *_) in reasons(m).items() if code == "DRV040"} == {"B", "C"}
+    directory = PLUGINS / "Button_drv"
+    repo.load_entry(SearchPathEntry(raw=str(directory), path=directory, origin="test"))
+    m.retry_pending()
+    assert "no definition" not in reasons(m)["B"][1]  # a definition now: no driver yet
+    assert reasons(m)["B"][:2] == reasons(m)["C"][:2]
+    Flaky.can_start = True
+    registry.register_device(Flaky)
+    assert m.retry_pending() == 2
+    assert not m.pending() and not m.proxy("P").stupefied
+    # a type that is not about input is ignored, until a driver registers a class for it
+    m.configure(config('<sound name="S1" version="1"/>'))
+    assert m.status("S1") is None and not m.pending()
+    registry.register_device(Flaky, "sound")
+    m.configure(config('<sound name="S2" version="1"/>'))
+    assert m.status("S2") is not None and "S2" in m.devices
+
+
 def test_an_element_replaces_one_of_the_same_name_even_of_another_type(make):
     m = make(BUTTONS)
     m.add([load_alias_named("A Proxy")])  # as VR Juggler's Configuration::add: same name, replaced

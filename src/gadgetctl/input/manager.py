@@ -182,6 +182,10 @@ class InputManager:
         self._last_retry = now()
         self._shut_down = False
         self._generation = 0  # counts configuration changes, for _vrjuggler_fate()
+        # per element type: what _classify answers, and the versions of its definition, kept
+        # while the repository and the registry stay as they were (_type_facts)
+        self._facts: dict[str, tuple[ElementKind | None, tuple[int, ...]]] = {}
+        self._facts_of: tuple[object, int, object, int] | None = None
         self._fate: tuple[int, dict[str, str | None]] = (-1, {})
 
     @classmethod
@@ -331,7 +335,24 @@ class InputManager:
     def _classify(self, element: ConfigElement) -> ElementKind | None:
         """What the element is to the input manager; None: not an input element. A type
         without definition counts as a device (it is reported pending)."""
-        token = element.type
+        return self._type_facts(element.type)[0]
+
+    def _type_facts(self, token: str) -> tuple[ElementKind | None, tuple[int, ...]]:
+        """What :meth:`_classify` answers for an element of type ``token``, and the versions
+        of its definition (none: no definition is loaded): the same for every element of the
+        type (20,000 elements asked twice each), worked out again once the repository or the
+        registry has changed (a driver loaded, definitions added: their generations)."""
+        repo, registry = self.repo, self.registry
+        state = (repo, repo.generation, registry, registry.generation)
+        if state != self._facts_of:
+            self._facts.clear()
+            self._facts_of = state
+        facts = self._facts.get(token)
+        if facts is None:
+            facts = self._facts[token] = (self._kind_of(token), tuple(repo.versions(token)))
+        return facts
+
+    def _kind_of(self, token: str) -> ElementKind | None:
         if token == INPUT_MANAGER:
             return ElementKind.INPUT_MANAGER
         if token == ALIAS:
@@ -402,9 +423,9 @@ class InputManager:
     # -- configuring one element ------------------------------------------------------------
 
     def _try(self, element: ConfigElement) -> PendingEntry | None:
-        kind = self._classify(element)
         token = element.type
-        if token not in self.repo:
+        kind, versions = self._type_facts(token)
+        if not versions:  # (no definition of the type is loaded)
             return PendingEntry(
                 element,
                 PendingKind.NO_DEFINITION,
@@ -417,7 +438,7 @@ class InputManager:
         unhandled = never_handled(token, RunTime.GADGETCTL)
         if unhandled is not None:
             return PendingEntry(element, PendingKind.UNSUPPORTED, unhandled)
-        old = too_old(token, element.version, self.repo.versions(token))
+        old = too_old(token, element.version, versions)
         if old is not None:
             return PendingEntry(element, PendingKind.TOO_OLD, old)
         access = ElementAccess(element, self.repo)

@@ -51,6 +51,9 @@ def registration_for(device_class: object, element_type: str | None, plugin: str
 class DeviceRegistry:
     def __init__(self) -> None:
         self._registrations: dict[str, Registration] = {}
+        #: Counts the registrations added: an answer kept with the generation it was worked
+        #: out in holds while the generation is the same.
+        self.generation = 0
 
     @classmethod
     def with_builtins(cls) -> DeviceRegistry:
@@ -69,7 +72,10 @@ class DeviceRegistry:
 
     def add(self, registration: Registration) -> Registration:
         """Add a registration; an element type already registered keeps its first class."""
-        return self._registrations.setdefault(registration.element_type, registration)
+        kept = self._registrations.setdefault(registration.element_type, registration)
+        if kept is registration:
+            self.generation += 1
+        return kept
 
     def get(self, element_type: str) -> Registration | None:
         return self._registrations.get(element_type)

@@ -76,6 +76,9 @@ class DefinitionRepository:
         self._property_owners: dict[str, frozenset[str]] | None = None
         #: close_names answers by (word, cutoff), cleared by add()
         self._close_cache: dict[tuple[str, float], list[str]] = {}
+        #: Counts the calls of add(): an answer kept with the generation it was worked out
+        #: in holds while the generation is the same.
+        self.generation = 0
 
     # -- building ---------------------------------------------------------------------
 
@@ -105,6 +108,7 @@ class DefinitionRepository:
 
     def add(self, definition: Definition, entry: SearchPathEntry | None = None) -> int:
         """Add every version of ``definition``; an existing name and version wins. Returns how many were added."""
+        self.generation += 1
         self._ancestor_cache.clear()
         self._effective_cache.clear()
         self._map_cache.clear()
