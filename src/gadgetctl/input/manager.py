@@ -614,7 +614,10 @@ class InputManager:
         problem = proxy_unit_problem(element, self._known.get(proxy.device_name), self.repo)
         if problem is not None and problem not in proxy.diagnostics:
             proxy.diagnostics.append(problem)
-        proxy.refresh(self._device_objects, self._why_missing(proxy.device_name))
+        devices = self._device_objects
+        device_name = proxy.device_name
+        # (why a device is missing is asked only when it is: refresh() reads it then alone)
+        proxy.refresh(devices, None if device_name in devices else self._why_missing(device_name))
         self._proxies[name] = proxy
         self._proxy_elements[name] = element
         names = self._proxies_of.get(proxy.device_name)
