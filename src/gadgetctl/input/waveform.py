@@ -71,6 +71,9 @@ AHEAD_SECONDS = 0.1
 #: ahead does not make the next frame late.
 PREPARE_PACE = 0.001
 _RUNNING = DeviceState.RUNNING
+#: Before any moment: one float shared by every device not yet published by a frame
+#: (``-math.inf`` written in a method makes a new float each time: 10,000 of them).
+_NEVER = -math.inf
 #: Held while a waveform device publishes (its frame, the scheduler's stand-in) and while a
 #: frame group is updated: one lock for all of them, so that a group frame takes it once.
 _PUBLISHING = threading.Lock()
@@ -281,7 +284,7 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         self._block: Block | None = None
         self._ahead: Block | None = None  # the next block, computed ahead between frames
         self._ahead_tried = False  # a next block was computed ahead (it may have events)
-        self._frame_published = -math.inf  # when a frame last published (input-manager clock)
+        self._frame_published = _NEVER  # when a frame last published (input-manager clock)
         self._stand_in = _STAND_IN  # its manager's, once it starts
 
     @property
@@ -377,7 +380,7 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
             self.next_index = 0
             self._block = None
             self._ahead, self._ahead_tried = None, False
-            self._frame_published = -math.inf
+            self._frame_published = _NEVER
             self._mirror()
 
     def _last_frame(self) -> float:
