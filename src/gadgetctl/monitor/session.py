@@ -220,7 +220,6 @@ class MonitorSession:
         self.markers: list[MarkerRecord] = []
         self.finished = False
         self._selected: list[str] = []
-        self._order: dict[str, int] = {}
         self._tracks: dict[str, DeviceTrack] = {}
         self._sinks: list[_Sink] = []
         self._buffer: list[tuple[str, object, int]] = []
@@ -252,11 +251,14 @@ class MonitorSession:
         Raises :class:`SelectionError` when a pattern matches nothing. Returns the names."""
         self.configured_at = now()  # before any device of the session starts
         with collector_paused():  # what is built here lives as long as the session
+            # where each element is in the configuration: the order of the names selected
+            # (only here: 20,000 names and their places, about 1 MB, need not last the session)
+            places: dict[str, int] = {}
             if self.configuration is not None:
                 self.manager.configure(self.configuration)
                 for index, element in enumerate(self.configuration.elements):
-                    self._order.setdefault(element.full_name, index)
-            self._selected = self._resolve(self.selectors)
+                    places.setdefault(element.full_name, index)
+            self._selected = self._resolve(self.selectors, places)
         return list(self._selected)
 
     def known(self) -> dict[str, str]:
@@ -279,12 +281,12 @@ class MonitorSession:
             return {}
         return {s.name: s for s in self.manager.statuses() if s.state in (PENDING, UNKNOWN_TYPE)}
 
-    def _resolve(self, selectors: Sequence[str]) -> list[str]:
+    def _resolve(self, selectors: Sequence[str], places: Mapping[str, int]) -> list[str]:
         known = self.known()
         group = {DEVICE: 0, PROXY: 1, ALIAS: 2}
 
         def order(name: str) -> tuple[int, int, str]:
-            return group[known[name]], self._order.get(name, 1 << 30), name
+            return group[known[name]], places.get(name, 1 << 30), name
 
         if not selectors:
             return sorted(known, key=order)
