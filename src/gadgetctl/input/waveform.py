@@ -23,10 +23,12 @@ The input manager updates the waveform devices of a frame together (:attr:`FRAME
 one clock reading, then, with numpy over all of them at once, each device's window of its
 block that came due; those windows go to the group's
 :class:`~gadgetctl.input.samples.SharedWindows` (each store makes its frame from it when
-read). Only a device whose frame is not that usual one (its block runs out, no sample came
-due, it is not running, its window holds an event) is updated alone: with an event period,
-a device's frame is its own only when one of its events comes due, not for the whole block
-that holds one.
+read). Devices configured alike whose block ran out (or who have none yet: the first frame)
+get their next blocks together, from one cut of their shared values, and their frame stays
+the usual one. Only a device whose frame is not that usual one (its values are its own and
+its block runs out, no sample came due, it is not running, its window holds an event) is
+updated alone: with an event period, a device's frame is its own only when one of its events
+comes due, not for the whole block that holds one.
 """
 
 from __future__ import annotations
@@ -846,6 +848,10 @@ class _FrameGroup:
             self.usual = np.zeros(count, dtype=bool)  # the usual frame may be taken
             self.running = np.zeros(count, dtype=bool)
             self.alone = np.full(count, -1, dtype=np.int64)  # frame a device was updated alone
+            # what the values of a device configured alike with others depend on (None: values
+            # of its own): its blocks are renewed together with theirs (:meth:`_renew`)
+            self.keys = [d.signal_key() for d in devices]
+            self.renewable = np.array([key is not None for key in self.keys], dtype=bool)
             self.moment = -math.inf  # when the group last published
             self.frame = -1  # the frame it last updated
             self.prepare_after = 0.0  # no block to compute ahead before then (a hint)
@@ -905,6 +911,21 @@ class _FrameGroup:
                     usual |= switch
             usual &= ends <= self.event_next  # a window with an event: the device's own frame
             if not (usual | empty).all():
+                # a block ran out (or there is none yet) of devices whose values are shared:
+                # their next blocks computed together, from the samples now due
+                renew = (
+                    ~(usual | empty)
+                    & self.renewable
+                    & self.running
+                    & (self.alone != frame)
+                    & (nexts < ends)
+                    & (ends - nexts <= self.cap)
+                )
+                if renew.any():  # (a window with an event is still the device's own frame)
+                    usual |= self._renew(np.flatnonzero(renew).tolist(), ends) & (
+                        ends <= self.event_next
+                    )
+            if not (usual | empty).all():
                 for slot in np.flatnonzero(~(usual | empty)).tolist():
                     device = devices[slot]
                     if device._updated_frame == frame:
@@ -931,6 +952,71 @@ class _FrameGroup:
             nexts[taken] = ends[taken]
             self.moment = moment
             self.frame = frame
+
+    def _renew(self, slots: list[int], ends: np.ndarray) -> np.ndarray:
+        """Make the next block of each device of ``slots`` (running, values shared, samples
+        ``next`` .. ``ends - 1`` due, at most its store's cap) its current one, starting at
+        its next sample and sized as :meth:`WaveformDevice._publish_due` sizes it, so that
+        this frame's samples are one window of it: the devices configured alike that need the
+        same samples share one cut of the values (events included), their timestamps are
+        computed in one array, and their state is mirrored with numpy. Returns which slots
+        were renewed (a device whose store holds samples of its own, or whose values are not
+        shared for these samples, is left to its own frame, as is one whose window holds an
+        event). The caller holds the lock."""
+        devices, keys = self.devices, self.keys
+        nexts = self.next.tolist()
+        wanted: dict[tuple, list[int]] = {}
+        for slot in slots:
+            device = devices[slot]
+            if "compute" in device.__dict__:  # its blocks are what its own compute() makes
+                continue
+            store = device.store
+            store.sync()  # its pending window is taken before its arrays change
+            if store._waiting:
+                continue
+            start = nexts[slot]
+            size = max(1, math.ceil(device.rate * BLOCK_SECONDS))
+            if device._block is None:  # (as _publish_due spreads the first blocks)
+                size = max(1, size - zlib.crc32(device.name.encode()) % size)
+            size += int(ends[slot]) - start
+            found = wanted.get((keys[slot], start, size))
+            if found is None:
+                wanted[(keys[slot], start, size)] = [slot]
+            else:
+                found.append(slot)
+        renewed: list[int] = []
+        lasts: list[int] = []
+        events_next: list[int] = []
+        windows = self.windows
+        for (_, start, size), members in wanted.items():
+            try:
+                cut = _SIGNALS.values(devices[members[0]], start, size)
+            except Exception:  # each device's own frame computes its block, and faults
+                continue
+            if cut is None:
+                continue
+            t, items, events = cut
+            stamps = self.t0[members][:, None] + t  # each row: t0 + t, as compute() adds
+            for row, slot in enumerate(members):
+                device = devices[slot]
+                block = device._block = Block(start, stamps[row], items, events)
+                device._ahead, device._ahead_tried = None, False
+                windows.set_arrays(slot, block.timestamps, items)
+            renewed += members
+            lasts += [start + size] * len(members)
+            event = Block.event_after(block, start)  # (the same for every member)
+            events_next += [event] * len(members)
+        taken = np.zeros(len(devices), dtype=bool)
+        if renewed:
+            taken[renewed] = True
+            self.first[renewed] = self.next[renewed]
+            self.last[renewed] = lasts
+            self.ahead[renewed] = False
+            self.ahead_first[renewed] = self.ahead_last[renewed] = 0
+            self.event_next[renewed] = events_next
+            self.usual[renewed] = True
+            self.prepare_after = 0.0
+        return taken
 
     def _usual_small(self, frame: int, moment: float) -> bool:
         """:meth:`update` of a small group whose every device has its usual frame or an empty
