@@ -116,10 +116,13 @@ class GatheredFrames(Mapping[str, Mapping[DeviceKind, FrameSamples]]):
 
 
 class GatherPlan:
-    """How a session without statistics gathers: the watched devices read per device, and
-    per frame group sharing windows, the watched members read at once."""
+    """How a session gathers: the watched devices read per device, and per frame group
+    sharing windows, the watched members (read at once by a session without statistics).
+    ``entries``: every watched device in order, with its track and, when its frames are
+    windows of shared arrays, the index of its group in ``groups`` and its slot there
+    (-1 and 0 otherwise)."""
 
-    __slots__ = ("arrangement", "groups", "own", "shared", "watch")
+    __slots__ = ("arrangement", "entries", "groups", "own", "shared", "watch")
 
     def __init__(
         self,
@@ -128,6 +131,7 @@ class GatherPlan:
         own: list[str],
         shared: dict[str, tuple[SharedWindows, int, Input]],
         groups: list[SharedGroup],
+        entries: list[tuple[str, Any, int, int]] = [],  # noqa: B006 (read-only)
     ) -> None:
         self.arrangement, self.watch, self.own, self.shared, self.groups = (
             arrangement,
@@ -136,6 +140,7 @@ class GatherPlan:
             shared,
             groups,
         )
+        self.entries = entries
 
 
 NO_GATHERING = GatheredFrames({})

@@ -130,6 +130,9 @@ def _kind_values(kinds: tuple[DeviceKind, ...]) -> tuple[str, ...]:
 #: the figures of one such part are held while its entries are read.
 FINAL_PART = 512
 
+#: The sampling instants of a frame with nothing new.
+_NO_STAMPS = np.empty(0)
+
 
 class FinalStats(Mapping[str, dict[str, object]]):
     """:meth:`MonitorSession.final_stats` made one device at a time when read (see
@@ -551,7 +554,7 @@ class MonitorSession:
             self._watch = self._names_with_targets()
         gathered: dict[str, Mapping[DeviceKind, FrameSamples]] = {}
         if self.statistics or self._sinks:
-            samples = self._gather(self._watch, gathered)
+            samples = self._gather_every(self._gather_plan(), gathered)
             self._gathered = GatheredFrames(gathered)
         else:  # gathering only: frame groups' shared windows are read at once
             plan = self._gather_plan()
@@ -604,9 +607,51 @@ class MonitorSession:
                 gathered[name] = track.frames
         return samples
 
+    def _gather_every(
+        self, plan: GatherPlan, gathered: dict[str, Mapping[DeviceKind, FrameSamples]]
+    ) -> int:
+        """:meth:`_gather` of every watched device, in order: a device whose frame is a
+        window of its group's shared arrays (or empty) is noted from the arrays
+        (:meth:`DeviceTrack.update_window`), the others per device."""
+        frame = self.frame
+        windows_of = [group.windows for group in plan.groups]
+        read = [
+            (
+                windows.moment,
+                windows.fresh.tolist(),
+                windows.emptied.tolist(),
+                windows.starts.tolist(),
+                windows.stops.tolist(),
+                windows.arrays,
+            )
+            for windows in windows_of
+        ]
+        samples = 0
+        for name, track, group, slot in plan.entries:
+            if group < 0:
+                count = track.update()
+            else:
+                moment, fresh, emptied, starts, stops, arrays = read[group]
+                if track._swapped_at == moment:  # (its group did not publish this frame)
+                    count = track.update_window(_NO_STAMPS, (), 0, 0, moment)
+                elif fresh[slot]:
+                    timestamps, items = arrays[slot]
+                    count = track.update_window(
+                        timestamps, items, starts[slot], stops[slot], moment
+                    )
+                elif emptied[slot]:
+                    count = track.update_window(_NO_STAMPS, (), 0, 0, moment)
+                else:  # swapped on its own this frame
+                    count = track.update()
+            samples += count
+            track.frame_seen = frame
+            if track.frames:
+                gathered[name] = track.frames
+        return samples
+
     def _gather_plan(self) -> GatherPlan:
-        """The plan of :meth:`step` without statistics, made again when the watched names or
-        what the manager updates change."""
+        """How :meth:`step` gathers, made again when the watched names or what the manager
+        updates change."""
         manager = self.manager
         arrangement = manager.arrangement
         plan = self._plan
@@ -614,23 +659,31 @@ class MonitorSession:
             return plan
         own: list[str] = []
         shared: dict[str, tuple[SharedWindows, int, Input]] = {}
-        members: dict[int, tuple[SharedWindows, list[int], list[str]]] = {}
+        # per group: its windows, the watched slots and names, and its index
+        members: dict[int, tuple[SharedWindows, list[int], list[str], int]] = {}
+        entries: list[tuple[str, DeviceTrack, int, int]] = []
         for name in self._watch:
             device = manager.devices.get(name)
             if device is None:
                 continue
-            self._track(name, device)
+            track = self._track(name, device)
             place = device.store.shared
             if place is None:
                 own.append(name)
+                entries.append((name, track, -1, 0))
                 continue
             windows, slot = place
             shared[name] = (windows, slot, device)
-            entry = members.setdefault(id(windows), (windows, [], []))
+            entry = members.get(id(windows))
+            if entry is None:
+                entry = members[id(windows)] = (windows, [], [], len(members))
             entry[1].append(slot)
             entry[2].append(name)
-        groups = [SharedGroup(windows, slots, names) for windows, slots, names in members.values()]
-        self._plan = GatherPlan(arrangement, self._watch, own, shared, groups)
+            entries.append((name, track, entry[3], slot))
+        groups = [
+            SharedGroup(windows, slots, names) for windows, slots, names, _ in members.values()
+        ]
+        self._plan = GatherPlan(arrangement, self._watch, own, shared, groups, entries)
         return self._plan
 
     def _current_track(self, name: str) -> DeviceTrack | None:

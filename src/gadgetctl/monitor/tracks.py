@@ -4,7 +4,7 @@ its running statistics, button presses, analog histories and the values a view s
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 
 import numpy as np
 
@@ -21,6 +21,8 @@ from gadgetctl.monitor.views import UnitView
 #: A track's analog histories while it has none (shared).
 _NO_HISTORY: tuple[()] = ()
 
+_ANALOG, _DIGITAL = DeviceKind.ANALOG, DeviceKind.DIGITAL
+
 STATS_REFRESH = 0.25  # seconds between recomputations of interval percentiles and jitter
 
 
@@ -31,6 +33,7 @@ class DeviceTrack:
     __slots__ = (
         "_dropped_seen",
         "_faults_seen",
+        "_items_seen",
         "_snapshot",
         "_snapshot_at",
         "_swapped_at",
@@ -71,6 +74,7 @@ class DeviceTrack:
         self._snapshot: DeviceSnapshot | None = None
         self._snapshot_at = -1.0
         self._swapped_at: float | None = None
+        self._items_seen: object = None  # the shared arrays whose units were noted last
 
     def reset(self) -> None:
         self.stats.reset()
@@ -101,8 +105,55 @@ class DeviceTrack:
             else:
                 self.count = max(f.count for f in frames.values())
             return self.count
+        units = [
+            (kind, len(newest.values))
+            for kind, samples in frames.items()
+            if (newest := samples.newest) is not None
+        ]
+        return self._note(frames, frame_timestamps(frames) if frames else (), units)
+
+    def update_window(
+        self,
+        timestamps: np.ndarray,
+        items: tuple[tuple[DeviceKind, np.ndarray], ...],
+        start: int,
+        stop: int,
+        moment: float,
+    ) -> int:
+        """:meth:`update` of a device whose frame is a window of its frame group's shared
+        arrays (:class:`~gadgetctl.input.samples.SharedWindows`): samples ``start`` ..
+        ``stop - 1`` of ``timestamps`` and of each kind's values ``items``, swapped at
+        ``moment`` (``stop == start``: a frame with nothing new). Its sampling instants are
+        that window of ``timestamps`` and its units the arrays' second dimension, read without
+        making the store's frame."""
+        self._swapped_at = moment
+        if stop == start:
+            self.frames = NO_CURRENT
+            if not self.statistics:
+                self.count = 0
+                return 0
+            return self._note(NO_CURRENT, (), ())
+        self.frames = frames = self.device.store.current
+        if not self.statistics:
+            self.count = stop - start
+            return self.count
+        if items is self._items_seen:  # (their units are noted already)
+            return self._note(frames, timestamps[start:stop], ())
+        self._items_seen = items
+        return self._note(
+            frames, timestamps[start:stop], [(kind, values.shape[1]) for kind, values in items]
+        )
+
+    def _note(
+        self,
+        frames: Mapping[DeviceKind, FrameSamples],
+        stamps: np.ndarray | tuple[()],
+        units: Iterable[tuple[DeviceKind, int]],
+    ) -> int:
+        """Statistics, presses and histories of a frame: ``frames``, its sampling instants
+        ``stamps`` and the units of each kind with samples."""
+        device = self.device
         dropped = self._dropped_now()
-        stamps = frame_timestamps(frames) if frames else ()
         count = len(stamps)
         if count:
             self.stats.add_timestamps(stamps)
@@ -115,17 +166,18 @@ class DeviceTrack:
         if faults != self._faults_seen:
             self.stats.add_fault(max(0, faults - self._faults_seen))
             self._faults_seen = faults
-        digital = frames.get(DeviceKind.DIGITAL)
+        digital = frames.get(_DIGITAL)
         if digital is not None:
             self._scan_digital(digital)
         elif self.changed is not None and self.changed.any():
             self.changed[:] = False
-        if DeviceKind.ANALOG in store.kinds:
-            self._note_analog(store.latest(DeviceKind.ANALOG))
-        for kind, samples in frames.items():
-            newest = samples.newest
-            if newest is not None:
-                self.units[kind.value] = max(self.units.get(kind.value, 0), len(newest.values))
+        store = device.store
+        if _ANALOG in store.kinds:
+            self._note_analog(store.latest(_ANALOG))
+        known = self.units
+        for kind, width in units:
+            value = kind._value_  # (kind.value: the enum's descriptor, a call per read)
+            known[value] = max(known.get(value, 0), width)
         return count
 
     def _scan_digital(self, frame: FrameSamples) -> None:

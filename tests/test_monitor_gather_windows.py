@@ -1,0 +1,121 @@
+"""A monitor session notes the devices whose frames are windows of their frame group's shared
+arrays from the arrays (DeviceTrack.update_window): the same samples, statistics, units and
+gathered frames as noting each device from its store (DeviceTrack.update), frame by frame."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from gadgetctl.input.manager import InputManager
+from gadgetctl.monitor.session import MonitorSession
+from gadgetctl.monitor.tracks import DeviceTrack
+
+from jccl_samples import jconf
+
+pytestmark = pytest.mark.timeout(60)
+
+BODIES = {
+    # alike, with events: most frames are windows, an event's frame is the device's own
+    "fast": "<rate>1000</rate><position_path>circle</position_path><event_period>0.02</event_period>",
+    # alike, slow: most frames bring nothing new (empty frames)
+    "slow": "<rate>40</rate><position_path>spin</position_path><button_period>0.1</button_period>"
+    "<event_period>0</event_period>",
+    # values of its own (noise): its blocks are computed alone
+    "noise": "<rate>500</rate><seed>{seed}</seed><analog_waveform>noise</analog_waveform>"
+    "<min>-1</min><max>1</max><event_period>0</event_period>",
+}
+
+
+@pytest.fixture
+def session(tmp_path):
+    body = "".join(
+        f'<waveform_device name="{name}{copy}" version="1">{text.format(seed=copy)}'
+        "</waveform_device>\n"
+        for name, text in BODIES.items()
+        for copy in range(3)
+    )
+    body += (
+        '<position_proxy name="Head" version="1"><device>fast1</device><unit>0</unit>'
+        "</position_proxy>\n"
+    )
+    path = tmp_path / "w.jconf"
+    path.write_text(jconf(body))
+    manager, configuration = InputManager.from_files([path])
+    session = MonitorSession(manager, configuration, selectors=["fast0", "slow*", "noise*", "Head"])
+    session.start()
+    yield session
+    manager.shutdown()
+
+
+def noted(track: DeviceTrack) -> dict[str, object]:
+    """What a track noted, but for the instants of its frame ends (read from the clock)."""
+    stats = track.stats
+    return {
+        "count": track.count,
+        "frames": {
+            kind: (samples.count, samples.timestamps()) for kind, samples in track.frames.items()
+        },
+        "units": dict(track.units),
+        "history": [list(h) for h in track.analog_history],
+        "presses": None if track.presses is None else track.presses.tolist(),
+        "changed": None if track.changed is None else track.changed.tolist(),
+        "stats": (
+            stats.count,
+            stats.first_timestamp,
+            stats.newest_timestamp,
+            stats.frames,
+            stats.samples_per_frame,
+            stats.dropped,
+            stats.faults,
+            stats.recent_timestamps().tobytes(),
+            list(stats._frame_ends)[1::2],  # the counts at the frame ends
+        ),
+    }
+
+
+def test_tracks_noted_from_shared_windows_are_those_noted_from_the_stores(session):
+    windowed, own = [], []
+    real, real_update = DeviceTrack.update_window, DeviceTrack.update
+
+    def counted(track, *args):
+        windowed.append(track.name)
+        return real(track, *args)
+
+    def counted_update(track):
+        if session._tracks.get(track.name) is track:
+            own.append(track.name)
+        return real_update(track)
+
+    DeviceTrack.update_window, DeviceTrack.update = counted, counted_update
+    try:
+        shadows: dict[str, DeviceTrack] = {}
+        gathered_shown = 0
+        for _ in range(60):
+            time.sleep(0.004)
+            session.step()
+            watched = [name for name in session.watched if session.manager.device(name)]
+            assert set(watched) == {"fast0", "fast1"} | {
+                f"{name}{copy}" for name in ("slow", "noise") for copy in range(3)
+            }
+            for name in watched:
+                track = session._tracks[name]
+                shadow = shadows.get(name)
+                if shadow is None:
+                    shadow = shadows[name] = DeviceTrack(name, track.device, session.history)
+                shadow.update()  # the same frame, noted from the store
+                assert noted(track) == noted(shadow), name
+            expected = [name for name in watched if shadows[name].frames]
+            assert list(session.gathered) == expected
+            for name in expected:
+                assert session.gathered[name] is shadows[name].frames
+            gathered_shown += len(expected)
+    finally:
+        DeviceTrack.update_window, DeviceTrack.update = real, real_update
+    assert gathered_shown > 100
+    # most frames were noted from the windows; a frame holding an event (every 20 samples of
+    # the fast devices) or a block computed alone (the noisy ones) from the store
+    for name in ("fast1", "slow2", "noise0"):
+        assert windowed.count(name) > 30, name
+    assert own.count("fast1") >= 2 and own.count("noise0") >= 1
