@@ -850,7 +850,11 @@ class _FrameGroup:
             self.alone = np.full(count, -1, dtype=np.int64)  # frame a device was updated alone
             # what the values of a device configured alike with others depend on (None: values
             # of its own): its blocks are renewed together with theirs (:meth:`_renew`)
-            self.keys = [d.signal_key() for d in devices]
+            alike: dict[tuple, tuple] = {}  # one key for devices alike (a copy each: MBs)
+            self.keys = [
+                key if (key := d.signal_key()) is None else alike.setdefault(key, key)
+                for d in devices
+            ]
             self.renewable = np.array([key is not None for key in self.keys], dtype=bool)
             self.moment = -math.inf  # when the group last published
             self.frame = -1  # the frame it last updated

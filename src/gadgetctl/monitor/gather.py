@@ -116,13 +116,25 @@ class GatheredFrames(Mapping[str, Mapping[DeviceKind, FrameSamples]]):
 
 
 class GatherPlan:
-    """How a session gathers: the watched devices read per device, and per frame group
-    sharing windows, the watched members (read at once by a session without statistics).
-    ``entries``: every watched device in order, with its track and, when its frames are
-    windows of shared arrays, the index of its group in ``groups`` and its slot there
-    (-1 and 0 otherwise)."""
+    """How a session gathers: the watched devices read per device (``own``), and per frame
+    group sharing windows, the watched members (``groups``; ``shared``: each member's
+    windows, slot and device, for a session without statistics, which reads them at once).
+    Every watched device in order: its name, its track, and where its frames are
+    (``places``: -1 for a device read per device, else the index of its frame group's
+    shared windows in ``windows`` times :data:`PLACE` plus its slot there). Lists and an
+    array rather than a tuple a device: 10,000 of them were a megabyte more."""
 
-    __slots__ = ("arrangement", "entries", "groups", "own", "shared", "watch")
+    __slots__ = (
+        "arrangement",
+        "groups",
+        "names",
+        "own",
+        "places",
+        "shared",
+        "tracks",
+        "watch",
+        "windows",
+    )
 
     def __init__(
         self,
@@ -131,7 +143,10 @@ class GatherPlan:
         own: list[str],
         shared: dict[str, tuple[SharedWindows, int, Input]],
         groups: list[SharedGroup],
-        entries: list[tuple[str, Any, int, int]] = [],  # noqa: B006 (read-only)
+        names: list[str] | None = None,
+        tracks: list[Any] | None = None,
+        places: np.ndarray | None = None,
+        windows: list[SharedWindows] | None = None,
     ) -> None:
         self.arrangement, self.watch, self.own, self.shared, self.groups = (
             arrangement,
@@ -140,7 +155,14 @@ class GatherPlan:
             shared,
             groups,
         )
-        self.entries = entries
+        self.names = names if names is not None else []
+        self.tracks = tracks if tracks is not None else []
+        self.places = places if places is not None else np.empty(0, dtype=np.int64)
+        self.windows = windows if windows is not None else [group.windows for group in groups]
+
+
+#: A group's index in a :class:`GatherPlan`'s ``places`` is counted in these.
+PLACE = 1 << 32
 
 
 NO_GATHERING = GatheredFrames({})

@@ -43,6 +43,7 @@ from gadgetctl.monitor.encoding import encode_frame, json_value, plain_json, pro
 from gadgetctl.monitor.gather import (
     NO_GATHERING,
     NOTHING,
+    PLACE,
     GatheredFrames,
     GatherPlan,
     SharedGroup,
@@ -614,7 +615,6 @@ class MonitorSession:
         window of its group's shared arrays (or empty) is noted from the arrays
         (:meth:`DeviceTrack.update_window`), the others per device."""
         frame = self.frame
-        windows_of = [group.windows for group in plan.groups]
         read = [
             (
                 windows.moment,
@@ -624,13 +624,14 @@ class MonitorSession:
                 windows.stops.tolist(),
                 windows.arrays,
             )
-            for windows in windows_of
+            for windows in plan.windows
         ]
         samples = 0
-        for name, track, group, slot in plan.entries:
-            if group < 0:
+        for name, track, place in zip(plan.names, plan.tracks, plan.places.tolist(), strict=True):
+            if place < 0:
                 count = track.update()
             else:
+                group, slot = divmod(place, PLACE)
                 moment, fresh, emptied, starts, stops, arrays = read[group]
                 if track._swapped_at == moment:  # (its group did not publish this frame)
                     count = track.update_window(_NO_STAMPS, (), 0, 0, moment)
@@ -657,33 +658,51 @@ class MonitorSession:
         plan = self._plan
         if plan is not None and plan.arrangement is arrangement and plan.watch is self._watch:
             return plan
+        # (only a session without statistics reads shared windows by name and by group:
+        # 10,000 devices' entries were a megabyte more)
+        by_name = not (self.statistics or self._sinks)
         own: list[str] = []
         shared: dict[str, tuple[SharedWindows, int, Input]] = {}
         # per group: its windows, the watched slots and names, and its index
         members: dict[int, tuple[SharedWindows, list[int], list[str], int]] = {}
-        entries: list[tuple[str, DeviceTrack, int, int]] = []
+        names: list[str] = []
+        tracks: list[DeviceTrack] = []
+        places: list[int] = []
         for name in self._watch:
             device = manager.devices.get(name)
             if device is None:
                 continue
-            track = self._track(name, device)
+            names.append(name)
+            tracks.append(self._track(name, device))
             place = device.store.shared
             if place is None:
                 own.append(name)
-                entries.append((name, track, -1, 0))
+                places.append(-1)
                 continue
             windows, slot = place
-            shared[name] = (windows, slot, device)
             entry = members.get(id(windows))
             if entry is None:
                 entry = members[id(windows)] = (windows, [], [], len(members))
-            entry[1].append(slot)
-            entry[2].append(name)
-            entries.append((name, track, entry[3], slot))
+            if by_name:
+                shared[name] = (windows, slot, device)
+                entry[1].append(slot)
+                entry[2].append(name)
+            places.append(entry[3] * PLACE + slot)
         groups = [
-            SharedGroup(windows, slots, names) for windows, slots, names, _ in members.values()
+            SharedGroup(windows, slots, group_names)
+            for windows, slots, group_names, _ in (members.values() if by_name else ())
         ]
-        self._plan = GatherPlan(arrangement, self._watch, own, shared, groups, entries)
+        self._plan = GatherPlan(
+            arrangement,
+            self._watch,
+            own,
+            shared,
+            groups,
+            names,
+            tracks,
+            np.array(places, dtype=np.int64),
+            [windows for windows, _, _, _ in members.values()],
+        )
         return self._plan
 
     def _current_track(self, name: str) -> DeviceTrack | None:
