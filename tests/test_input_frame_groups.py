@@ -256,3 +256,53 @@ def test_gathering_without_statistics_reads_shared_windows_and_proxies_see_filte
     raw = m.device("Mixed 0").store.latest(DeviceKind.ANALOG)
     assert knob.timestamp == raw.timestamp
     assert knob.data == pytest.approx(m.device("Mixed 0").normalize(float(raw.values[1])))
+
+
+@pytest.mark.timeout(60)
+def test_the_newest_sample_is_read_from_the_shared_windows_as_the_frame_would_give_it(make):
+    """A store whose frame is a window of its group's shared arrays gives its newest sample
+    of each kind without making that frame (proxies read it every frame): the sample the
+    frame gives once made, for the kinds of the window and for the others (the newest of an
+    earlier frame, or none)."""
+    events = "".join(  # (their commands come in frames of their own, between windows)
+        f'<waveform_device name="Events {i}" version="1"><rate>1000</rate>'
+        "<position_path>circle</position_path><event_period>0.01</event_period>"
+        "</waveform_device>"
+        for i in range(2)
+    )
+    m = make(_config(poses=3, mixed=2, extra=events))
+    devices = (
+        [m.device(f"Poses {i}") for i in range(3)]
+        + [m.device(f"Mixed {i}") for i in range(2)]
+        + [m.device(f"Events {i}") for i in range(2)]
+    )
+    kinds = [
+        DeviceKind.POSITION,
+        DeviceKind.ANALOG,
+        DeviceKind.DIGITAL,
+        DeviceKind.HAT,
+        DeviceKind.COMMAND,
+    ]
+    read_before = latched = 0
+    for _ in range(60):
+        time.sleep(0.002)
+        m.update()
+        for device in devices:
+            store = device.store
+            shared, slot = store.shared
+            pending = shared.serial != store._synced and bool(shared.fresh[slot])
+            before = [store.latest(kind) for kind in kinds]  # (read first: nothing made yet)
+            assert (shared.serial != store._synced) == pending  # reading made nothing
+            store.sync()
+            after = [store.latest(kind) for kind in kinds]
+            for kind, one, other in zip(kinds, before, after, strict=True):
+                assert (one is None) == (other is None), kind
+                if one is not None:
+                    assert one.timestamp == other.timestamp
+                    assert np.asarray(one.values).tobytes() == np.asarray(other.values).tobytes()
+            read_before += pending
+            latched += pending and before[-1] is not None
+    assert read_before > 100  # most frames were read from the windows
+    assert devices[0].store.latest(DeviceKind.ANALOG) is None  # (a kind it never had)
+    assert devices[3].store.latest(DeviceKind.DIGITAL) is not None
+    assert latched > 20  # a command of an earlier frame, read from a window without one

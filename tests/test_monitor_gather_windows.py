@@ -1,6 +1,8 @@
 """A monitor session notes the devices whose frames are windows of their frame group's shared
 arrays from the arrays (DeviceTrack.update_window): the same samples, statistics, units and
-gathered frames as noting each device from its store (DeviceTrack.update), frame by frame."""
+gathered frames as noting each device from its store (DeviceTrack.update), frame by frame,
+without making the store's frame until it is read (a proxy reading the newest sample does
+not make it either)."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ import time
 import pytest
 
 from gadgetctl.input.manager import InputManager
+from gadgetctl.monitor import tracks as tracks_module
 from gadgetctl.monitor.session import MonitorSession
 from gadgetctl.monitor.tracks import DeviceTrack
 
@@ -91,7 +94,7 @@ def test_tracks_noted_from_shared_windows_are_those_noted_from_the_stores(sessio
     DeviceTrack.update_window, DeviceTrack.update = counted, counted_update
     try:
         shadows: dict[str, DeviceTrack] = {}
-        gathered_shown = 0
+        gathered_shown = unmade = 0
         for _ in range(60):
             time.sleep(0.004)
             session.step()
@@ -99,6 +102,12 @@ def test_tracks_noted_from_shared_windows_are_those_noted_from_the_stores(sessio
             assert set(watched) == {"fast0", "fast1"} | {
                 f"{name}{copy}" for name in ("slow", "noise") for copy in range(3)
             }
+            for name in watched:  # a frame noted from the windows is made only when read
+                track = session._tracks[name]  # (but to count button presses: "slow")
+                if track._frames is tracks_module._FROM_STORE and not name.startswith("slow"):
+                    store = track.device.store
+                    assert store.shared[0].serial != store._synced, name
+                    unmade += 1
             for name in watched:
                 track = session._tracks[name]
                 shadow = shadows.get(name)
@@ -113,7 +122,7 @@ def test_tracks_noted_from_shared_windows_are_those_noted_from_the_stores(sessio
             gathered_shown += len(expected)
     finally:
         DeviceTrack.update_window, DeviceTrack.update = real, real_update
-    assert gathered_shown > 100
+    assert gathered_shown > 100 and unmade > 100
     # most frames were noted from the windows; a frame holding an event (every 20 samples of
     # the fast devices) or a block computed alone (the noisy ones) from the store
     for name in ("fast1", "slow2", "noise0"):

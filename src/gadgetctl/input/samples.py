@@ -702,7 +702,19 @@ class SampleStore:
 
     def latest(self, kind: DeviceKind) -> Sample | None:
         """The newest sample ever received (it stays when a frame brings nothing new)."""
-        if self._shared is not None:
+        shared = self._shared
+        if shared is not None and shared.serial != self._synced:
+            slot = self._slot
+            if shared.fresh[slot]:  # read without making the frame
+                timestamps, items = shared.arrays[slot]
+                for found, values in items:
+                    if found is kind:  # the last of its window
+                        last = int(shared.stops[slot]) - 1
+                        return Sample(float(timestamps[last]), values[last])
+                # a kind the window has not: its newest is as it was (the frame would latch it)
+                channel = self._channel(kind)
+                frame = channel.frame
+                return frame.newest if frame.count else channel.latest
             self.sync()
         channel = self._channel(kind)
         # the current frame's newest is made when asked, not kept (a sample and a view of its

@@ -815,6 +815,7 @@ _Cut = tuple[np.ndarray, tuple[tuple[DeviceKind, np.ndarray], ...], Sequence[tup
 
 
 _SIGNALS = _SharedSignals()
+_COMPUTE = WaveformDevice.compute
 
 
 class _FrameGroup:
@@ -972,8 +973,8 @@ class _FrameGroup:
         wanted: dict[tuple, list[int]] = {}
         for slot in slots:
             device = devices[slot]
-            if "compute" in device.__dict__:  # its blocks are what its own compute() makes
-                continue
+            if getattr(device.compute, "__func__", None) is not _COMPUTE:
+                continue  # its blocks are what its own compute() makes (one set on it)
             store = device.store
             store.sync()  # its pending window is taken before its arrays change
             if store._waiting:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Mapping, Sequence
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -69,17 +69,25 @@ class SharedGroup:
             self.slots = windows.every  # all of them: read with slices
 
 
+class Noted(Protocol):
+    """What holds a device's frame made when read (a monitor's track of the device)."""
+
+    @property
+    def frames(self) -> Mapping[DeviceKind, FrameSamples]: ...
+
+
 class GatheredFrames(Mapping[str, Mapping[DeviceKind, FrameSamples]]):
     """A frame's samples by device name (:attr:`MonitorSession.gathered`): those gathered per
-    device, and those of the devices whose frame is a window of their group's shared arrays,
-    made per device only when asked. ``groups``: the latter, for a consumer that reads the
-    shared arrays of every device at once (a slot is in this frame when ``fresh``)."""
+    device (``own``: their frames, or what holds a frame made when read), and those of the
+    devices whose frame is a window of their group's shared arrays, made per device only
+    when asked. ``groups``: the latter, for a consumer that reads the shared arrays of every
+    device at once (a slot is in this frame when ``fresh``)."""
 
     __slots__ = ("_own", "_shared", "groups")
 
     def __init__(
         self,
-        own: dict[str, Mapping[DeviceKind, FrameSamples]],
+        own: dict[str, Mapping[DeviceKind, FrameSamples] | Noted],
         shared: Mapping[str, tuple[SharedWindows, int, Input]] = NOTHING,
         groups: Sequence[SharedGroup] = (),
     ) -> None:
@@ -90,7 +98,7 @@ class GatheredFrames(Mapping[str, Mapping[DeviceKind, FrameSamples]]):
     def __getitem__(self, name: str) -> Mapping[DeviceKind, FrameSamples]:
         frames = self._own.get(name)
         if frames is not None:
-            return frames
+            return frames if isinstance(frames, Mapping) else frames.frames
         entry = self._shared.get(name)
         if entry is not None and entry[0].fresh[entry[1]]:
             return entry[2].store.current

@@ -46,6 +46,7 @@ from gadgetctl.monitor.gather import (
     PLACE,
     GatheredFrames,
     GatherPlan,
+    Noted,
     SharedGroup,
 )
 from gadgetctl.monitor.poses import MATRIX, pose_values
@@ -553,7 +554,7 @@ class MonitorSession:
         self.frame_timestamp = moment
         if manager.arrangement is not arrangement or not self._watch:
             self._watch = self._names_with_targets()
-        gathered: dict[str, Mapping[DeviceKind, FrameSamples]] = {}
+        gathered: dict[str, Mapping[DeviceKind, FrameSamples] | Noted] = {}
         if self.statistics or self._sinks:
             samples = self._gather_every(self._gather_plan(), gathered)
             self._gathered = GatheredFrames(gathered)
@@ -609,7 +610,7 @@ class MonitorSession:
         return samples
 
     def _gather_every(
-        self, plan: GatherPlan, gathered: dict[str, Mapping[DeviceKind, FrameSamples]]
+        self, plan: GatherPlan, gathered: dict[str, Mapping[DeviceKind, FrameSamples] | Noted]
     ) -> int:
         """:meth:`_gather` of every watched device, in order: a device whose frame is a
         window of its group's shared arrays (or empty) is noted from the arrays
@@ -640,6 +641,11 @@ class MonitorSession:
                     count = track.update_window(
                         timestamps, items, starts[slot], stops[slot], moment
                     )
+                    if count:  # (its frame made when read)
+                        samples += count
+                        track.frame_seen = frame
+                        gathered[name] = track
+                        continue
                 elif emptied[slot]:
                     count = track.update_window(_NO_STAMPS, (), 0, 0, moment)
                 else:  # swapped on its own this frame

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Iterable, Mapping
+from types import MappingProxyType
 
 import numpy as np
 
@@ -22,6 +23,8 @@ from gadgetctl.monitor.views import UnitView
 _NO_HISTORY: tuple[()] = ()
 
 _ANALOG, _DIGITAL = DeviceKind.ANALOG, DeviceKind.DIGITAL
+#: A track's frames are its store's current frame, made when read (:attr:`DeviceTrack.frames`).
+_FROM_STORE: Mapping[DeviceKind, FrameSamples] = MappingProxyType({})
 
 STATS_REFRESH = 0.25  # seconds between recomputations of interval percentiles and jitter
 
@@ -33,6 +36,7 @@ class DeviceTrack:
     __slots__ = (
         "_dropped_seen",
         "_faults_seen",
+        "_frames",
         "_items_seen",
         "_snapshot",
         "_snapshot_at",
@@ -43,7 +47,6 @@ class DeviceTrack:
         "device",
         "digital_state",
         "frame_seen",
-        "frames",
         "history_length",
         "name",
         "presses",
@@ -58,7 +61,7 @@ class DeviceTrack:
         self.statistics = statistics
         self.stats = DeviceStats(name)
         self.history_length = history
-        self.frames: Mapping[DeviceKind, FrameSamples] = NO_CURRENT  # (shared, read-only)
+        self._frames: Mapping[DeviceKind, FrameSamples] = NO_CURRENT  # (shared, read-only)
         self.count = 0
         self.frame_seen = -1  # the manager frame whose samples ``frames`` holds
         self.units: dict[str, int] = {}
@@ -96,7 +99,7 @@ class DeviceTrack:
         fresh = swapped_at != self._swapped_at  # a failed update_data leaves the old frame
         self._swapped_at = swapped_at
         # the kinds with samples this frame, as the swap found them (a read-only mapping)
-        self.frames = frames = store.current if fresh else NO_CURRENT
+        self._frames = frames = store.current if fresh else NO_CURRENT
         if not self.statistics:  # gathering only (serve): no rates, presses or histories
             if not frames:
                 self.count = 0
@@ -110,7 +113,8 @@ class DeviceTrack:
             for kind, samples in frames.items()
             if (newest := samples.newest) is not None
         ]
-        return self._note(frames, frame_timestamps(frames) if frames else (), units)
+        stamps = frame_timestamps(frames) if frames else ()
+        return self._note(frames.get(_DIGITAL), stamps, units)
 
     def update_window(
         self,
@@ -125,33 +129,50 @@ class DeviceTrack:
         ``stop - 1`` of ``timestamps`` and of each kind's values ``items``, swapped at
         ``moment`` (``stop == start``: a frame with nothing new). Its sampling instants are
         that window of ``timestamps`` and its units the arrays' second dimension, read without
-        making the store's frame."""
+        making the store's frame (:attr:`frames` is made when read, but for buttons)."""
         self._swapped_at = moment
-        if stop == start:
-            self.frames = NO_CURRENT
+        if stop == start or not items:  # (no kinds: no sampling instants either)
+            self._frames = NO_CURRENT if stop == start else self.device.store.current
             if not self.statistics:
                 self.count = 0
                 return 0
-            return self._note(NO_CURRENT, (), ())
-        self.frames = frames = self.device.store.current
+            return self._note(None, (), ())
+        self._frames = _FROM_STORE
         if not self.statistics:
             self.count = stop - start
             return self.count
+        digital = None
+        for kind, _ in items:
+            if kind is _DIGITAL:  # (presses are counted over every sample of the frame)
+                digital = self.device.store.current.get(_DIGITAL)
         if items is self._items_seen:  # (their units are noted already)
-            return self._note(frames, timestamps[start:stop], ())
+            return self._note(digital, timestamps[start:stop], ())
         self._items_seen = items
         return self._note(
-            frames, timestamps[start:stop], [(kind, values.shape[1]) for kind, values in items]
+            digital, timestamps[start:stop], [(kind, values.shape[1]) for kind, values in items]
         )
+
+    @property
+    def frames(self) -> Mapping[DeviceKind, FrameSamples]:
+        """The samples of each kind that had any in the frame noted last (read-only, shared);
+        read within that frame (before the manager's next update), as every consumer of a
+        frame reads it: a frame noted from shared windows is its store's frame, made when
+        first read."""
+        frames = self._frames
+        return self.device.store.current if frames is _FROM_STORE else frames
+
+    @frames.setter
+    def frames(self, frames: Mapping[DeviceKind, FrameSamples]) -> None:
+        self._frames = frames
 
     def _note(
         self,
-        frames: Mapping[DeviceKind, FrameSamples],
+        digital: FrameSamples | None,
         stamps: np.ndarray | tuple[()],
         units: Iterable[tuple[DeviceKind, int]],
     ) -> int:
-        """Statistics, presses and histories of a frame: ``frames``, its sampling instants
-        ``stamps`` and the units of each kind with samples."""
+        """Statistics, presses and histories of a frame: its button samples (``digital``),
+        its sampling instants ``stamps`` and the units of each kind with samples."""
         device = self.device
         dropped = self._dropped_now()
         count = len(stamps)
@@ -166,7 +187,6 @@ class DeviceTrack:
         if faults != self._faults_seen:
             self.stats.add_fault(max(0, faults - self._faults_seen))
             self._faults_seen = faults
-        digital = frames.get(_DIGITAL)
         if digital is not None:
             self._scan_digital(digital)
         elif self.changed is not None and self.changed.any():
