@@ -65,6 +65,26 @@ def test_a_track_shares_empties_until_it_has_samples(device):
     assert len(track.frames) == 0
 
 
+def test_tracks_that_saw_the_same_units_share_one_read_only_mapping(device):
+    one, two = DeviceTrack("W", device, history=8), DeviceTrack("W", device, history=8)
+    assert dict(one.units) == {} and one.units is two.units
+    device.store.add_batch(DeviceKind.POSITION, [1.0], [[[[1.0] * 4] * 4]])
+    device.store.swap()
+    one.update()
+    two.update()
+    device.store.add(DeviceKind.ANALOG, 2.0, (0.25, 0.5))
+    device.store.swap()
+    one.update()
+    assert dict(one.units) == {"position": 1, "analog": 2}  # in the order the kinds came
+    assert dict(two.units) == {"position": 1}
+    two.update()  # the same frame: the same units, the same mapping
+    assert two.units is one.units and isinstance(one.units, MappingProxyType)
+    device.store.add(DeviceKind.ANALOG, 4.0, (0.25,))  # fewer units: the most are kept
+    device.store.swap()
+    one.update()
+    assert one.units is two.units
+
+
 def test_statistics_make_their_ring_at_the_first_timestamps_they_consolidate():
     """Issue 27 goal 3: no ring per device before its statistics are read (10,000 devices'
     rings of 16 were 2 MB held through a run whose statistics are read at its end), then
