@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import json
 import multiprocessing
 import os
@@ -921,29 +922,23 @@ def main() -> None:
         if args.part in ("ingest", "all"):
             print("VRPN_drv ingest from gadgetctl serve")
             ingest(report, args.seconds, Path(tmp))
+        the_fanout = functools.partial(
+            fanout,
+            report,
+            args.seconds,
+            Path(tmp),
+            args.devices,
+            args.clients,
+            not args.walking_clients,
+        )
         if args.part in ("fanout", "all"):
             print("serve fan-out")
-            fanout(
-                report,
-                args.seconds,
-                Path(tmp),
-                args.devices,
-                args.clients,
-                not args.walking_clients,
-            )
+            the_fanout()
         if args.part in ("fanout-busy", "all"):
             with other_cores_busy() as spinning:
                 condition = "the other core busy" if spinning == 1 else f"{spinning} cores busy"
                 print(f"serve fan-out, {condition} (a process spinning on it)")
-                fanout(
-                    report,
-                    args.seconds,
-                    Path(tmp),
-                    args.devices,
-                    args.clients,
-                    not args.walking_clients,
-                    condition=condition,
-                )
+                the_fanout(condition=condition)
         if args.part == "flood":
             print("serve fan-out, without and with a client flooding pings")
             flooded(report, args.seconds, Path(tmp), args.devices, args.clients)

@@ -448,6 +448,17 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
         if group is not None and group.devices is devices:
             group.prepare()
 
+    def _next_block_size(self, backlog: int) -> int:
+        """Samples of the block that follows the current one (or the first), made when
+        ``backlog`` samples are due already: a shorter first block spreads the devices'
+        block computations out, and a backlog (the first frame after a long start-up, a
+        stalled frame loop) goes in one block with it, up to the store's cap (a block per
+        half second of it cost 10,000 devices 1.5 s of start-up each second it lasted)."""
+        size = max(1, math.ceil(self.rate * BLOCK_SECONDS))
+        if self._block is None:
+            size = max(1, size - zlib.crc32(self.name.encode()) % size)
+        return size + min(backlog, self.store.cap)
+
     def _compute_ahead(self) -> None:
         """The block after the current one, starting some samples before its end (the caller
         holds the publishing lock)."""
@@ -509,15 +520,7 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
                 self._ahead, self._ahead_tried = None, False
             if block is None or not block.start <= self.next_index < block.end:
                 self._ahead, self._ahead_tried = None, False
-                size = max(1, math.ceil(self.rate * BLOCK_SECONDS))
-                if (
-                    block is None
-                ):  # a shorter first block spreads the devices' block computations out
-                    size = max(1, size - zlib.crc32(self.name.encode()) % size)
-                # a backlog (the first frame after a long start-up, a stalled frame loop) in
-                # one block with it, up to the store's cap: a block per half second of it
-                # cost 10,000 devices 1.5 s of start-up each second it lasted
-                size += min(end - self.next_index, self.store.cap)
+                size = self._next_block_size(end - self.next_index)
                 block = self._block = self.compute(self.next_index, size)
             stop = min(end, block.end)
             self.publish(block, self.next_index - block.start, stop - block.start)
@@ -980,10 +983,7 @@ class _FrameGroup:
             if store._waiting:
                 continue
             start = nexts[slot]
-            size = max(1, math.ceil(device.rate * BLOCK_SECONDS))
-            if device._block is None:  # (as _publish_due spreads the first blocks)
-                size = max(1, size - zlib.crc32(device.name.encode()) % size)
-            size += int(ends[slot]) - start
+            size = device._next_block_size(int(ends[slot]) - start)  # (within the cap)
             found = wanted.get((keys[slot], start, size))
             if found is None:
                 wanted[(keys[slot], start, size)] = [slot]
