@@ -13,6 +13,10 @@ def run() -> None:
     from gadgetctl.cli import exiting
 
     exiting.own_process = True
+    # numpy's OpenBLAS starts a worker thread per core at import, which spins while the
+    # import goes on (0.06 s of CPU a command); gadgetctl's matrices are 4x4 and never need
+    # them. A user's own setting stands.
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     main()
 
 
