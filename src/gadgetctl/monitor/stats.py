@@ -344,7 +344,7 @@ class DeviceStats:
 
 def snapshots(devices: Sequence[DeviceStats], now: float | None = None) -> list[DeviceSnapshot]:
     """``[stats.snapshot(now) for stats in devices]``, computed together."""
-    return [DeviceSnapshot(**row) for row in snapshot_rows(devices, now)]
+    return [DeviceSnapshot(*values) for values in _snapshot_values(devices, now)]
 
 
 def snapshot_rows(
@@ -354,6 +354,15 @@ def snapshot_rows(
     :func:`~gadgetctl.monitor.batchstats.figures` (numpy over all their timestamps, not a
     dozen numpy calls for each device: 10,000 devices' final statistics were mostly those
     calls). Nothing is consolidated: reading changes nothing."""
+    return [
+        dict(zip(_SNAPSHOT_FIELDS, values, strict=True))
+        for values in _snapshot_values(devices, now)
+    ]
+
+
+def _snapshot_values(devices: Sequence[DeviceStats], now: float | None) -> list[tuple]:
+    """The fields of each device's :class:`DeviceSnapshot`, in their order (snapshots are
+    made of them without a dict and keywords for each)."""
     if not devices:
         return []
     pieces: list[np.ndarray] = []
@@ -376,7 +385,7 @@ def snapshot_rows(
         np.array([s.window for s in devices], dtype=np.float64),
         now,
     )
-    rows: list[dict[str, object]] = []
+    rows: list[tuple] = []
     for stats, gap, fresh, known, middle, high, spread, rated, newer in zip(
         devices,
         gaps,
@@ -392,27 +401,26 @@ def snapshot_rows(
         if fresh and (gap is None or newer > gap):
             gap = newer
         newest_timestamp = stats.newest_timestamp
-        # (DeviceSnapshot's fields, in order: a test holds them to it)
-        rows.append(
-            {
-                "name": stats.name,
-                "count": stats.count,
-                "first_timestamp": stats.first_timestamp,
-                "newest_timestamp": newest_timestamp,
-                "mean_rate": stats.mean_rate,
-                "window_rate": rated,
-                "p50_interval": middle if known else None,
-                "p99_interval": high if known else None,
-                "max_gap": gap,
-                "jitter": spread if known else None,
-                "dropped": stats.dropped,
-                "faults": stats.faults,
-                "age": None if now is None or newest_timestamp is None else now - newest_timestamp,
-                "frames": stats.frames,
-                "samples_per_frame": stats.samples_per_frame,
-                "mean_samples_per_frame": stats.mean_samples_per_frame,
-                "window_samples_per_frame": stats.window_samples_per_frame(now),
-            }
+        rows.append(  # DeviceSnapshot's fields, in order
+            (
+                stats.name,
+                stats.count,
+                stats.first_timestamp,
+                newest_timestamp,
+                stats.mean_rate,
+                rated,  # window_rate
+                middle if known else None,  # p50_interval
+                high if known else None,  # p99_interval
+                gap,  # max_gap
+                spread if known else None,  # jitter
+                stats.dropped,
+                stats.faults,
+                None if now is None or newest_timestamp is None else now - newest_timestamp,  # age
+                stats.frames,
+                stats.samples_per_frame,
+                stats.mean_samples_per_frame,
+                stats.window_samples_per_frame(now),
+            )
         )
     return rows
 
