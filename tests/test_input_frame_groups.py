@@ -114,6 +114,14 @@ def test_a_group_frame_gives_each_device_exactly_its_own_samples(make, ahead, po
 
     def check() -> None:  # cheap, so that two frames can follow at once
         nonlocal shared_frames, switches, empties
+        # the counts readers of every slot go by (serve's feed, the session's gathering)
+        # are those of the slots' marks: fresh, emptied (never both), the fresh samples
+        windows = devices[0].store.shared[0]
+        fresh, emptied = windows.fresh, windows.emptied
+        assert not (fresh & emptied).any()
+        assert windows.fresh_slots == np.count_nonzero(fresh)
+        assert windows.emptied_slots == np.count_nonzero(emptied)
+        assert windows.fresh_samples == int((windows.stops - windows.starts)[fresh].sum())
         for device in devices:
             store = device.store
             place = store.shared

@@ -241,9 +241,12 @@ class SharedWindows:
         #: Incremented whenever some slot's upcoming arrays are set (a reader that saw this
         #: number has seen every slot's).
         self.upcoming_serial = 0
-        #: Of the last :meth:`publish`: how many slots are fresh, and their samples in all.
+        #: Of the last :meth:`publish`: how many slots are fresh, and their samples in all, and
+        #: how many were emptied (a reader of every slot knows from these numbers, without
+        #: numpy, whether some slot's frame is in its store this time).
         self.fresh_slots = 0
         self.fresh_samples = 0
+        self.emptied_slots = 0
         self.stores = tuple(stores)
         #: Every slot in order: a reader that passes this very array for its slots means all
         #: of them (``select`` turns it into a slice, no gathering copy).
@@ -267,18 +270,26 @@ class SharedWindows:
         self.moment = moment
         fresh = self.fresh
         slots = self.select(slots)
-        fresh[:] = False
-        fresh[slots] = True
+        if type(slots) is slice:
+            fresh[:] = True
+            self.fresh_slots = len(fresh)
+        else:
+            fresh[:] = False
+            fresh[slots] = True
+            self.fresh_slots = len(slots)
         self.emptied[:] = False
         if empty is not None:
             self.emptied[empty] = True
+            self.emptied_slots = len(empty)
+        else:
+            self.emptied_slots = 0
         self.starts[slots] = starts
         self.stops[slots] = stops
         self.window_serial[slots] = self.serial
         sizes = stops - starts
         self.delivered[slots] += sizes
-        self.fresh_slots = len(fresh) if type(slots) is slice else len(slots)
-        self.fresh_samples = int(sizes.sum())
+        # (a ufunc's reduce: ndarray.sum() goes through a Python function of numpy's)
+        self.fresh_samples = int(np.add.reduce(sizes))
 
     def publish_few(
         self, moment: float, windows: Sequence[tuple[int, int, int]], empty: Sequence[int] = ()
@@ -306,6 +317,7 @@ class SharedWindows:
             samples += stop - start
         self.fresh_slots = len(windows)
         self.fresh_samples = samples
+        self.emptied_slots = len(empty)
 
     def select(self, slots: np.ndarray) -> np.ndarray | slice:
         """``slots`` as an index of the per-slot arrays: a slice when it is :attr:`every`."""

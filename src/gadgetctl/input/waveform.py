@@ -427,6 +427,7 @@ class WaveformDevice(Analog, Digital, Position, Hat, Command, String):
             if group.frame == frame:
                 return  # its group updated it this frame
             group.alone[self._slot] = frame  # the group leaves it alone this frame
+            group.alone_frame = frame
         super().update_for_frame(frame)
 
     @property
@@ -852,6 +853,7 @@ class _FrameGroup:
             self.usual = np.zeros(count, dtype=bool)  # the usual frame may be taken
             self.running = np.zeros(count, dtype=bool)
             self.alone = np.full(count, -1, dtype=np.int64)  # frame a device was updated alone
+            self.alone_frame = -1  # the latest of them
             # what the values of a device configured alike with others depend on (None: values
             # of its own): its blocks are renewed together with theirs (:meth:`_renew`)
             alike: dict[tuple, tuple] = {}  # one key for devices alike (a copy each: MBs)
@@ -903,22 +905,29 @@ class _FrameGroup:
             moment = now()
             if len(devices) <= FEW_SLOTS and self._usual_small(frame, moment):
                 return
-            ends = ((moment - self.t0) * self.rate).astype(
-                np.int64
-            ) + 1  # samples whose time has come
+            # (bool arrays are counted with count_nonzero and indexed with nonzero(): all(),
+            # any() and flatnonzero() are Python functions of numpy's, a few times the cost)
+            ends = ((moment - self.t0) * self.rate).astype(np.int64)
+            ends += 1  # samples whose time has come
             nexts = self.next
-            ready = self.usual & self.running & (self.alone != frame) & (ends - nexts <= self.cap)
+            count = len(devices)
+            ready = self.usual & self.running
+            ready &= ends - nexts <= self.cap
+            if self.alone_frame == frame:  # some device was updated alone this frame
+                ready &= self.alone != frame
             empty = ready & (ends <= nexts)  # nothing came due: an empty frame
-            ready &= ~empty
-            usual = ready & (self.first <= nexts) & (ends <= self.last)
-            if not (usual | empty).all():
+            ready ^= empty  # (empty is part of ready)
+            usual = ready & (self.first <= nexts)
+            usual &= ends <= self.last
+            emptied = np.count_nonzero(empty)  # (usual and empty never share a slot)
+            if np.count_nonzero(usual) + emptied != count:
                 switch = ready & ~usual & (self.ahead_first <= nexts) & (ends <= self.ahead_last)
-                if switch.any():
-                    for slot in np.flatnonzero(switch).tolist():
+                if np.count_nonzero(switch):
+                    for slot in switch.nonzero()[0].tolist():
                         devices[slot]._take_ahead()
                     usual |= switch
             usual &= ends <= self.event_next  # a window with an event: the device's own frame
-            if not (usual | empty).all():
+            if np.count_nonzero(usual) + emptied != count:
                 # a block ran out (or there is none yet) of devices whose values are shared:
                 # their next blocks computed together, from the samples now due
                 renew = (
@@ -929,12 +938,11 @@ class _FrameGroup:
                     & (nexts < ends)
                     & (ends - nexts <= self.cap)
                 )
-                if renew.any():  # (a window with an event is still the device's own frame)
-                    usual |= self._renew(np.flatnonzero(renew).tolist(), ends) & (
+                if np.count_nonzero(renew):  # (a window with an event is still its own frame)
+                    usual |= self._renew(renew.nonzero()[0].tolist(), ends) & (
                         ends <= self.event_next
                     )
-            if not (usual | empty).all():
-                for slot in np.flatnonzero(~(usual | empty)).tolist():
+                for slot in (~(usual | empty)).nonzero()[0].tolist():
                     device = devices[slot]
                     if device._updated_frame == frame:
                         continue
@@ -945,17 +953,17 @@ class _FrameGroup:
                         device.frame_fault(err)
                     self.mirror(slot)
             windows = self.windows
-            if usual.all():  # the usual frame of every device
+            if np.count_nonzero(usual) == count:  # the usual frame of every device
                 slots, taken = windows.every, slice(None)
             else:
-                slots = taken = np.flatnonzero(usual)
+                slots = taken = usual.nonzero()[0]
             first = self.first[taken]
             windows.publish(
                 moment,
                 slots,
                 nexts[taken] - first,
                 ends[taken] - first,
-                np.flatnonzero(empty) if empty.any() else None,
+                empty.nonzero()[0] if emptied else None,
             )
             nexts[taken] = ends[taken]
             self.moment = moment

@@ -563,16 +563,19 @@ class MonitorSession:
             samples = self._gather(plan.own, gathered) if plan.own else 0
             for group in plan.groups:
                 windows = group.windows
-                if group.slots is windows.every and windows.fresh_slots == len(windows.every):
-                    samples += windows.fresh_samples  # every slot's window, as published
-                    continue
-                slots = windows.select(group.slots)
-                fresh = windows.fresh[slots]
-                sizes = windows.stops[slots] - windows.starts[slots]
-                if fresh.all():
-                    samples += int(sizes.sum())
-                    continue
-                samples += int(sizes[fresh].sum())
+                if group.slots is windows.every:  # every slot's window, as published
+                    samples += windows.fresh_samples
+                    if windows.fresh_slots + windows.emptied_slots == len(windows.every):
+                        continue  # (every other slot empty: none swapped on its own)
+                    slots, fresh = windows.select(group.slots), windows.fresh
+                else:
+                    slots = windows.select(group.slots)
+                    fresh = windows.fresh[slots]
+                    sizes = windows.stops[slots] - windows.starts[slots]
+                    if fresh.all():
+                        samples += int(sizes.sum())
+                        continue
+                    samples += int(sizes[fresh].sum())
                 alone = ~(fresh | windows.emptied[slots])  # neither a window nor empty
                 if alone.any():
                     self._gather([group.names[i] for i in np.flatnonzero(alone).tolist()], gathered)

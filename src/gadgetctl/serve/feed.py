@@ -134,6 +134,9 @@ class _GroupPlan:
         self.senders = np.array([entry.vrpn_name for entry in self.entries], dtype=object)
         self.generation = np.full(len(picked), -1, dtype=np.int64)
         self.poses_only = np.zeros(len(picked), dtype=bool)
+        self.all_poses = False  # every slot's arrays hold position data only
+        #: The group's every slot, in order (its windows' counts then say which are fresh).
+        self.whole = self.slots is group.windows.every
         self.slot_list: list[int] = self.slots.tolist()
 
     def all_bulk(self, windows: Any) -> bool:
@@ -152,6 +155,7 @@ class _GroupPlan:
             arrays = windows.arrays[slot]
             self.poses_only[index] = arrays is not None and served_positions(arrays[1]) is not None
             self.generation[index] = windows.generation[slot]
+        self.all_poses = np.count_nonzero(self.poses_only) == len(self.poses_only)
 
 
 class ServeFeed:
@@ -250,18 +254,25 @@ class ServeFeed:
             self.outlet.tracker_shared(windows, slots, plan.senders, self.offset)
             return
         taken = windows.select(slots)
-        fresh = windows.fresh[taken]
         stale = plan.generation != windows.generation[taken]
-        if stale.any():
-            plan.recheck(windows, np.flatnonzero(stale))
-        bulk = fresh & plan.poses_only
-        if bulk.all():
+        if np.count_nonzero(stale):
+            plan.recheck(windows, stale.nonzero()[0])
+        # (bool arrays counted with count_nonzero: all() and any() cost a few times more)
+        whole = plan.whole and plan.all_poses  # the windows' counts tell every slot's frame
+        if whole and windows.fresh_slots == len(slots):
             self.outlet.tracker_shared(windows, slots, plan.senders, self.offset)
             return
-        if bulk.any():
+        bulk = windows.fresh[taken] & plan.poses_only
+        served = np.count_nonzero(bulk)
+        if served == len(slots):
+            self.outlet.tracker_shared(windows, slots, plan.senders, self.offset)
+            return
+        if served:
             self.outlet.tracker_shared(windows, slots[bulk], plan.senders[bulk], self.offset)
+        if whole and windows.fresh_slots + windows.emptied_slots == len(slots):
+            return  # the others' frames are empty
         alone = ~(bulk | windows.emptied[taken])  # empty frames have nothing to serve
-        for index in np.flatnonzero(alone).tolist():
+        for index in alone.nonzero()[0].tolist():
             entry = plan.entries[index]
             frames = gathered.get(entry.element)
             if frames:

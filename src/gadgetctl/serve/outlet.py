@@ -55,6 +55,11 @@ class _SharedStretches:
         self.first = np.zeros(slots, dtype=np.int64)
         self.last = np.zeros(slots, dtype=np.int64)
         self.sensors = np.ones(slots, dtype=np.int64)
+        #: Per slot, where sample 0 of its arrays would begin in :attr:`records` (its row's
+        #: start less ``first * sensors``): a window's first message is ``origin + start *
+        #: sensors``. Set with ``row``, ``first`` and ``sensors`` (:meth:`place`).
+        self.origin = self.row * FRAME_AHEAD
+        self.narrow = True  # every slot's rows hold one sensor
         self.offset = 0.0
         self.names: list[str | None] = [None] * slots  # the sender each slot is served as
         self.upcoming_seen = np.zeros(slots, dtype=np.int64)
@@ -62,6 +67,12 @@ class _SharedStretches:
         self.spare_for: list[object | None] = [None] * slots
         self.spare = np.zeros((slots, 3), dtype=np.int64)  # first, last, sensors
         self.spare_offset = np.zeros(slots)
+
+    def place(self, slot: int, first: int, last: int, sensors: int) -> None:
+        """Slot ``slot``'s row (``row[slot]``) holds samples ``first`` .. ``last - 1`` of its
+        arrays, ``sensors`` messages each."""
+        self.first[slot], self.last[slot], self.sensors[slot] = first, last, sensors
+        self.origin[slot] = int(self.row[slot]) * FRAME_AHEAD - first * sensors
 
 
 class _SharedRotations:
@@ -221,35 +232,38 @@ class VrpnOutlet:
         taken = windows.select(slots)  # a slice when they are all the slots
         starts = windows.starts[taken]
         stops = windows.stops[taken]
-        stale = (
-            (state.generation[taken] != windows.generation[taken])
-            | (starts < state.first[taken])
-            | (stops > state.last[taken])
-        )
+        stale = state.generation[taken] != windows.generation[taken]
+        stale |= starts < state.first[taken]
+        stale |= stops > state.last[taken]
         if state.offset != offset:
             stale[:] = True
             state.offset = offset
-        if stale.any():
+        # (bool arrays counted with count_nonzero: all() and any() cost a few times more)
+        if np.count_nonzero(stale):
             keep = np.ones(len(slots), dtype=bool)
-            for index in np.flatnonzero(stale).tolist():
+            for index in stale.nonzero()[0].tolist():
                 slot, start, stop = int(slots[index]), int(starts[index]), int(stops[index])
                 state.names[slot] = senders[index]
                 if not self._take_spare(state, slot, start, stop):
                     keep[index] = self._frame_row(state, slot, start, stop)
-            if not keep.all():
+            state.narrow = not np.count_nonzero(state.sensors != 1)
+            if np.count_nonzero(keep) != len(keep):
                 slots, starts, stops = slots[keep], starts[keep], stops[keep]
                 taken = slots
                 if not len(slots):
                     return
-        sensors = state.sensors[taken]
-        begins = state.row[taken] * FRAME_AHEAD + (starts - state.first[taken]) * sensors
-        counts = (stops - starts) * sensors
-        size = int(counts[0])
-        if (counts == size).all():
-            picks = (begins[:, None] + np.arange(size)).ravel()
+        if state.narrow:
+            begins = state.origin[taken] + starts
+            counts = stops - starts
+        else:
+            sensors = state.sensors[taken]
+            begins = state.origin[taken] + starts * sensors
+            counts = (stops - starts) * sensors
+        if np.count_nonzero(counts == 1) == len(counts):  # a message each: the usual frame
+            picks = begins
         else:
             picks = np.repeat(begins - (np.cumsum(counts) - counts), counts) + np.arange(
-                int(counts.sum())
+                int(np.add.reduce(counts))
             )
         self._pieces.append(state.records[picks].tobytes())
         self.messages += len(picks)
@@ -291,7 +305,7 @@ class VrpnOutlet:
         ):
             return False
         state.row[slot] ^= 1
-        state.first[slot], state.last[slot], state.sensors[slot] = first, last, sensors
+        state.place(slot, first, last, sensors)
         state.generation[slot] = windows.generation[slot]
         state.spare_for[slot] = None
         return True
@@ -347,7 +361,7 @@ class VrpnOutlet:
             state, int(state.row[slot]), name, times, matrices, start
         )
         state.generation[slot] = windows.generation[slot]
-        state.first[slot], state.last[slot], state.sensors[slot] = first, last, sensors
+        state.place(slot, first, last, sensors)
         return True
 
     def _frame_into(
