@@ -11,8 +11,10 @@ from vrpn_peers import Broadcasts
 
 from gadgetctl.serve.framing import (
     CHANGE_SIZE,
+    POSE_MESSAGE,
     POSE_SIZE,
     analog_size,
+    fill_poses,
     pack_analogs,
     pack_button_changes,
     pack_poses,
@@ -44,6 +46,25 @@ def test_poses_match_one_message_per_sensor():
         quats.reshape(-1, 4),
     )
     assert data == expected and len(data) == 15 * POSE_SIZE
+
+
+def test_poses_framed_in_place_into_a_larger_buffer_are_the_same_messages():
+    """fill_poses (what serve's outlet frames a row with, in place) writes pack_poses'
+    messages into a view of a larger buffer, and leaves the rest of it alone; one sensor
+    number for every row is the same as an array of it."""
+    rng = np.random.default_rng(5)
+    t = times(6)
+    positions, quats = rng.normal(size=(6, 3)), rng.normal(size=(6, 4))
+    expected = b"".join(
+        pack_message(7, 2, codecs.encode_pose(0, tuple(positions[i]), tuple(quats[i])), t[i])
+        for i in range(6)
+    )
+    assert pack_poses(2, 7, t, 0, positions, quats) == expected
+    memory = bytearray(b"\xab" * 10 * POSE_SIZE)
+    buffer = np.frombuffer(memory, dtype=np.dtype((np.void, POSE_SIZE)))
+    fill_poses(buffer[3:9].view(POSE_MESSAGE), 2, 7, t, 0, positions, quats)
+    assert bytes(memory[3 * POSE_SIZE : 9 * POSE_SIZE]) == expected
+    assert memory[: 3 * POSE_SIZE] + memory[9 * POSE_SIZE :] == b"\xab" * 4 * POSE_SIZE
 
 
 def test_analogs_and_button_changes_match():

@@ -69,15 +69,29 @@ def pack_poses(
     senders: np.ndarray | int,
     type_id: int,
     times: np.ndarray,
-    sensors: np.ndarray,
+    sensors: np.ndarray | int,
     positions: np.ndarray,
     quats: np.ndarray,
 ) -> bytes:
     """``vrpn_Tracker Pos_Quat`` messages, one per row: ``senders`` (m,) or one id, ``times``
-    (m,), ``sensors`` (m,), ``positions`` (m, 3), ``quats`` (m, 4) as x, y, z, w."""
-    positions = np.asarray(positions, dtype=np.float64)
-    count = len(positions)
-    records = np.empty(count, dtype=_POSE)
+    (m,), ``sensors`` (m,) or one number, ``positions`` (m, 3), ``quats`` (m, 4) as x, y, z,
+    w."""
+    records = np.empty(len(positions), dtype=_POSE)
+    fill_poses(records, senders, type_id, times, sensors, positions, quats)
+    return records.tobytes()
+
+
+def fill_poses(
+    records: np.ndarray,
+    senders: np.ndarray | int,
+    type_id: int,
+    times: np.ndarray,
+    sensors: np.ndarray | int,
+    positions: np.ndarray,
+    quats: np.ndarray,
+) -> None:
+    """:func:`pack_poses` into ``records`` (:data:`POSE_MESSAGE` records, one per row; a
+    view of a larger buffer, say), not into a new bytes object."""
     sec, usec = split_times(times)
     records["length"] = HEADER_SIZE + 64
     records["sec"] = sec
@@ -87,9 +101,8 @@ def pack_poses(
     records["sequence"] = 0
     records["sensor"] = sensors
     records["filler"] = sensors
-    records["position"] = positions
+    records["position"] = np.asarray(positions, dtype=np.float64)
     records["quat"] = quats
-    return records.tobytes()
 
 
 def pack_analogs(sender: int, type_id: int, times: np.ndarray, values: np.ndarray) -> bytes:

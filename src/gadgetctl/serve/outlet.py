@@ -14,8 +14,10 @@ from gadgetctl.input.transforms import quaternions_xyzw
 from gadgetctl.serve.catalog import Role, ServedElement, served_positions
 from gadgetctl.serve.framing import (
     CHANGE_SIZE,
+    POSE_MESSAGE,
     POSE_SIZE,
     analog_size,
+    fill_poses,
     pack_analogs,
     pack_button_changes,
     pack_poses,
@@ -372,16 +374,17 @@ class VrpnOutlet:
         sensors = matrices.shape[1]
         last = min(len(matrices), start + FRAME_AHEAD // sensors)
         flat = matrices[start:last].reshape(-1, 4, 4)
-        data = pack_poses(
+        times = np.asarray(times[start:last], dtype=np.float64) + state.offset
+        base = row * FRAME_AHEAD
+        fill_poses(  # framed in place, in the row
+            state.records[base : base + len(flat)].view(POSE_MESSAGE),
             self.senders[name],
             self._pose,
-            np.repeat(np.asarray(times[start:last], dtype=np.float64) + state.offset, sensors),
-            np.tile(np.arange(sensors), last - start),
+            np.repeat(times, sensors) if sensors > 1 else times,
+            np.tile(np.arange(sensors), last - start) if sensors > 1 else 0,
             flat[:, :3, 3],
             self._rotations.quaternions(flat),
         )
-        base = row * FRAME_AHEAD
-        state.records[base : base + len(flat)] = np.frombuffer(data, dtype=_RECORD)
         return start, last, sensors
 
     def _frame_ahead(
