@@ -55,7 +55,12 @@ def split_times(times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _header(
-    records: np.ndarray, payload: int, sec: np.ndarray, usec: np.ndarray, sender: int, type_id: int
+    records: np.ndarray,
+    payload: int,
+    sec: np.ndarray,
+    usec: np.ndarray,
+    sender: np.ndarray | int,
+    type_id: int,
 ) -> None:
     records["length"] = HEADER_SIZE + payload
     records["sec"] = sec
@@ -93,12 +98,7 @@ def fill_poses(
     """:func:`pack_poses` into ``records`` (:data:`POSE_MESSAGE` records, one per row; a
     view of a larger buffer, say), not into a new bytes object."""
     sec, usec = split_times(times)
-    records["length"] = HEADER_SIZE + 64
-    records["sec"] = sec
-    records["usec"] = usec
-    records["sender"] = senders
-    records["type"] = type_id
-    records["sequence"] = 0
+    _header(records, 64, sec, usec, senders, type_id)
     records["sensor"] = sensors
     records["filler"] = sensors
     records["position"] = np.asarray(positions, dtype=np.float64)
