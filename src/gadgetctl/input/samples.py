@@ -319,6 +319,17 @@ class SharedWindows:
         self.fresh_samples = samples
         self.emptied_slots = len(empty)
 
+    @property
+    def all_fresh(self) -> bool:
+        """Whether the last :meth:`publish` gave every slot a window."""
+        return self.fresh_slots == len(self.every)
+
+    @property
+    def none_alone(self) -> bool:
+        """Whether the last :meth:`publish` gave every slot a window or an empty frame (no
+        slot's frame is in its store alone)."""
+        return self.fresh_slots + self.emptied_slots == len(self.every)
+
     def select(self, slots: np.ndarray) -> np.ndarray | slice:
         """``slots`` as an index of the per-slot arrays: a slice when it is :attr:`every`."""
         return slice(None) if slots is self.every else slots

@@ -565,7 +565,7 @@ class MonitorSession:
                 windows = group.windows
                 if group.slots is windows.every:  # every slot's window, as published
                     samples += windows.fresh_samples
-                    if windows.fresh_slots + windows.emptied_slots == len(windows.every):
+                    if windows.none_alone:
                         continue  # (every other slot empty: none swapped on its own)
                     slots, fresh = windows.select(group.slots), windows.fresh
                 else:

@@ -259,7 +259,7 @@ class ServeFeed:
             plan.recheck(windows, stale.nonzero()[0])
         # (bool arrays counted with count_nonzero: all() and any() cost a few times more)
         whole = plan.whole and plan.all_poses  # the windows' counts tell every slot's frame
-        if whole and windows.fresh_slots == len(slots):
+        if whole and windows.all_fresh:
             self.outlet.tracker_shared(windows, slots, plan.senders, self.offset)
             return
         bulk = windows.fresh[taken] & plan.poses_only
@@ -269,7 +269,7 @@ class ServeFeed:
             return
         if served:
             self.outlet.tracker_shared(windows, slots[bulk], plan.senders[bulk], self.offset)
-        if whole and windows.fresh_slots + windows.emptied_slots == len(slots):
+        if whole and windows.none_alone:
             return  # the others' frames are empty
         alone = ~(bulk | windows.emptied[taken])  # empty frames have nothing to serve
         for index in alone.nonzero()[0].tolist():
