@@ -34,6 +34,7 @@ from common import (
     command_time,
     median_time,
     replicate_corpus,
+    timed_call,
 )
 from lxml import etree
 
@@ -63,9 +64,7 @@ for path in sorted(p for p in Path(sys.argv[1]).rglob("*") if p.suffix in (".jde
 
 def cpu_time(fn: Callable[[], object]) -> float:
     """CPU seconds of this process spent in one call of ``fn``."""
-    start = time.process_time()
-    fn()
-    return time.process_time() - start
+    return timed_call(fn, time.process_time)
 
 
 def bare_parse(files: list[Path]) -> None:

@@ -21,10 +21,9 @@ from __future__ import annotations
 
 import random
 import tempfile
-import time
 from pathlib import Path
 
-from common import GADGETCTL, Report, command_cpu
+from common import GADGETCTL, Report, command_cpu, timed_call
 
 from gadgetctl.jccl.configcheck import open_configuration
 from gadgetctl.jccl.graph import build_graph, render_text
@@ -72,9 +71,7 @@ def valued(count: int, per: int = 70) -> str:
 
 
 def timed(fn) -> float:
-    start = time.perf_counter()
-    fn()
-    return time.perf_counter() - start
+    return timed_call(fn)
 
 
 def validate_time(path: Path) -> float:
