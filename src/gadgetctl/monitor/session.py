@@ -8,7 +8,7 @@ frame (``SampleStore.frame``): it feeds the running statistics (rates, intervals
 gaps, dropped samples, faults), counts button presses, keeps a short history of analog values
 for sparklines, and writes sample, frame, status and marker records to its sinks
 (:class:`~gadgetctl.monitor.recording.Recorder` objects: a recording file or an NDJSON
-stream). Renderers (the live and table views of the CLI) ask for a :class:`Snapshot` when
+stream; :mod:`gadgetctl.monitor.sinks` hands the records out). Renderers (the live and table views of the CLI) ask for a :class:`Snapshot` when
 they draw, at their own pace; the session itself never prints.
 
 Nothing here imports rich or typer.
@@ -20,7 +20,6 @@ import fnmatch
 import gc
 import time
 from collections.abc import Callable, Container, Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -56,9 +55,9 @@ from gadgetctl.monitor.records import (
     FrameRecord,
     MarkerRecord,
     SampleRecord,
-    StatusRecord,
     encode_samples,
 )
+from gadgetctl.monitor.sinks import FRAME, MARKER, SAMPLES, Opener, Sinks
 from gadgetctl.monitor.stats import DeviceSnapshot, snapshot_rows, snapshots
 from gadgetctl.monitor.tracks import DeviceTrack
 from gadgetctl.monitor.views import ElementView, Frame, Snapshot, UnitView
@@ -98,14 +97,6 @@ class ReplaySource(Protocol):
 
 
 # --------------------------------------------------------------------------- the session
-
-
-@dataclass(slots=True)
-class _Sink:
-    open: Callable[[Mapping[str, object]], Recorder]
-    per_frame: bool
-    recorder: Recorder | None = None
-    pose: str = MATRIX  # how positions are written (gadgetctl.monitor.poses)
 
 
 #: A run that reaches less than this share of the requested frame rate says so (once),
@@ -226,11 +217,7 @@ class MonitorSession:
         self.finished = False
         self._selected: list[str] = []
         self._tracks: dict[str, DeviceTrack] = {}
-        self._sinks: list[_Sink] = []
-        self._buffer: list[tuple[str, object, int]] = []
-        self._sinks_open = False
-        self._statuses: dict[str, tuple[str, str | None]] = {}
-        self._status_pairs: dict[tuple[str, str | None], tuple[str, str | None]] = {}
+        self._sinks = Sinks()
         self._proxy_stamps: dict[str, float | None] = {}
         self._frame_interval = 1.0 / rate
         self._last_frame_at: float | None = None
@@ -242,7 +229,6 @@ class MonitorSession:
         #: (requested, achieved) frame rate, set once when the frames fall short of the rate.
         self.rate_shortfall: tuple[float, float] | None = None
         self._stop = False
-        self._samples_written = 0
         self._watch: list[str] = []
         self._consumers: list[FrameConsumer] = []
         self._gathered: Mapping[str, Mapping[DeviceKind, FrameSamples]] = NO_GATHERING
@@ -341,7 +327,7 @@ class MonitorSession:
 
     def add_sink(
         self,
-        opener: Callable[[Mapping[str, object]], Recorder],
+        opener: Opener,
         *,
         per_frame: bool = False,
         pose: str = MATRIX,
@@ -352,7 +338,7 @@ class MonitorSession:
         its positions are written (recordings keep matrices, which replay reads)."""
         if not self._sinks:
             self.add_consumer(MonitorSession._write_frame)
-        self._sinks.append(_Sink(opener, per_frame, pose=pose))
+        self._sinks.add(opener, per_frame=per_frame, pose=pose)
 
     def add_consumer(self, consumer: FrameConsumer) -> None:
         """Call ``consumer(session, moment)`` once per frame, after the frame's samples were
@@ -361,7 +347,7 @@ class MonitorSession:
 
     @property
     def recorders(self) -> list[Recorder]:
-        return [s.recorder for s in self._sinks if s.recorder is not None]
+        return self._sinks.recorders
 
     # -- header -------------------------------------------------------------------------
 
@@ -726,28 +712,29 @@ class MonitorSession:
     # -- writing ------------------------------------------------------------------------
 
     def _write_frame(self, moment: float) -> None:
-        # the sinks open (header, then what earlier frames left buffered) before this frame's
+        # the sinks open (header, then what earlier frames left waiting) before this frame's
         # records, which then go out in parts as they are encoded: the first frame of
         # 10,000 devices is megabytes of text, three copies of it when made whole first
-        if not self._sinks_open and (
+        sinks = self._sinks
+        if not sinks.is_open and (
             self._warm() or moment - (self.started_at or moment) >= SINK_WARMUP
         ):
-            self._open_sinks()
-        self._check_statuses(moment)
-        poses = sorted({s.pose for s in self._sinks if not s.per_frame})
-        if len(poses) == 1 and self._sinks_open:
+            sinks.open(self.header_info())
+        sinks.note_statuses(moment, ((name, *self._status_of(name)) for name in self._selected))
+        poses = sinks.poses(per_frame=False)
+        if len(poses) == 1 and sinks.is_open:
             for text, count in self._encoded_parts(poses[0]):
-                self._deliver("samples", {poses[0]: text}, count)
+                sinks.deliver(SAMPLES, {poses[0]: text}, count)
         elif poses:
             texts: dict[str, str] = {}
             count = 0
             for pose in poses:
                 texts[pose], count = self.encode_samples(pose)
             if count:
-                self._emit("samples", texts, count)
-        poses = sorted({s.pose for s in self._sinks if s.per_frame})
+                sinks.emit(SAMPLES, texts, count)
+        poses = sinks.poses(per_frame=True)
         if poses:
-            self._emit("frame", {pose: self.frame_record(pose) for pose in poses}, 0)
+            sinks.emit(FRAME, {pose: self.frame_record(pose) for pose in poses}, 0)
 
     def warm(self) -> bool:
         """Whether every watched running device has delivered a sample."""
@@ -764,45 +751,10 @@ class MonitorSession:
                 return False
         return True
 
-    def _open_sinks(self) -> None:
-        info = self.header_info()
-        for sink in self._sinks:
-            if sink.recorder is None:
-                sink.recorder = sink.open(info)
-        self._sinks_open = True
-        buffered, self._buffer = self._buffer, []
-        for what, payload, count in buffered:
-            self._deliver(what, payload, count)
-
     def open_sinks(self) -> None:
         """Open every sink now (normally done after the first samples)."""
-        if not self._sinks_open:
-            self._open_sinks()
-
-    def _emit(self, what: str, payload: object, count: int) -> None:
-        if not self._sinks_open:
-            self._buffer.append((what, payload, count))
-            return
-        self._deliver(what, payload, count)
-
-    def _deliver(self, what: str, payload: object, count: int) -> None:
-        for sink in self._sinks:
-            recorder = sink.recorder
-            if recorder is None or recorder.closed:
-                continue
-            if what == "samples":
-                if not sink.per_frame:
-                    recorder.write_encoded(payload[sink.pose], count)  # type: ignore[index]
-            elif what == "frame":
-                if sink.per_frame:
-                    recorder.write_frame(payload[sink.pose])  # type: ignore[index]
-            elif what == "statuses":
-                recorder.write_statuses(payload)  # type: ignore[arg-type]
-            elif what == "marker":
-                marker = payload
-                recorder.write_marker(marker.name, marker.timestamp)  # type: ignore[attr-defined]
-        if what == "samples":
-            self._samples_written += count
+        if not self._sinks.is_open:
+            self._sinks.open(self.header_info())
 
     def encode_samples(self, pose: str = MATRIX) -> tuple[str, int]:
         """This frame's sample records of the selected devices (and of proxies and aliases
@@ -906,18 +858,6 @@ class MonitorSession:
             devices[name] = FrameDevice(1 if fresh else 0, {proxy.KIND.value: {unit: value}})
         return FrameRecord(self.frame, self.frame_timestamp, devices)
 
-    def _check_statuses(self, moment: float) -> None:
-        changed: list[StatusRecord] = []
-        for name in self._selected:
-            element, element_type, state, reason = self._status_of(name)
-            current = (state, reason)
-            if self._statuses.get(name) != current:
-                # one tuple per distinct status, not per name (20,000 of them alike)
-                self._statuses[name] = self._status_pairs.setdefault(current, current)
-                changed.append(StatusRecord(moment, name, element, element_type, state, reason))
-        if changed:
-            self._emit("statuses", changed, 0)
-
     def mark(self, name: str | None = None) -> MarkerRecord:
         """Write a marker (named ``marker N`` when no name is given) to every sink."""
         marker = MarkerRecord(name or f"marker {len(self.markers) + 1}", now())
@@ -927,7 +867,7 @@ class MonitorSession:
     def _note_marker(self, marker: MarkerRecord) -> None:
         self.markers.append(marker)
         if self._sinks:
-            self._emit("marker", marker, 0)
+            self._sinks.emit(MARKER, marker, 0)
 
     def reset_stats(self) -> None:
         """Forget statistics and press counts (the r key)."""
@@ -943,22 +883,15 @@ class MonitorSession:
     ) -> None:
         """Write the final statistics record (``final``, :meth:`final_stats_view` when not
         given) and the end record of every sink."""
-        if self._sinks and not self._sinks_open:
-            self._open_sinks()
+        if self._sinks and not self._sinks.is_open:
+            self.open_sinks()
         if not stats:
             final = None
         elif final is None and self._sinks:
             final = self.final_stats_view()
         if isinstance(final, FinalStats) and len(self._sinks) > 1:
             final = dict(final)  # made once for every sink
-        moment = now()
-        for sink in self._sinks:
-            recorder = sink.recorder
-            if recorder is None or recorder.closed:
-                continue
-            if final is not None:
-                recorder.write_stats(final, moment)
-            recorder.close(reason)
+        self._sinks.close(reason, final, now())
 
     # -- reading ------------------------------------------------------------------------
 
@@ -1052,7 +985,7 @@ class MonitorSession:
     @property
     def samples_written(self) -> int:
         """Sample records written to the recordings so far."""
-        return self._samples_written
+        return self._sinks.samples_written
 
     @property
     def frame_rate(self) -> float:
@@ -1100,7 +1033,7 @@ class MonitorSession:
             views,
             self.markers[-5:],
             self.keyboards(),
-            self._samples_written,
+            self._sinks.samples_written,
             self.finished,
         )
 
