@@ -49,7 +49,7 @@ class Sinks:
         return len(self.sinks)
 
     def add(self, opener: Opener, *, per_frame: bool = False, pose: str = MATRIX) -> None:
-        self.sinks.append(Sink(opener, per_frame, pose=pose))
+        self.sinks.append(Sink(opener, bool(per_frame), pose=pose))
 
     @property
     def recorders(self) -> list[Recorder]:
