@@ -8,8 +8,9 @@ frame (``SampleStore.frame``): it feeds the running statistics (rates, intervals
 gaps, dropped samples, faults), counts button presses, keeps a short history of analog values
 for sparklines, and writes sample, frame, status and marker records to its sinks
 (:class:`~gadgetctl.monitor.recording.Recorder` objects: a recording file or an NDJSON
-stream; :mod:`gadgetctl.monitor.sinks` hands the records out). Renderers (the live and table views of the CLI) ask for a :class:`Snapshot` when
-they draw, at their own pace; the session itself never prints.
+stream; :mod:`gadgetctl.monitor.sinks` hands the records out). Renderers (the live and
+table views of the CLI) ask for a :class:`Snapshot` when they draw, at their own pace; the
+session itself never prints.
 
 Nothing here imports rich or typer.
 """
