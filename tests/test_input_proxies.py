@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from gadgetctl.input import Digital, DigitalState, InputManager, Key, LengthUnit, ManagerOptions
+from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.registry import DeviceRegistry
 from gadgetctl.jccl.configload import load_configuration
 from gadgetctl.jccl.repository import default_repository
@@ -177,6 +178,41 @@ def test_analog_normalises_and_clamps(make):
         m.events.tap(Key.KEY_S)
     m.update()
     assert proxy.raw == 0.0 and proxy.data == 0.0  # clamped to min
+
+
+def test_a_proxy_reads_its_device_when_read_and_a_digital_one_every_frame(make):
+    m = make(
+        ANALOG + '<analog_proxy name="Far" version="1"><device>Throttle</device><unit>3</unit>'
+        "</analog_proxy>" + BUTTONS.replace(KEYBOARD, "")
+    )
+    reads: dict[str, int] = {}
+    for name in ("T", "Far", "A Proxy"):
+        proxy = m.proxy(name)
+        real = proxy.update_data
+
+        def counted(device, name=name, real=real):
+            reads[name] = reads.get(name, 0) + 1
+            real(device)
+
+        proxy.update_data = counted
+    analog = m.proxy("T")
+    for _ in range(3):
+        m.events.tap(Key.KEY_W)
+        m.update()
+    # nobody read the analog proxies: the frames did not; the digital one each frame
+    assert reads == {"A Proxy": 3}
+    assert analog.raw == 255.0 and analog.data == 1.0  # the newest, as every frame would
+    assert analog.timestamp == m.device("Throttle").store.latest(DeviceKind.ANALOG).timestamp
+    assert reads["T"] == 1
+    assert analog.value == 1.0 and not analog.stupefied  # read again: nothing new to read
+    assert reads["T"] == 1
+    m.events.tap(Key.KEY_S)
+    m.update()
+    m.update()  # (a frame without samples: the newest stays)
+    assert analog.raw == 155.0 and reads["T"] == 2
+    far = m.proxy("Far")  # a unit out of range is found when it is read
+    assert far.stupefied and "unit 3 is out of range" in far.reason and far.data == 0.0
+    assert m.proxy("A Proxy").data == OFF
 
 
 def test_analog_proxy_clamps_raw_values_outside_the_device_range(make):

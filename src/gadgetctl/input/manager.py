@@ -820,7 +820,9 @@ class InputManager:
     # -- frames -----------------------------------------------------------------------------
 
     def update(self) -> int:
-        """One frame: reconfigure, update every device, then every proxy. Returns the frame number."""
+        """One frame: reconfigure, update every device, then every proxy that looks at every
+        frame (:attr:`Proxy.every_frame`; the others read their device when read). Returns
+        the frame number."""
         interval = self.options.retry_interval
         if interval is not None and self._pending and now() - self._last_retry >= interval:
             self.retry_pending()
@@ -936,7 +938,8 @@ class InputManager:
         if self._frame_order is None:
             self._frame_order = (
                 _frame_groups([self._device_objects[n] for n in sorted(self._device_objects)]),
-                [self._proxies[n] for n in sorted(self._proxies)],
+                # the proxies that must look at every frame (the others read when read)
+                [p for n in sorted(self._proxies) if (p := self._proxies[n]).every_frame],
             )
         return self._frame_order
 

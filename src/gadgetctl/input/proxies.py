@@ -5,8 +5,12 @@ and is *stupefied* otherwise (device missing, of the wrong type, or unit out of 
 it then returns the neutral value of its type and :attr:`Proxy.reason` says why. Proxies
 re-bind whenever devices come and go, so a device added back revives them.
 
-Once per frame a proxy reads its device's newest sample (the digital proxy looks at every
-sample of the frame so that a press and release between two frames is not lost).
+A proxy shows its device's newest sample. Most proxies read it when they are read (their
+value attributes are :class:`NewestValue` descriptors), so a frame costs nothing for the
+proxies nobody looks at (10,000 position proxies were half of a frame). Proxies that must
+see every frame (:attr:`Proxy.every_frame`) read it once per frame: the digital proxy looks
+at every sample of the frame so that a press and release between two frames is not lost,
+and the keyboard/mouse proxy takes the newest of that frame.
 """
 
 from __future__ import annotations
@@ -51,12 +55,37 @@ class LengthUnit(float, Enum):
     INCHES = 1 / 0.0254
 
 
+class NewestValue:
+    """A proxy attribute that shows its device's newest sample: reading it first brings the
+    proxy up to date (:meth:`Proxy.catch_up`); setting it sets the value read next."""
+
+    __slots__ = ("_key",)
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self._key = "_" + name
+
+    def __get__(self, proxy: Proxy | None, owner: type | None = None) -> Any:
+        if proxy is None:
+            return self
+        proxy.catch_up()
+        return proxy.__dict__[self._key]
+
+    def __set__(self, proxy: Proxy, value: Any) -> None:
+        proxy.__dict__[self._key] = value
+
+
 class Proxy:
     """Base of every proxy type."""
 
     ELEMENT_TYPE: ClassVar[str] = ""
     KIND: ClassVar[DeviceKind]
     HAS_UNIT: ClassVar[bool] = True
+    #: Whether the proxy must look at every frame (the manager updates it each frame); the
+    #: others read their device's newest sample when read.
+    EVERY_FRAME: ClassVar[bool] = False
+
+    timestamp = NewestValue()
+    reason = NewestValue()
 
     def __init__(self) -> None:
         self.name = ""
@@ -64,11 +93,17 @@ class Proxy:
         self.device_name = ""
         self.unit = 0
         self.device: Input | None = None
-        self.reason: str | None = "not configured yet"
-        self.timestamp: float | None = None
+        self.reason = "not configured yet"
+        self.timestamp = None
         self.diagnostics: list[Diagnostic] = []  # configuration findings (e.g. skipped filters)
         self._updated_frame = -1
+        self._seen: object = None  # the device store's changes() when read last
         self.reset()
+
+    @property
+    def every_frame(self) -> bool:
+        """Whether the manager must update this proxy every frame (see :attr:`EVERY_FRAME`)."""
+        return self.EVERY_FRAME
 
     # -- configuration ------------------------------------------------------------------
 
@@ -98,6 +133,7 @@ class Proxy:
             self.reason = None
             self.reset()
             self._updated_frame = -1
+            self._seen = None
 
     def stupefy(self, reason: str) -> None:
         self.device = None
@@ -115,7 +151,23 @@ class Proxy:
         if device is None:
             return
         device.update_for_frame(frame)
-        self.update_data(device)
+        if self.EVERY_FRAME:
+            self.update_data(device)
+        else:
+            self.catch_up()
+
+    def catch_up(self) -> None:
+        """Read the device's newest sample if its frame changed since the last read (a proxy
+        that looks at every frame is updated by the manager instead)."""
+        if self.EVERY_FRAME:
+            return
+        device = self.device
+        if device is None:
+            return
+        seen = device.store.changes()
+        if seen != self._seen:
+            self._seen = seen
+            self.update_data(device)
 
     def update_data(self, device: Input) -> None:
         """Read the device's newest sample of this proxy's unit."""
@@ -167,10 +219,12 @@ class Proxy:
 class AnalogProxy(Proxy):
     ELEMENT_TYPE = "analog_proxy"
     KIND = DeviceKind.ANALOG
+    value = NewestValue()
+    raw = NewestValue()
 
     def reset(self) -> None:
         self.value = 0.0
-        self.raw: float | None = None
+        self.raw = None
 
     def take(self, value: Any, device: Input) -> None:
         self.raw = float(value)
@@ -185,6 +239,7 @@ class AnalogProxy(Proxy):
 class DigitalProxy(Proxy):
     ELEMENT_TYPE = "digital_proxy"
     KIND = DeviceKind.DIGITAL
+    EVERY_FRAME = True  # a press and release between two reads must show
 
     def reset(self) -> None:
         self.value = DigitalState.OFF
@@ -304,6 +359,7 @@ class GloveProxy(Proxy):
     ELEMENT_TYPE = "glove_proxy"
     KIND = DeviceKind.GLOVE
     visible = True
+    angles = NewestValue()
 
     def config(self, access: ElementAccess) -> None:
         super().config(access)
@@ -332,6 +388,7 @@ class GestureProxy(Proxy):
     ELEMENT_TYPE = "gesture_proxy"
     KIND = DeviceKind.GESTURE
     HAS_UNIT = False
+    gesture = NewestValue()
 
     def reset(self) -> None:
         self.gesture = -1
@@ -355,6 +412,7 @@ class GestureProxy(Proxy):
 class CommandProxy(Proxy):
     ELEMENT_TYPE = "command_proxy"
     KIND = DeviceKind.COMMAND
+    value = NewestValue()
 
     def reset(self) -> None:
         self.value = 0
@@ -372,6 +430,7 @@ class StringProxy(Proxy):
 
     ELEMENT_TYPE = "string_proxy"
     KIND = DeviceKind.STRING
+    value = NewestValue()
 
     def reset(self) -> None:
         self.value = ""
@@ -387,6 +446,7 @@ class StringProxy(Proxy):
 class HatProxy(Proxy):
     ELEMENT_TYPE = "hat_proxy"
     KIND = DeviceKind.HAT
+    value = NewestValue()
 
     def reset(self) -> None:
         self.value = HatState.CENTERED
@@ -403,6 +463,7 @@ class KeyboardMouseProxy(Proxy):
     ELEMENT_TYPE = "keyboard_mouse_proxy"
     KIND = DeviceKind.KEYBOARD_MOUSE
     HAS_UNIT = False
+    EVERY_FRAME = True  # the newest of each frame (a frame without keys keeps it)
 
     def update_data(self, device: Input) -> None:
         self.reason = None
@@ -441,6 +502,7 @@ class RumbleProxy(Proxy):
     ELEMENT_TYPE = "rumble_proxy"
     KIND = DeviceKind.RUMBLE
     HAS_UNIT = False
+    EVERY_FRAME = True  # (it reads no samples: nothing to gain)
 
     def update_data(self, device: Input) -> None:
         self.reason = None

@@ -445,6 +445,7 @@ class SampleStore:
         "_shared",
         "_slot",
         "_swapped_at",
+        "_swaps",
         "_synced",
         "_waiting",
         "cap",
@@ -461,6 +462,7 @@ class SampleStore:
         # 5 MB for 10,000 devices); a kind without one reads as _UNUSED
         self._channels: dict[DeviceKind, _Channel] = {}
         self._swapped_at: float | None = None
+        self._swaps = 0  # frames made current so far (see changes())
         self._waiting = False  # samples were added since the last swap
         self._current: Mapping[DeviceKind, FrameSamples] = NO_CURRENT
         # a frame group's shared windows this store takes its usual frames from (see
@@ -477,6 +479,13 @@ class SampleStore:
         if self._shared is not None and self._shared.serial != self._synced:
             self.sync()
         return self._swapped_at
+
+    def changes(self) -> tuple[int, int]:
+        """A value that changes whenever the current frame may have been replaced (what
+        :meth:`latest` returns may then differ): a reader that saw it knows whether to read
+        again. Read without taking shared windows in."""
+        shared = self._shared
+        return (self._swaps, 0 if shared is None else shared.serial)
 
     @property
     def current(self) -> Mapping[DeviceKind, FrameSamples]:
@@ -498,6 +507,7 @@ class SampleStore:
         the previous one left pending is taken first."""
         self.sync()
         with self._lock:
+            self._swaps += 1  # (changes(): another serial from now on)
             self._shared, self._slot = shared, slot
             self._synced = shared.serial if shared is not None else 0
             self._delivered = int(shared.delivered[slot]) if shared is not None else 0
@@ -696,6 +706,7 @@ class SampleStore:
                     channel.latest = channel.frame.newest
                 channel.frame = EMPTY_FRAME
         self._current = current
+        self._swaps += 1
 
     def _take(self) -> list[tuple[DeviceKind, _Channel, list[Chunk], int]]:
         self._waiting = False
@@ -717,6 +728,7 @@ class SampleStore:
             channel.frame = current[kind] = FrameSamples(chunks, count)
             channel.latest = None  # the frame's newest, computed when asked
         self._current = current
+        self._swaps += 1
 
     def frame(self, kind: DeviceKind) -> FrameSamples:
         if self._shared is not None:
@@ -728,7 +740,9 @@ class SampleStore:
         shared = self._shared
         if shared is not None and shared.serial != self._synced:
             slot = self._slot
-            if shared.fresh[slot]:  # read without making the frame
+            # its window of the latest frame, or one not taken yet (the slot had nothing
+            # since, or an empty frame): read without making the frame
+            if shared.fresh[slot] or shared.window_serial[slot] > self._applied:
                 timestamps, items = shared.arrays[slot]
                 for found, values in items:
                     if found is kind:  # the last of its window

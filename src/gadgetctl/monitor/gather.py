@@ -137,8 +137,11 @@ class GatherPlan:
         "groups",
         "names",
         "own",
+        "own_indices",
         "places",
+        "serials",
         "shared",
+        "slot_indices",
         "tracks",
         "watch",
         "windows",
@@ -155,6 +158,7 @@ class GatherPlan:
         tracks: list[Any] | None = None,
         places: np.ndarray | None = None,
         windows: list[SharedWindows] | None = None,
+        own_indices: list[int] | None = None,
     ) -> None:
         self.arrangement, self.watch, self.own, self.shared, self.groups = (
             arrangement,
@@ -167,6 +171,19 @@ class GatherPlan:
         self.tracks = tracks if tracks is not None else []
         self.places = places if places is not None else np.empty(0, dtype=np.int64)
         self.windows = windows if windows is not None else [group.windows for group in groups]
+        #: The indices (in ``names``) of the devices read per device.
+        self.own_indices = (
+            own_indices if own_indices is not None else np.flatnonzero(self.places < 0).tolist()
+        )
+        #: Per shared windows: each slot's index in ``names`` (-1: not watched), and the
+        #: serial of the windows' frame gathered last.
+        self.slot_indices: list[np.ndarray] = []
+        for group, shared_windows in enumerate(self.windows):
+            index_of = np.full(len(shared_windows.every), -1, dtype=np.int64)
+            mine = np.flatnonzero((self.places >= 0) & (self.places // PLACE == group))
+            index_of[self.places[mine] % PLACE] = mine
+            self.slot_indices.append(index_of)
+        self.serials = [-1] * len(self.windows)
 
 
 #: A group's index in a :class:`GatherPlan`'s ``places`` is counted in these.

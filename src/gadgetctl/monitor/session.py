@@ -60,7 +60,7 @@ from gadgetctl.monitor.records import (
 )
 from gadgetctl.monitor.sinks import FRAME, MARKER, SAMPLES, Opener, Sinks
 from gadgetctl.monitor.stats import DeviceSnapshot, snapshot_rows, snapshots
-from gadgetctl.monitor.tracks import DeviceTrack
+from gadgetctl.monitor.tracks import DeviceTrack, FrameClock
 from gadgetctl.monitor.views import ElementView, Frame, Snapshot, UnitView
 from gadgetctl.perf import collector_paused
 from gadgetctl.suggest import did_you_mean
@@ -218,6 +218,7 @@ class MonitorSession:
         self.finished = False
         self._selected: list[str] = []
         self._tracks: dict[str, DeviceTrack] = {}
+        self._clock = FrameClock()  # the frames its tracks note
         self._sinks = Sinks()
         self._proxy_stamps: dict[str, float | None] = {}
         self._frame_interval = 1.0 / rate
@@ -542,6 +543,7 @@ class MonitorSession:
         if manager.arrangement is not arrangement or not self._watch:
             self._watch = self._names_with_targets()
         gathered: dict[str, Mapping[DeviceKind, FrameSamples] | Noted] = {}
+        self._clock.tick(now())  # (before the plan: a track made for it starts in this frame)
         if self.statistics or self._sinks:
             samples = self._gather_every(self._gather_plan(), gathered)
             self._gathered = GatheredFrames(gathered)
@@ -577,7 +579,9 @@ class MonitorSession:
     def _track(self, name: str, device: Input) -> DeviceTrack:
         track = self._tracks.get(name)
         if track is None or track.device is not device:
-            track = self._tracks[name] = DeviceTrack(name, device, self.history, self.statistics)
+            track = self._tracks[name] = DeviceTrack(
+                name, device, self.history, self.statistics, self._clock
+            )
         return track
 
     def _gather(
@@ -602,48 +606,69 @@ class MonitorSession:
     def _gather_every(
         self, plan: GatherPlan, gathered: dict[str, Mapping[DeviceKind, FrameSamples] | Noted]
     ) -> int:
-        """:meth:`_gather` of every watched device, in order: a device whose frame is a
-        window of its group's shared arrays (or empty) is noted from the arrays
-        (:meth:`DeviceTrack.update_window`), the others per device."""
+        """:meth:`_gather` of every watched device with something this frame, in watch
+        order: a device whose frame is a window of its group's shared arrays is noted from the
+        arrays (:meth:`DeviceTrack.update_window`), the others per device. The members of a
+        frame group with nothing this frame (most, for slow devices) are not visited: their
+        tracks catch up with the session's clock when next noted or read."""
         frame = self.frame
-        read = [
-            (
-                windows.moment,
-                windows.fresh.tolist(),
-                windows.emptied.tolist(),
-                windows.starts.tolist(),
-                windows.stops.tolist(),
-                windows.arrays,
-            )
-            for windows in plan.windows
-        ]
+        tracks = plan.tracks
+        found: dict[int, Mapping[DeviceKind, FrameSamples] | Noted] = {}
         samples = 0
-        for name, track, place in zip(plan.names, plan.tracks, plan.places.tolist(), strict=True):
-            if place < 0:
-                count = track.update()
-            else:
-                group, slot = divmod(place, PLACE)
-                moment, fresh, emptied, starts, stops, arrays = read[group]
-                if track._swapped_at == moment:  # (its group did not publish this frame)
-                    count = track.update_window(_NO_STAMPS, (), 0, 0, moment)
-                elif fresh[slot]:
-                    timestamps, items = arrays[slot]
-                    count = track.update_window(
-                        timestamps, items, starts[slot], stops[slot], moment
-                    )
-                    if count:  # (its frame made when read)
-                        samples += count
-                        track.frame_seen = frame
-                        gathered[name] = track
-                        continue
-                elif emptied[slot]:
-                    count = track.update_window(_NO_STAMPS, (), 0, 0, moment)
-                else:  # swapped on its own this frame
-                    count = track.update()
-            samples += count
+        for index in plan.own_indices:
+            track = tracks[index]
+            samples += track.update()
             track.frame_seen = frame
             if track.frames:
-                gathered[name] = track.frames
+                found[index] = track.frames
+        for group, windows in enumerate(plan.windows):
+            serial = windows.serial
+            if serial == plan.serials[group]:
+                continue  # it did not publish this frame: nothing new for its devices
+            plan.serials[group] = serial
+            index_of = plan.slot_indices[group]
+            moment = windows.moment
+            if windows.fresh_slots:
+                if windows.fresh_slots == len(windows.every):
+                    slots = windows.every
+                else:
+                    slots = np.flatnonzero(windows.fresh)
+                indices = index_of[slots]
+                chosen = indices >= 0
+                if not chosen.all():
+                    slots, indices = slots[chosen], indices[chosen]
+                arrays = windows.arrays
+                for slot, index, start, stop in zip(
+                    slots.tolist(),
+                    indices.tolist(),
+                    windows.starts[slots].tolist(),
+                    windows.stops[slots].tolist(),
+                    strict=True,
+                ):
+                    track = tracks[index]
+                    if track._swapped_at == moment:
+                        continue  # noted already (a plan made again within the frame)
+                    timestamps, items = arrays[slot]
+                    count = track.update_window(timestamps, items, start, stop, moment)
+                    samples += count
+                    track.frame_seen = frame
+                    if count:  # (its frame made when read)
+                        found[index] = track
+                    elif track.frames:
+                        found[index] = track.frames
+            if not windows.none_alone:  # swapped on their own this frame
+                alone = np.flatnonzero(~(windows.fresh | windows.emptied))
+                for index in index_of[alone].tolist():
+                    if index < 0:
+                        continue
+                    track = tracks[index]
+                    samples += track.update()
+                    track.frame_seen = frame
+                    if track.frames:
+                        found[index] = track.frames
+        names = plan.names
+        for index in sorted(found):
+            gathered[names[index]] = found[index]
         return samples
 
     def _gather_plan(self) -> GatherPlan:
@@ -664,6 +689,7 @@ class MonitorSession:
         names: list[str] = []
         tracks: list[DeviceTrack] = []
         places: list[int] = []
+        own_indices: list[int] = []
         for name in self._watch:
             device = manager.devices.get(name)
             if device is None:
@@ -673,6 +699,7 @@ class MonitorSession:
             place = device.store.shared
             if place is None:
                 own.append(name)
+                own_indices.append(len(places))
                 places.append(-1)
                 continue
             windows, slot = place
@@ -698,6 +725,7 @@ class MonitorSession:
             tracks,
             np.array(places, dtype=np.int64),
             [windows for windows, _, _, _ in members.values()],
+            own_indices,
         )
         return self._plan
 

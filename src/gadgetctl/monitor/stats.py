@@ -158,6 +158,9 @@ class DeviceStats:
         n = len(timestamps)
         if n == 0:
             return
+        if n == 1:  # (a frame's one sample: the usual case of a slow device)
+            self.add_timestamp(timestamps[0])
+            return
         if isinstance(timestamps, np.ndarray):
             self._pending.frombytes(timestamps.astype(np.float64, copy=False).ravel().tobytes())
         else:
@@ -193,6 +196,31 @@ class DeviceStats:
                 old += 1
             if old:
                 del ends[: 2 * old]
+
+    def end_frames(self, count: int, times: Sequence[float]) -> None:
+        """``count`` frame boundaries with no samples added between them (:meth:`end_frame`
+        that many times), the last ``len(times)`` of them placed at ``times`` (older ones
+        need not be: only their number counts)."""
+        if count <= 0:
+            return
+        delta = self.count - self._frame_start_count  # (samples added before the first)
+        self._frame_start_count = self.count
+        self._frame_samples += delta
+        self.samples_per_frame = delta if count == 1 else 0
+        self.frames += count
+        if not times:
+            return
+        ends = self._frame_ends
+        total = float(self.count)
+        for at in times:
+            ends.append(at)
+            ends.append(total)
+        at = times[-1]
+        old = 0  # keep one frame before the window
+        while 2 * old + 2 < len(ends) and ends[2 * old + 2] <= at - self.window:
+            old += 1
+        if old:
+            del ends[: 2 * old]
 
     # ---------------------------------------------------------------- numpy side
 

@@ -3,6 +3,7 @@ its running statistics, button presses, analog histories and the values a view s
 
 from __future__ import annotations
 
+from array import array
 from collections import deque
 from collections.abc import Iterable, Mapping
 from types import MappingProxyType
@@ -16,7 +17,7 @@ from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.samples import NO_CURRENT, FrameSamples, Sample
 from gadgetctl.monitor.encoding import plain_value
 from gadgetctl.monitor.gather import as_rows, frame_timestamps
-from gadgetctl.monitor.stats import DeviceSnapshot, DeviceStats
+from gadgetctl.monitor.stats import DEFAULT_WINDOW, DeviceSnapshot, DeviceStats
 from gadgetctl.monitor.views import UnitView
 
 #: A track's analog histories while it has none (shared).
@@ -47,6 +48,47 @@ def _units_with(units: Mapping[str, int], value: str, width: int) -> Mapping[str
 
 
 STATS_REFRESH = 0.25  # seconds between recomputations of interval percentiles and jitter
+#: A frame clock keeps the times of the frames of this many seconds (at least two): enough
+#: for a statistics window (:data:`~gadgetctl.monitor.stats.DEFAULT_WINDOW`) and the frame
+#: before it.
+CLOCK_KEEPS = 2 * DEFAULT_WINDOW
+
+
+class FrameClock:
+    """The frames a session's tracks note, shared by them: how many so far (``ticks``) and
+    the times of the recent ones. A track that had nothing in some frames (most of them, for
+    a slow device of a frame group) is not visited then: it catches up with the clock when
+    it is next noted or read, as if it had noted each of those frames empty."""
+
+    __slots__ = ("_first", "_times", "ticks")
+
+    def __init__(self) -> None:
+        self.ticks = 0
+        self._times = array("d")
+        self._first = 1  # the tick whose time is _times[0]
+
+    def tick(self, at: float) -> int:
+        """A new frame, ending at ``at``; returns its number (1 for the first)."""
+        self.ticks += 1
+        times = self._times
+        times.append(at)
+        if len(times) > 64 and times[32] < at - CLOCK_KEEPS:  # dropped in batches
+            old = 32
+            while old + 2 < len(times) and times[old + 1] < at - CLOCK_KEEPS:
+                old += 1
+            del times[:old]
+            self._first += old
+        return self.ticks
+
+    @property
+    def now(self) -> float:
+        """The time of the latest frame."""
+        return self._times[-1]
+
+    def times(self, after: int, upto: int) -> array:
+        """The times of frames ``after + 1`` .. ``upto`` that the clock still keeps."""
+        first = self._first
+        return self._times[max(0, after + 1 - first) : max(0, upto + 1 - first)]
 
 
 class DeviceTrack:
@@ -54,35 +96,51 @@ class DeviceTrack:
 
     # one per watched device: slotted
     __slots__ = (
+        "_analog_history",
+        "_changed",
+        "_clock",
+        "_count",
+        "_digital_state",
         "_dropped_seen",
         "_faults_seen",
         "_frames",
         "_items_seen",
+        "_noted",
+        "_own_clock",
+        "_presses",
         "_snapshot",
         "_snapshot_at",
+        "_stats",
         "_swapped_at",
-        "analog_history",
-        "changed",
-        "count",
         "device",
-        "digital_state",
         "frame_seen",
         "history_length",
         "name",
-        "presses",
         "statistics",
-        "stats",
         "units",
     )
 
-    def __init__(self, name: str, device: Input, history: int, statistics: bool = True) -> None:
+    def __init__(
+        self,
+        name: str,
+        device: Input,
+        history: int,
+        statistics: bool = True,
+        clock: FrameClock | None = None,
+    ) -> None:
+        """``clock``: the session's, ticked once a frame before its tracks are noted; without
+        one, each :meth:`update` or :meth:`update_window` is a frame of the track's own."""
         self.name = name
         self.device = device
         self.statistics = statistics
-        self.stats = DeviceStats(name)
+        self._stats = DeviceStats(name)
         self.history_length = history
+        self._own_clock = clock is None
+        self._clock = FrameClock() if clock is None else clock
+        # the clock's frame noted last (those after it, up to the clock's, are owed: empty)
+        self._noted = self._clock.ticks if clock is None else self._clock.ticks - 1
         self._frames: Mapping[DeviceKind, FrameSamples] = NO_CURRENT  # (shared, read-only)
-        self.count = 0
+        self._count = 0
         self.frame_seen = -1  # the manager frame whose samples ``frames`` holds
         # the most units seen of each kind (by value), in the order the kinds came: one
         # read-only mapping for every track that saw the same (a dict each was 1.8 MB for
@@ -92,20 +150,81 @@ class DeviceTrack:
         # a device is new to its manager, and the session started it: a fault before the first
         # frame (while it started) is one of this run's too
         self._faults_seen = 0
-        self.digital_state: np.ndarray | None = None
-        self.presses: np.ndarray | None = None
-        self.changed: np.ndarray | None = None
+        self._digital_state: np.ndarray | None = None
+        self._presses: np.ndarray | None = None
+        self._changed: np.ndarray | None = None
         # one history per analog unit, made at its first value (most devices have none)
-        self.analog_history: list[deque[float]] | tuple[()] = _NO_HISTORY
+        self._analog_history: list[deque[float]] | tuple[()] = _NO_HISTORY
         self._snapshot: DeviceSnapshot | None = None
         self._snapshot_at = -1.0
         self._swapped_at: float | None = None
         self._items_seen: object = None  # the shared arrays whose units were noted last
 
+    # -- read: brought up to date with the clock first ------------------------------------
+
+    @property
+    def stats(self) -> DeviceStats:
+        self.catch_up()
+        return self._stats
+
+    @property
+    def count(self) -> int:
+        """The samples (sampling instants) of the frame noted last."""
+        self.catch_up()
+        return self._count
+
+    @property
+    def presses(self) -> np.ndarray | None:
+        self.catch_up()
+        return self._presses
+
+    @property
+    def changed(self) -> np.ndarray | None:
+        """Per button, whether it changed in the frame noted last."""
+        self.catch_up()
+        return self._changed
+
+    @property
+    def digital_state(self) -> np.ndarray | None:
+        return self._digital_state
+
+    @property
+    def analog_history(self) -> list[deque[float]] | tuple[()]:
+        """One value per frame of each analog unit, the newest last."""
+        self.catch_up()
+        return self._analog_history
+
+    def catch_up(self, upto: int | None = None) -> None:
+        """Note the frames after the one noted last, up to the clock's (or ``upto``), as
+        frames without samples: what noting each of them would have done."""
+        clock = self._clock
+        upto = clock.ticks if upto is None else upto
+        owed = upto - self._noted
+        if owed <= 0:
+            return
+        self._noted = upto
+        self._frames = NO_CURRENT
+        self._count = 0
+        if not self.statistics:
+            return
+        self._stats.end_frames(owed, clock.times(upto - owed, upto))
+        self._note_counters()
+        changed = self._changed
+        if changed is not None and changed.any():
+            changed[:] = False
+        self._hold_analog(owed)
+
+    def _hold_analog(self, frames: int) -> None:
+        """The analog histories of ``frames`` frames without samples (the newest value held)."""
+        for history in self._analog_history:
+            if history:
+                history.extend([history[-1]] * min(frames, self.history_length))
+
     def reset(self) -> None:
-        self.stats.reset()
-        if self.presses is not None:
-            self.presses[:] = 0
+        self.catch_up()
+        self._stats.reset()
+        if self._presses is not None:
+            self._presses[:] = 0
         self._snapshot = None
         self._dropped_seen = self._dropped_now()
         self._faults_seen = self.device.faults
@@ -115,7 +234,20 @@ class DeviceTrack:
         before the driver read it (kernel receive-buffer overflows)."""
         return self.device.store.most_dropped() + self.device.transport_dropped()
 
+    def _begin_frame(self) -> int:
+        """Before noting a frame (with a clock of the track's own, a new one): returns how
+        many frames before it are owed (empty; :meth:`_note` notes them first)."""
+        clock = self._clock
+        if self._own_clock:
+            clock.tick(now())
+        owed = clock.ticks - 1 - self._noted
+        if owed > 0 and not self.statistics:
+            self.catch_up(clock.ticks - 1)
+        self._noted = clock.ticks
+        return owed
+
     def update(self) -> int:
+        owed = self._begin_frame()
         device = self.device
         store = device.store
         swapped_at = store.swapped_at
@@ -125,19 +257,19 @@ class DeviceTrack:
         self._frames = frames = store.current if fresh else NO_CURRENT
         if not self.statistics:  # gathering only (serve): no rates, presses or histories
             if not frames:
-                self.count = 0
+                self._count = 0
             elif len(frames) == 1:
-                self.count = next(iter(frames.values())).count
+                self._count = next(iter(frames.values())).count
             else:
-                self.count = max(f.count for f in frames.values())
-            return self.count
+                self._count = max(f.count for f in frames.values())
+            return self._count
         units = [
             (kind, len(newest.values))
             for kind, samples in frames.items()
             if (newest := samples.newest) is not None
         ]
         stamps = frame_timestamps(frames) if frames else ()
-        return self._note(frames.get(_DIGITAL), stamps, units)
+        return self._note(frames.get(_DIGITAL), stamps, units, owed, _ANALOG in frames)
 
     def update_window(
         self,
@@ -153,34 +285,40 @@ class DeviceTrack:
         ``moment`` (``stop == start``: a frame with nothing new). Its sampling instants are
         that window of ``timestamps`` and its units the arrays' second dimension, read without
         making the store's frame (:attr:`frames` is made when read, but for buttons)."""
+        owed = self._begin_frame()
         self._swapped_at = moment
         if stop == start or not items:  # (no kinds: no sampling instants either)
             self._frames = NO_CURRENT if stop == start else self.device.store.current
             if not self.statistics:
-                self.count = 0
+                self._count = 0
                 return 0
-            return self._note(None, (), ())
+            return self._note(None, (), (), owed, False if stop == start else None)
         self._frames = _FROM_STORE
         if not self.statistics:
-            self.count = stop - start
-            return self.count
+            self._count = stop - start
+            return self._count
         digital = None
+        analog = False
         for kind, _ in items:
             if kind is _DIGITAL:  # (presses are counted over every sample of the frame)
                 digital = self.device.store.current.get(_DIGITAL)
+            elif kind is _ANALOG:
+                analog = True
+        stamps = timestamps[start:stop]
         if items is self._items_seen:  # (their units are noted already)
-            return self._note(digital, timestamps[start:stop], ())
+            return self._note(digital, stamps, (), owed, analog)
         self._items_seen = items
-        return self._note(
-            digital, timestamps[start:stop], [(kind, values.shape[1]) for kind, values in items]
-        )
+        units = [(kind, values.shape[1]) for kind, values in items]
+        return self._note(digital, stamps, units, owed, analog)
 
     @property
     def frames(self) -> Mapping[DeviceKind, FrameSamples]:
         """The samples of each kind that had any in the frame noted last (read-only, shared);
         read within that frame (before the manager's next update), as every consumer of a
         frame reads it: a frame noted from shared windows is its store's frame, made when
-        first read."""
+        first read. A track not noted in the clock's latest frame had nothing in it."""
+        if self._noted != self._clock.ticks:
+            self.catch_up()
         frames = self._frames
         return self.device.store.current if frames is _FROM_STORE else frames
 
@@ -193,30 +331,35 @@ class DeviceTrack:
         digital: FrameSamples | None,
         stamps: np.ndarray | tuple[()],
         units: Iterable[tuple[DeviceKind, int]],
+        owed: int = 0,
+        analog: bool | None = None,
     ) -> int:
         """Statistics, presses and histories of a frame: its button samples (``digital``),
-        its sampling instants ``stamps`` and the units of each kind with samples."""
-        device = self.device
-        dropped = self._dropped_now()
+        its sampling instants ``stamps`` and the units of each kind with samples; the
+        ``owed`` frames before it, empty, first. ``analog``: whether the frame has analog
+        samples (None: not known)."""
+        stats = self._stats
+        clock = self._clock
+        first = not stats.frames  # (what came before this track is read once, from the store)
+        if owed > 0:
+            ticks = clock.ticks
+            stats.end_frames(owed, clock.times(ticks - 1 - owed, ticks - 1))
         count = len(stamps)
         if count:
-            self.stats.add_timestamps(stamps)
-        self.count = count
-        self.stats.end_frame(now())
-        if dropped != self._dropped_seen:
-            self.stats.add_dropped(max(0, dropped - self._dropped_seen))
-            self._dropped_seen = dropped
-        faults = device.faults
-        if faults != self._faults_seen:
-            self.stats.add_fault(max(0, faults - self._faults_seen))
-            self._faults_seen = faults
+            stats.add_timestamps(stamps)
+        self._count = count
+        stats.end_frame(clock.now)
+        self._note_counters()
         if digital is not None:
             self._scan_digital(digital)
-        elif self.changed is not None and self.changed.any():
-            self.changed[:] = False
-        store = device.store
+        elif self._changed is not None and self._changed.any():
+            self._changed[:] = False
+        store = self.device.store
         if _ANALOG in store.kinds:
-            self._note_analog(store.latest(_ANALOG))
+            if analog is False and not first:  # nothing new: the newest held
+                self._hold_analog(owed + 1)
+            else:
+                self._note_analog(store.latest(_ANALOG), owed)
         known = self.units
         for kind, width in units:
             value = kind._value_  # (kind.value: the enum's descriptor, a call per read)
@@ -224,6 +367,17 @@ class DeviceTrack:
                 known = _units_with(known, value, width)
         self.units = known
         return count
+
+    def _note_counters(self) -> None:
+        """The samples dropped and the faults since they were noted last."""
+        dropped = self._dropped_now()
+        if dropped != self._dropped_seen:
+            self._stats.add_dropped(max(0, dropped - self._dropped_seen))
+            self._dropped_seen = dropped
+        faults = self.device.faults
+        if faults != self._faults_seen:
+            self._stats.add_fault(max(0, faults - self._faults_seen))
+            self._faults_seen = faults
 
     def _scan_digital(self, frame: FrameSamples) -> None:
         try:
@@ -240,26 +394,29 @@ class DeviceTrack:
         if not rows.size:
             return
         units = rows.shape[1]
-        previous = self.digital_state
+        previous = self._digital_state
         if previous is None or len(previous) != units:
             previous = rows[0]
             presses = np.zeros(units, dtype=np.int64)
-            if self.presses is not None:
-                presses[: min(units, len(self.presses))] = self.presses[:units]
-            self.presses = presses
+            if self._presses is not None:
+                presses[: min(units, len(self._presses))] = self._presses[:units]
+            self._presses = presses
         stacked = np.vstack((previous[None, :], rows)).astype(np.int8)
         steps = np.diff(stacked, axis=0)
-        self.presses += (steps > 0).sum(axis=0)
-        self.changed = (steps != 0).any(axis=0)
-        self.digital_state = rows[-1].copy()
+        self._presses += (steps > 0).sum(axis=0)
+        self._changed = (steps != 0).any(axis=0)
+        self._digital_state = rows[-1].copy()
 
-    def _note_analog(self, newest: Sample | None) -> None:
+    def _note_analog(self, newest: Sample | None, owed: int = 0) -> None:
+        """One more value of each analog unit (``owed`` frames before: the newest then)."""
+        histories = self._analog_history
+        if owed > 0:
+            self._hold_analog(owed)
         if newest is None:
             return
         values = newest.values
-        histories = self.analog_history
         if type(histories) is tuple:
-            histories = self.analog_history = []
+            histories = self._analog_history = []
         while len(histories) < len(values):
             histories.append(deque(maxlen=self.history_length))
         device = self.device
@@ -284,6 +441,7 @@ class DeviceTrack:
     # -- values -------------------------------------------------------------------------
 
     def unit_views(self) -> list[UnitView]:
+        self.catch_up()
         device = self.device
         store = device.store
         views: list[UnitView] = []
@@ -300,18 +458,20 @@ class DeviceTrack:
                 for unit, raw in enumerate(values):
                     raw = float(raw)
                     value = device.normalize(raw) if isinstance(device, Analog) else raw
-                    history = self.analog_history[unit] if unit < len(self.analog_history) else None
+                    history = (
+                        self._analog_history[unit] if unit < len(self._analog_history) else None
+                    )
                     views.append(UnitView(kind.value, unit, value, raw, history=history))
             elif kind is DeviceKind.DIGITAL:
                 for unit, state in enumerate(values):
                     changed = (
-                        bool(self.changed[unit])
-                        if self.changed is not None and unit < len(self.changed)
+                        bool(self._changed[unit])
+                        if self._changed is not None and unit < len(self._changed)
                         else False
                     )
                     presses = (
-                        int(self.presses[unit])
-                        if self.presses is not None and unit < len(self.presses)
+                        int(self._presses[unit])
+                        if self._presses is not None and unit < len(self._presses)
                         else 0
                     )
                     views.append(
