@@ -163,3 +163,28 @@ def test_a_tuple_of_kinds_given_again_reads_as_the_first_time():
     assert SampleStore(other).kinds == (D, A)
     assert SampleStore(other).kinds is SampleStore([D, A]).kinds
     assert all(type(k) is DeviceKind for k in SampleStore(other).kinds)
+
+
+def test_the_newest_of_a_shared_window_not_taken_in_yet_is_read_from_it():
+    from gadgetctl.input.samples import SharedWindows
+
+    P = DeviceKind.POSITION
+    stores = [SampleStore([A, D, P]) for _ in range(2)]
+    windows = SharedWindows(stores)
+    stamps = np.array([1.0, 2.0, 3.0])
+    items = ((A, np.array([[0.1], [0.2], [0.3]])),)
+    for slot in (0, 1):
+        windows.set_arrays(slot, stamps, items)
+    windows.publish(5.0, windows.every, np.array([0, 0]), np.array([2, 1]))
+    windows.publish(  # a frame with nothing new for either: the windows above stay the newest
+        6.0, np.empty(0, np.int64), np.empty(0, np.int64), np.empty(0, np.int64), np.array([0, 1])
+    )
+    newest = stores[0].newest()  # read without taking the window in (the kinds never filled
+    assert [kind for kind, _ in newest] == [A]  # are not asked)
+    assert newest[0][1].timestamp == 2.0 and float(newest[0][1].values[0]) == 0.2
+    assert stores[1].latest(A).timestamp == 1.0 and stores[1].latest(D) is None
+    for store in stores:  # taken in, the same
+        store.sync()
+    assert stores[0].latest(A).timestamp == 2.0 and stores[1].latest(A).timestamp == 1.0
+    assert [kind for kind, _ in stores[1].newest()] == [A]
+    assert stores[0].total(A) == 2 and stores[1].total(A) == 1

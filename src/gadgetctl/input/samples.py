@@ -759,6 +759,25 @@ class SampleStore:
         frame = channel.frame
         return frame.newest if frame.count else channel.latest
 
+    def newest(self) -> list[tuple[DeviceKind, Sample]]:
+        """:meth:`latest` of each declared kind that has had a sample, in declared order
+        (the kinds that never had one are not asked: a waveform device declares six and
+        fills one)."""
+        shared = self._shared
+        window: tuple[DeviceKind, ...] | list[DeviceKind] = ()
+        if shared is not None and shared.serial != self._synced:
+            slot = self._slot
+            if shared.fresh[slot] or shared.window_serial[slot] > self._applied:
+                window = [kind for kind, _ in shared.arrays[slot][1]]  # (not taken in yet)
+        channels = self._channels
+        found = []
+        for kind in self._kinds:
+            if kind in channels or kind in window:
+                sample = self.latest(kind)
+                if sample is not None:
+                    found.append((kind, sample))
+        return found
+
     def total(self, kind: DeviceKind | None = None) -> int:
         """Samples added so far (dropped ones included)."""
         if self._shared is not None:

@@ -318,7 +318,7 @@ class DeviceTrack:
         frame reads it: a frame noted from shared windows is its store's frame, made when
         first read. A track not noted in the clock's latest frame had nothing in it."""
         if self._noted != self._clock.ticks:
-            self.catch_up()
+            return NO_CURRENT
         frames = self._frames
         return self.device.store.current if frames is _FROM_STORE else frames
 
@@ -445,10 +445,7 @@ class DeviceTrack:
         device = self.device
         store = device.store
         views: list[UnitView] = []
-        for kind in store.kinds:
-            latest = store.latest(kind)
-            if latest is None:
-                continue
+        for kind, latest in store.newest():
             values = latest.values
             if kind is not DeviceKind.POSITION and kind is not DeviceKind.GLOVE:
                 tolist = getattr(values, "tolist", None)  # Python numbers at once, not numpy
