@@ -146,3 +146,22 @@ def test_tracks_noted_from_shared_windows_are_those_noted_from_the_stores(sessio
     assert 5 < windowed.count("slow2") <= had["slow2"]
     assert had["slow2"] < 40
     assert own.count("fast1") >= 2 and own.count("noise0") >= 1
+
+
+def test_a_fault_counted_between_window_notes_shows_when_the_track_is_read(session):
+    for _ in range(5):
+        time.sleep(0.004)
+        session.step()
+    device = session.manager.device("slow1")
+    track = session._tracks["slow1"]
+    faults = track.stats.faults
+    device.faults += 1  # (counted away from a frame of its own, e.g. by its sampling side)
+    for _ in range(200):  # until a frame notes it from the windows (40 Hz: within ~25 ms)
+        time.sleep(0.002)
+        session.step()
+        if track._noted == session._clock.ticks and track._frames is tracks_module._FROM_STORE:
+            break
+    else:
+        raise AssertionError("slow1 was never noted from the windows")
+    assert track.stats.faults == faults + 1
+    assert session.final_stats()["slow1"]["faults"] == faults + 1

@@ -335,3 +335,35 @@ def test_timestamps_of_every_form_wait_as_doubles_and_come_out_in_order():
     stats.add_timestamps(np.arange(7.0, 12.0))  # past ``history``: consolidated as it comes
     assert stats.recent_timestamps().tolist() == [4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0]
     assert stats.max_gap == 1.0
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_frames_without_samples_ended_at_once_are_those_ended_one_by_one(seed):
+    # a track that was not visited in some frames ends them at once when next noted or
+    # read (end_frames): the figures are those of ending each of them in turn
+    rng = np.random.default_rng(seed)
+    one, many = DeviceStats("one"), DeviceStats("many")
+    at, stamp = 100.0, 100.0
+    for _ in range(40):
+        idle = int(rng.integers(0, 200))  # frames without samples (some beyond the window)
+        times = [at + (i + 1) / 60 for i in range(idle)]
+        for t in times:
+            one.end_frame(t)
+        # the clock keeps the times of the last 2 s (and one before), or all of them
+        kept = sum(1 for t in times if t > times[-1] - 2.0) + 1 if rng.random() < 0.5 else idle
+        many.end_frames(idle, times[max(0, len(times) - kept) :])
+        if times:
+            moment = times[-1]
+            assert many.window_samples_per_frame(moment) == one.window_samples_per_frame(moment)
+            assert list(many._frame_ends) == list(one._frame_ends)  # (the same frames kept)
+        at += idle / 60 + 1 / 60
+        stamps = np.sort(stamp + rng.random(int(rng.integers(1, 4))) * 0.01)
+        stamp = float(stamps[-1]) + 0.01
+        for stats in (one, many):
+            stats.add_timestamps(stamps)
+            stats.end_frame(at)
+        assert many.frames == one.frames and many.samples_per_frame == one.samples_per_frame
+        assert many.mean_samples_per_frame == one.mean_samples_per_frame
+        for moment in (at, at + 0.4):
+            assert many.window_samples_per_frame(moment) == one.window_samples_per_frame(moment)
+    assert list(many._frame_ends) == list(one._frame_ends)

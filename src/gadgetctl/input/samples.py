@@ -483,9 +483,10 @@ class SampleStore:
     def changes(self) -> tuple[int, int]:
         """A value that changes whenever the current frame may have been replaced (what
         :meth:`latest` returns may then differ): a reader that saw it knows whether to read
-        again. Read without taking shared windows in."""
+        again. Read without taking shared windows in: a frame group's frame that brought this
+        store no window of its own changes nothing."""
         shared = self._shared
-        return (self._swaps, 0 if shared is None else shared.serial)
+        return (self._swaps, 0 if shared is None else int(shared.window_serial[self._slot]))
 
     @property
     def current(self) -> Mapping[DeviceKind, FrameSamples]:

@@ -15,8 +15,10 @@ recording.
 from __future__ import annotations
 
 from array import array
+from bisect import bisect_right
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, fields
+from itertools import chain, repeat
 
 import numpy as np
 
@@ -211,11 +213,10 @@ class DeviceStats:
         if not times:
             return
         ends = self._frame_ends
-        total = float(self.count)
-        for at in times:
-            ends.append(at)
-            ends.append(total)
         at = times[-1]
+        # only those in the window and the one before it are kept (see end_frame)
+        first = max(0, bisect_right(times, at - self.window) - 1)
+        ends.extend(chain.from_iterable(zip(times[first:], repeat(float(self.count)))))
         old = 0  # keep one frame before the window
         while 2 * old + 2 < len(ends) and ends[2 * old + 2] <= at - self.window:
             old += 1

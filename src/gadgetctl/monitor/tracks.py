@@ -100,6 +100,7 @@ class DeviceTrack:
         "_changed",
         "_clock",
         "_count",
+        "_counted",
         "_digital_state",
         "_dropped_seen",
         "_faults_seen",
@@ -150,6 +151,7 @@ class DeviceTrack:
         # a device is new to its manager, and the session started it: a fault before the first
         # frame (while it started) is one of this run's too
         self._faults_seen = 0
+        self._counted = True  # the dropped samples and faults looked at since the last note
         self._digital_state: np.ndarray | None = None
         self._presses: np.ndarray | None = None
         self._changed: np.ndarray | None = None
@@ -201,6 +203,8 @@ class DeviceTrack:
         upto = clock.ticks if upto is None else upto
         owed = upto - self._noted
         if owed <= 0:
+            if not self._counted and self.statistics:  # (a frame noted from windows)
+                self._note_counters()
             return
         self._noted = upto
         self._frames = NO_CURRENT
@@ -306,10 +310,10 @@ class DeviceTrack:
                 analog = True
         stamps = timestamps[start:stop]
         if items is self._items_seen:  # (their units are noted already)
-            return self._note(digital, stamps, (), owed, analog)
+            return self._note(digital, stamps, (), owed, analog, counters=False)
         self._items_seen = items
         units = [(kind, values.shape[1]) for kind, values in items]
-        return self._note(digital, stamps, units, owed, analog)
+        return self._note(digital, stamps, units, owed, analog, counters=False)
 
     @property
     def frames(self) -> Mapping[DeviceKind, FrameSamples]:
@@ -333,11 +337,13 @@ class DeviceTrack:
         units: Iterable[tuple[DeviceKind, int]],
         owed: int = 0,
         analog: bool | None = None,
+        counters: bool = True,
     ) -> int:
         """Statistics, presses and histories of a frame: its button samples (``digital``),
         its sampling instants ``stamps`` and the units of each kind with samples; the
         ``owed`` frames before it, empty, first. ``analog``: whether the frame has analog
-        samples (None: not known)."""
+        samples (None: not known); ``counters``: whether to look at the dropped samples and
+        faults now."""
         stats = self._stats
         clock = self._clock
         first = not stats.frames  # (what came before this track is read once, from the store)
@@ -349,7 +355,10 @@ class DeviceTrack:
             stats.add_timestamps(stamps)
         self._count = count
         stats.end_frame(clock.now)
-        self._note_counters()
+        if counters:
+            self._note_counters()
+        else:
+            self._counted = False
         if digital is not None:
             self._scan_digital(digital)
         elif self._changed is not None and self._changed.any():
@@ -369,7 +378,10 @@ class DeviceTrack:
         return count
 
     def _note_counters(self) -> None:
-        """The samples dropped and the faults since they were noted last."""
+        """The samples dropped and the faults since they were noted last (a frame noted
+        from shared windows brings neither: they are looked at when the track is read or
+        next noted otherwise)."""
+        self._counted = True
         dropped = self._dropped_now()
         if dropped != self._dropped_seen:
             self._stats.add_dropped(max(0, dropped - self._dropped_seen))
