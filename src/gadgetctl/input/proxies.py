@@ -182,7 +182,7 @@ class Proxy:
     def _unit_value(self, sample: Sample) -> Any:
         values = sample.values
         if self.unit < len(values):
-            if self.reason is not None:
+            if self.__dict__["_reason"] is not None:  # (not through NewestValue: read now)
                 self.reason = None
             return values[self.unit]
         self.reason = f"unit {self.unit} is out of range: {self.device_name!r} has {counted(len(values), f'{self.KIND} unit')}"
@@ -227,8 +227,8 @@ class AnalogProxy(Proxy):
         self.raw = None
 
     def take(self, value: Any, device: Input) -> None:
-        self.raw = float(value)
-        self.value = device.normalize(self.raw) if isinstance(device, Analog) else self.raw
+        raw = self.raw = float(value)
+        self.value = device.normalize(raw) if isinstance(device, Analog) else raw
 
     @property
     def data(self) -> float:

@@ -35,6 +35,7 @@ from gadgetctl.input.proxies import (
     AnalogProxy,
     DigitalProxy,
     PositionProxy,
+    ProxyState,
 )
 from gadgetctl.input.samples import FrameSamples, SharedWindows
 from gadgetctl.input.status import UNKNOWN_TYPE, ElementKind, ElementStatus
@@ -126,6 +127,7 @@ FINAL_PART = 512
 
 #: The sampling instants of a frame with nothing new.
 _NO_STAMPS = np.empty(0)
+_STUPEFIED, _ACTIVE = ProxyState.STUPEFIED.value, ProxyState.ACTIVE.value
 
 
 class FinalStats(Mapping[str, dict[str, object]]):
@@ -933,17 +935,15 @@ class MonitorSession:
             return DEVICE, device.element_type, state.value, reason
         proxy = manager.proxies.get(name)
         if proxy is not None:
-            return (
-                PROXY,
-                proxy.element_type,
-                proxy.state.value,
-                proxy.reason if proxy.stupefied else None,
-            )
+            reason = proxy.reason  # (read once: a proxy reads its device when read)
+            if proxy.device is None or reason is not None:
+                return PROXY, proxy.element_type, _STUPEFIED, reason
+            return PROXY, proxy.element_type, _ACTIVE, None
         target = manager.aliases.get(name)
         if target is not None:
             proxy = manager.proxies.get(target)
             if proxy is None:
-                return ALIAS, "alias", "stupefied", f"its proxy {target!r} is not configured"
+                return ALIAS, "alias", _STUPEFIED, f"its proxy {target!r} is not configured"
             return ALIAS, "alias", proxy.state.value, proxy.reason if proxy.stupefied else None
         status = manager.status(name)
         if status is not None and status.state in (PENDING, UNKNOWN_TYPE):
