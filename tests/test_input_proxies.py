@@ -210,8 +210,10 @@ def test_a_proxy_reads_its_device_when_read_and_a_digital_one_every_frame(make):
     m.update()
     m.update()  # (a frame without samples: the newest stays)
     assert analog.raw == 155.0 and reads["T"] == 2
-    far = m.proxy("Far")  # a unit out of range is found when it is read
-    assert far.stupefied and "unit 3 is out of range" in far.reason and far.data == 0.0
+    far = m.proxy("Far")  # a unit out of range is found when the proxy is read
+    assert far.stupefied and "unit 3 is out of range" in far.reason
+    assert far.data == 0.0  # (the neutral value)
+    assert "Far" not in reads  # (its state alone: no value was read for it)
     assert m.proxy("A Proxy").data == OFF
 
 

@@ -74,6 +74,22 @@ class NewestValue:
         proxy.__dict__[self._key] = value
 
 
+class UnitReason:
+    """A proxy's reason: reading it first looks at whether its unit is within its device's
+    newest sample (:meth:`Proxy.check_unit`), without reading the value."""
+
+    __slots__ = ()
+
+    def __get__(self, proxy: Proxy | None, owner: type | None = None) -> Any:
+        if proxy is None:
+            return self
+        proxy.check_unit()
+        return proxy.__dict__["_reason"]
+
+    def __set__(self, proxy: Proxy, value: str | None) -> None:
+        proxy.__dict__["_reason"] = value
+
+
 class Proxy:
     """Base of every proxy type."""
 
@@ -85,7 +101,7 @@ class Proxy:
     EVERY_FRAME: ClassVar[bool] = False
 
     timestamp = NewestValue()
-    reason = NewestValue()
+    reason = UnitReason()
 
     def __init__(self) -> None:
         self.name = ""
@@ -98,6 +114,7 @@ class Proxy:
         self.diagnostics: list[Diagnostic] = []  # configuration findings (e.g. skipped filters)
         self._updated_frame = -1
         self._seen: object = None  # the device store's changes() when read last
+        self._unit_seen: object = None  # ... and when the unit was checked last
         self.reset()
 
     @property
@@ -133,7 +150,7 @@ class Proxy:
             self.reason = None
             self.reset()
             self._updated_frame = -1
-            self._seen = None
+            self._seen = self._unit_seen = None
 
     def stupefy(self, reason: str) -> None:
         self.device = None
@@ -179,15 +196,35 @@ class Proxy:
             self.timestamp = sample.timestamp
             self.take(value, device)
 
+    def check_unit(self) -> None:
+        """Whether the unit is within the device's newest sample, looked at again when the
+        device's frame changed (the value is read only when read: :meth:`catch_up`)."""
+        if self.EVERY_FRAME:
+            return
+        device = self.device
+        if device is None:
+            return
+        store = device.store
+        seen = store.changes()
+        if seen != self._unit_seen:
+            self._unit_seen = seen
+            width = store.width(self.KIND)
+            if width is not None:
+                self._unit_within(width)
+
+    def _unit_within(self, width: int) -> bool:
+        """Set or clear the reason for a device whose newest sample has ``width`` units."""
+        if self.unit < width:
+            if self.__dict__["_reason"] is not None:  # (not through the descriptor: now)
+                self.reason = None
+            return True
+        self.reason = f"unit {self.unit} is out of range: {self.device_name!r} has {counted(width, f'{self.KIND} unit')}"
+        self.reset()
+        return False
+
     def _unit_value(self, sample: Sample) -> Any:
         values = sample.values
-        if self.unit < len(values):
-            if self.__dict__["_reason"] is not None:  # (not through NewestValue: read now)
-                self.reason = None
-            return values[self.unit]
-        self.reason = f"unit {self.unit} is out of range: {self.device_name!r} has {counted(len(values), f'{self.KIND} unit')}"
-        self.reset()
-        return None
+        return values[self.unit] if self._unit_within(len(values)) else None
 
     # -- type-specific ------------------------------------------------------------------
 
@@ -338,6 +375,7 @@ class PositionProxy(Proxy):
     @property
     def matrix(self) -> np.ndarray:
         """Read-only 4x4 matrix in meters (identity when stupefied)."""
+        self.catch_up()
         return np.eye(4) if self.stupefied else self._matrix
 
     @property

@@ -760,6 +760,19 @@ class SampleStore:
         frame = channel.frame
         return frame.newest if frame.count else channel.latest
 
+    def width(self, kind: DeviceKind) -> int | None:
+        """How many units the newest sample of ``kind`` has (None before the first), read
+        without making that sample when it is in a shared window not taken in yet."""
+        shared = self._shared
+        if shared is not None and shared.serial != self._synced:
+            slot = self._slot
+            if shared.fresh[slot] or shared.window_serial[slot] > self._applied:
+                for found, values in shared.arrays[slot][1]:
+                    if found is kind:
+                        return values.shape[1]
+        newest = self.latest(kind)
+        return None if newest is None else len(newest.values)
+
     def newest(self) -> list[tuple[DeviceKind, Sample]]:
         """:meth:`latest` of each declared kind that has had a sample, in declared order
         (the kinds that never had one are not asked: a waveform device declares six and
