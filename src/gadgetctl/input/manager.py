@@ -821,7 +821,7 @@ class InputManager:
 
     def update(self) -> int:
         """One frame: reconfigure, update every device, then every proxy that looks at every
-        frame (:attr:`Proxy.every_frame`; the others read their device when read). Returns
+        frame (:attr:`Proxy.EVERY_FRAME`; the others read their device when read). Returns
         the frame number."""
         interval = self.options.retry_interval
         if interval is not None and self._pending and now() - self._last_retry >= interval:
@@ -939,7 +939,7 @@ class InputManager:
             self._frame_order = (
                 _frame_groups([self._device_objects[n] for n in sorted(self._device_objects)]),
                 # the proxies that must look at every frame (the others read when read)
-                [p for n in sorted(self._proxies) if (p := self._proxies[n]).every_frame],
+                [p for n in sorted(self._proxies) if (p := self._proxies[n]).EVERY_FRAME],
             )
         return self._frame_order
 

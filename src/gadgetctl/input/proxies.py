@@ -8,7 +8,7 @@ re-bind whenever devices come and go, so a device added back revives them.
 A proxy shows its device's newest sample. Most proxies read it when they are read (their
 value attributes are :class:`NewestValue` descriptors), so a frame costs nothing for the
 proxies nobody looks at (10,000 position proxies were half of a frame). Proxies that must
-see every frame (:attr:`Proxy.every_frame`) read it once per frame: the digital proxy looks
+see every frame (:attr:`Proxy.EVERY_FRAME`) read it once per frame: the digital proxy looks
 at every sample of the frame so that a press and release between two frames is not lost,
 and the keyboard/mouse proxy takes the newest of that frame.
 """
@@ -116,11 +116,6 @@ class Proxy:
         self._seen: object = None  # the device store's changes() when read last
         self._unit_seen: object = None  # ... and when the unit was checked last
         self.reset()
-
-    @property
-    def every_frame(self) -> bool:
-        """Whether the manager must update this proxy every frame (see :attr:`EVERY_FRAME`)."""
-        return self.EVERY_FRAME
 
     # -- configuration ------------------------------------------------------------------
 
