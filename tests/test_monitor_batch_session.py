@@ -49,8 +49,8 @@ def test_final_statistics_by_parts_are_those_device_by_device(many, monkeypatch)
     session = MonitorSession(manager, configuration)
     session.start()
     list(session.frames(duration=0.4))
-    session._tracks["W3"].stats.add_dropped(5)
-    session._tracks["W4"].stats.add_fault(2)
+    session.gatherer.tracks["W3"].stats.add_dropped(5)
+    session.gatherer.tracks["W4"].stats.add_fault(2)
     with manager.hold_sampling():
         moment = session.last_look
         view = session.final_stats_view()
@@ -108,7 +108,7 @@ def test_the_table_of_statistics_computed_together_is_the_one_device_by_device(m
         together = io.StringIO()
         TableView(session, together).print()
         assert sum(computed) == 23  # every device's figures computed together
-        for track in session._tracks.values():  # forget them: computed again one by one
+        for track in session.gatherer.tracks.values():  # forget them: computed again one by one
             track._snapshot = None
         monkeypatch.setattr(MonitorSession, "_refresh_stats", lambda self, names, moment: None)
         one_by_one = io.StringIO()

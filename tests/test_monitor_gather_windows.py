@@ -89,7 +89,7 @@ def test_tracks_noted_from_shared_windows_are_those_noted_from_the_stores(sessio
         return real(track, *args)
 
     def counted_update(track):
-        if session._tracks.get(track.name) is track:
+        if session.gatherer.tracks.get(track.name) is track:
             own.append(track.name)
         return real_update(track)
 
@@ -107,13 +107,13 @@ def test_tracks_noted_from_shared_windows_are_those_noted_from_the_stores(sessio
                 f"{name}{copy}" for name in ("slow", "noise") for copy in range(3)
             }
             for name in watched:  # a frame noted from the windows is made only when read
-                track = session._tracks[name]  # (but to count button presses: "slow")
+                track = session.gatherer.tracks[name]  # (but to count button presses: "slow")
                 if track._frames is tracks_module._FROM_STORE and not name.startswith("slow"):
                     store = track.device.store
                     assert store.shared[0].serial != store._synced, name
                     unmade += 1
             for name in watched:
-                track = session._tracks[name]
+                track = session.gatherer.tracks[name]
                 shadow = shadows.get(name)
                 if shadow is None:
                     shadow = shadows[name] = DeviceTrack(name, track.device, session.history)
@@ -124,7 +124,7 @@ def test_tracks_noted_from_shared_windows_are_those_noted_from_the_stores(sessio
                 if newest is not None:
                     analog_frames[name] = analog_frames.get(name, 0) + 1
                     device = session.manager.device(name)
-                    history = session._tracks[name].analog_history[0]
+                    history = session.gatherer.tracks[name].analog_history[0]
                     assert history[-1] == device.normalize(float(newest.values[0])), name
                     assert len(history) == analog_frames[name], name
             expected = [name for name in watched if shadows[name].frames]
@@ -153,13 +153,16 @@ def test_a_fault_counted_between_window_notes_shows_when_the_track_is_read(sessi
         time.sleep(0.004)
         session.step()
     device = session.manager.device("slow1")
-    track = session._tracks["slow1"]
+    track = session.gatherer.tracks["slow1"]
     faults = track.stats.faults
     device.faults += 1  # (counted away from a frame of its own, e.g. by its sampling side)
     for _ in range(200):  # until a frame notes it from the windows (40 Hz: within ~25 ms)
         time.sleep(0.002)
         session.step()
-        if track._noted == session._clock.ticks and track._frames is tracks_module._FROM_STORE:
+        if (
+            track._noted == session.gatherer.clock.ticks
+            and track._frames is tracks_module._FROM_STORE
+        ):
             break
     else:
         raise AssertionError("slow1 was never noted from the windows")

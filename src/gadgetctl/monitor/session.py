@@ -27,7 +27,7 @@ import numpy as np
 
 from gadgetctl.errors import GadgetctlError
 from gadgetctl.input.clock import now
-from gadgetctl.input.device import DeviceState, Input
+from gadgetctl.input.device import DeviceState
 from gadgetctl.input.devicetypes import Analog
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.manager import InputManager
@@ -37,19 +37,12 @@ from gadgetctl.input.proxies import (
     PositionProxy,
     ProxyState,
 )
-from gadgetctl.input.samples import FrameSamples, SharedWindows
+from gadgetctl.input.samples import FrameSamples
 from gadgetctl.input.status import UNKNOWN_TYPE, ElementKind, ElementStatus
 from gadgetctl.jccl.configuration import Configuration
 from gadgetctl.monitor.encoding import encode_frame, json_value, plain_json, proxy_value
-from gadgetctl.monitor.gather import (
-    NO_GATHERING,
-    NOTHING,
-    PLACE,
-    GatheredFrames,
-    GatherPlan,
-    Noted,
-    SharedGroup,
-)
+from gadgetctl.monitor.gather import NOTHING
+from gadgetctl.monitor.gathering import FrameGatherer
 from gadgetctl.monitor.poses import MATRIX, pose_values
 from gadgetctl.monitor.recording import Recorder
 from gadgetctl.monitor.records import (
@@ -61,7 +54,7 @@ from gadgetctl.monitor.records import (
 )
 from gadgetctl.monitor.sinks import FRAME, MARKER, SAMPLES, Opener, Sinks
 from gadgetctl.monitor.stats import DeviceSnapshot, snapshot_rows, snapshots
-from gadgetctl.monitor.tracks import DeviceTrack, FrameClock
+from gadgetctl.monitor.tracks import DeviceTrack
 from gadgetctl.monitor.views import ElementView, Frame, Snapshot, UnitView
 from gadgetctl.perf import collector_paused
 from gadgetctl.suggest import did_you_mean
@@ -138,7 +131,7 @@ class FinalStats(Mapping[str, dict[str, object]]):
     def __init__(self, session: MonitorSession, moment: float) -> None:
         self._session = session
         self._moment = moment
-        tracks, device = session._tracks, session.manager.device
+        tracks, device = session.gatherer.tracks, session.manager.device
         self._names = [
             name
             for name in session._selected
@@ -161,7 +154,7 @@ class FinalStats(Mapping[str, dict[str, object]]):
 
     def _read_part(self, part: int) -> None:
         self._rows = {}  # (the previous part's figures go first)
-        tracks = self._session._tracks
+        tracks = self._session.gatherer.tracks
         found = [
             (name, track)
             for name in self._names[part * FINAL_PART : (part + 1) * FINAL_PART]
@@ -219,8 +212,8 @@ class MonitorSession:
         self.markers: list[MarkerRecord] = []
         self.finished = False
         self._selected: list[str] = []
-        self._tracks: dict[str, DeviceTrack] = {}
-        self._clock = FrameClock()  # the frames its tracks note
+        #: The watched devices, their tracks and each frame's samples.
+        self.gatherer = FrameGatherer(manager, self.history, statistics)
         self._sinks = Sinks()
         self._proxy_stamps: dict[str, float | None] = {}
         self._frame_interval = 1.0 / rate
@@ -233,10 +226,7 @@ class MonitorSession:
         #: (requested, achieved) frame rate, set once when the frames fall short of the rate.
         self.rate_shortfall: tuple[float, float] | None = None
         self._stop = False
-        self._watch: list[str] = []
         self._consumers: list[FrameConsumer] = []
-        self._gathered: Mapping[str, Mapping[DeviceKind, FrameSamples]] = NO_GATHERING
-        self._plan: GatherPlan | None = None
         self._keyboards: tuple[object, list[str]] | None = None  # (arrangement, names)
 
     # -- setting up ---------------------------------------------------------------------
@@ -316,18 +306,18 @@ class MonitorSession:
     def watched(self) -> list[str]:
         """The devices whose samples are gathered every frame (the selected ones and those
         the selected proxies and aliases read)."""
-        return list(self._watch)
+        return list(self.gatherer.watch)
 
     def frame_samples(self, name: str) -> Mapping[DeviceKind, FrameSamples]:
         """Every sample the watched device ``name`` delivered this frame, per kind (empty
         when it delivered nothing or is not watched)."""
-        return self._gathered.get(name, NOTHING)
+        return self.gatherer.gathered.get(name, NOTHING)
 
     @property
     def gathered(self) -> Mapping[str, Mapping[DeviceKind, FrameSamples]]:
         """This frame's samples of every watched device that delivered any, by device name:
         what :meth:`frame_samples` gives, in one read-only mapping (replaced each frame)."""
-        return self._gathered
+        return self.gatherer.gathered
 
     def add_sink(
         self,
@@ -364,11 +354,11 @@ class MonitorSession:
         elements: dict[str, dict[str, object]] = {}
         devices = []
         alike: dict[tuple, dict[str, object]] = {}  # each entry, by what it holds
-        for name in self._names_with_targets():
+        for name in self.gatherer.watch_names(self._selected):
             device = manager.device(name)
             if device is not None:
                 devices.append(name)
-                track = self._tracks.get(name)
+                track = self.gatherer.tracks.get(name)
                 units = dict(track.units) if track is not None else {}
                 store = device.store
                 store.sync()
@@ -416,23 +406,6 @@ class MonitorSession:
             "selection": list(self.selectors),
             "frame_rate": self.rate,
         }
-
-    def _names_with_targets(self) -> list[str]:
-        """The selected names plus the proxies and devices they lead to."""
-        manager = self.manager
-        names = list(self._selected)
-        seen = set(names)
-        for name in list(names):
-            target = manager.aliases.get(name)
-            if target is not None and target not in seen:
-                names.append(target)
-                seen.add(target)
-        for name in list(names):
-            proxy = manager.proxies.get(name)
-            if proxy is not None and proxy.device_name and proxy.device_name not in seen:
-                names.append(proxy.device_name)
-                seen.add(proxy.device_name)
-        return names
 
     # -- running ------------------------------------------------------------------------
 
@@ -542,203 +515,18 @@ class MonitorSession:
         arrangement = manager.arrangement  # replaced when devices or proxies come or go
         self.frame = manager.update()
         self.frame_timestamp = moment
-        if manager.arrangement is not arrangement or not self._watch:
-            self._watch = self._names_with_targets()
-        gathered: dict[str, Mapping[DeviceKind, FrameSamples] | Noted] = {}
-        self._clock.tick(now())  # (before the plan: a track made for it starts in this frame)
-        if self.statistics or self._sinks:
-            samples = self._gather_every(self._gather_plan(), gathered)
-            self._gathered = GatheredFrames(gathered)
-        else:  # gathering only: frame groups' shared windows are read at once
-            plan = self._gather_plan()
-            samples = self._gather(plan.own, gathered) if plan.own else 0
-            for group in plan.groups:
-                windows = group.windows
-                if group.slots is windows.every:  # every slot's window, as published
-                    samples += windows.fresh_samples
-                    if windows.none_alone:
-                        continue  # (every other slot empty: none swapped on its own)
-                    slots, fresh = windows.select(group.slots), windows.fresh
-                else:
-                    slots = windows.select(group.slots)
-                    fresh = windows.fresh[slots]
-                    sizes = windows.stops[slots] - windows.starts[slots]
-                    if fresh.all():
-                        samples += int(sizes.sum())
-                        continue
-                    samples += int(sizes[fresh].sum())
-                alone = ~(fresh | windows.emptied[slots])  # neither a window nor empty
-                if alone.any():
-                    self._gather([group.names[i] for i in np.flatnonzero(alone).tolist()], gathered)
-            self._gathered = GatheredFrames(gathered, plan.shared, plan.groups)
+        samples = self.gatherer.gather(
+            self.frame,
+            self._selected,
+            renewed=manager.arrangement is not arrangement,
+            every=self.statistics or bool(self._sinks),
+        )
         if self.source is not None:
             for marker in self.source.drain_markers():
                 self._note_marker(marker)
         for consumer in self._consumers:
             consumer(self, moment)
         return Frame(self.frame, moment, moment - self.started_at, samples)
-
-    def _track(self, name: str, device: Input) -> DeviceTrack:
-        track = self._tracks.get(name)
-        if track is None or track.device is not device:
-            track = self._tracks[name] = DeviceTrack(
-                name, device, self.history, self.statistics, self._clock
-            )
-        return track
-
-    def _gather(
-        self, names: Iterable[str], gathered: dict[str, Mapping[DeviceKind, FrameSamples]]
-    ) -> int:
-        """Update the tracks of ``names`` (watched devices) and put what each delivered this
-        frame in ``gathered``; returns the samples (sampling instants)."""
-        samples = 0
-        device_named = self.manager.devices.get
-        frame = self.frame
-        for name in names:
-            device = device_named(name)
-            if device is None:
-                continue
-            track = self._track(name, device)
-            samples += track.update()
-            track.frame_seen = frame
-            if track.frames:
-                gathered[name] = track.frames
-        return samples
-
-    def _gather_every(
-        self, plan: GatherPlan, gathered: dict[str, Mapping[DeviceKind, FrameSamples] | Noted]
-    ) -> int:
-        """:meth:`_gather` of every watched device with something this frame, in watch
-        order: a device whose frame is a window of its group's shared arrays is noted from the
-        arrays (:meth:`DeviceTrack.update_window`), the others per device. The members of a
-        frame group with nothing this frame (most, for slow devices) are not visited: their
-        tracks catch up with the session's clock when next noted or read."""
-        frame = self.frame
-        tracks = plan.tracks
-        found: dict[int, Mapping[DeviceKind, FrameSamples] | Noted] = {}
-        samples = 0
-        for index in plan.own_indices:
-            track = tracks[index]
-            samples += track.update()
-            track.frame_seen = frame
-            if track.frames:
-                found[index] = track.frames
-        for group, windows in enumerate(plan.windows):
-            serial = windows.serial
-            if serial == plan.serials[group]:
-                continue  # it did not publish this frame: nothing new for its devices
-            plan.serials[group] = serial
-            index_of = plan.slot_indices[group]
-            moment = windows.moment
-            if windows.fresh_slots:
-                if windows.fresh_slots == len(windows.every):
-                    slots = windows.every
-                else:
-                    slots = np.flatnonzero(windows.fresh)
-                indices = index_of[slots]
-                chosen = indices >= 0
-                if not chosen.all():
-                    slots, indices = slots[chosen], indices[chosen]
-                arrays = windows.arrays
-                for slot, index, start, stop in zip(
-                    slots.tolist(),
-                    indices.tolist(),
-                    windows.starts[slots].tolist(),
-                    windows.stops[slots].tolist(),
-                    strict=True,
-                ):
-                    track = tracks[index]
-                    if track._swapped_at == moment:
-                        continue  # noted already (a plan made again within the frame)
-                    timestamps, items = arrays[slot]
-                    count = track.update_window(timestamps, items, start, stop, moment)
-                    samples += count
-                    track.frame_seen = frame
-                    if count:  # (its frame made when read)
-                        found[index] = track
-                    elif track.frames:
-                        found[index] = track.frames
-            if not windows.none_alone:  # swapped on their own this frame
-                alone = np.flatnonzero(~(windows.fresh | windows.emptied))
-                for index in index_of[alone].tolist():
-                    if index < 0:
-                        continue
-                    track = tracks[index]
-                    samples += track.update()
-                    track.frame_seen = frame
-                    if track.frames:
-                        found[index] = track.frames
-        names = plan.names
-        for index in sorted(found):
-            gathered[names[index]] = found[index]
-        return samples
-
-    def _gather_plan(self) -> GatherPlan:
-        """How :meth:`step` gathers, made again when the watched names or what the manager
-        updates change."""
-        manager = self.manager
-        arrangement = manager.arrangement
-        plan = self._plan
-        if plan is not None and plan.arrangement is arrangement and plan.watch is self._watch:
-            return plan
-        # (only a session without statistics reads shared windows by name and by group:
-        # 10,000 devices' entries were a megabyte more)
-        by_name = not (self.statistics or self._sinks)
-        own: list[str] = []
-        shared: dict[str, tuple[SharedWindows, int, Input]] = {}
-        # per group: its windows, the watched slots and names, and its index
-        members: dict[int, tuple[SharedWindows, list[int], list[str], int]] = {}
-        names: list[str] = []
-        tracks: list[DeviceTrack] = []
-        places: list[int] = []
-        own_indices: list[int] = []
-        for name in self._watch:
-            device = manager.devices.get(name)
-            if device is None:
-                continue
-            names.append(name)
-            tracks.append(self._track(name, device))
-            place = device.store.shared
-            if place is None:
-                own.append(name)
-                own_indices.append(len(places))
-                places.append(-1)
-                continue
-            windows, slot = place
-            entry = members.get(id(windows))
-            if entry is None:
-                entry = members[id(windows)] = (windows, [], [], len(members))
-            if by_name:
-                shared[name] = (windows, slot, device)
-                entry[1].append(slot)
-                entry[2].append(name)
-            places.append(entry[3] * PLACE + slot)
-        groups = [
-            SharedGroup(windows, slots, group_names)
-            for windows, slots, group_names, _ in (members.values() if by_name else ())
-        ]
-        self._plan = GatherPlan(
-            arrangement,
-            self._watch,
-            own,
-            shared,
-            groups,
-            names,
-            tracks,
-            np.array(places, dtype=np.int64),
-            [windows for windows, _, _, _ in members.values()],
-            own_indices,
-        )
-        return self._plan
-
-    def _current_track(self, name: str) -> DeviceTrack | None:
-        """The track of ``name`` with this frame's samples (a device gathered from shared
-        windows has its track brought up to date when it is read)."""
-        track = self._tracks.get(name)
-        if track is not None and track.frame_seen != self.frame and not self.statistics:
-            track.update()
-            track.frame_seen = self.frame
-        return track
 
     # -- writing ------------------------------------------------------------------------
 
@@ -774,7 +562,7 @@ class MonitorSession:
     def _warm(self) -> bool:
         """Whether every watched running device has delivered something (so the header can
         tell its units)."""
-        for name in self._watch:
+        for name in self.gatherer.watch:
             device = self.manager.device(name)
             if device is None or device.state is not DeviceState.RUNNING:
                 continue
@@ -822,7 +610,7 @@ class MonitorSession:
         manager = self.manager
         stream_proxies = bool(self.selectors)
         for name in self._selected:
-            track = self._current_track(name)
+            track = self.gatherer.current_track(name)
             if track is not None and manager.device(name) is track.device:
                 for kind, samples in track.frames.items():
                     yield encode_frame(name, kind, samples, track.device, pose)
@@ -851,7 +639,7 @@ class MonitorSession:
         manager = self.manager
         devices: dict[str, FrameDevice] = {}
         for name in self._selected:
-            track = self._current_track(name)
+            track = self.gatherer.current_track(name)
             if track is not None and manager.device(name) is track.device:
                 values: dict[str, dict[int, object]] = {}
                 store = track.device.store
@@ -902,8 +690,7 @@ class MonitorSession:
 
     def reset_stats(self) -> None:
         """Forget statistics and press counts (the r key)."""
-        for track in self._tracks.values():
-            track.reset()
+        self.gatherer.reset()
 
     def close_sinks(
         self,
@@ -957,7 +744,7 @@ class MonitorSession:
         return None, element.type if element is not None else "", "removed", "no longer configured"
 
     def device_stats(self, name: str, moment: float | None = None) -> DeviceSnapshot | None:
-        track = self._tracks.get(name)
+        track = self.gatherer.tracks.get(name)
         return None if track is None else track.snapshot(now() if moment is None else moment)
 
     def final_stats(self) -> dict[str, dict[str, object]]:
@@ -982,7 +769,7 @@ class MonitorSession:
         """The :meth:`final_stats` entry of ``name`` at ``moment`` (None: not a device
         with a track), with its statistics' ``figures`` when they were computed (with
         other devices': :func:`~gadgetctl.monitor.stats.snapshot_rows`)."""
-        track = self._tracks.get(name)
+        track = self.gatherer.tracks.get(name)
         device = self.manager.device(name)
         if track is None or device is None:
             return None
@@ -1005,7 +792,7 @@ class MonitorSession:
         without the statistics."""
         result: dict[str, tuple[int, str, str | None]] = {}
         for name in self._selected:
-            track = self._tracks.get(name)
+            track = self.gatherer.tracks.get(name)
             device = self.manager.device(name)
             if track is not None and device is not None:
                 result[name] = (track.stats.faults, device.state.value, device.error)
@@ -1072,7 +859,7 @@ class MonitorSession:
         stale = [
             track
             for name in names
-            if (track := self._current_track(name)) is not None and track.stale(moment)
+            if (track := self.gatherer.current_track(name)) is not None and track.stale(moment)
         ]
         if len(stale) > 1:
             found = snapshots([track.stats for track in stale], moment)
@@ -1098,7 +885,7 @@ class MonitorSession:
         if device is not None and not detail:
             return view
         if device is not None:
-            track = self._current_track(name)
+            track = self.gatherer.current_track(name)
             if track is not None and track.device is device:
                 self._fill_from_track(view, track, moment)
                 view.values = track.unit_views()
@@ -1117,7 +904,7 @@ class MonitorSession:
         view.unit = proxy.unit if proxy.HAS_UNIT else None
         if not detail:
             return view
-        track = self._current_track(proxy.device_name)
+        track = self.gatherer.current_track(proxy.device_name)
         live = track is not None and track.device is proxy.device
         if live:
             self._fill_from_track(view, track, moment)
