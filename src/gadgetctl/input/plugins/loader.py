@@ -18,7 +18,6 @@ other plug-ins still load.
 
 from __future__ import annotations
 
-import hashlib
 import importlib
 import importlib.util
 import re
@@ -101,6 +100,8 @@ class PluginRegistrar:
 
 def module_name(info: PluginInfo) -> str:
     """The private ``sys.modules`` name a plug-in loaded from a path gets."""
+    import hashlib  # (here: OpenSSL's library is 3.6 MB more of every run that loads none)
+
     digest = hashlib.sha1(str(info.path.resolve()).encode()).hexdigest()[:10]
     safe = _UNSAFE.sub("_", info.name)
     return f"{_MODULE_PREFIX}{safe}_{digest}"
