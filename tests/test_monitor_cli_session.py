@@ -381,9 +381,9 @@ def test_a_frames_sample_records_go_out_in_parts_after_the_header(monkeypatch):
     """Issue 27: a frame's sample records are written in parts of about ``ENCODED_PART``
     characters as they are encoded (10,000 devices' first frame made whole was three copies
     of megabytes of text), after the header: the same records, in the same order."""
-    from gadgetctl.monitor import session as session_module
+    from gadgetctl.monitor import framerecords
 
-    monkeypatch.setattr(session_module, "ENCODED_PART", 200)
+    monkeypatch.setattr(framerecords, "ENCODED_PART", 200)
     manager, session = _controlled(kinds=("digital", "analog"))
     writes: list[bytes] = []
 

@@ -1,7 +1,8 @@
 """The frame gatherer on its own, as a session uses it: the watched names are the selected
 ones and what they lead to, and gathering with statistics (every device noted in its track)
 or without (frame groups' windows handed out as they are) gives the same samples by device,
-frame by frame."""
+frame by frame, and counts them alike: also when the devices' first frames are their own
+(the scheduler published for them before frames began)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import time
 import pytest
 
 from gadgetctl.input.manager import InputManager
+from gadgetctl.input.testing import wait_until
 from gadgetctl.monitor.gather import frame_timestamps
 from gadgetctl.monitor.gathering import FrameGatherer
 
@@ -46,8 +48,12 @@ def test_the_watched_names_are_the_selected_ones_and_what_they_lead_to(manager):
     assert set(gatherer.tracks) == {"W0", "W2"}  # devices only
 
 
-def test_gathering_with_and_without_statistics_gives_the_same_samples(manager):
+@pytest.mark.parametrize("stood_in", [False, True], ids=["frames-from-start", "stood-in-first"])
+def test_gathering_with_and_without_statistics_gives_the_same_samples(manager, stood_in):
     selected = ["W0", "W1", "W3", "Look"]
+    if stood_in:  # no frame yet: the scheduler publishes into each store, swapped on its own
+        devices = [manager.devices[f"W{i}"] for i in range(4)]
+        assert wait_until(lambda: all(d.store.total() > 0 for d in devices), timeout=10)
     noting = FrameGatherer(manager, history=8, statistics=True)
     handing = FrameGatherer(manager, history=8, statistics=False)
     seen: dict[str, int] = {}

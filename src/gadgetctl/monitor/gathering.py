@@ -110,7 +110,8 @@ class FrameGatherer:
                 samples += int(sizes[fresh].sum())
             alone = ~(fresh | windows.emptied[slots])  # neither a window nor empty
             if alone.any():
-                self._gather([group.names[i] for i in np.flatnonzero(alone).tolist()], gathered)
+                names = [group.names[i] for i in np.flatnonzero(alone).tolist()]
+                samples += self._gather(names, gathered)
         self.gathered = GatheredFrames(gathered, plan.shared, plan.groups)
         return samples
 

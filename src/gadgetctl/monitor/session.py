@@ -28,29 +28,25 @@ import numpy as np
 from gadgetctl.errors import GadgetctlError
 from gadgetctl.input.clock import now
 from gadgetctl.input.device import DeviceState
-from gadgetctl.input.devicetypes import Analog
 from gadgetctl.input.kinds import DeviceKind
 from gadgetctl.input.manager import InputManager
 from gadgetctl.input.proxies import (
     AnalogProxy,
     DigitalProxy,
-    PositionProxy,
     ProxyState,
 )
 from gadgetctl.input.samples import FrameSamples
 from gadgetctl.input.status import UNKNOWN_TYPE, ElementKind, ElementStatus
 from gadgetctl.jccl.configuration import Configuration
-from gadgetctl.monitor.encoding import encode_frame, json_value, plain_json, proxy_value
+from gadgetctl.monitor.encoding import proxy_value
+from gadgetctl.monitor.framerecords import ALIAS, DEVICE, PROXY, FrameRecords
 from gadgetctl.monitor.gather import NOTHING
 from gadgetctl.monitor.gathering import FrameGatherer
-from gadgetctl.monitor.poses import MATRIX, pose_values
+from gadgetctl.monitor.poses import MATRIX
 from gadgetctl.monitor.recording import Recorder
 from gadgetctl.monitor.records import (
-    FrameDevice,
     FrameRecord,
     MarkerRecord,
-    SampleRecord,
-    encode_samples,
 )
 from gadgetctl.monitor.sinks import FRAME, MARKER, SAMPLES, Opener, Sinks
 from gadgetctl.monitor.stats import DeviceSnapshot, snapshot_rows, snapshots
@@ -59,7 +55,6 @@ from gadgetctl.monitor.views import ElementView, Frame, Snapshot, UnitView
 from gadgetctl.perf import collector_paused
 from gadgetctl.suggest import did_you_mean
 
-DEVICE, PROXY, ALIAS = ElementKind.DEVICE.value, ElementKind.PROXY.value, ElementKind.ALIAS.value
 PENDING = "pending"
 DEFAULT_HISTORY_SECONDS = 5.0
 SINK_WARMUP = 0.5  # seconds a session waits for every device's first sample before its header
@@ -68,8 +63,6 @@ SINK_WARMUP = 0.5  # seconds a session waits for every device's first sample bef
 #: (0: only when the next frame is already due; skipped work is done by a later pause, or by
 #: the frame that needs it).
 PREPARE_SLACK = 0.0
-#: Characters of sample records written at once when a frame's records go out in parts.
-ENCODED_PART = 1 << 20
 
 
 class SelectionError(GadgetctlError):
@@ -214,8 +207,9 @@ class MonitorSession:
         self._selected: list[str] = []
         #: The watched devices, their tracks and each frame's samples.
         self.gatherer = FrameGatherer(manager, self.history, statistics)
+        #: The records of its frames (proxies' own sample records when selectors name them).
+        self.records = FrameRecords(manager, self.gatherer, stream_proxies=bool(self.selectors))
         self._sinks = Sinks()
-        self._proxy_stamps: dict[str, float | None] = {}
         self._frame_interval = 1.0 / rate
         self._last_frame_at: float | None = None
         #: When the next frame of :meth:`frames` is due (None outside it).
@@ -346,59 +340,9 @@ class MonitorSession:
     # -- header -------------------------------------------------------------------------
 
     def header_info(self) -> dict[str, object]:
-        """What replay needs: every selected element with its type, kinds, units and links.
-        Devices whose entries are alike share one entry (read-only, as the whole header is):
-        10,000 devices of one configuration made 10,000 equal dicts, with their lists of
-        kinds and dicts of units, about 6 MB held while the header was encoded."""
-        manager = self.manager
-        elements: dict[str, dict[str, object]] = {}
-        devices = []
-        alike: dict[tuple, dict[str, object]] = {}  # each entry, by what it holds
-        for name in self.gatherer.watch_names(self._selected):
-            device = manager.device(name)
-            if device is not None:
-                devices.append(name)
-                track = self.gatherer.tracks.get(name)
-                units = dict(track.units) if track is not None else {}
-                store = device.store
-                store.sync()
-                made = store.channels_made  # a kind without a channel never had a sample
-                for kind in store.kinds:
-                    if kind in made and kind.value not in units:
-                        latest = store.latest(kind)
-                        if latest is not None:
-                            units[kind.value] = len(latest.values)
-                kinds = device.kinds()
-                limits = (
-                    (device.analog_min, device.analog_max) if isinstance(device, Analog) else None
-                )
-                # (the limits by their text: -0.0 equals 0.0 but is written otherwise)
-                key = (device.element_type, kinds, tuple(units.items()), repr(limits))
-                entry = alike.get(key)
-                if entry is None:
-                    entry = {
-                        "element": DEVICE,
-                        "type": device.element_type,
-                        "kinds": [k.value for k in kinds],
-                        "units": units,
-                    }
-                    if limits is not None:
-                        entry["min"], entry["max"] = limits
-                    alike[key] = entry
-                elements[name] = entry
-                continue
-            proxy = manager.proxies.get(name)
-            if proxy is not None:
-                elements[name] = {
-                    "element": PROXY,
-                    "type": proxy.element_type,
-                    "device": proxy.device_name,
-                    "unit": proxy.unit,
-                }
-                continue
-            target = manager.aliases.get(name)
-            if target is not None:
-                elements[name] = {"element": ALIAS, "type": "alias", "proxy": target}
+        """What replay needs: every selected element with its type, kinds, units and links
+        (:meth:`FrameRecords.header_elements`), the selection and the frame rate."""
+        devices, elements = self.records.header_elements(self._selected)
         return {
             **self.info,
             "devices": devices,
@@ -542,7 +486,7 @@ class MonitorSession:
         sinks.note_statuses(moment, ((name, *self._status_of(name)) for name in self._selected))
         poses = sinks.poses(per_frame=False)
         if len(poses) == 1 and sinks.is_open:
-            for text, count in self._encoded_parts(poses[0]):
+            for text, count in self.records.sample_parts(self._selected, poses[0]):
                 sinks.deliver(SAMPLES, {poses[0]: text}, count)
         elif poses:
             texts: dict[str, str] = {}
@@ -578,104 +522,12 @@ class MonitorSession:
     def encode_samples(self, pose: str = MATRIX) -> tuple[str, int]:
         """This frame's sample records of the selected devices (and of proxies and aliases
         named by the selectors), as NDJSON text and count; positions in ``pose``."""
-        parts: list[str] = []
-        count = 0
-        for text, n in self._encoded_parts(pose, 0):
-            parts.append(text)
-            count += n
-        return "".join(parts), count
-
-    def _encoded_parts(self, pose: str, size: int | None = None) -> Iterator[tuple[str, int]]:
-        """:meth:`encode_samples` in parts of at least ``size`` characters (None:
-        :data:`ENCODED_PART`; 0: of each device and kind) and their counts, in order; none
-        that is empty."""
-        size = ENCODED_PART if size is None else size
-        parts: list[str] = []
-        length = count = 0
-        for text, n in self._encoded_pieces(pose):
-            if not text:
-                continue
-            parts.append(text)
-            length += len(text)
-            count += n
-            if length >= size:
-                yield "".join(parts) if len(parts) > 1 else text, count
-                parts.clear()
-                length = count = 0
-        if parts:
-            yield "".join(parts), count
-
-    def _encoded_pieces(self, pose: str) -> Iterator[tuple[str, int]]:
-        """The sample records of :meth:`encode_samples`, per device and kind or proxy."""
-        manager = self.manager
-        stream_proxies = bool(self.selectors)
-        for name in self._selected:
-            track = self.gatherer.current_track(name)
-            if track is not None and manager.device(name) is track.device:
-                for kind, samples in track.frames.items():
-                    yield encode_frame(name, kind, samples, track.device, pose)
-                continue
-            if stream_proxies:
-                proxy = manager.proxy(name)
-                if proxy is None or proxy.stupefied or proxy.timestamp is None:
-                    continue
-                if self._proxy_stamps.get(name) == proxy.timestamp:
-                    continue
-                self._proxy_stamps[name] = proxy.timestamp
-                value, raw = proxy_value(proxy)
-                value = (
-                    pose_values(value, pose)[0]
-                    if isinstance(proxy, PositionProxy)
-                    else plain_json(value)
-                )
-                raw = value if raw is None else raw
-                unit = proxy.unit if proxy.HAS_UNIT else 0
-                record = SampleRecord(name, proxy.KIND.value, unit, proxy.timestamp, value, raw)
-                yield encode_samples([record]), 1
+        return self.records.samples(self._selected, pose)
 
     def frame_record(self, pose: str = MATRIX) -> FrameRecord:
         """What every selected element delivered this frame, with its newest values
         (positions in ``pose``)."""
-        manager = self.manager
-        devices: dict[str, FrameDevice] = {}
-        for name in self._selected:
-            track = self.gatherer.current_track(name)
-            if track is not None and manager.device(name) is track.device:
-                values: dict[str, dict[int, object]] = {}
-                store = track.device.store
-                for kind in store.kinds:
-                    latest = store.latest(kind)
-                    if latest is None:
-                        continue
-                    if kind is DeviceKind.ANALOG and isinstance(track.device, Analog):
-                        values[kind.value] = {
-                            u: track.device.normalize(float(v)) for u, v in enumerate(latest.values)
-                        }
-                    elif kind is DeviceKind.POSITION:
-                        values[kind.value] = dict(enumerate(pose_values(latest.values, pose)))
-                    else:
-                        values[kind.value] = {
-                            u: json_value(kind, v) for u, v in enumerate(latest.values)
-                        }
-                devices[name] = FrameDevice(track.count, values)
-                continue
-            proxy = manager.proxy(name)
-            if proxy is None:
-                continue
-            value, _ = proxy_value(proxy)
-            fresh = (
-                proxy.timestamp is not None
-                and self._proxy_stamps.get("frame:" + name) != proxy.timestamp
-            )
-            self._proxy_stamps["frame:" + name] = proxy.timestamp
-            unit = proxy.unit if proxy.HAS_UNIT else 0
-            value = (
-                pose_values(value, pose)[0]
-                if isinstance(proxy, PositionProxy)
-                else plain_json(value)
-            )
-            devices[name] = FrameDevice(1 if fresh else 0, {proxy.KIND.value: {unit: value}})
-        return FrameRecord(self.frame, self.frame_timestamp, devices)
+        return self.records.frame(self._selected, self.frame, self.frame_timestamp, pose)
 
     def mark(self, name: str | None = None) -> MarkerRecord:
         """Write a marker (named ``marker N`` when no name is given) to every sink."""
