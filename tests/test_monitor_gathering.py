@@ -43,8 +43,11 @@ def manager(tmp_path):
 def test_the_watched_names_are_the_selected_ones_and_what_they_lead_to(manager):
     gatherer = FrameGatherer(manager, history=8)
     assert gatherer.watch_names(["W0", "Look"]) == ["W0", "Look", "Head", "W2"]
-    gatherer.gather(manager.update(), ["W0", "Look"], renewed=True)
+    selected = ["W0", "Look"]
+    gatherer.gather(manager.update(), selected, renewed=True)
     assert gatherer.watch == ["W0", "Look", "Head", "W2"]
+    assert gatherer.watched(selected) is gatherer.watch  # found by the frame: not again
+    assert gatherer.watched(["W1"]) == ["W1"]  # another selection: found for it
     assert set(gatherer.tracks) == {"W0", "W2"}  # devices only
 
 

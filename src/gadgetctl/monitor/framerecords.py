@@ -52,7 +52,7 @@ class FrameRecords:
         elements: dict[str, dict[str, object]] = {}
         devices = []
         alike: dict[tuple, dict[str, object]] = {}  # each entry, by what it holds
-        for name in self.gatherer.watch_names(selected):
+        for name in self.gatherer.watched(selected):
             device = manager.device(name)
             if device is not None:
                 devices.append(name)

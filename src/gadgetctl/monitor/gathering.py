@@ -55,6 +55,8 @@ class FrameGatherer:
         self.frame = 0
         self._plan: GatherPlan | None = None
         self._plan_by_name = False
+        # what :attr:`watch` was found for: the selection and the manager's arrangement
+        self._watch_for: tuple[Sequence[str], object] | None = None
 
     def watch_names(self, selected: Sequence[str]) -> list[str]:
         """``selected`` plus the proxies and devices they lead to."""
@@ -73,6 +75,14 @@ class FrameGatherer:
                 seen.add(proxy.device_name)
         return names
 
+    def watched(self, selected: Sequence[str]) -> list[str]:
+        """:meth:`watch_names` of ``selected``: :attr:`watch` when the latest frame found it
+        for that selection (the same list) and for what the manager has now."""
+        found = self._watch_for
+        if found is not None and found[0] is selected and found[1] is self.manager.arrangement:
+            return self.watch
+        return self.watch_names(selected)
+
     def gather(
         self, frame: int, selected: Sequence[str], *, renewed: bool, every: bool = True
     ) -> int:
@@ -85,6 +95,7 @@ class FrameGatherer:
         self.frame = frame
         if renewed or not self.watch:
             self.watch = self.watch_names(selected)
+            self._watch_for = (selected, self.manager.arrangement)
         gathered: Gathered = {}
         self.clock.tick(now())  # (before the plan: a track made for it starts in this frame)
         plan = self._gather_plan(by_name=not every)
