@@ -23,8 +23,6 @@ import time
 from collections.abc import Callable, Container, Iterable, Iterator, Mapping, Sequence
 from typing import Protocol
 
-import numpy as np
-
 from gadgetctl.errors import GadgetctlError
 from gadgetctl.input.clock import now
 from gadgetctl.input.device import DeviceState
@@ -111,8 +109,6 @@ def _kind_values(kinds: tuple[DeviceKind, ...]) -> tuple[str, ...]:
 #: the figures of one such part are held while its entries are read.
 FINAL_PART = 512
 
-#: The sampling instants of a frame with nothing new.
-_NO_STAMPS = np.empty(0)
 _STUPEFIED, _ACTIVE = ProxyState.STUPEFIED.value, ProxyState.ACTIVE.value
 
 
