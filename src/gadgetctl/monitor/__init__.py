@@ -14,7 +14,8 @@ out); the last two run it:
   views their snapshots, with its parts in modules of their own:
   :mod:`~gadgetctl.monitor.gather` (a frame's samples by device),
   :mod:`~gadgetctl.monitor.tracks` (what is kept per device between frames),
-  :mod:`~gadgetctl.monitor.encoding` (samples and proxy values as records) and
+  :mod:`~gadgetctl.monitor.encoding` (samples and proxy values as records, their numbers
+  written by :mod:`~gadgetctl.monitor.numbertext`) and
   :mod:`~gadgetctl.monitor.views` (the snapshots views draw);
 * :mod:`~gadgetctl.monitor.replaydevice`: the replay driver (``replay_device``) and the
   thread that feeds a recording into it.

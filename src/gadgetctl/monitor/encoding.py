@@ -20,8 +20,9 @@ from gadgetctl.input.proxies import (
     Proxy,
 )
 from gadgetctl.input.samples import FrameSamples, Sample
+from gadgetctl.monitor.numbertext import array_texts
 from gadgetctl.monitor.poses import MATRIX, pose_values
-from gadgetctl.monitor.records import encode_rows
+from gadgetctl.monitor.records import encode_rows, sample_head
 
 
 def plain_value(kind: DeviceKind, value: Any) -> Any:
@@ -86,12 +87,17 @@ def encode_frame(
                 parts.append(encode_rows(name, label, stamps, rows))
             continue
         values = np.asarray(chunk.values)
-        stamps = np.asarray(chunk.timestamps, dtype=np.float64).tolist()
-        if not len(stamps):
+        if not len(values):
             continue
         count += values.shape[0] * (values.shape[1] if values.ndim > 1 else 1)
         if values.ndim == 1:
             values = values[:, None]
+        if not analog:
+            text = encode_array_rows(name, label, chunk.timestamps, values)
+            if text is not None:
+                parts.append(text)
+                continue
+        stamps = np.asarray(chunk.timestamps, dtype=np.float64).tolist()
         if analog:
             if high <= low:
                 normalised = np.zeros(values.shape)
@@ -101,6 +107,42 @@ def encode_frame(
         else:
             parts.append(encode_rows(name, label, stamps, values.tolist()))
     return "".join(parts), count
+
+
+def encode_array_rows(
+    device: str, kind: str, timestamps: np.ndarray, values: np.ndarray
+) -> str | None:
+    """:func:`~gadgetctl.monitor.records.encode_rows` of numpy arrays (``values`` of shape
+    (samples, units, ...)) with their numbers written by :func:`array_texts`: the same text,
+    a few times faster for positions' matrices. None where :func:`array_texts` gives none
+    (then call ``encode_rows``)."""
+    if values.ndim < 2:
+        return None
+    stamps = array_texts(np.asarray(timestamps, dtype=np.float64))
+    if stamps is None or len(stamps) != len(values):
+        return None
+    units = values.shape[1]
+    texts = array_texts(values.reshape((len(values) * units, *values.shape[2:])))
+    if texts is None or not units:
+        return None
+    prefix = sample_head(device, kind)
+    if units == 1:
+        head = prefix + '0,"timestamp":'
+        return "".join(
+            [
+                head + stamp + ',"value":' + text + "}\n"
+                for stamp, text in zip(stamps, texts, strict=True)
+            ]
+        )
+    heads = [prefix + repr(unit) + ',"timestamp":' for unit in range(units)]
+    lines: list[str] = []
+    append = lines.append
+    at = 0
+    for stamp in stamps:
+        for head in heads:
+            append(head + stamp + ',"value":' + texts[at] + "}\n")
+            at += 1
+    return "".join(lines)
 
 
 def _encode_poses(name: str, frame: FrameSamples, pose: str) -> tuple[str, int]:

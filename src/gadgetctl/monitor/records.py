@@ -1,7 +1,8 @@
 """Monitor records and their NDJSON encoding: one JSON object per line, each with ``"v": 1``.
 
 Sample records are the hot path and are formatted by hand (``repr`` of floats round-trips
-exactly); the rare records go through :func:`json.dumps`. Non-finite floats are written as
+exactly; :mod:`gadgetctl.monitor.numbertext` writes numpy arrays' numbers so); the rare
+records go through :func:`json.dumps`. Non-finite floats are written as
 ``NaN``, ``Infinity`` and ``-Infinity``, as Python's :mod:`json` does. The format is
 described in ``docs/recording-format.md``.
 """
@@ -214,7 +215,7 @@ def encode_value(value: object) -> str:
     raise TypeError(f"cannot encode a sample value of type {t.__name__}")
 
 
-def _prefix(device: str, kind: str) -> str:
+def sample_head(device: str, kind: str) -> str:
     """The head of a sample record of ``device`` and ``kind``, up to its unit."""
     if type(device) is not str or type(kind) is not str:
         if not isinstance(device, str) or not isinstance(kind, str):
@@ -259,7 +260,7 @@ def encode_samples(records: Iterable[SampleRecord]) -> str:
     parts: list[str] = []
     append = parts.append
     for r in records:
-        prefix = _prefix(r.device, r.kind)
+        prefix = sample_head(r.device, r.kind)
         unit = r.unit
         ts = r.timestamp
         value = r.value
@@ -306,7 +307,7 @@ def encode_rows(
     text is the one :func:`encode_samples` writes for the same records, without building
     them: this is the monitor's hot path (values as Python lists, e.g. numpy ``tolist()``).
     """
-    prefix = _prefix(device, kind)
+    prefix = sample_head(device, kind)
     parts: list[str] = []
     append = parts.append
     heads: list[str] = []
