@@ -85,10 +85,24 @@ def test_other_dtypes_are_left_to_the_caller(dtype):
     assert array_texts(np.zeros((2, 1), dtype=dtype)) is None
 
 
+@pytest.mark.parametrize(
+    "values",
+    [
+        np.arange(12, dtype="<i4").reshape(3, 4)[:, ::2],  # not contiguous
+        (np.arange(16.0) / 3).reshape(4, 4).T,
+        np.arange(8, dtype=">i8").reshape(4, 2),  # not this machine's byte order
+        (np.arange(6.0) / 7).astype(">f8").reshape(3, 2),
+    ],
+    ids=["strided", "transposed", "big-endian-ints", "big-endian-doubles"],
+)
+def test_arrays_as_they_come_are_written_as_their_numbers(values):
+    assert array_texts(values) == _reference(values)
+
+
 @settings(max_examples=200, deadline=None)
 @given(data=st.data())
 def test_encode_array_rows_writes_what_encode_rows_writes(data):
-    count = data.draw(st.integers(1, 5))
+    count = data.draw(st.integers(1, 5))  # (one sample: its timestamp by repr)
     inner = data.draw(st.sampled_from([(), (4, 4), (3,)]))
     units = data.draw(st.integers(1, 3))
     stamps = data.draw(hnp.arrays("f8", (count,), elements=st.floats(0, 1e6, allow_nan=False)))

@@ -118,7 +118,11 @@ def encode_array_rows(
     (then call ``encode_rows``)."""
     if values.ndim < 2:
         return None
-    stamps = array_texts(np.asarray(timestamps, dtype=np.float64))
+    if len(values) == 1:  # (the usual chunk of a slow device: repr costs less than a call)
+        stamp = float(timestamps[0])
+        stamps = [repr(stamp)] if stamp - stamp == 0.0 and len(timestamps) == 1 else None
+    else:
+        stamps = array_texts(np.asarray(timestamps, dtype=np.float64))
     if stamps is None or len(stamps) != len(values):
         return None
     units = values.shape[1]

@@ -11,31 +11,34 @@ import orjson
 
 __all__ = ["array_texts"]
 
-#: dtypes whose numbers this module writes: 64-bit floats (orjson writes other
-#: widths' own shortest text, not that of the double ``tolist`` makes) and integers.
-_ARRAY_DTYPES = frozenset(
-    np.dtype(code) for code in ("f8", "i1", "i2", "i4", "i8", "u1", "u2", "u4", "u8")
-)
-#: Where orjson's text of a number may not be ``repr``'s: NaN and infinities (it writes null)
-#: and magnitudes below 1e-4 (``repr`` writes an exponent, orjson decimals or ``e-7``).
-_NOT_REPR = ("n", "0.0000", "e-")
+#: The dtypes (by character code) whose numbers this module writes: doubles (orjson writes
+#: other floats' own shortest text, not that of the double ``tolist`` makes) and integers.
+_WRITTEN = frozenset("dbhilqBHILQ")
 
 
 def array_texts(values: np.ndarray) -> list[str] | None:
     """The JSON text of each ``values[i]`` (a number, or nested lists of them), exactly as
     :func:`~gadgetctl.monitor.records.encode_value` writes ``values[i].tolist()``; None
     where that text might differ (a non-finite number, one below 1e-4, another dtype)."""
-    if values.dtype not in _ARRAY_DTYPES or values.ndim == 0:
+    if values.dtype.char not in _WRITTEN or not values.ndim:
         return None
     count = len(values)
     if not count:
         return []
     try:
-        body = orjson.dumps(np.ascontiguousarray(values), option=orjson.OPT_SERIALIZE_NUMPY)
-    except orjson.JSONEncodeError:
-        return None
+        body = orjson.dumps(values, option=orjson.OPT_SERIALIZE_NUMPY)
+    except orjson.JSONEncodeError:  # not C-contiguous, or not in this machine's byte order
+        try:
+            body = orjson.dumps(
+                np.ascontiguousarray(values, dtype=values.dtype.newbyteorder("=")),
+                option=orjson.OPT_SERIALIZE_NUMPY,
+            )
+        except orjson.JSONEncodeError:
+            return None
     text = body.decode("ascii")
-    if any(mark in text for mark in _NOT_REPR):
+    # where orjson's text may not be repr's: NaN and infinities (orjson writes null) and
+    # magnitudes below 1e-4 (repr writes an exponent; orjson decimals, or one like 2.5e-7)
+    if "n" in text or "0.0000" in text or "e-" in text:
         return None
     depth = values.ndim - 1
     if not depth:
