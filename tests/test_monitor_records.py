@@ -316,6 +316,9 @@ def test_a_header_record_in_parts_is_the_record_in_one_piece():
         for i in range(2000)
     }
     elements["A"] = {"element": "device", "min": -0.0, "max": float("inf")}
+    shared = {"element": "device", "kinds": ["hat"], "units": {"hat": 2}}
+    elements.update((f"S{i}", shared) for i in range(50))  # one entry of alike devices
+    elements["after"] = {"element": "proxy", "device": "S1", "unit": 0}
     infos = [
         {"config": ["a.jconf"], "devices": list(elements), "elements": elements},
         {"elements": {}, "frame_rate": 60.0, "selection": [], "pose": "euler"},

@@ -215,17 +215,23 @@ def encode_value(value: object) -> str:
     raise TypeError(f"cannot encode a sample value of type {t.__name__}")
 
 
+def _name_text(name: str) -> str:
+    """``json.dumps(name)``, kept for the names seen most."""
+    text = _NAME_TEXTS.get(name)
+    if text is None:
+        text = json.dumps(name)
+        if len(_NAME_TEXTS) < _PREFIX_CACHE_LIMIT:
+            _NAME_TEXTS[name] = text
+    return text
+
+
 def sample_head(device: str, kind: str) -> str:
     """The head of a sample record of ``device`` and ``kind``, up to its unit."""
     if type(device) is not str or type(kind) is not str:
         if not isinstance(device, str) or not isinstance(kind, str):
             raise TypeError("device and kind of a sample record must be strings")
         return _HEAD + json.dumps(device) + ',"kind":' + json.dumps(kind) + ',"unit":'
-    name = _NAME_TEXTS.get(device)
-    if name is None:
-        name = json.dumps(device)
-        if len(_NAME_TEXTS) < _PREFIX_CACHE_LIMIT:
-            _NAME_TEXTS[device] = name
+    name = _name_text(device)
     kind_text = _KIND_TEXTS.get(kind)
     if kind_text is None:
         kind_text = json.dumps(kind)
@@ -450,7 +456,7 @@ def encode_status_parts(records: Iterable[StatusRecord], size: int = 1 << 20) ->
                     f',"state":{_dumps(r.state)},"reason":{_dumps(r.reason)}}}\n'
                 )
             line = f'{{"v":{FORMAT_VERSION},"type":"status","timestamp":{stamp}'
-            line += f',"name":{_dumps(r.name)}{tail}'
+            line += f',"name":{_name_text(r.name)}{tail}'
         parts.append(line)
         length += len(line)
         if length >= size:
@@ -525,8 +531,12 @@ def _item_parts(lead: str, value: object) -> Iterator[str]:
         return
     yield lead + "{"
     comma = ""
+    made: dict[int, str] = {}  # (an entry many names share, as alike devices do: made once)
     for name, entry in value.items():
-        yield comma + _dumps(name) + ":" + _dumps(entry)
+        text = made.get(id(entry))
+        if text is None:
+            text = made[id(entry)] = _dumps(entry)
+        yield comma + _name_text(name) + ":" + text
         comma = ","
     yield "}"
 
