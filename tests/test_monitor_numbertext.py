@@ -137,3 +137,46 @@ def test_a_frame_with_a_non_finite_value_is_written_as_the_hand_formatter_writes
         "Dial", DeviceKind.HAT, FrameSamples([SampleBatch(stamps, values)]), Analog()
     )
     assert '"value":NaN' in text and '"value":Infinity' in text
+
+
+@settings(max_examples=200, deadline=None)
+@given(data=st.data())
+def test_analog_rows_with_raw_values_are_what_encode_rows_writes(data):
+    count = data.draw(st.integers(1, 4))
+    units = data.draw(st.integers(1, 3))
+    stamps = data.draw(hnp.arrays("f8", (count,), elements=st.floats(1.0, 1e6, allow_nan=False)))
+    raw_dtype = data.draw(st.sampled_from(["f8", "i2", "i8"]))
+    raw = data.draw(
+        hnp.arrays(raw_dtype, (count, units), elements=floats if raw_dtype == "f8" else None)
+    )
+    # the value: the raw one normalised, or itself (a raw value equal to its value is left out)
+    values = data.draw(
+        st.sampled_from(
+            [np.clip(raw.astype("f8"), 0.0, 1.0), raw.astype("f8"), np.zeros((count, units))]
+        )
+    )
+    text = encode_array_rows("Stick", "analog", stamps, values, raw)
+    expected = encode_rows("Stick", "analog", stamps.tolist(), values.tolist(), raw.tolist())
+    if text is not None:
+        assert text == expected
+    elif raw_dtype != "f8":
+        assert not np.isfinite(values).all() or ((values != 0) & (np.abs(values) < 1e-4)).any()
+
+
+def test_an_analog_frame_writes_raw_values_only_where_they_differ():
+    stick = Analog()
+    stick.analog_min, stick.analog_max = -1.0, 1.0
+    raw = np.array([[-1.0, 0.5], [1.0, 3.0]])
+    stamps = np.array([10.0, 10.5])
+    text, count = encode_frame(
+        "Stick", DeviceKind.ANALOG, FrameSamples([SampleBatch(stamps, raw)]), stick
+    )
+    assert count == 4
+    normalised = (np.clip(raw, -1.0, 1.0) + 1.0) / 2.0
+    assert encode_array_rows("Stick", "analog", stamps, normalised, raw) is not None
+    assert text == encode_rows(
+        "Stick", "analog", stamps.tolist(), normalised.tolist(), raw.tolist()
+    )
+    records = [decode_line(line) for line in text.splitlines()]
+    assert [(r.value, r.raw) for r in records] == [(0.0, -1.0), (0.75, 0.5), (1.0, 1.0), (1.0, 3.0)]
+    assert text.count('"raw"') == 3  # 1.0 normalises to itself: no raw written

@@ -94,29 +94,36 @@ def encode_frame(
             values = values[:, None]
         if not analog:
             text = encode_array_rows(name, label, chunk.timestamps, values)
-            if text is not None:
-                parts.append(text)
-                continue
-        stamps = np.asarray(chunk.timestamps, dtype=np.float64).tolist()
-        if analog:
-            if high <= low:
-                normalised = np.zeros(values.shape)
-            else:
-                normalised = (np.clip(values.astype(np.float64), low, high) - low) / (high - low)
-            parts.append(encode_rows(name, label, stamps, normalised.tolist(), values.tolist()))
+            if text is None:
+                stamps = np.asarray(chunk.timestamps, dtype=np.float64).tolist()
+                text = encode_rows(name, label, stamps, values.tolist())
+            parts.append(text)
+            continue
+        if high <= low:
+            normalised = np.zeros(values.shape)
         else:
-            parts.append(encode_rows(name, label, stamps, values.tolist()))
+            normalised = (np.clip(values.astype(np.float64), low, high) - low) / (high - low)
+        text = encode_array_rows(name, label, chunk.timestamps, normalised, values)
+        if text is None:
+            stamps = np.asarray(chunk.timestamps, dtype=np.float64).tolist()
+            text = encode_rows(name, label, stamps, normalised.tolist(), values.tolist())
+        parts.append(text)
     return "".join(parts), count
 
 
 def encode_array_rows(
-    device: str, kind: str, timestamps: np.ndarray, values: np.ndarray
+    device: str,
+    kind: str,
+    timestamps: np.ndarray,
+    values: np.ndarray,
+    raw: np.ndarray | None = None,
 ) -> str | None:
-    """:func:`~gadgetctl.monitor.records.encode_rows` of numpy arrays (``values`` of shape
-    (samples, units, ...)) with their numbers written by :func:`array_texts`: the same text,
-    a few times faster for positions' matrices. None where :func:`array_texts` gives none
-    (then call ``encode_rows``)."""
-    if values.ndim < 2:
+    """:func:`~gadgetctl.monitor.records.encode_rows` of numpy arrays (``values`` and
+    ``raw`` of shape (samples, units, ...)) with their numbers written by
+    :func:`array_texts`: the same text, a few times faster for positions' matrices. A raw
+    value is written where it is not the value (doubles that differ, or integers). None
+    where :func:`array_texts` gives none (then call ``encode_rows``)."""
+    if values.ndim < 2 or (raw is not None and raw.shape != values.shape):
         return None
     if len(values) == 1:  # (the usual chunk of a slow device: repr costs less than a call)
         stamp = float(timestamps[0])
@@ -126,16 +133,31 @@ def encode_array_rows(
     if stamps is None or len(stamps) != len(values):
         return None
     units = values.shape[1]
-    texts = array_texts(values.reshape((len(values) * units, *values.shape[2:])))
-    if texts is None or not units:
+    if not units:
         return None
+    cells = (len(values) * units, *values.shape[2:])
+    texts = array_texts(values.reshape(cells))
+    if texts is None:
+        return None
+    tails = ["}\n"] * len(texts)
+    if raw is not None:
+        raw_texts = array_texts(raw.reshape(cells))
+        if raw_texts is None:
+            return None
+        # encode_rows leaves out a raw value equal to its value, both floats
+        if raw.dtype == values.dtype == np.float64:
+            differ = np.flatnonzero(raw.reshape(len(texts), -1) != values.reshape(len(texts), -1))
+        else:
+            differ = range(len(texts))
+        for at in differ:
+            tails[at] = ',"raw":' + raw_texts[at] + "}\n"
     prefix = sample_head(device, kind)
     if units == 1:
         head = prefix + '0,"timestamp":'
         return "".join(
             [
-                head + stamp + ',"value":' + text + "}\n"
-                for stamp, text in zip(stamps, texts, strict=True)
+                head + stamp + ',"value":' + text + tail
+                for stamp, text, tail in zip(stamps, texts, tails, strict=True)
             ]
         )
     heads = [prefix + repr(unit) + ',"timestamp":' for unit in range(units)]
@@ -144,7 +166,7 @@ def encode_array_rows(
     at = 0
     for stamp in stamps:
         for head in heads:
-            append(head + stamp + ',"value":' + texts[at] + "}\n")
+            append(head + stamp + ',"value":' + texts[at] + tails[at])
             at += 1
     return "".join(lines)
 
